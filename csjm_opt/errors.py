@@ -1,0 +1,121 @@
+"""One error family for csjm_opt.
+
+Every error the library raises derives from :class:`CsjmError`; each class
+names one condition and carries the data that explains it, so a caller can
+react to the condition without parsing the message. The CLI turns any
+``CsjmError`` into one line on stderr and exit status 2.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+
+class CsjmError(Exception):
+    """Base class of every error raised by csjm_opt."""
+
+
+class InvalidInput(CsjmError, ValueError):
+    """An argument has the wrong shape, type or value.
+
+    ``name`` is the argument (or key) at fault.
+    """
+
+    def __init__(self, message: str, name: str | None = None):
+        super().__init__(message)
+        self.name = name
+
+
+class NotARotation(InvalidInput):
+    """A matrix given as a rotation is not one.
+
+    ``orthogonality_error`` is ``||R^T R - I||_F``; ``det`` is ``det(R)``.
+    """
+
+    def __init__(self, message: str, orthogonality_error: float, det: float,
+                 name: str | None = None):
+        super().__init__(message, name)
+        self.orthogonality_error = float(orthogonality_error)
+        self.det = float(det)
+
+
+class RigFileError(InvalidInput):
+    """A rig description (TOML file or dict) is malformed.
+
+    ``path`` is the file (or ``None`` for in-memory data), ``key`` the dotted
+    key at fault, e.g. ``"cables.t_min"``.
+    """
+
+    def __init__(self, message: str, path: str | None = None, key: str | None = None):
+        where = f"{path}: " if path else ""
+        where += f"[{key}] " if key else ""
+        super().__init__(where + message, key)
+        self.path = path
+        self.key = key
+
+
+class DataFileError(InvalidInput):
+    """A measurement log (CSV) is malformed. ``line`` is 1-based (header = 1)."""
+
+    def __init__(self, message: str, path: str | None = None, line: int | None = None,
+                 column: str | None = None):
+        where = f"{path}" if path else "<data>"
+        where += f":{line}" if line is not None else ""
+        where += f" column '{column}'" if column else ""
+        super().__init__(f"{where}: {message}", column)
+        self.path = path
+        self.line = line
+        self.column = column
+
+
+class InfeasibleLoad(CsjmError):
+    """No tensions within ``[t_min, t_max]`` hold the load at the pose.
+
+    ``distance_Nm`` is the smallest achievable equilibrium residual
+    ``min ||J^T T + tau_load||`` over tensions within bounds: how far the
+    load lies outside the wrench-feasible set.
+    """
+
+    def __init__(self, message: str, R: Any, tau_ext: Any, distance_Nm: float,
+                 index: int | None = None):
+        super().__init__(message)
+        self.R = np.asarray(R)
+        self.tau_ext = np.asarray(tau_ext)
+        self.distance_Nm = float(distance_Nm)
+        self.index = index
+
+
+class SolverError(CsjmError):
+    """A numerical back end (QP solver, CasADi) failed; ``backend`` names it."""
+
+    def __init__(self, message: str, backend: str | None = None):
+        super().__init__(message)
+        self.backend = backend
+
+
+class NoEquilibrium(CsjmError):
+    """Forward statics found no stable equilibrium.
+
+    ``residual_Nm`` is the best equilibrium residual reached, ``reason`` one of
+    ``"diverged"``, ``"slack"``, ``"unstable"``.
+    """
+
+    def __init__(self, message: str, reason: str, residual_Nm: float = float("nan")):
+        super().__init__(message)
+        self.reason = reason
+        self.residual_Nm = float(residual_Nm)
+
+
+class IllConditionedData(CsjmError):
+    """Measured excitation does not determine the estimate.
+
+    ``condition`` is the condition number (``inf`` when rank deficient),
+    ``rank`` the numerical rank of the excitation.
+    """
+
+    def __init__(self, message: str, condition: float, rank: int | None = None):
+        super().__init__(message)
+        self.condition = float(condition)
+        self.rank = rank

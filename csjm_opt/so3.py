@@ -1,0 +1,99 @@
+"""SO(3) helpers: hat, vee, exp, log, on numpy arrays and CasADi symbols.
+
+Conventions (SPEC.md): ``R`` is the orientation of {A} in {B}; body-frame
+canonical coordinates ``zeta`` with ``R = R_ref @ exp(hat(zeta))``, paper (1)-(3).
+Numpy versions broadcast over leading axes: ``exp`` takes (..., 3) and returns
+(..., 3, 3). Small-angle branches keep everything finite at zero, and ``log``
+is accurate near pi.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+_SMALL = 1e-6
+
+
+def hat(w: Any) -> Any:
+    """Skew matrix of (2): ``hat(w) @ v == cross(w, v)``."""
+    if isinstance(w, (ca.SX, ca.MX, ca.DM)):
+        return ca.vertcat(ca.horzcat(0, -w[2], w[1]),
+                          ca.horzcat(w[2], 0, -w[0]),
+                          ca.horzcat(-w[1], w[0], 0))
+    w = np.asarray(w, dtype=float)
+    out = np.zeros(w.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -w[..., 2], w[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = w[..., 2], -w[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -w[..., 1], w[..., 0]
+    return out
+
+
+def vee(W: Any) -> Any:
+    """Inverse of :func:`hat` (uses the antisymmetric part)."""
+    if isinstance(W, (ca.SX, ca.MX, ca.DM)):
+        return 0.5 * ca.vertcat(W[2, 1] - W[1, 2], W[0, 2] - W[2, 0], W[1, 0] - W[0, 1])
+    W = np.asarray(W, dtype=float)
+    return 0.5 * np.stack([W[..., 2, 1] - W[..., 1, 2],
+                           W[..., 0, 2] - W[..., 2, 0],
+                           W[..., 1, 0] - W[..., 0, 1]], axis=-1)
+
+
+def exp(w: Any) -> Any:
+    """Rodrigues' formula, ``exp(hat(w))``, with a Taylor branch near zero."""
+    if isinstance(w, (ca.SX, ca.MX, ca.DM)):
+        th2 = ca.dot(w, w)
+        th = ca.sqrt(th2 + 1e-300)
+        a = ca.if_else(th2 < _SMALL**2, 1 - th2 / 6, ca.sin(th) / th)
+        b = ca.if_else(th2 < _SMALL**2, 0.5 - th2 / 24, (1 - ca.cos(th)) / (th2 + 1e-300))
+        W = hat(w)
+        return ca.DM.eye(3) + a * W + b * (W @ W)
+    w = np.asarray(w, dtype=float)
+    th2 = np.sum(w * w, axis=-1)
+    th = np.sqrt(th2)
+    small = th < _SMALL
+    ths = np.where(small, 1.0, th)
+    a = np.where(small, 1 - th2 / 6, np.sin(ths) / ths)
+    b = np.where(small, 0.5 - th2 / 24, (1 - np.cos(ths)) / ths**2)
+    W = hat(w)
+    return np.eye(3) + a[..., None, None] * W + b[..., None, None] * (W @ W)
+
+
+def log(R: Any) -> np.ndarray:
+    """Rotation vector ``w`` with ``exp(w) == R``, ``|w| <= pi``; batched over (..., 3, 3)."""
+    R = np.asarray(R, dtype=float)
+    cos = np.clip((np.trace(R, axis1=-2, axis2=-1) - 1) / 2, -1.0, 1.0)
+    v = vee(R)  # = sin(th) * axis
+    sin = np.linalg.norm(v, axis=-1)
+    th = np.arctan2(sin, cos)
+    small = th < _SMALL
+    near_pi = th > np.pi - 1e-3
+    scale = np.where(small, 1 + th**2 / 6, th / np.where(small | near_pi, 1.0, sin))
+    out = scale[..., None] * v
+    if np.any(near_pi):
+        S = 0.5 * (R + np.swapaxes(R, -1, -2))
+        B = (S - cos[..., None, None] * np.eye(3)) / np.maximum(1 - cos, 1e-12)[..., None, None]
+        # B = n n^T: take its largest column for a well-conditioned axis.
+        diag = np.diagonal(B, axis1=-2, axis2=-1)
+        j = np.argmax(diag, axis=-1)
+        col = np.take_along_axis(B, j[..., None, None].repeat(3, axis=-2), axis=-1)[..., 0]
+        n = col / np.sqrt(np.maximum(np.take_along_axis(diag, j[..., None], -1), 1e-300))
+        sign = np.where(np.sum(n * v, axis=-1) < 0, -1.0, 1.0)
+        out = np.where(near_pi[..., None], (sign * th)[..., None] * n, out)
+    return out
+
+
+def random_rotations(n: int, rng: np.random.Generator, max_angle: float = np.pi) -> np.ndarray:
+    """``n`` rotations with axes uniform on the sphere and angles uniform in [0, max_angle]."""
+    axis = rng.normal(size=(n, 3))
+    axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+    return exp(axis * rng.uniform(0, max_angle, size=(n, 1)))
+
+
+def angle_between(R1: Any, R2: Any) -> np.ndarray:
+    """Geodesic distance ``||log(R1^T R2)||`` (rad), paper (63)-(65)."""
+    R1 = np.asarray(R1, dtype=float)
+    R2 = np.asarray(R2, dtype=float)
+    return np.linalg.norm(log(np.swapaxes(R1, -1, -2) @ R2), axis=-1)
