@@ -18,6 +18,7 @@ the distance ``min ||J^T T + tau_load||`` over the tension box.
 from __future__ import annotations
 
 import dataclasses
+import warnings
 
 import numpy as np
 import qpsolvers
@@ -262,7 +263,9 @@ def _solve_qp(problem: qpsolvers.Problem, solver: str) -> np.ndarray | None:
                            f"{', '.join(qpsolvers.available_solvers)} (or 'active_set')", "solver")
     opts = {"eps_abs": 1e-9, "eps_rel": 1e-9, "polish": True, "verbose": False} if solver == "osqp" else {}
     try:
-        sol = qpsolvers.solve_problem(problem, solver=solver, **opts)
+        with warnings.catch_warnings():  # infeasibility is reported by InfeasibleLoad instead
+            warnings.simplefilter("ignore")
+            sol = qpsolvers.solve_problem(problem, solver=solver, **opts)
     except Exception as exc:  # noqa: BLE001 - backend errors are wrapped, never leaked
         raise SolverError(f"{solver} failed: {exc}", solver) from exc
     return sol.x if sol.found and sol.x is not None else None

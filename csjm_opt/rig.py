@@ -24,7 +24,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import tomli_w
 
 from . import hexagon
 from .errors import RigFileError
@@ -136,7 +135,7 @@ class Rig:
 
         An existing file is never replaced unless ``overwrite=True``.
         """
-        text = "# csjm_opt rig file (SI units; frames per SPEC.md)\n" + tomli_w.dumps(self.as_dict())
+        text = _format_toml(self.as_dict())
         if path is not None:
             atomic_write_text(path, text, overwrite=overwrite)
         return text
@@ -155,6 +154,29 @@ def load_rig(spec: str | Path | None) -> Rig:
     if spec is None or str(spec) == "paper":
         return paper_rig()
     return Rig.from_toml(spec)
+
+
+def _format_toml(data: dict[str, dict[str, Any]]) -> str:
+    """Compact, human-editable TOML (one hole per line); round-trips through tomllib.
+
+    Written by hand rather than with tomli-w, whose arrays put every number on
+    its own line, which makes a rig file hard to read and edit.
+    """
+    units = {"platform_holes": "m, A_i in {A}", "base_holes": "m, B_i in {B}",
+             "stiffness": "N/m, cable with drive", "t_min": "N", "t_max": "N", "mass": "kg",
+             "com": "m, in {A}", "gravity": "m/s^2, in {B}"}
+    lines = ["# csjm_opt rig file (SI units; frames per SPEC.md)"]
+    for section, table in data.items():
+        lines.append(f"\n[{section}]")
+        for key, value in table.items():
+            if isinstance(value, list) and value and isinstance(value[0], list):
+                rows = ",\n".join("    [" + ", ".join(repr(float(x)) for x in row) + "]" for row in value)
+                lines.append(f"{key} = [  # {units[key]}\n{rows},\n]")
+            elif isinstance(value, list):
+                lines.append(f"{key} = [" + ", ".join(repr(float(x)) for x in value) + f"]  # {units[key]}")
+            else:
+                lines.append(f"{key} = {float(value)!r}  # {units[key]}")
+    return "\n".join(lines) + "\n"
 
 
 # ---------------------------------------------------------------- validation
