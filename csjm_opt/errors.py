@@ -119,3 +119,18 @@ class IllConditionedData(CsjmError):
         super().__init__(message)
         self.condition = float(condition)
         self.rank = rank
+
+
+class DesignError(InvalidInput):
+    """A design (hole geometry) or a sweep description is invalid.
+
+    ``key`` names the parameter or dotted TOML key at fault, ``path`` the file
+    (``None`` for in-memory data).
+    """
+
+    def __init__(self, message: str, key: str | None = None, path: str | None = None):
+        where = f"{path}: " if path else ""
+        where += f"[{key}] " if key else ""
+        super().__init__(where + message, key)
+        self.key = key
+        self.path = path
