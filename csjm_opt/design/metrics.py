@@ -1,0 +1,261 @@
+"""Per-design metrics over sampled orientations: workspace, stiffness, margins, shaping range.
+
+Definitions (all over the orientations of an :class:`OrientationSampling`):
+
+* A pose is **feasible** when every load of the load set can be held with
+  tensions in ``[t_min, t_max]``: ``tau_load = tau_ext + tau_weight(R)``
+  lies in the available moment set (exact zonotope test,
+  :mod:`csjm_opt.design.feasibility`).
+* ``workspace_fraction``: feasible poses / sampled poses (the fraction of the
+  sampled tilt/torsion region, Haar measure).
+* ``tilt_cone_deg``: largest tilt such that every sample with a smaller tilt
+  (any azimuth, any sampled torsion) is feasible; ``max_tilt_deg`` when all are.
+  The infeasible samples of smallest tilt are refined by bisection along
+  their tilt ray (azimuth, torsion fixed) to the feasibility boundary.
+* Stiffness at a feasible pose is K (SPEC.md load convention) with the
+  planner's tensions (closest to mid-range, :func:`csjm_opt.planner`'s QP,
+  solved by the batched exact active-set method) for the *stiffness load*,
+  the first load of the set. ``min_stiffness_Nm_per_rad`` is the smallest
+  eigenvalue of K over feasible poses; ``max_condition`` the largest
+  ``lambda_max / lambda_min``; ``min_torsion_stiffness_Nm_per_rad`` the
+  smallest ``K_zz`` (about the platform axis z_A); ``min_bending_stiffness``
+  the smallest eigenvalue of the x-y block; medians likewise.
+  ``stable_fraction``: feasible poses with K positive definite.
+* ``min_tension_margin_N``: smallest ``min(T - t_min, t_max - T)`` of those
+  planned tensions; ``min_wrench_margin_Nm``: smallest distance of any load of
+  the set to the boundary of the available moment set (capacity margin).
+* Shaping range: at ``shaping_poses`` feasible poses (the first ones in
+  sample order, spread over the region by the low-discrepancy sequence) the
+  exact min and max of the directional stiffness ``u^T K u`` over all
+  tensions holding the stiffness load, for u = x, y (bending) and z
+  (torsion) of {A}; reported as medians over those poses
+  (:mod:`csjm_opt.design.shaping_range`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from .. import active_set
+from ..errors import DesignError, InfeasibleLoad
+from ..model import Model
+from ..planner import plan_tensions
+from ..rig import Rig
+from . import feasibility, shaping_range
+from .sampling import OrientationSampling, tilt_torsion_angles, tilt_torsion_rotations
+
+#: Infeasible samples refined by bisection for the tilt cone, and bisection steps (2^-12 of the tilt).
+CONE_RAYS = 64
+CONE_BISECTIONS = 12
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class LoadSet:
+    """External moments (N m, in {A}, weight excluded) a feasible pose must hold; row 0 is the stiffness load."""
+
+    taus_ext_A_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((1, 3)))
+
+    def __post_init__(self) -> None:
+        arr = np.array(self.taus_ext_A_Nm, dtype=float, ndmin=2)
+        if arr.ndim != 2 or arr.shape[1] != 3 or arr.shape[0] < 1:
+            raise DesignError(f"expected rows of [tx, ty, tz], got shape {arr.shape}", "loads.tau_ext")
+        if not np.all(np.isfinite(arr)):
+            raise DesignError("expected finite numbers", "loads.tau_ext")
+        arr.setflags(write=False)
+        object.__setattr__(self, "taus_ext_A_Nm", arr)
+
+
+@dataclasses.dataclass(frozen=True)
+class MetricOptions:
+    """Tolerances and effort of :func:`evaluate`."""
+
+    shaping_poses: int = 16
+    feasibility_tol_Nm: float = 1e-9
+
+    def __post_init__(self) -> None:
+        if isinstance(self.shaping_poses, bool) or not isinstance(self.shaping_poses, int) \
+                or self.shaping_poses < 0:
+            raise DesignError(f"expected an integer >= 0, got {self.shaping_poses!r}", "shaping_poses")
+        if not self.feasibility_tol_Nm >= 0:
+            raise DesignError(f"expected >= 0, got {self.feasibility_tol_Nm}", "feasibility_tol_Nm")
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class PoseMetrics:
+    """Per-orientation arrays behind :class:`DesignMetrics` (n = number of samples)."""
+
+    R: np.ndarray                   # (n, 3, 3)
+    tilt_rad: np.ndarray            # (n,)
+    feasible: np.ndarray            # (n,) bool, all loads held
+    wrench_margin_Nm: np.ndarray    # (n, m) per load
+    tensions_N: np.ndarray          # (n, 6) planned for the stiffness load (valid where feasible)
+    K: np.ndarray                   # (n, 3, 3) at those tensions
+    eig_Nm_per_rad: np.ndarray      # (n, 3) ascending
+    fallbacks: int                  # feasible rows the active-set method did not settle
+
+
+@dataclasses.dataclass(frozen=True)
+class DesignMetrics:
+    """Scalar metrics of one design (see the module docstring); NaN when undefined."""
+
+    n_orientations: int
+    workspace_fraction: float
+    tilt_cone_deg: float
+    min_stiffness_Nm_per_rad: float
+    median_min_stiffness_Nm_per_rad: float
+    max_condition: float
+    median_condition: float
+    min_torsion_stiffness_Nm_per_rad: float
+    median_torsion_stiffness_Nm_per_rad: float
+    min_bending_stiffness_Nm_per_rad: float
+    median_bending_stiffness_Nm_per_rad: float
+    stable_fraction: float
+    min_tension_margin_N: float
+    min_wrench_margin_Nm: float
+    shaping_range_Nm_per_rad: dict[str, tuple[float, float]]
+    planner_fallbacks: int
+    seconds: float
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-safe dict (NaN and infinities become ``None``)."""
+        return {k: _json_safe(v) for k, v in dataclasses.asdict(self).items()}
+
+
+def evaluate_poses(rig: Rig, Rs: np.ndarray, loads: LoadSet = LoadSet(),
+                   options: MetricOptions = MetricOptions(), model: Model | None = None) -> PoseMetrics:
+    """Feasibility, planned tensions and K at every orientation of ``Rs`` (n, 3, 3)."""
+    model = model or Model(rig)
+    J = model.jacobian(Rs)
+    tau_w = model.weight_moment(Rs)
+    tau_load = loads.taus_ext_A_Nm[None, :, :] + tau_w[:, None, :]          # (n, m, 3)
+    margin = feasibility.wrench_margin_Nm(J, tau_load, rig.t_min_N, rig.t_max_N)
+    ok = np.all(margin >= -options.feasibility_tol_Nm, axis=1)
+    # Tensions only where the load set can be held (infeasible rows never settle).
+    rows = np.flatnonzero(ok)
+    t_ref = np.broadcast_to(rig.t_mid_N, (rows.size, 6))
+    res = active_set.solve(np.swapaxes(J[rows], 1, 2), -tau_load[rows, 0], np.ascontiguousarray(t_ref),
+                           rig.t_min_N, rig.t_max_N)
+    T = np.tile(rig.t_mid_N, (Rs.shape[0], 1))
+    T[rows] = res.t
+    unsettled = rows[~res.converged]
+    for i in unsettled:  # rare: the exact feasibility verdict says yes, ask the general planner
+        try:
+            T[i] = plan_tensions(rig, Rs[i], loads.taus_ext_A_Nm[0], model=model).tensions_N
+        except InfeasibleLoad:  # inside the tolerance band of the zonotope test only
+            ok[i] = False
+    K = model.stiffness(Rs, T)
+    return PoseMetrics(R=Rs, tilt_rad=tilt_torsion_angles(Rs)[0], feasible=ok, wrench_margin_Nm=margin,
+                       tensions_N=T, K=K, eig_Nm_per_rad=np.linalg.eigvalsh(K),
+                       fallbacks=int(unsettled.size))
+
+
+def evaluate(rig: Rig, sampling: OrientationSampling = OrientationSampling(),
+             loads: LoadSet = LoadSet(), options: MetricOptions = MetricOptions(),
+             model: Model | None = None) -> DesignMetrics:
+    """All scalar metrics of one design over ``sampling`` (see the module docstring)."""
+    start = time.perf_counter()
+    model = model or Model(rig)
+    pm = evaluate_poses(rig, sampling.rotations(), loads, options, model)
+    ok = pm.feasible
+    n = ok.size
+    cone = _tilt_cone_deg(rig, model, sampling, ok, loads, options)
+    eig, K = pm.eig_Nm_per_rad[ok], pm.K[ok]
+    lam_min = eig[:, 0]
+    cond = np.where(lam_min > 0, eig[:, -1] / np.where(lam_min > 0, lam_min, 1.0), np.inf)
+    torsion = K[:, 2, 2]
+    bending = np.linalg.eigvalsh(K[:, :2, :2])[:, 0] if K.size else np.empty(0)
+    T = pm.tensions_N[ok]
+    tension_margin = np.minimum(T - rig.t_min_N, rig.t_max_N - T).min(axis=1) if T.size else T
+    shaping = _shaping(rig, model, pm, loads, options.shaping_poses)
+    return DesignMetrics(
+        n_orientations=n, workspace_fraction=float(ok.mean()), tilt_cone_deg=float(cone),
+        min_stiffness_Nm_per_rad=_stat(np.min, lam_min),
+        median_min_stiffness_Nm_per_rad=_stat(np.median, lam_min),
+        max_condition=_stat(np.max, cond), median_condition=_stat(np.median, cond),
+        min_torsion_stiffness_Nm_per_rad=_stat(np.min, torsion),
+        median_torsion_stiffness_Nm_per_rad=_stat(np.median, torsion),
+        min_bending_stiffness_Nm_per_rad=_stat(np.min, bending),
+        median_bending_stiffness_Nm_per_rad=_stat(np.median, bending),
+        stable_fraction=_stat(np.mean, lam_min > 0) if lam_min.size else math.nan,
+        min_tension_margin_N=_stat(np.min, tension_margin),
+        min_wrench_margin_Nm=_stat(np.min, pm.wrench_margin_Nm[ok]),
+        shaping_range_Nm_per_rad=shaping, planner_fallbacks=pm.fallbacks,
+        seconds=time.perf_counter() - start)
+
+
+def _tilt_cone_deg(rig: Rig, model: Model, sampling: OrientationSampling, ok: np.ndarray,
+                   loads: LoadSet, options: MetricOptions) -> float:
+    """Largest tilt below which every sampled azimuth/torsion is feasible (deg).
+
+    The infeasible samples of smallest tilt (up to ``CONE_RAYS``) are moved
+    along their own tilt ray (azimuth and torsion fixed) by bisection to the
+    feasibility boundary, so the estimate depends on the sampling density in
+    azimuth and torsion only, not in tilt.
+    """
+    if np.all(ok):
+        return float(sampling.max_tilt_deg)
+    tilt, azimuth, torsion = sampling.angles()
+    bad = np.flatnonzero(~ok)
+    bad = bad[np.argsort(tilt[bad])[:CONE_RAYS]]
+    bad = np.resize(bad, CONE_RAYS)  # fixed batch size for the cached CasADi maps
+    lo, hi = np.zeros(bad.size), tilt[bad].copy()
+    # boundary in [lo, hi]: hi infeasible; lo = 0 feasible unless shown otherwise
+    at_zero = _feasible_at(rig, model, lo, azimuth[bad], torsion[bad], loads, options)
+    hi = np.where(at_zero, hi, 0.0)
+    for _ in range(CONE_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        good = _feasible_at(rig, model, mid, azimuth[bad], torsion[bad], loads, options)
+        lo, hi = np.where(good, mid, lo), np.where(good, hi, mid)
+    return math.degrees(float(hi.min()))
+
+
+def _feasible_at(rig: Rig, model: Model, tilt: np.ndarray, azimuth: np.ndarray, torsion: np.ndarray,
+                 loads: LoadSet, options: MetricOptions) -> np.ndarray:
+    Rs = tilt_torsion_rotations(tilt, azimuth, torsion)
+    tau_load = loads.taus_ext_A_Nm[None, :, :] + model.weight_moment(Rs)[:, None, :]
+    margin = feasibility.wrench_margin_Nm(model.jacobian(Rs), tau_load, rig.t_min_N, rig.t_max_N)
+    return np.all(margin >= -options.feasibility_tol_Nm, axis=1)
+
+
+def stiffness_affine_parts(model: Model, Rs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``K(T) = K0 + sum_i T_i K_i`` at each pose: K0 (n, 3, 3), K_i (n, 6, 3, 3)."""
+    n = Rs.shape[0]
+    R7 = np.repeat(Rs, 7, axis=0)
+    T7 = np.tile(np.vstack([np.zeros(6), np.eye(6)]), (n, 1))
+    K7 = model.stiffness(R7, T7).reshape(n, 7, 3, 3)
+    return K7[:, 0], K7[:, 1:] - K7[:, :1]
+
+
+def _shaping(rig: Rig, model: Model, pm: PoseMetrics, loads: LoadSet,
+             count: int) -> dict[str, tuple[float, float]]:
+    idx = np.flatnonzero(pm.feasible)[:count]
+    if count == 0 or idx.size == 0:
+        return {axis: (math.nan, math.nan) for axis in shaping_range.AXES}
+    idx = np.resize(idx, count)  # fixed batch size: CasADi maps are cached per size
+    Rs = pm.R[idx]
+    K0, Ki = stiffness_affine_parts(model, Rs)
+    J = model.jacobian(Rs)
+    tau_load = loads.taus_ext_A_Nm[0] + model.weight_moment(Rs)
+    lo, hi = shaping_range.directional_stiffness_range(
+        J, tau_load, K0, Ki, rig.t_min_N, rig.t_max_N, np.array(list(shaping_range.AXES.values())))
+    return {axis: (float(np.nanmedian(lo[:, d])), float(np.nanmedian(hi[:, d])))
+            for d, axis in enumerate(shaping_range.AXES)}
+
+
+def _stat(fn: Any, values: np.ndarray) -> float:
+    return float(fn(values)) if np.size(values) else math.nan
+
+
+def _json_safe(value: Any) -> Any:
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    return value
