@@ -2,10 +2,13 @@
 
 Build, then solve (pink's ``build_ik``/``solve_ik``):
 :func:`build_tension_qp` returns a :class:`qpsolvers.Problem` a test can
-inspect without a solver; :func:`plan_tensions` solves it (OSQP through
-qpsolvers by default), polishes the answer to round-off with the exact active
-set method of :mod:`csjm_opt.active_set`, and returns a self-checking
-:class:`TensionPlan`. The QP::
+inspect without a solver; :func:`plan_tensions` solves it and returns a
+self-checking :class:`TensionPlan`. By default the QP is solved exactly by the
+compiled primal-dual active set method (:mod:`csjm_opt.kernels`), with OSQP
+through qpsolvers as the fallback; any qpsolvers backend can be chosen, and
+its answer is then polished to round-off by the same active set method. (The
+default is not OSQP because qpsolvers' set-up alone costs ~0.5 ms a pose,
+several times scipy SLSQP; see README.) The QP::
 
     minimise    1/2 ||T - T_ref||^2
     subject to  J^T T + tau_load = 0,   tau_load = tau_ext + tau_weight  (in {A})
@@ -25,11 +28,11 @@ import qpsolvers
 from scipy import sparse
 from scipy.optimize import lsq_linear
 
-from . import active_set
+from . import kernels
 from .errors import InfeasibleLoad, InvalidInput, SolverError
 from .model import Model
 from .rig import Rig
-from .validate import as_array, as_rotation, as_vector3
+from .validate import as_array, as_rotation, as_rotations, as_vector3
 
 #: Equilibrium residual (N m) above which a load is reported infeasible.
 FEASIBILITY_TOL_NM = 1e-8
@@ -152,80 +155,79 @@ def build_tension_qp_for(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray,
 
 
 # --------------------------------------------------------------------- solve
-def plan_tensions(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray = (0.0, 0.0, 0.0),
-                  t_ref_N: np.ndarray | None = None, solver: str = "osqp",
-                  model: Model | None = None) -> TensionPlan:
-    """Tensions that hold ``tau_ext`` (N m, {A}) at ``R``, closest to ``t_ref``.
+#: Solver names besides the qpsolvers backends: "auto" (exact active set,
+#: compiled, with OSQP through qpsolvers as fallback) and "active_set" (no fallback).
+SOLVERS = ("auto", "active_set")
 
-    ``solver`` is any installed qpsolvers backend (``qpsolvers.available_solvers``)
-    or ``"active_set"`` for the exact active-set method alone.
+
+def plan_tensions(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray = (0.0, 0.0, 0.0),
+                  t_ref_N: np.ndarray | None = None, solver: str = "auto",
+                  model: Model | None = None) -> TensionPlan:
+    """Tensions that hold ``tau_ext`` (N m, {A}) at ``R``, closest to ``t_ref`` (N).
+
+    ``solver``: ``"auto"`` (default) solves the QP exactly by the compiled
+    active-set method and falls back to OSQP through qpsolvers if that does not
+    settle; any installed qpsolvers backend (``"osqp"``, ``"clarabel"``, ...)
+    solves :func:`build_tension_qp` with it and polishes the result exactly.
+    ``model`` is accepted for symmetry with other functions and not needed.
     """
-    model = model or Model(rig)
-    R = as_rotation(R)
-    tau_ext = as_vector3(tau_ext_A_Nm, "tau_ext")
+    R = _rotation(R)
+    tau_ext = _vector3(tau_ext_A_Nm, "tau_ext")
     t_ref = _t_ref(rig, t_ref_N)
-    J = model.jacobian(R)
-    tau_w = model.weight_moment(R)
-    A, b = J.T[None], -(tau_ext + tau_w)[None]
-    lower0 = upper0 = None
-    if solver != "active_set":
-        x = _solve_qp(build_tension_qp(J, tau_ext + tau_w, rig.t_min_N, rig.t_max_N, t_ref), solver)
-        if x is not None:  # warm-start the exact polish from the solver's active set
+    _check_solver(solver)
+    J, tau_w = np.empty((6, 3)), np.empty(3)
+    kernels.jacobian_into(rig.platform_holes_A_m, rig.base_holes_B_m, R, J)
+    kernels.weight_moment_into(rig.platform_mass_kg, rig.com_A_m, rig.gravity_B_m_per_s2, R, tau_w)
+    b = -(tau_ext + tau_w)
+    lower, upper, T = np.zeros(6, np.bool_), np.zeros(6, np.bool_), np.empty(6)
+    status = kernels.NOT_CONVERGED
+    used = solver
+    if solver in SOLVERS:
+        status = kernels.solve_one(J, b, t_ref, rig.t_min_N, rig.t_max_N, lower, upper, T, 40)
+        used = "active_set"
+    if status != kernels.OK and solver != "active_set":
+        backend = "osqp" if solver in SOLVERS else solver
+        x = _solve_qp(build_tension_qp(J, -b, rig.t_min_N, rig.t_max_N, t_ref), backend)
+        if x is not None:  # polish exactly, warm-started from the backend's active set
             tol = 1e-5 * max(1.0, rig.t_max_N)
-            lower0, upper0 = (x <= rig.t_min_N + tol)[None], (x >= rig.t_max_N - tol)[None]
-    res = active_set.solve(A, b, t_ref[None], rig.t_min_N, rig.t_max_N, lower0, upper0)
-    plan = TensionPlan(res.t[0], R, tau_ext, tau_w, J, rig.t_min_N, rig.t_max_N, t_ref, solver)
-    if res.converged[0] and plan.is_valid(FEASIBILITY_TOL_NM, 1e-9):
+            lower, upper = x <= rig.t_min_N + tol, x >= rig.t_max_N - tol
+            status = kernels.solve_one(J, b, t_ref, rig.t_min_N, rig.t_max_N, lower, upper, T, 40)
+            used = backend
+    plan = TensionPlan(T, R, tau_ext, tau_w, J, rig.t_min_N, rig.t_max_N, t_ref, used)
+    if status == kernels.OK and plan.is_valid(FEASIBILITY_TOL_NM, 1e-9):
         return plan
-    raise _infeasible(J, tau_ext + tau_w, rig, R, tau_ext)
+    raise _infeasible(J, -b, rig, R, tau_ext)
 
 
 def plan_tensions_batch(rig: Rig, Rs: np.ndarray, taus_A_Nm: np.ndarray | None = None,
-                        t_ref_N: np.ndarray | None = None, solver: str = "active_set",
-                        warm_start: bool = True, model: Model | None = None) -> TensionPlanBatch:
-    """Plan tensions for ``n`` poses ``Rs`` (n, 3, 3) under loads ``taus`` (n, 3).
+                        t_ref_N: np.ndarray | None = None, solver: str = "auto",
+                        model: Model | None = None) -> TensionPlanBatch:
+    """Plan tensions for ``n`` poses ``Rs`` (n, 3, 3) under loads ``taus`` (n, 3) N m.
 
-    The default solver handles all poses at once with the exact active-set
-    method; with ``warm_start`` each pose starts from the active set of the
-    previous one, as along a trajectory. Rows it cannot settle, and all rows
-    for another ``solver``, go through qpsolvers one by one (warm-started from
-    the previous solution).
+    Poses are solved in order, each warm-started from the previous pose's
+    active set (as along a trajectory), in one compiled loop. Rows that do not
+    settle, and all rows for a qpsolvers backend, go through
+    :func:`plan_tensions` one by one. ``t_ref_N`` is a scalar, (6,) or (n, 6).
     """
-    model = model or Model(rig)
-    Rs = _as_rotation_stack(Rs)
+    Rs = as_rotations(Rs, "Rs")
     n = Rs.shape[0]
     taus = np.zeros((n, 3)) if taus_A_Nm is None else as_array(taus_A_Nm, (n, 3), "taus")
-    t_ref = np.broadcast_to(_t_ref(rig, t_ref_N), (n, 6))
-    J = model.jacobian(Rs)
-    tau_w = model.weight_moment(Rs)
-    A, b = np.swapaxes(J, 1, 2), -(taus + tau_w)
-    todo = np.ones(n, bool)
-    T = np.zeros((n, 6))
-    if solver == "active_set":
-        res = active_set.solve(A, b, np.ascontiguousarray(t_ref), rig.t_min_N, rig.t_max_N)
-        if warm_start and not np.all(res.converged):
-            # second pass: seed each unsettled row with its predecessor's active set
-            bad = ~res.converged
-            prev = np.maximum(np.flatnonzero(bad) - 1, 0)
-            res2 = active_set.solve(A[bad], b[bad], np.ascontiguousarray(t_ref[bad]), rig.t_min_N,
-                                    rig.t_max_N, res.lower[prev], res.upper[prev])
-            for field in ("t", "converged"):
-                getattr(res, field)[bad] = getattr(res2, field)
-        T[:] = res.t
-        todo = ~res.converged
-        fallback_solver = "osqp"
-    else:
-        fallback_solver = solver
-    x_prev = None
-    for i in np.flatnonzero(todo):
+    t_ref = _t_ref_batch(rig, t_ref_N, n)
+    _check_solver(solver)
+    T, J, tau_w = np.zeros((n, 6)), np.empty((n, 6, 3)), np.empty((n, 3))
+    status = np.full(n, kernels.NOT_CONVERGED, np.int64)
+    if solver in SOLVERS:
+        kernels.plan_batch(rig.platform_holes_A_m, rig.base_holes_B_m, rig.platform_mass_kg,
+                           rig.com_A_m, rig.gravity_B_m_per_s2, Rs, taus, t_ref, rig.t_min_N,
+                           rig.t_max_N, 40, T, J, tau_w, status)
+    todo = np.flatnonzero(status != kernels.OK)
+    for i in todo:
         try:
-            plan = plan_tensions(rig, Rs[i], taus[i], t_ref[i], fallback_solver, model)
+            plan = plan_tensions(rig, Rs[i], taus[i], t_ref[i], "auto" if solver in SOLVERS else solver)
         except InfeasibleLoad as exc:
             raise InfeasibleLoad(f"pose {i}: {exc}", Rs[i], taus[i], exc.distance_Nm, index=int(i)) from exc
-        T[i] = x_prev = plan.tensions_N
-    del x_prev
-    batch = TensionPlanBatch(T, Rs, taus, tau_w, J, rig.t_min_N, rig.t_max_N, solver,
-                             int(todo.sum()) if solver == "active_set" else 0)
+        T[i], J[i], tau_w[i] = plan.tensions_N, plan.J, plan.tau_weight_A_Nm
+    batch = TensionPlanBatch(T, Rs, taus, tau_w, J, rig.t_min_N, rig.t_max_N, solver, int(todo.size))
     bad = (batch.equilibrium_residual_Nm > FEASIBILITY_TOL_NM) | (batch.bound_violation_N > 1e-9)
     if np.any(bad):
         i = int(np.argmax(bad))
@@ -251,16 +253,36 @@ def _t_ref(rig: Rig, t_ref_N: np.ndarray | None) -> np.ndarray:
     return as_array(t_ref, (6,), "t_ref")
 
 
-def _as_rotation_stack(Rs: np.ndarray) -> np.ndarray:
-    from .validate import as_rotations
+def _t_ref_batch(rig: Rig, t_ref_N: np.ndarray | None, n: int) -> np.ndarray:
+    if t_ref_N is not None and np.ndim(t_ref_N) == 2:
+        return np.ascontiguousarray(as_array(t_ref_N, (n, 6), "t_ref"))
+    return np.ascontiguousarray(np.broadcast_to(_t_ref(rig, t_ref_N), (n, 6)))
 
-    return as_rotations(Rs, "Rs")
+
+def _rotation(R: np.ndarray) -> np.ndarray:
+    """Fast path of :func:`as_rotation` for exact rotations (the common case)."""
+    arr = np.asarray(R, dtype=np.float64)
+    if arr.shape == (3, 3) and arr.flags.c_contiguous:
+        err, det = kernels.rotation_error(arr)
+        if err < 1e-12 and det > 0:
+            return arr
+    return as_rotation(R)
+
+
+def _vector3(v: np.ndarray, name: str) -> np.ndarray:
+    arr = np.asarray(v, dtype=np.float64) if not isinstance(v, str) else None
+    if arr is not None and arr.shape == (3,) and np.isfinite(arr).all():
+        return arr
+    return as_vector3(v, name)
+
+
+def _check_solver(solver: str) -> None:
+    if solver not in SOLVERS and solver not in qpsolvers.available_solvers:
+        raise InvalidInput(f"unknown QP solver {solver!r}; choose from "
+                           f"{', '.join(SOLVERS + tuple(qpsolvers.available_solvers))}", "solver")
 
 
 def _solve_qp(problem: qpsolvers.Problem, solver: str) -> np.ndarray | None:
-    if solver not in qpsolvers.available_solvers:
-        raise InvalidInput(f"unknown QP solver {solver!r}; installed: "
-                           f"{', '.join(qpsolvers.available_solvers)} (or 'active_set')", "solver")
     opts = {"eps_abs": 1e-9, "eps_rel": 1e-9, "polish": True, "verbose": False} if solver == "osqp" else {}
     try:
         with warnings.catch_warnings():  # infeasibility is reported by InfeasibleLoad instead

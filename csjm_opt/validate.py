@@ -62,8 +62,12 @@ def as_rotations(Rs: Any, name: str = "Rs", tol: float = ROTATION_TOL) -> np.nda
         raise NotARotation(
             f"{where} is not a rotation: ||R^T R - I|| = {err[i]:.3g} (tolerance {tol:g}), "
             f"det = {det[i]:.4g}", err[i], det[i], name)
-    U, _, Vt = np.linalg.svd(arr)
-    return U @ Vt
+    out = np.array(arr)
+    fix = err > 1e-12  # re-orthonormalise only what is not already a rotation to round-off
+    if np.any(fix):
+        U, _, Vt = np.linalg.svd(arr[fix])
+        out[fix] = U @ Vt
+    return out
 
 
 def _fmt(shape: tuple[int | None, ...]) -> str:
