@@ -122,3 +122,10 @@ def test_stiffness_rejects_bad_input(rig):
         co.stiffness(rig, 1.1 * np.eye(3), np.ones(6))
     with pytest.raises(co.InvalidInput, match="tensions"):
         co.stiffness(rig, np.eye(3), np.ones(5))
+
+
+def test_compiled_model_gives_the_same_numbers(rig, model):
+    Rs = so3.random_rotations(5, np.random.default_rng(9), max_angle=0.3)
+    T = np.full((5, 6), 60.0)
+    fast = co.Model(rig, compiled=True)
+    assert np.allclose(fast.stiffness(Rs, T), model.stiffness(Rs, T), atol=1e-10)
