@@ -285,7 +285,7 @@ def _symmetric_fit(dzeta: np.ndarray, tau_load: np.ndarray, order: int,
         q = quadratic_terms(dzeta)
         blocks.append(np.einsum("ik,nm->nikm", np.eye(3), q).reshape(n, 3, 18))
     A = np.concatenate(blocks, axis=2)                      # (n, 3, P)
-    W_half = np.linalg.cholesky(np.linalg.inv(Sigma)).T     # W = W_half^T W_half
+    W_half = _whitener(Sigma)                               # W = W_half^T W_half = Sigma^-1
     Aw = np.einsum("ij,njp->nip", W_half, A).reshape(3 * n, -1)
     yw = (tau_load @ W_half.T).reshape(-1)
     scale = np.maximum(np.linalg.norm(Aw, axis=0), 1e-300)
@@ -295,6 +295,14 @@ def _symmetric_fit(dzeta: np.ndarray, tau_load: np.ndarray, order: int,
     for m, (i, j) in enumerate(_SYM_INDEX):
         M[3 * i + j, 3 + m] = M[3 * j + i, 3 + m] = 1.0
     return {"K": (M @ theta).reshape(3, 3), "cov_K": M @ cov @ M.T, "tau0": theta[:3]}
+
+
+def _whitener(Sigma: np.ndarray) -> np.ndarray:
+    """``Sigma^-1/2``, with eigenvalues floored (noise-free data give a near-zero Sigma)."""
+    w, V = np.linalg.eigh(0.5 * (Sigma + Sigma.T))
+    top = max(float(w.max()), 0.0)
+    w = np.maximum(w, top * 1e-10) if top > 0 else np.ones(3)
+    return (V / np.sqrt(w)).T
 
 
 def _bootstrap(dzeta, tau_load, order, noise, n_boot, ci_level, rng) -> np.ndarray:
