@@ -1,0 +1,91 @@
+"""Figures of the core quantities: tension bars and stiffness ellipsoids.
+
+Matplotlib with the Agg backend, selected inside each function (never at
+import); every figure is written to a file atomically and closed.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+
+def figure():
+    """A new (figure, pyplot) pair on the Agg backend."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save(fig, path: str | Path) -> Path:
+    """Save atomically (temp file + rename) and close the figure."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=120, bbox_inches="tight")
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        figure().close(fig)
+    return path
+
+
+def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.ndarray,
+                            t_min_N: float, t_max_N: float, path: str | Path,
+                            show: tuple[int, ...] | None = None) -> Path:
+    """Tension bars per pose (top), stiffness ellipsoids of a few poses and K's eigenvalues (bottom).
+
+    An ellipsoid's semi-axes are K's eigenvectors scaled by the eigenvalues
+    (N m/rad): a long axis is a stiff direction, drawn in {A}.
+    """
+    plt = figure()
+    n = len(labels)
+    show = tuple(show if show is not None else sorted({0, n // 2, n - 1}))
+    fig = plt.figure(figsize=(14, 9))
+    grid = fig.add_gridspec(2, len(show) + 1, height_ratios=(1, 1.1))
+    ax = fig.add_subplot(grid[0, :])
+    width = 0.8 / 6
+    for i in range(6):
+        ax.bar(np.arange(n) + (i - 2.5) * width, tensions_N[:, i], width, label=f"cable {i + 1}")
+    ax.axhline(t_min_N, color="k", ls="--", lw=0.8)
+    ax.axhline(t_max_N, color="k", ls="--", lw=0.8)
+    ax.set_xticks(np.arange(n), labels, rotation=25, ha="right", fontsize=8)
+    ax.set_ylabel("tension (N)")
+    ax.set_title("planned tensions (dashed: t_min, t_max)")
+    ax.legend(fontsize=7, ncol=6, loc="upper left")
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 32), np.linspace(0, np.pi, 16))
+    sphere = np.stack([np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v)], axis=-1)
+    lim = float(np.max(np.linalg.eigvalsh(K[list(show)])))
+    for col, j in enumerate(show):
+        w, V = np.linalg.eigh(K[j])
+        pts = sphere @ (V * np.maximum(w, 0)).T
+        a3 = fig.add_subplot(grid[1, col], projection="3d")
+        a3.plot_surface(pts[..., 0], pts[..., 1], pts[..., 2], cmap="viridis", alpha=0.7, lw=0)
+        a3.set_xlim(-lim, lim)
+        a3.set_ylim(-lim, lim)
+        a3.set_zlim(-lim, lim)
+        a3.set_box_aspect((1, 1, 1))
+        a3.set_title(f"{labels[j]}\neig {np.round(w, 1).tolist()} N m/rad", fontsize=8)
+        a3.set_xlabel("x")
+        a3.set_ylabel("y")
+        a3.set_zlabel("z")
+    ae = fig.add_subplot(grid[1, -1])
+    eig = np.linalg.eigvalsh(K)
+    for k in range(3):
+        ae.plot(np.arange(n), eig[:, k], "o-", ms=3, label=f"eigenvalue {k + 1}")
+    ae.set_xticks(np.arange(n), [str(i) for i in range(n)], fontsize=7)
+    ae.set_xlabel("pose index (as above)")
+    ae.set_ylabel("N m/rad")
+    ae.set_title("eigenvalues of K")
+    ae.legend(fontsize=7)
+    fig.tight_layout()
+    return save(fig, path)
