@@ -1,0 +1,301 @@
+"""Stiffness shaping: tensions that hold a load and make K as close as possible to a target.
+
+For fixed cable stiffness ``k`` the stiffness of SPEC.md is affine in the
+tensions (:mod:`csjm_opt.cable_terms`)::
+
+    K(T) = K0 + sum_i t_i G_i,     K0 = J^T diag(k) J,   G_i = Hess(c_i)
+
+and the six cables leave three redundant tension directions (the null space
+of ``J^T``). Shaping solves the QP (build, then solve)::
+
+    minimise    sum_k w_k (L_k . vec K(T) - s_k)^2 + rho ||T - t_mid||^2
+    subject to  J^T T + tau_load = 0,   tau_load = tau_ext + tau_weight   (in {A})
+                t_min <= T <= t_max
+
+Objectives (each a set of linear functionals ``L_k`` of K with targets
+``s_k``): ``"frobenius"`` (entries of K, elementwise weights ``W`` (3, 3):
+``||K - K_target||_W^2 = sum W_ab (K_ab - K_target_ab)^2``), ``"eigen"``
+(``u_k^T K u_k`` along the eigenvectors ``u_k`` of ``K_target``, targets its
+eigenvalues: shapes the principal stiffnesses, ignores coupling), and
+``"directional"`` (``u^T K u`` along given ``directions``, targets
+``u^T K_target u``). ``rho`` is a tiny regulariser (``regularization`` times
+the mean curvature) toward mid-range tensions, which only breaks ties.
+
+:func:`build_shaping_qp` returns the :class:`qpsolvers.Problem`;
+:func:`shape_stiffness` solves it (OSQP by default, polished to round-off by
+the exact active-set solver of :mod:`csjm_opt.dense_qp`, or ``"active_set"``
+alone) and returns a self-checking :class:`ShapingResult`. :class:`Shaper`
+is the allocation-light form for control loops (no qpsolvers round trip,
+basis reused while the pose does not change, active set warm-started).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import numpy as np
+import qpsolvers
+from scipy import sparse
+
+from . import dense_qp
+from .cable_terms import CableTerms, point_force_terms
+from .errors import InfeasibleLoad, InvalidInput, SolverError
+from .model import Model
+from .planner import feasibility_distance_Nm
+from .rig import Rig
+from .validate import as_array, as_rotation, as_vector3
+
+OBJECTIVES = ("frobenius", "eigen", "directional")
+#: Default tie-breaking regulariser, relative to the mean curvature of the objective.
+REGULARIZATION = 1e-10
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class StiffnessBasis:
+    """``K(T) = K0 + sum_i T_i G_i`` at one pose, with J and the weight moment there."""
+
+    R: np.ndarray             # (3, 3)
+    J: np.ndarray             # (6, 3)
+    K0: np.ndarray            # (3, 3) N m/rad, J^T diag(k) J
+    G: np.ndarray             # (6, 3, 3) m, dK/dt_i
+    tau_weight_A_Nm: np.ndarray  # (3,)
+
+    def K(self, tensions_N: np.ndarray) -> np.ndarray:
+        return self.K0 + np.einsum("i,ijk->jk", tensions_N, self.G)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class StiffnessObjective:
+    """``sum_k w_k (L_k . vec K - s_k)^2``: functionals ``L`` (m, 9), targets ``s`` (m,), weights ``w``."""
+
+    name: str
+    L: np.ndarray
+    s: np.ndarray
+    w: np.ndarray
+
+    def residual(self, K: np.ndarray) -> float:
+        """Weighted residual ``sqrt(sum w_k (L_k . vec K - s_k)^2)`` (N m/rad)."""
+        e = self.L @ K.reshape(9) - self.s
+        return float(np.sqrt(np.sum(self.w * e * e)))
+
+
+def make_objective(K_target: np.ndarray, weights: np.ndarray | None = None, objective: str = "frobenius",
+                   directions: np.ndarray | None = None) -> StiffnessObjective:
+    """Objective of the given kind for ``K_target`` (3, 3); see the module docstring for ``weights``."""
+    if objective not in OBJECTIVES:
+        raise InvalidInput(f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}", "objective")
+    Kt = as_array(K_target, (3, 3), "K_target")
+    Kt = 0.5 * (Kt + Kt.T)
+    if objective == "frobenius":
+        W = np.ones((3, 3)) if weights is None else as_array(weights, (3, 3), "weights")
+        if np.any(W < 0):
+            raise InvalidInput("weights must be >= 0", "weights")
+        return StiffnessObjective("frobenius", np.eye(9), Kt.reshape(9), 0.5 * (W + W.T).reshape(9))
+    if objective == "eigen":
+        lam, U = np.linalg.eigh(Kt)
+        U = U.T
+    else:
+        if directions is None:
+            raise InvalidInput("objective='directional' needs directions (n, 3)", "directions")
+        U = as_array(np.atleast_2d(directions), (None, 3), "directions")
+        norms = np.linalg.norm(U, axis=1)
+        if np.any(norms < 1e-12):
+            raise InvalidInput("directions must be non-zero", "directions")
+        U = U / norms[:, None]
+        lam = np.einsum("ki,ij,kj->k", U, Kt, U)
+    w = np.ones(len(U)) if weights is None else as_array(np.ravel(weights), (len(U),), "weights")
+    if np.any(w < 0):
+        raise InvalidInput("weights must be >= 0", "weights")
+    return StiffnessObjective(objective, np.einsum("ki,kj->kij", U, U).reshape(len(U), 9), lam, w)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ShapingResult:
+    """Shaped tensions for one pose and load; checks itself."""
+
+    tensions_N: np.ndarray       # (6,)
+    K: np.ndarray                # (3, 3) achieved stiffness, N m/rad (CasADi model)
+    K_target: np.ndarray         # (3, 3)
+    objective: StiffnessObjective
+    R: np.ndarray
+    tau_ext_A_Nm: np.ndarray
+    tau_weight_A_Nm: np.ndarray
+    J: np.ndarray
+    t_min_N: float
+    t_max_N: float
+    solver: str
+    exact_tol: float             # residual (N m/rad) below which the target counts as reached
+    kkt_error: float             # of the QP solution (exact active-set check)
+
+    @property
+    def tensions(self) -> np.ndarray:
+        """Alias of ``tensions_N`` (SPEC.md name)."""
+        return self.tensions_N
+
+    @property
+    def residual(self) -> float:
+        """Weighted residual of the objective (weighted Frobenius by default), N m/rad."""
+        return self.objective.residual(self.K)
+
+    @property
+    def frobenius_error(self) -> float:
+        """Unweighted ``||K - K_target||_F`` (N m/rad)."""
+        return float(np.linalg.norm(self.K - self.K_target))
+
+    @property
+    def exact(self) -> bool:
+        """The target is reached (residual below ``exact_tol``)."""
+        return self.residual <= self.exact_tol
+
+    @property
+    def equilibrium_residual_Nm(self) -> float:
+        """``||J^T T + tau_load||`` (N m)."""
+        return float(np.linalg.norm(self.J.T @ self.tensions_N + self.tau_ext_A_Nm + self.tau_weight_A_Nm))
+
+    @property
+    def bound_violation_N(self) -> float:
+        return float(max(0.0, np.max(self.t_min_N - self.tensions_N), np.max(self.tensions_N - self.t_max_N)))
+
+    @property
+    def active_bounds(self) -> list[str]:
+        """Cables at a bound, e.g. ``["t3=t_min", "t5=t_max"]``."""
+        tol = 1e-7 * max(1.0, self.t_max_N)
+        return ([f"t{i + 1}=t_min" for i in np.flatnonzero(self.tensions_N <= self.t_min_N + tol)]
+                + [f"t{i + 1}=t_max" for i in np.flatnonzero(self.tensions_N >= self.t_max_N - tol)])
+
+    def is_valid(self, eq_tol_Nm: float = 1e-8, bound_tol_N: float = 1e-9) -> bool:
+        return self.equilibrium_residual_Nm <= eq_tol_Nm and self.bound_violation_N <= bound_tol_N
+
+    def as_dict(self) -> dict:
+        """JSON-able summary."""
+        return {"tensions_N": self.tensions_N.tolist(), "K": self.K.tolist(), "K_target": self.K_target.tolist(),
+                "objective": self.objective.name, "residual": self.residual, "exact": self.exact,
+                "frobenius_error": self.frobenius_error, "active_bounds": self.active_bounds,
+                "equilibrium_residual_Nm": self.equilibrium_residual_Nm, "solver": self.solver}
+
+
+# --------------------------------------------------------------------- build
+@functools.lru_cache(maxsize=64)
+def _terms(rig: Rig) -> CableTerms:
+    return CableTerms.from_rig(rig)
+
+
+def stiffness_basis(rig: Rig, R: np.ndarray) -> StiffnessBasis:
+    """``J, K0, G`` and the weight moment at ``R`` (closed form; trusted ``R``)."""
+    J, K0, G = _terms(rig).stiffness_basis(R)
+    tau_w, _ = point_force_terms(R, rig.weight_B_N[None], np.asarray(rig.com_A_m)[None])
+    return StiffnessBasis(R, J, K0, G, tau_w)
+
+
+def qp_matrices(basis: StiffnessBasis, tau_ext: np.ndarray, objective: StiffnessObjective,
+                t_mid: np.ndarray, regularization: float = REGULARIZATION):
+    """Dense ``P, q, A, b`` of the shaping QP (``1/2 x^T P x + q^T x``, ``A x = b``)."""
+    M = objective.L @ basis.G.reshape(6, 9).T                     # (m, 6)
+    d = objective.s - objective.L @ basis.K0.reshape(9)
+    MW = M.T * objective.w
+    H = MW @ M
+    rho = regularization * max(float(np.trace(H)) / 6.0, 1e-300)
+    P = 2.0 * (H + rho * np.eye(6))
+    q = -2.0 * (MW @ d + rho * t_mid)
+    return P, q, basis.J.T, -(tau_ext + basis.tau_weight_A_Nm)
+
+
+def build_shaping_qp(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray, K_target: np.ndarray,
+                     weights: np.ndarray | None = None, objective: str = "frobenius",
+                     directions: np.ndarray | None = None,
+                     regularization: float = REGULARIZATION) -> qpsolvers.Problem:
+    """The shaping QP at ``R`` under ``tau_ext`` as a :class:`qpsolvers.Problem` (solver-free)."""
+    R = as_rotation(R)
+    tau_ext = as_vector3(tau_ext_A_Nm, "tau_ext")
+    obj = make_objective(K_target, weights, objective, directions)
+    P, q, A, b = qp_matrices(stiffness_basis(rig, R), tau_ext, obj, rig.t_mid_N, regularization)
+    return qpsolvers.Problem(P=sparse.csc_matrix(P), q=q, A=sparse.csc_matrix(A), b=b,
+                             lb=np.full(6, rig.t_min_N), ub=np.full(6, rig.t_max_N))
+
+
+# --------------------------------------------------------------------- solve
+class Shaper:
+    """Reusable shaping solver for one rig (control loops).
+
+    Keeps the stiffness basis while the pose is unchanged and warm-starts the
+    exact active-set solver from the previous active set. Inputs are trusted.
+    """
+
+    def __init__(self, rig: Rig, regularization: float = REGULARIZATION):
+        self.rig = rig
+        self.regularization = regularization
+        self._lo, self._hi = np.full(6, rig.t_min_N), np.full(6, rig.t_max_N)
+        self._basis: StiffnessBasis | None = None
+        self._active = (np.zeros(6, bool), np.zeros(6, bool))
+
+    def basis(self, R: np.ndarray) -> StiffnessBasis:
+        if self._basis is None or not np.array_equal(self._basis.R, R):
+            self._basis = stiffness_basis(self.rig, np.array(R, float))
+        return self._basis
+
+    def solve(self, R: np.ndarray, tau_ext: np.ndarray, objective: StiffnessObjective,
+              x0: np.ndarray | None = None) -> tuple[np.ndarray, StiffnessBasis, dense_qp.DenseQPResult]:
+        """Tensions (6,), the basis used and the QP result; raises InfeasibleLoad/SolverError."""
+        basis = self.basis(R)
+        P, q, A, b = qp_matrices(basis, tau_ext, objective, self.rig.t_mid_N, self.regularization)
+        if x0 is not None:
+            tol = 1e-5 * max(1.0, self.rig.t_max_N)
+            self._active = (x0 <= self.rig.t_min_N + tol, x0 >= self.rig.t_max_N - tol)
+        res = dense_qp.solve(P, q, A, b, self._lo, self._hi, *self._active)
+        if not res.converged or res.kkt_error(P, q, A, b, self._lo, self._hi) > 1e-6 * max(1.0, np.abs(q).max()):
+            dist = feasibility_distance_Nm(basis.J, -b, self.rig.t_min_N, self.rig.t_max_N)
+            if dist > 1e-8:
+                raise InfeasibleLoad(f"load tau_ext={np.round(tau_ext, 4).tolist()} N m cannot be held at this "
+                                     f"pose with {self.rig.t_min_N:g} N <= t <= {self.rig.t_max_N:g} N: it lies "
+                                     f"{dist:.3g} N m outside the wrench-feasible set", R, tau_ext, dist)
+            raise SolverError("shaping QP: active-set solver did not converge", "dense_qp")
+        self._active = (res.lower, res.upper)
+        return res.x, basis, res
+
+
+def shape_stiffness(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray, K_target: np.ndarray,
+                    weights: np.ndarray | None = None, objective: str = "frobenius",
+                    directions: np.ndarray | None = None, solver: str = "osqp",
+                    regularization: float = REGULARIZATION, exact_tol: float = 1e-6,
+                    model: Model | None = None) -> ShapingResult:
+    """Tensions within bounds that hold ``tau_ext`` (N m, {A}) at ``R`` with K closest to ``K_target``.
+
+    ``solver``: a qpsolvers backend (``"osqp"``, ``"clarabel"``, ...) whose
+    answer is polished exactly by the active-set method, or ``"active_set"``
+    alone. The result reports the achieved K (CasADi model), the weighted
+    residual, whether the target was reached (``exact``: residual below
+    ``exact_tol`` N m/rad) and the active bounds.
+    """
+    model = model or Model(rig)
+    R = as_rotation(R)
+    tau_ext = as_vector3(tau_ext_A_Nm, "tau_ext")
+    obj = make_objective(K_target, weights, objective, directions)
+    shaper = Shaper(rig, regularization)
+    x0 = None
+    if solver != "active_set":
+        x0 = _solve_qpsolvers(build_shaping_qp(rig, R, tau_ext, K_target, weights, objective, directions,
+                                               regularization), solver)
+    T, basis, res = shaper.solve(R, tau_ext, obj, x0)
+    P, q, A, b = qp_matrices(basis, tau_ext, obj, rig.t_mid_N, regularization)
+    Kt = as_array(K_target, (3, 3), "K_target")
+    result = ShapingResult(T, model.stiffness(R, T), 0.5 * (Kt + Kt.T), obj, R, tau_ext, model.weight_moment(R), model.jacobian(R), rig.t_min_N,
+                           rig.t_max_N, solver, exact_tol, res.kkt_error(P, q, A, b, shaper._lo, shaper._hi))
+    if not result.is_valid():
+        raise SolverError(f"shaped tensions fail their check: equilibrium residual "
+                          f"{result.equilibrium_residual_Nm:.3g} N m, bound violation "
+                          f"{result.bound_violation_N:.3g} N", solver)
+    return result
+
+
+def _solve_qpsolvers(problem: qpsolvers.Problem, solver: str) -> np.ndarray | None:
+    if solver not in qpsolvers.available_solvers:
+        raise InvalidInput(f"unknown QP solver {solver!r}; installed: "
+                           f"{', '.join(qpsolvers.available_solvers)} (or 'active_set')", "solver")
+    opts = {"eps_abs": 1e-10, "eps_rel": 1e-10, "polish": True, "verbose": False, "max_iter": 20000} \
+        if solver == "osqp" else {}
+    try:
+        sol = qpsolvers.solve_problem(problem, solver=solver, **opts)
+    except Exception as exc:  # noqa: BLE001 - backend errors are wrapped, never leaked
+        raise SolverError(f"{solver} failed: {exc}", solver) from exc
+    return sol.x if sol.found and sol.x is not None else None
+
