@@ -1,0 +1,191 @@
+"""Sweep runner: evaluate many designs, in parallel, resumably.
+
+:func:`run_sweep` evaluates every design of a :class:`SweepSpec` that the
+result file (:class:`ResultStore`) does not already hold, appends each
+finished design as it arrives, and shows a progress bar. Designs run on
+
+* local processes (``concurrent.futures.ProcessPoolExecutor``, ``workers``
+  of them, 2 by default; ``workers=1`` runs in this process), or
+* a Dask cluster: ``scheduler="tcp://host:8786"`` connects to a running
+  ``distributed`` scheduler, ``dask=True`` without an address starts a
+  ``LocalCluster``. The same function evaluates each design on every
+  backend and a design's result depends only on its parameters and the
+  settings, so all backends give identical records (apart from timings).
+
+A design is identified by a hash of the evaluation settings and its
+parameters, so a resumed run (or a larger grid over the same settings)
+skips every design already in the file.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import dataclasses
+import hashlib
+import json
+import sys
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+from ..errors import CsjmError, DesignError
+from .geometry import design_rig
+from .metrics import evaluate
+from .store import ResultStore
+from .sweep_file import EvaluationSettings, SweepSpec
+
+#: Record keys that depend on the machine, not on the design (left out of comparisons).
+TIMING_KEYS = ("seconds",)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class SweepResult:
+    """Records of every design of the sweep, in sweep order, and run statistics."""
+
+    records: list[dict[str, Any]]
+    computed: int            # designs evaluated in this run
+    skipped: int             # designs found in the result file
+    seconds: float           # wall time of this run
+    complete: bool           # False when stopped early (stop_after)
+
+    @property
+    def designs_per_second(self) -> float:
+        """Designs evaluated per wall-clock second in this run (0 when none were)."""
+        return self.computed / self.seconds if self.computed and self.seconds > 0 else 0.0
+
+    def as_json(self) -> dict[str, Any]:
+        """The ``csjm sweep --json`` document (SPEC.md keys plus more)."""
+        designs = []
+        for r in self.records:
+            designs.append({"params": r["params"], "status": r["status"],
+                            "workspace_fraction": r["workspace_fraction"],
+                            "min_stiffness_Nm_per_rad": r["min_stiffness_Nm_per_rad"],
+                            "metrics": r["metrics"], "error": r["error"], "id": r["id"]})
+        return {"designs": designs, "designs_per_second": self.designs_per_second,
+                "computed": self.computed, "skipped": self.skipped, "seconds": self.seconds,
+                "complete": self.complete}
+
+
+def design_id(settings_digest: str, params: dict[str, float]) -> str:
+    """Stable identifier of a design under given settings."""
+    text = json.dumps({"settings": settings_digest, "params": params}, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+def evaluate_design(params: dict[str, float], settings: EvaluationSettings) -> dict[str, Any]:
+    """Metrics record of one design (``status`` "ok", or "invalid" with the reason)."""
+    start = time.perf_counter()
+    try:
+        rig = design_rig({**settings.base, **params}, settings.limits)
+    except CsjmError as exc:
+        return {"params": params, "status": "invalid", "error": str(exc), "metrics": None,
+                "workspace_fraction": None, "min_stiffness_Nm_per_rad": None,
+                "seconds": time.perf_counter() - start}
+    m = evaluate(rig, settings.sampling, settings.loads, settings.options).as_dict()
+    return {"params": params, "status": "ok", "error": None, "metrics": m,
+            "workspace_fraction": m["workspace_fraction"],
+            "min_stiffness_Nm_per_rad": m["min_stiffness_Nm_per_rad"],
+            "seconds": time.perf_counter() - start}
+
+
+def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str | None = None,
+              dask: bool = False, progress: bool | None = None,
+              stop_after: int | None = None) -> SweepResult:
+    """Evaluate the designs of ``spec`` missing from ``out`` and return all of them.
+
+    ``progress=None`` shows a bar only on a terminal. ``stop_after`` stops
+    after that many designs were written (an orderly interruption, for tests
+    and for splitting a long sweep into sessions).
+    """
+    if workers < 1:
+        raise DesignError(f"workers must be >= 1, got {workers}", "workers")
+    settings = spec.settings
+    digest = settings.digest()
+    designs = spec.designs()
+    ids = [design_id(digest, p) for p in designs]
+    start = time.perf_counter()
+    computed = 0
+    with ResultStore(out, digest) as store:
+        todo = [(i, p) for i, (p, d) in enumerate(zip(designs, ids)) if d not in store.records]
+        todo = list({ids[i]: (i, p) for i, p in todo}.values())   # a grid may repeat a design
+        skipped = len(designs) - len(todo)
+        bar = _progress(len(designs), skipped, progress)
+        try:
+            if dask or scheduler:
+                stream = _run_dask(todo, settings, scheduler, workers)
+            elif workers == 1 or len(todo) <= 1:
+                stream = ((i, evaluate_design(p, settings)) for i, p in todo)
+            else:
+                stream = _run_processes(todo, settings, workers)
+            for i, record in stream:
+                record.update(id=ids[i], index=i, settings=digest)
+                store.append(record)
+                computed += 1
+                bar.update(1)
+                if stop_after is not None and computed >= stop_after:
+                    stream.close()
+                    break
+        finally:
+            bar.close()
+        records = [store.records[d] for d in ids if d in store.records]
+    return SweepResult(records=records, computed=computed, skipped=skipped,
+                       seconds=time.perf_counter() - start, complete=len(records) == len(designs))
+
+
+def _run_processes(todo: list[tuple[int, dict]], settings: EvaluationSettings,
+                   workers: int) -> Iterator[tuple[int, dict[str, Any]]]:
+    pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers)
+    try:
+        futures = {pool.submit(evaluate_design, p, settings): i for i, p in todo}
+        for future in concurrent.futures.as_completed(futures):
+            yield futures[future], future.result()
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _run_dask(todo: list[tuple[int, dict]], settings: EvaluationSettings, scheduler: str | None,
+              workers: int) -> Iterator[tuple[int, dict[str, Any]]]:
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError as exc:  # pragma: no cover - dask[distributed] is a dependency
+        raise DesignError("the Dask option needs dask[distributed] installed", "--scheduler") from exc
+    cluster = None
+    try:
+        if scheduler:
+            client = Client(scheduler, timeout="10s")
+        else:
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
+            client = Client(cluster)
+    except (OSError, TimeoutError, ValueError) as exc:
+        if cluster is not None:
+            cluster.close()
+        raise DesignError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}", "--scheduler") from exc
+    try:
+        yield from dask_stream(client, todo, settings, as_completed)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def dask_stream(client: Any, todo: list[tuple[int, dict]], settings: EvaluationSettings,
+                as_completed: Callable) -> Iterator[tuple[int, dict[str, Any]]]:
+    """Evaluate ``todo`` on a Dask ``client``; yields (index, record) as designs finish."""
+    futures = {}
+    try:
+        shared = client.scatter(settings, broadcast=True)
+        for i, p in todo:
+            futures[client.submit(evaluate_design, p, shared, pure=False)] = i
+        for future in as_completed(futures):
+            yield futures[future], future.result()
+    finally:
+        client.cancel(list(futures))
+
+
+def _progress(total: int, done: int, show: bool | None) -> Any:
+    from tqdm import tqdm
+
+    return tqdm(total=total, initial=done, desc="designs", unit="design", file=sys.stderr,
+                disable=None if show is None else not show, smoothing=0.1)
