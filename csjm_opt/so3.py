@@ -61,8 +61,10 @@ def exp(w: Any) -> Any:
     return np.eye(3) + a[..., None, None] * W + b[..., None, None] * (W @ W)
 
 
-def log(R: Any) -> np.ndarray:
+def log(R: Any) -> Any:
     """Rotation vector ``w`` with ``exp(w) == R``, ``|w| <= pi``; batched over (..., 3, 3)."""
+    if isinstance(R, (ca.SX, ca.MX, ca.DM)):
+        return _log_casadi(R)
     R = np.asarray(R, dtype=float)
     cos = np.clip((np.trace(R, axis1=-2, axis2=-1) - 1) / 2, -1.0, 1.0)
     v = vee(R)  # = sin(th) * axis
@@ -83,6 +85,24 @@ def log(R: Any) -> np.ndarray:
         sign = np.where(np.sum(n * v, axis=-1) < 0, -1.0, 1.0)
         out = np.where(near_pi[..., None], (sign * th)[..., None] * n, out)
     return out
+
+
+def _log_casadi(R: Any) -> Any:
+    """Symbolic log with the same three branches as the numpy version."""
+    v = vee(R)
+    sin = ca.sqrt(ca.dot(v, v))
+    cos = (R[0, 0] + R[1, 1] + R[2, 2] - 1) / 2
+    th = ca.atan2(sin, cos)
+    generic = th / ca.fmax(sin, 1e-300) * v
+    small = (1 + th**2 / 6) * v
+    # near pi: axis from the largest diagonal entry of (R + R^T)/2 - cos I = (1 - cos) n n^T
+    S = 0.5 * (R + R.T) - cos * ca.DM.eye(3)
+    cols = [S[:, j] / ca.sqrt(ca.fmax(S[j, j] * (1 - cos), 1e-300)) * ca.sqrt(1 - cos) for j in range(3)]
+    n = ca.if_else(ca.logic_and(S[0, 0] >= S[1, 1], S[0, 0] >= S[2, 2]), cols[0],
+                   ca.if_else(S[1, 1] >= S[2, 2], cols[1], cols[2]))
+    n = n / ca.sqrt(ca.fmax(ca.dot(n, n), 1e-300))
+    n = ca.if_else(ca.dot(n, v) < 0, -n, n)
+    return ca.if_else(th < _SMALL, small, ca.if_else(th > np.pi - 1e-3, th * n, generic))
 
 
 def random_rotations(n: int, rng: np.random.Generator, max_angle: float = np.pi) -> np.ndarray:

@@ -65,6 +65,16 @@ def test_casadi_versions_match_numpy():
         assert np.all(np.isfinite(np.array(R)))
 
 
+def test_casadi_log_matches_numpy_including_near_zero_and_pi():
+    X = ca.SX.sym("R", 3, 3)
+    f = ca.Function("log", [X], [so3.log(X)])
+    rng = np.random.default_rng(2)
+    for angle in (0.0, 1e-9, 1e-4, 0.7, 2.5, np.pi - 1e-5, np.pi - 1e-2):
+        axis = rng.normal(size=3)
+        w = angle * axis / np.linalg.norm(axis)
+        assert np.allclose(np.array(f(so3.exp(w))).ravel(), w, atol=1e-9)
+
+
 def test_batched_shapes_and_angle_between():
     rng = np.random.default_rng(1)
     Rs = so3.random_rotations(50, rng, max_angle=1.0)
