@@ -109,10 +109,11 @@ def design_holes(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
             xyz = _as_holes(params[f"{body}_holes"], f"{body}_holes")
         else:
             d12, d23 = _chords(body, params)
-            z = p["oo_a_m"] if body == "platform" else -p["oo_b_m"]
             height_key = "oo_a_m" if body == "platform" else "oo_b_m"
-            if not p[height_key] > 0:
-                raise DesignError(f"must be > 0, got {p[height_key]}", height_key)
+            height = _number(p, height_key)
+            if not height > 0:
+                raise DesignError(f"must be > 0, got {height}", height_key)
+            z = height if body == "platform" else -height
             try:
                 xyz = hexagon.hexagon_holes(d12, d23, z_m=z, theta0_deg=_number(p, f"{body}_theta0_deg"))
             except (InvalidInput, ValueError) as exc:
@@ -189,7 +190,7 @@ def _check_names(params: Mapping[str, Any]) -> None:
         chords = {f"{body}_d12_m", f"{body}_d23_m"} & set(params)
         circle = {f"{body}_radius_m", f"{body}_gamma_deg"} & set(params)
         if chords and circle:
-            raise DesignError("give chords or radius and gamma, not both", sorted(circle)[0])
+            raise DesignError("give chords or radius and gamma, not both", sorted(circle)[-1])
         if len(circle) == 1:
             missing = ({f"{body}_radius_m", f"{body}_gamma_deg"} - circle).pop()
             raise DesignError(f"needs {missing} as well", circle.pop())

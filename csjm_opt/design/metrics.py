@@ -21,9 +21,14 @@ Definitions (all over the orientations of an :class:`OrientationSampling`):
   smallest ``K_zz`` (about the platform axis z_A); ``min_bending_stiffness``
   the smallest eigenvalue of the x-y block; medians likewise.
   ``stable_fraction``: feasible poses with K positive definite.
-* ``min_tension_margin_N``: smallest ``min(T - t_min, t_max - T)`` of those
-  planned tensions; ``min_wrench_margin_Nm``: smallest distance of any load of
-  the set to the boundary of the available moment set (capacity margin).
+* ``min_tension_margin_N`` / ``median_tension_margin_N``: smallest / median
+  over feasible poses of ``min(T - t_min, t_max - T)`` of those planned
+  tensions; ``median_wrench_margin_Nm``: median over feasible poses of the
+  smallest distance of any load of the set to the boundary of the available
+  moment set (capacity margin, N m). (Minima of margins go to 0 whenever the
+  workspace is not the whole region, so medians are reported.)
+* ``home_*``: the same at the home pose R = I (feasible, smallest eigenvalue
+  of K, tension margin, wrench margin).
 * Shaping range: at ``shaping_poses`` feasible poses (the first ones in
   sample order, spread over the region by the low-discrepancy sequence) the
   exact min and max of the directional stiffness ``u^T K u`` over all
@@ -116,7 +121,12 @@ class DesignMetrics:
     median_bending_stiffness_Nm_per_rad: float
     stable_fraction: float
     min_tension_margin_N: float
-    min_wrench_margin_Nm: float
+    median_tension_margin_N: float
+    median_wrench_margin_Nm: float
+    home_feasible: bool
+    home_min_stiffness_Nm_per_rad: float
+    home_tension_margin_N: float
+    home_wrench_margin_Nm: float
     shaping_range_Nm_per_rad: dict[str, tuple[float, float]]
     planner_fallbacks: int
     seconds: float
@@ -172,6 +182,10 @@ def evaluate(rig: Rig, sampling: OrientationSampling = OrientationSampling(),
     T = pm.tensions_N[ok]
     tension_margin = np.minimum(T - rig.t_min_N, rig.t_max_N - T).min(axis=1) if T.size else T
     shaping = _shaping(rig, model, pm, loads, options.shaping_poses)
+    home = evaluate_poses(rig, np.eye(3)[None], loads, options, model)
+    t_home = home.tensions_N[0]
+    home_tension_margin = float(min(np.min(t_home - rig.t_min_N), np.min(rig.t_max_N - t_home))) \
+        if home.feasible[0] else math.nan
     return DesignMetrics(
         n_orientations=n, workspace_fraction=float(ok.mean()), tilt_cone_deg=float(cone),
         min_stiffness_Nm_per_rad=_stat(np.min, lam_min),
@@ -183,7 +197,12 @@ def evaluate(rig: Rig, sampling: OrientationSampling = OrientationSampling(),
         median_bending_stiffness_Nm_per_rad=_stat(np.median, bending),
         stable_fraction=_stat(np.mean, lam_min > 0) if lam_min.size else math.nan,
         min_tension_margin_N=_stat(np.min, tension_margin),
-        min_wrench_margin_Nm=_stat(np.min, pm.wrench_margin_Nm[ok]),
+        median_tension_margin_N=_stat(np.median, tension_margin),
+        median_wrench_margin_Nm=_stat(np.median, pm.wrench_margin_Nm[ok].min(axis=1)),
+        home_feasible=bool(home.feasible[0]),
+        home_min_stiffness_Nm_per_rad=float(home.eig_Nm_per_rad[0, 0]) if home.feasible[0] else math.nan,
+        home_tension_margin_N=home_tension_margin,
+        home_wrench_margin_Nm=float(home.wrench_margin_Nm[0].min()),
         shaping_range_Nm_per_rad=shaping, planner_fallbacks=pm.fallbacks,
         seconds=time.perf_counter() - start)
 

@@ -128,7 +128,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
                     break
         finally:
             bar.close()
-        records = [store.records[d] for d in ids if d in store.records]
+        records = [{**store.records[d], "params": p} for d, p in zip(ids, designs) if d in store.records]
     return SweepResult(records=records, computed=computed, skipped=skipped,
                        seconds=time.perf_counter() - start, complete=len(records) == len(designs))
 

@@ -176,6 +176,7 @@ class SweepSpec:
                 raise fail("parameter is both fixed in [base] and swept", f"base.{name}")
         settings = _settings(data, base, fail)
         spec = cls(method=method, axes=axes, settings=settings, designs_requested=n, seed=seed, path=path)
+        _check_typical_design(spec, fail)
         if method == "grid" and math.prod(len(a.values) for a in axes) > 1_000_000:
             raise fail("grid has more than 1,000,000 designs", "parameters")
         return spec
@@ -212,11 +213,26 @@ def _settings(data: dict[str, Any], base: dict[str, Any], fail: Any) -> Evaluati
                                 float(m.get("min_cable_clearance_m", 5e-3)))
     except DesignError as exc:
         raise fail(str(exc).split("] ", 1)[-1], f"metrics.{exc.key}") from exc
-    try:
-        design_rig(base, limits)  # the fixed part must itself be a valid design
-    except DesignError as exc:
-        raise fail(str(exc).split("] ", 1)[-1], f"base.{exc.key}") from exc
     return EvaluationSettings(base=base, sampling=sampling, loads=loads, options=options, limits=limits)
+
+
+def _check_typical_design(spec: "SweepSpec", fail: Any) -> None:
+    """Build one design (first grid values, or range midpoints): catches misspelt or clashing keys early.
+
+    Single designs of the sweep may still be invalid (holes too close...): those are recorded
+    with ``status = "invalid"``, not fatal.
+    """
+    params = {a.name: a.values[0] if a.values else 0.5 * (a.low + a.high) for a in spec.axes}
+    try:
+        design_rig({**spec.settings.base, **params}, spec.settings.limits)
+    except DesignError as exc:
+        if exc.key in params:
+            section = "parameters"
+        elif exc.key in spec.settings.base:
+            section = "base"
+        else:
+            return  # a property of this one design (e.g. holes too close), not of the file
+        raise fail(str(exc).split("] ", 1)[-1], f"{section}.{exc.key}") from exc
 
 
 def _axis(name: str, spec: Any, method: str, fail: Any) -> ParameterAxis:
