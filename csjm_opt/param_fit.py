@@ -62,7 +62,8 @@ class ParameterFit:
 
         ``R_init`` (n, 3, 3) starts each solve (default: the row's measured pose).
         """
-        model = model or Model(self.rig)
+        if model is None or model.rig is not self.rig:   # the model must carry the fitted stiffness
+            model = Model(self.rig)
         starts = log.R if R_init is None else R_init
         out = np.empty((len(log), 3, 3))
         for i in range(len(log)):
