@@ -148,9 +148,8 @@ def plot_closed_loop(log: ClosedLoopLog, out_dir: str | Path, prefix: str = "clo
     out_dir.mkdir(parents=True, exist_ok=True)
     t = log.t_s
     fig, axes = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True)
-    axes[0].plot(t, 1e3 * log.pose_error_rad, color="C3")
-    axes[0].set_ylabel("pose error (mrad)")
-    axes[0].set_yscale("symlog", linthresh=1e-6)
+    axes[0].semilogy(t, np.maximum(1e3 * log.pose_error_rad, 1e-10), color="C3")
+    axes[0].set_ylabel("pose error (mrad, floor 1e-10)")
     axes[1].plot(t, log.tau_ext_A_Nm, label=[r"$\tau_x$", r"$\tau_y$", r"$\tau_z$"])
     axes[1].set_ylabel("external moment (N m)")
     axes[1].legend(fontsize=7, ncol=3)

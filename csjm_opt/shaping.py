@@ -291,8 +291,7 @@ def _solve_qpsolvers(problem: qpsolvers.Problem, solver: str) -> np.ndarray | No
     if solver not in qpsolvers.available_solvers:
         raise InvalidInput(f"unknown QP solver {solver!r}; installed: "
                            f"{', '.join(qpsolvers.available_solvers)} (or 'active_set')", "solver")
-    opts = {"eps_abs": 1e-10, "eps_rel": 1e-10, "polish": True, "verbose": False, "max_iter": 20000} \
-        if solver == "osqp" else {}
+    opts = {"eps_abs": 1e-10, "eps_rel": 1e-10, "verbose": False, "max_iter": 20000} if solver == "osqp" else {}
     try:
         sol = qpsolvers.solve_problem(problem, solver=solver, **opts)
     except Exception as exc:  # noqa: BLE001 - backend errors are wrapped, never leaked
