@@ -42,6 +42,7 @@ from .instruments import InstrumentNoise
 from .logfile import MeasurementLog
 from .model import Model
 from .rig import Rig
+from .stiffness_fits import affine_fit, bootstrap_interval, paper_estimate, symmetric_fit
 from .validate import as_array, as_rotations
 
 #: Default largest accepted condition number of the (centred) excitation.
@@ -118,6 +119,23 @@ class StiffnessEstimate:
     def is_well_conditioned(self, max_condition: float = MAX_CONDITION) -> bool:
         return bool(np.isfinite(self.condition) and self.condition <= max_condition)
 
+    def problems(self, max_condition: float = MAX_CONDITION, max_symmetry_z: float = 3.0,
+                 max_chi2: float = 2.0) -> list[str]:
+        """What the estimate itself says is doubtful (empty list: nothing)."""
+        out = []
+        if not self.is_well_conditioned(max_condition):
+            out.append(f"excitation condition {self.condition:.3g} > {max_condition:g}")
+        z = np.max(np.abs(self.symmetry_z))
+        if z > max_symmetry_z:
+            out.append(f"K is significantly asymmetric ({z:.1f} standard errors): unmodelled effects "
+                       "(friction, link compliance) or a wrong weight/reference")
+        if np.isfinite(self.chi2_per_dof) and self.chi2_per_dof > max_chi2:
+            out.append(f"residuals {self.chi2_per_dof:.2f}x the instrument variance: model or noise "
+                       "assumptions do not hold")
+        if np.any(np.linalg.eigvalsh(self.K_sym) <= 0):
+            out.append("K_sym is not positive definite: the reference pose looks unstable")
+        return out
+
     def as_dict(self) -> dict[str, Any]:
         d = {"cycle": self.cycle, "n_rows": self.n_rows, "order": self.order,
              "K_D": self.K_D, "K_L": self.K_L, "K": self.K, "K_sym": self.K_sym,
@@ -129,19 +147,14 @@ class StiffnessEstimate:
              "tau_load_ref_A_Nm": self.tau_load_ref_A_Nm, "rotvec_ref": so3.log(self.R_ref),
              "residual_rms_Nm": self.residual_rms_Nm,
              "chi2_per_dof": None if not np.isfinite(self.chi2_per_dof) else self.chi2_per_dof,
-             "det_K": float(np.linalg.det(self.K)), "eig_K_sym": np.linalg.eigvalsh(self.K_sym)}
+             "det_K": float(np.linalg.det(self.K)), "eig_K_sym": np.linalg.eigvalsh(self.K_sym),
+             "problems": self.problems()}
         if self.bootstrap_K_ci is not None:
             d["bootstrap_K_ci"] = self.bootstrap_K_ci
         return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in d.items()}
 
 
 # ------------------------------------------------------------------ design
-def quadratic_terms(dzeta: np.ndarray) -> np.ndarray:
-    """(n, 6) second-order monomials of dzeta: x^2, y^2, z^2, xy, xz, yz."""
-    x, y, z = dzeta.T
-    return np.stack([x * x, y * y, z * z, x * y, x * z, y * z], axis=1)
-
-
 def excitation(dzeta: np.ndarray, noise: InstrumentNoise | None = None,
                max_condition: float = MAX_CONDITION) -> tuple[float, np.ndarray]:
     """Condition number and singular values of the centred displacements.
@@ -197,9 +210,9 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
     _check_rows(n, p)
     cond, s = excitation(dzeta, noise, max_condition)
 
-    K_D_paper = _paper_estimate(dzeta, tau_load)
-    fit = _affine_fit(dzeta, tau_load, order, noise)
-    sym = _symmetric_fit(dzeta, tau_load, order, fit["Sigma"])
+    K_D_paper = paper_estimate(dzeta, tau_load)
+    fit = affine_fit(dzeta, tau_load, order, noise)
+    sym = symmetric_fit(dzeta, tau_load, order, fit["Sigma"])
     if noise is not None:
         q = float(stats.norm.ppf(0.5 + ci_level / 2))
         Y_std = np.sqrt(np.asarray(noise.tau_sigma_Nm) ** 2
@@ -210,7 +223,7 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
         chi2 = float("nan")
     boot = None
     if bootstrap:
-        boot = _bootstrap(dzeta, tau_load, order, noise, bootstrap, ci_level,
+        boot = bootstrap_interval(dzeta, tau_load, order, noise, bootstrap, ci_level,
                           rng or np.random.default_rng(0))
     return StiffnessEstimate(
         cycle=cycle, n_rows=n, order=order, R_ref=R[0], tau_load_ref_A_Nm=fit["c"],
@@ -220,103 +233,6 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
         condition=cond, singular_values_rad=s,
         residual_rms_Nm=float(np.sqrt(np.mean(np.sum(fit["resid"] ** 2, axis=1)))),
         chi2_per_dof=chi2, bootstrap_K_ci=boot)
-
-
-def _paper_estimate(dzeta: np.ndarray, tau_load: np.ndarray) -> np.ndarray:
-    """(49): ``K_D = Psi Omega^+`` with columns ``dtau_i``, ``dzeta_i`` relative to the reference."""
-    Psi, Omega = (tau_load[1:] - tau_load[0]).T, dzeta[1:].T
-    return Psi @ np.linalg.pinv(Omega)
-
-
-def _design(dzeta: np.ndarray, order: int) -> np.ndarray:
-    cols = [np.ones((len(dzeta), 1)), dzeta]
-    if order == 2:
-        cols.append(quadratic_terms(dzeta))
-    return np.hstack(cols)
-
-
-def _affine_fit(dzeta: np.ndarray, tau_load: np.ndarray, order: int,
-                noise: InstrumentNoise | None) -> dict[str, np.ndarray]:
-    """Least squares ``tau_load = c + K_D dzeta (+ Q q(dzeta))``; covariance of ``K = K_D - 1/2 hat(c)``."""
-    X = _design(dzeta, order)
-    n, p = X.shape
-    scale = np.maximum(np.linalg.norm(X, axis=0), 1e-300)
-    Xs = X / scale
-    N = Xs.T @ Xs
-    if noise is not None and noise.angle_sigma_rad > 0:
-        # corrected least squares: E[Z^T Z] = Z0^T Z0 + n sigma^2 I for the dzeta columns
-        N[1:4, 1:4] -= n * noise.angle_sigma_rad ** 2 * np.diag(1 / scale[1:4] ** 2)
-    G = np.linalg.inv(N)
-    B = (G @ (Xs.T @ tau_load)) / scale[:, None]          # (p, 3): column i = output axis i
-    G = G / np.outer(scale, scale)
-    resid = tau_load - X @ B
-    c, K_D = B[0], B[1:4].T
-    if noise is not None:
-        Sigma = np.diag(np.asarray(noise.tau_sigma_Nm) ** 2) + noise.angle_sigma_rad ** 2 * K_D @ K_D.T
-    else:
-        Sigma = resid.T @ resid / (n - p)
-    cov_B = np.kron(Sigma, G)                               # theta = B.T.ravel(): (axis i, param a)
-    L = np.zeros((9, 3 * p))                                # K.ravel() = L theta
-    for i in range(3):
-        for j in range(3):
-            L[3 * i + j, i * p + 1 + j] = 1.0
-            # -1/2 hat(c)[i, j] = -1/2 eps_{i k j} c_k  -> depends on c_k, k = 3 - i - j
-            if i != j:
-                k = 3 - i - j
-                sign = -0.5 * (so3.hat(np.eye(3)[k])[i, j])
-                L[3 * i + j, k * p] = sign
-    return {"c": c, "K_D": K_D, "K": K_D - 0.5 * so3.hat(c), "cov_K": L @ cov_B @ L.T,
-            "resid": resid, "Sigma": Sigma}
-
-
-_SYM_INDEX = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
-
-
-def _symmetric_fit(dzeta: np.ndarray, tau_load: np.ndarray, order: int,
-                   Sigma: np.ndarray) -> dict[str, np.ndarray]:
-    """GLS for ``tau_load_i = (I - 1/2 hat(dzeta_i)) tau0 + S dzeta_i (+ Q q_i)``; K_sym = S."""
-    n = len(dzeta)
-    blocks = [np.eye(3)[None] - 0.5 * so3.hat(dzeta)]      # tau0 (3 params)
-    E = np.zeros((6, 3, 3))
-    for m, (i, j) in enumerate(_SYM_INDEX):
-        E[m, i, j] = E[m, j, i] = 1.0
-    blocks.append(np.einsum("mij,nj->nim", E, dzeta))       # S (6 params)
-    if order == 2:
-        q = quadratic_terms(dzeta)
-        blocks.append(np.einsum("ik,nm->nikm", np.eye(3), q).reshape(n, 3, 18))
-    A = np.concatenate(blocks, axis=2)                      # (n, 3, P)
-    W_half = _whitener(Sigma)                               # W = W_half^T W_half = Sigma^-1
-    Aw = np.einsum("ij,njp->nip", W_half, A).reshape(3 * n, -1)
-    yw = (tau_load @ W_half.T).reshape(-1)
-    scale = np.maximum(np.linalg.norm(Aw, axis=0), 1e-300)
-    cov = np.linalg.inv((Aw / scale).T @ (Aw / scale)) / np.outer(scale, scale)
-    theta = cov @ (Aw.T @ yw)
-    M = np.zeros((9, A.shape[2]))
-    for m, (i, j) in enumerate(_SYM_INDEX):
-        M[3 * i + j, 3 + m] = M[3 * j + i, 3 + m] = 1.0
-    return {"K": (M @ theta).reshape(3, 3), "cov_K": M @ cov @ M.T, "tau0": theta[:3]}
-
-
-def _whitener(Sigma: np.ndarray) -> np.ndarray:
-    """``Sigma^-1/2``, with eigenvalues floored (noise-free data give a near-zero Sigma)."""
-    w, V = np.linalg.eigh(0.5 * (Sigma + Sigma.T))
-    top = max(float(w.max()), 0.0)
-    w = np.maximum(w, top * 1e-10) if top > 0 else np.ones(3)
-    return (V / np.sqrt(w)).T
-
-
-def _bootstrap(dzeta, tau_load, order, noise, n_boot, ci_level, rng) -> np.ndarray:
-    """Pairs bootstrap (rows resampled with replacement) percentile interval of K."""
-    n = len(dzeta)
-    Ks = []
-    for _ in range(n_boot):
-        rows = rng.integers(0, n, n)
-        try:
-            Ks.append(_affine_fit(dzeta[rows], tau_load[rows], order, noise)["K"])
-        except np.linalg.LinAlgError:
-            continue
-    a = (1 - ci_level) / 2
-    return np.quantile(np.array(Ks), [a, 1 - a], axis=0)
 
 
 # ---------------------------------------------------------------- whole logs
