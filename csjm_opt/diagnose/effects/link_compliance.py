@@ -1,0 +1,48 @@
+"""``link_compliance``: a compliance in series between the cable-driven platform and the measured body.
+
+The tracked, loaded body is joined to the cable platform by a link with
+symmetric compliance ``C`` (rad/(N m), in {A}); the moment it carries, the
+external moment plus the body's weight, ``tau_m``, twists it by
+``phi = C tau_m``: ``R_meas = R_cable exp(hat(phi))``. The cables balance
+``exp(hat(phi)) tau_m``. Six parameters (upper triangle of ``C``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ... import so3
+from .base import Effect
+
+_IU = np.triu_indices(3)
+
+
+def compliance_matrix(p: np.ndarray) -> np.ndarray:
+    C = np.zeros((3, 3))
+    C[_IU] = p
+    return C + np.triu(C, 1).T
+
+
+class LinkCompliance(Effect):
+    """Symmetric series compliance ``C`` (rad/(N m))."""
+
+    name = "link_compliance"
+    description = "series compliance C (rad/N m) between cable platform and measured body"
+
+    @property
+    def param_names(self):
+        return tuple(f"C_{i + 1}{j + 1}_rad_per_Nm" for i, j in zip(*_IU))
+
+    @property
+    def scales(self):
+        return np.full(6, 2e-3)
+
+    def adjust_pose(self, ev, p):
+        phi = (ev.tau_ext_A_Nm + ev.tau_weight_A_Nm) @ compliance_matrix(p)  # C symmetric
+        E = so3.exp(phi)
+        ev.R_cable = ev.R_cable @ np.swapaxes(E, 1, 2)
+        ev.link_rotation = E @ ev.link_rotation
+
+    def describe(self, p):
+        w = np.linalg.eigvalsh(compliance_matrix(p))
+        return {"compliance_eigenvalues_rad_per_Nm": w.tolist()}

@@ -1,0 +1,41 @@
+"""``mass_com``: error of the platform's mass and centre of mass.
+
+Moment data see the weight only through its first mass moment
+``m r`` (kg m, in {A}): ``tau_w = (m r) x (R^T g)``. Mass and the centre of
+mass along ``r`` are therefore not separately identifiable; the effect fits
+the first-moment error ``d(m r)`` (3 parameters) and reports what it implies
+for the centre of mass at the rig file's mass.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .base import Effect
+
+
+class MassCom(Effect):
+    """First mass moment error ``d(m r)`` (kg m, in {A})."""
+
+    name = "mass_com"
+    description = "platform mass / centre-of-mass error, fitted as the first mass moment m r (kg m)"
+
+    def __init__(self, mass_kg: float = 0.4913):
+        self.mass_kg = float(mass_kg)
+
+    @property
+    def param_names(self):
+        return ("dmr_x_kgm", "dmr_y_kgm", "dmr_z_kgm")
+
+    @property
+    def scales(self):
+        return np.full(3, 2e-3)
+
+    def adjust_load(self, ev, p):
+        ev.first_moment_A_kgm = ev.first_moment_A_kgm + p
+
+    def describe(self, p):
+        if self.mass_kg <= 0:
+            return {}
+        return {"com_shift_at_nominal_mass_m": (np.asarray(p) / self.mass_kg).tolist(),
+                "note": "mass and com are confounded in moment data; only m*r is identified"}

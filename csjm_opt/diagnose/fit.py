@@ -1,0 +1,126 @@
+"""Fit an augmented model on linearised, whitened pose residuals (Gauss-Newton).
+
+Residual of row ``i``: ``W_i G_i(theta)^-1 g_i(theta)``: the balance ``g`` at
+the measured pose mapped through the candidate's *own* tangent
+``G = dg/dzeta`` (one Newton step: the pose the candidate predicts, to first
+order) and whitened by the instrument noise (``W_i`` from :mod:`.residuals`).
+The tangent must be the candidate's: with a fixed nominal tangent, a model
+could shrink how moment *noise* enters ``g`` (e.g. softer cables plus a
+negative series compliance) and win on noise, not on physics. Parameters are solved for in units of their typical
+scale by ``scipy.optimize.least_squares``; parameters with a ridge prior add
+rows ``theta_j / sd_j``. The result knows its covariance, its effective
+number of parameters, the rank and condition of its Jacobian, and its BIC.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from . import kinematics as kin
+from .augmented import AugmentedModel
+from .residuals import ResidualTable
+
+#: Condition number (parameters in units of their scale) above which a fit is reported ill-conditioned.
+CONDITION_LIMIT = 1e4
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class FitResult:
+    """A fitted augmented model."""
+
+    model: AugmentedModel
+    theta: np.ndarray
+    cov: np.ndarray            # (p, p) parameter covariance
+    rss: float                 # sum of squared whitened data residuals
+    n_obs: int                 # 3 * rows
+    p_eff: float               # effective number of parameters (ridge-aware)
+    rank: int                  # numerical rank of the data Jacobian
+    condition: float           # condition number of the scaled data Jacobian
+    zeta_lin_rad: np.ndarray   # (n, 3) linearised pose residuals at the fit
+
+    @property
+    def sigma2(self) -> float:
+        return self.rss / max(self.n_obs - self.p_eff, 1.0)
+
+    @property
+    def bic(self) -> float:
+        """Gaussian BIC with unknown noise scale: ``N ln(RSS/N) + p_eff ln N``."""
+        N = self.n_obs
+        return float(N * np.log(self.rss / N) + self.p_eff * np.log(N))
+
+    @property
+    def stderr(self) -> np.ndarray:
+        return np.sqrt(np.maximum(np.diag(self.cov), 0.0))
+
+    @property
+    def identifiable(self) -> bool:
+        return bool(self.rank == self.model.n_params and self.condition < CONDITION_LIMIT)
+
+    def params(self, effect_only: bool = True) -> dict[str, float]:
+        names = self.model.param_names
+        start = 2 if effect_only else 0
+        return {n: float(v) for n, v in zip(names[start:], self.theta[start:])}
+
+    def param_sd(self, effect_only: bool = True) -> dict[str, float]:
+        names = self.model.param_names
+        start = 2 if effect_only else 0
+        return {n: float(v) for n, v in zip(names[start:], self.stderr[start:])}
+
+
+def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | None = None) -> FitResult:
+    """Fit ``model`` to the rows of ``table`` (all rows are training rows)."""
+    scales = model.scales
+    prior = model.prior_sd
+    has_prior = np.isfinite(prior)
+    rows, R_meas, W = table.rows, table.R_meas, table.whiten
+
+    def data_res(x: np.ndarray) -> np.ndarray:
+        return np.einsum("nij,nj->ni", W, linearised_zeta(model, table, x * scales)).ravel()
+
+    def res(x: np.ndarray) -> np.ndarray:
+        r = data_res(x)
+        if has_prior.any():
+            r = np.concatenate([r, (x * scales)[has_prior] / prior[has_prior]])
+        return r
+
+    x0 = (model.x0() if theta0 is None else np.asarray(theta0)) / scales
+    lb = model.lower_bounds / scales
+    x0 = np.maximum(x0, lb)
+    sol = least_squares(res, x0, bounds=(lb, np.full_like(lb, np.inf)), method="trf",
+                        x_scale=1.0, xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
+    x = sol.x
+    Jfull = sol.jac
+    Jd = Jfull[:3 * len(table)]
+    rd = data_res(x)
+    rss = float(rd @ rd)
+    N = rd.size
+    # effective parameters: trace of the hat matrix of the data rows; active bounds drop out
+    free = ~((x <= lb + 1e-9) & np.isfinite(lb))
+    JtJ = Jfull[:, free].T @ Jfull[:, free]
+    JtJ_inv = np.linalg.pinv(JtJ)
+    p_eff = float(np.trace(Jd[:, free] @ JtJ_inv @ Jd[:, free].T))
+    s = np.linalg.svd(Jd, compute_uv=False)
+    rank = int(np.sum(s > s[0] * 1e-9)) if s.size else 0
+    cond = float(s[0] / s[-1]) if s.size and s[-1] > 0 else float("inf")
+    sigma2 = rss / max(N - p_eff, 1.0)
+    cov_x = np.zeros((len(x), len(x)))
+    cov_x[np.ix_(free, free)] = JtJ_inv * sigma2
+    cov = cov_x * np.outer(scales, scales)
+    theta = x * scales
+    zeta = linearised_zeta(model, table, theta)
+    return FitResult(model, theta, cov, rss, N, p_eff, rank, cond, zeta)
+
+
+def linearised_zeta(model: AugmentedModel, table: ResidualTable, theta: np.ndarray) -> np.ndarray:
+    """``G^-1 g`` (n, 3): the pose residual ``log(R_pred^T R_meas)`` to first order (rad).
+
+    (``g(R_meas exp(d)) ~ g + G d = 0`` gives ``R_pred = R_meas exp(-G^-1 g)``.)"""
+    def g(R: np.ndarray) -> np.ndarray:
+        return model.balance(R, table.rows, theta)
+
+    g0 = g(table.R_meas)
+    G = kin.tangent(g, table.R_meas, g0, h=1e-6)
+    return np.linalg.solve(G, g0[..., None])[..., 0]
