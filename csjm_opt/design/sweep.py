@@ -91,12 +91,13 @@ def evaluate_design(params: dict[str, float], settings: EvaluationSettings) -> d
 
 def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str | None = None,
               dask: bool = False, progress: bool | None = None,
-              stop_after: int | None = None) -> SweepResult:
+              stop_after: int | None = None, connect_timeout_s: float = 10.0) -> SweepResult:
     """Evaluate the designs of ``spec`` missing from ``out`` and return all of them.
 
     ``progress=None`` shows a bar only on a terminal. ``stop_after`` stops
     after that many designs were written (an orderly interruption, for tests
-    and for splitting a long sweep into sessions).
+    and for splitting a long sweep into sessions). ``connect_timeout_s``
+    bounds the wait for a Dask scheduler.
     """
     if workers < 1:
         raise DesignError(f"workers must be >= 1, got {workers}", "workers")
@@ -113,7 +114,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
         bar = _progress(len(designs), skipped, progress)
         try:
             if dask or scheduler:
-                stream = _run_dask(todo, settings, scheduler, workers)
+                stream = _run_dask(todo, settings, scheduler, workers, connect_timeout_s)
             elif workers == 1 or len(todo) <= 1:
                 stream = ((i, evaluate_design(p, settings)) for i, p in todo)
             else:
@@ -145,7 +146,7 @@ def _run_processes(todo: list[tuple[int, dict]], settings: EvaluationSettings,
 
 
 def _run_dask(todo: list[tuple[int, dict]], settings: EvaluationSettings, scheduler: str | None,
-              workers: int) -> Iterator[tuple[int, dict[str, Any]]]:
+              workers: int, timeout_s: float) -> Iterator[tuple[int, dict[str, Any]]]:
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError as exc:  # pragma: no cover - dask[distributed] is a dependency
@@ -153,7 +154,7 @@ def _run_dask(todo: list[tuple[int, dict]], settings: EvaluationSettings, schedu
     cluster = None
     try:
         if scheduler:
-            client = Client(scheduler, timeout="10s")
+            client = Client(scheduler, timeout=f"{timeout_s}s")
         else:
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                    dashboard_address=None)
