@@ -36,8 +36,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("data", metavar="DATA.csv", help="measurement log (SPEC.md format)")
     p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
     p.add_argument("--cycle", type=int, default=None, help="only this cycle id")
-    p.add_argument("--order", type=int, choices=(1, 2), default=1,
-                   help="1: linear fit (paper); 2: add quadratic terms (less finite-displacement bias)")
+    p.add_argument("--order", type=int, choices=(1, 2, 3), default=1,
+                   help="1: linear fit (paper); 2, 3: add terms up to that degree in dzeta "
+                   "(less finite-displacement bias; needs 11 / 21 rows)")
     p.add_argument("--noise", choices=("none", "paper"), default="none",
                    help="'paper': weight and correct with the instrument uncertainties of Tables 1-2")
     p.add_argument("--ci-level", type=float, default=0.95, help="confidence level (default 0.95)")
@@ -79,6 +80,7 @@ def run_identify(args: argparse.Namespace) -> int:
     import numpy as np
 
     from .identify import MAX_CONDITION, identify_log
+    from .stiffness_fits import n_parameters
     from .identify_figures import convergence_curve, plot_convergence
     from .instruments import InstrumentNoise
     from .logfile import MeasurementLog
@@ -101,7 +103,7 @@ def run_identify(args: argparse.Namespace) -> int:
         for e in estimates:
             rows = log.cycle_rows(e.cycle)
             curve = convergence_curve(log.R[rows], log.tau_ext_A_Nm[rows], model,
-                                      n_min=5 if args.order == 1 else 11, **options | {"bootstrap": 0})
+                                      n_min=n_parameters(args.order) + 1, **options | {"bootstrap": 0})
             figures.append(str(plot_convergence(curve, Path(args.figures) / f"convergence_cycle{e.cycle}.png",
                                                 f"Cycle {e.cycle}: det K against measurements")))
     if args.json:

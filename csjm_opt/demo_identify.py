@@ -22,6 +22,7 @@ from .logfile import MeasurementLog
 from .model import Model
 from .param_fit import check_fit, fit_parameters
 from .rig import Rig
+from .stiffness_fits import n_parameters
 from .verify import plot_verification, verify_log
 
 #: Rows per cycle from which the quadratic (order 2) fit is used.
@@ -69,7 +70,7 @@ def run_demo(rig: Rig, log: MeasurementLog, out_dir: Path, test_log: Measurement
                                 "residual_rms_Nm")})
         if len(figures) < MAX_FIGURE_CYCLES:
             curve = convergence_curve(train.R[rows], train.tau_ext_A_Nm[rows], model,
-                                      n_min=11 if order == 2 else 5, order=order)
+                                      n_min=n_parameters(order) + 1, order=order)
             figures.append(str(plot_convergence(curve, out_dir / f"identify_convergence_cycle{c}.png",
                                                 f"Cycle {c}: det K against measurements")))
     summary: dict[str, Any] = {"cycles": cycles, "skipped_cycles": skipped, "n_train_rows": len(train),

@@ -12,7 +12,7 @@ Three estimates are returned together in :class:`StiffnessEstimate`:
 * ``K_D_paper`` / ``K_paper``: the paper's literal ``Psi Omega^+`` on
   differences to the reference row (49)-(50), with the corrected ``K_L``.
 * ``K_D`` / ``K``: affine least squares ``tau_load_i = c + K_D dzeta_i
-  [+ quadratic terms if order=2]`` over all rows, so the reference row's noise
+  [+ terms of degree 2..order]`` over all rows, so the reference row's noise
   is not copied into every difference; ``K_L`` uses the fitted ``c``. With an
   :class:`~csjm_opt.instruments.InstrumentNoise`, the normal matrix is
   corrected for the known orientation noise in ``dzeta`` (errors-in-variables,
@@ -42,7 +42,7 @@ from .instruments import InstrumentNoise
 from .logfile import MeasurementLog
 from .model import Model
 from .rig import Rig
-from .stiffness_fits import affine_fit, bootstrap_interval, paper_estimate, symmetric_fit
+from .stiffness_fits import affine_fit, bootstrap_interval, n_parameters, paper_estimate, symmetric_fit
 from .validate import as_array, as_rotations
 
 #: Default largest accepted condition number of the (centred) excitation.
@@ -75,6 +75,7 @@ class StiffnessEstimate:
     residual_rms_Nm: float
     chi2_per_dof: float             # residuals against the instrument model (nan without one)
     bootstrap_K_ci: np.ndarray | None = None  # (2, 3, 3) percentile interval of K, or None
+    design_condition: float = float("nan")  # condition of the column-scaled design (with higher terms)
 
     # ----------------------------------------------------------- self-checks
     @property
@@ -129,6 +130,9 @@ class StiffnessEstimate:
         if z > max_symmetry_z:
             out.append(f"K is significantly asymmetric ({z:.1f} standard errors): unmodelled effects "
                        "(friction, link compliance) or a wrong weight/reference")
+        if self.design_condition > max_condition:
+            out.append(f"design condition {self.design_condition:.3g}: curvature terms are poorly separated "
+                       "from the linear ones (vary load magnitudes as well as directions, or lower the order)")
         if np.isfinite(self.chi2_per_dof) and self.chi2_per_dof > max_chi2:
             out.append(f"residuals {self.chi2_per_dof:.2f}x the instrument variance: model or noise "
                        "assumptions do not hold")
@@ -142,7 +146,8 @@ class StiffnessEstimate:
              "K_D_paper": self.K_D_paper, "K_paper": self.K_paper,
              "K_std": self.K_std, "K_sym_std": self.K_sym_std,
              "ci_level": self.ci_level, "K_ci": self.K_ci, "K_sym_ci": self.K_sym_ci,
-             "condition": self.condition, "singular_values_rad": self.singular_values_rad,
+             "condition": self.condition, "design_condition": self.design_condition,
+             "singular_values_rad": self.singular_values_rad,
              "symmetry_error": self.symmetry_error, "symmetry_z": self.symmetry_z,
              "tau_load_ref_A_Nm": self.tau_load_ref_A_Nm, "rotvec_ref": so3.log(self.R_ref),
              "residual_rms_Nm": self.residual_rms_Nm,
@@ -202,11 +207,11 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
         if model is None:
             raise InvalidInput("give a model (for the weight moment) or tau_weight_A_Nm", "model")
         tau_weight_A_Nm = model.weight_moment(R)
-    if order not in (1, 2):
-        raise InvalidInput(f"order: expected 1 or 2, got {order!r}", "order")
+    if order not in (1, 2, 3):
+        raise InvalidInput(f"order: expected 1, 2 or 3, got {order!r}", "order")
     tau_load = tau_ext + as_array(tau_weight_A_Nm, (n, 3), "tau_weight")
     dzeta = so3.log(np.swapaxes(R[0], -1, -2)[None] @ R)
-    p = 4 if order == 1 else 10
+    p = n_parameters(order)
     _check_rows(n, p)
     cond, s = excitation(dzeta, noise, max_condition)
 
@@ -232,7 +237,7 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
         cov_K=fit["cov_K"], cov_K_sym=sym["cov_K"], ci_level=ci_level, ci_quantile=q,
         condition=cond, singular_values_rad=s,
         residual_rms_Nm=float(np.sqrt(np.mean(np.sum(fit["resid"] ** 2, axis=1)))),
-        chi2_per_dof=chi2, bootstrap_K_ci=boot)
+        chi2_per_dof=chi2, bootstrap_K_ci=boot, design_condition=fit["design_condition"])
 
 
 # ---------------------------------------------------------------- whole logs

@@ -3,6 +3,9 @@
 All take ``dzeta`` (n, 3), body-frame displacements from the reference row
 (row 0), and ``tau_load`` (n, 3), total load moments in {A}:
 
+Higher terms ``Q q(dzeta)`` (``order`` 2 or 3) absorb the finite-displacement
+curvature so that K is the derivative at the reference, not a secant.
+
 * :func:`paper_estimate`: (49), ``K_D = Psi Omega^+`` on differences to row 0.
 * :func:`affine_fit`: ``tau_load = c + K_D dzeta (+ Q q(dzeta))``, corrected
   for known orientation noise (errors in variables); covariance of
@@ -14,16 +17,26 @@ All take ``dzeta`` (n, 3), body-frame displacements from the reference row
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
 from . import so3
 from .instruments import InstrumentNoise
 
 
-def quadratic_terms(dzeta: np.ndarray) -> np.ndarray:
-    """(n, 6) second-order monomials of dzeta: x^2, y^2, z^2, xy, xz, yz."""
-    x, y, z = dzeta.T
-    return np.stack([x * x, y * y, z * z, x * y, x * z, y * z], axis=1)
+def higher_terms(dzeta: np.ndarray, order: int) -> np.ndarray:
+    """(n, m) monomials of dzeta of degree 2..order (m = 0, 6, 16 for order 1, 2, 3)."""
+    cols = []
+    for degree in range(2, order + 1):
+        for powers in itertools.combinations_with_replacement(range(3), degree):
+            cols.append(np.prod(dzeta[:, list(powers)], axis=1))
+    return np.stack(cols, axis=1) if cols else np.zeros((len(dzeta), 0))
+
+
+def n_parameters(order: int) -> int:
+    """Parameters per output axis of the affine fit: 1 + 3 + higher terms."""
+    return 4 + higher_terms(np.zeros((1, 3)), order).shape[1]
 
 
 def paper_estimate(dzeta: np.ndarray, tau_load: np.ndarray) -> np.ndarray:
@@ -33,10 +46,7 @@ def paper_estimate(dzeta: np.ndarray, tau_load: np.ndarray) -> np.ndarray:
 
 
 def design_matrix(dzeta: np.ndarray, order: int) -> np.ndarray:
-    cols = [np.ones((len(dzeta), 1)), dzeta]
-    if order == 2:
-        cols.append(quadratic_terms(dzeta))
-    return np.hstack(cols)
+    return np.hstack([np.ones((len(dzeta), 1)), dzeta, higher_terms(dzeta, order)])
 
 
 def affine_fit(dzeta: np.ndarray, tau_load: np.ndarray, order: int,
@@ -50,6 +60,8 @@ def affine_fit(dzeta: np.ndarray, tau_load: np.ndarray, order: int,
     if noise is not None and noise.angle_sigma_rad > 0:
         # corrected least squares: E[Z^T Z] = Z0^T Z0 + n sigma^2 I for the dzeta columns
         N[1:4, 1:4] -= n * noise.angle_sigma_rad ** 2 * np.diag(1 / scale[1:4] ** 2)
+    sv = np.linalg.svd(Xs, compute_uv=False)
+    design_condition = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
     G = np.linalg.inv(N)
     B = (G @ (Xs.T @ tau_load)) / scale[:, None]          # (p, 3): column i = output axis i
     G = G / np.outer(scale, scale)
@@ -70,7 +82,7 @@ def affine_fit(dzeta: np.ndarray, tau_load: np.ndarray, order: int,
                 sign = -0.5 * (so3.hat(np.eye(3)[k])[i, j])
                 L[3 * i + j, k * p] = sign
     return {"c": c, "K_D": K_D, "K": K_D - 0.5 * so3.hat(c), "cov_K": L @ cov_B @ L.T,
-            "resid": resid, "Sigma": Sigma}
+            "resid": resid, "Sigma": Sigma, "design_condition": design_condition}
 
 
 _SYM_INDEX = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
@@ -85,9 +97,8 @@ def symmetric_fit(dzeta: np.ndarray, tau_load: np.ndarray, order: int,
     for m, (i, j) in enumerate(_SYM_INDEX):
         E[m, i, j] = E[m, j, i] = 1.0
     blocks.append(np.einsum("mij,nj->nim", E, dzeta))       # S (6 params)
-    if order == 2:
-        q = quadratic_terms(dzeta)
-        blocks.append(np.einsum("ik,nm->nikm", np.eye(3), q).reshape(n, 3, 18))
+    q = higher_terms(dzeta, order)
+    blocks.append(np.einsum("ik,nm->nikm", np.eye(3), q).reshape(n, 3, 3 * q.shape[1]))
     A = np.concatenate(blocks, axis=2)                      # (n, 3, P)
     W_half = _whitener(Sigma)                               # W = W_half^T W_half = Sigma^-1
     Aw = np.einsum("ij,njp->nip", W_half, A).reshape(3 * n, -1)
