@@ -45,6 +45,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--bootstrap", type=int, default=0, metavar="N", help="pairs-bootstrap resamples")
     p.add_argument("--max-condition", type=float, default=None,
                    help="largest accepted condition number of the excitation (default 1e3)")
+    p.add_argument("--fit-parameters", choices=("none", "shared", "per-cable"), default="none",
+                   help="also fit the cable stiffness (shared or per cable) and rest-length offsets "
+                   "over the whole log, with standard deviations")
     p.add_argument("--json", metavar="PATH", help="write machine-readable output ('-' = stdout)")
     p.add_argument("--figures", metavar="DIR", help="write the Figure 5 convergence curve per cycle")
     p.set_defaults(func=run_identify)
@@ -106,9 +109,14 @@ def run_identify(args: argparse.Namespace) -> int:
                                       n_min=n_parameters(args.order) + 1, **options | {"bootstrap": 0})
             figures.append(str(plot_convergence(curve, Path(args.figures) / f"convergence_cycle{e.cycle}.png",
                                                 f"Cycle {e.cycle}: det K against measurements")))
+    out = {"source": str(args.data), "cycles": [e.as_dict() for e in estimates], "figures": figures}
+    if args.fit_parameters != "none":
+        from .param_fit import fit_parameters
+
+        fit = fit_parameters(log, rig, shared_stiffness=args.fit_parameters == "shared", noise=noise, model=model)
+        out["parameters"] = fit.summary()
     if args.json:
-        atomic_write_json(args.json, {"source": str(args.data), "cycles": [e.as_dict() for e in estimates],
-                                      "figures": figures})
+        atomic_write_json(args.json, out)
     if args.json != "-":
         np.set_printoptions(precision=3, suppress=True)
         for e in estimates:
@@ -116,6 +124,8 @@ def run_identify(args: argparse.Namespace) -> int:
                   f"{e.symmetry_error:.3g}, residual rms {e.residual_rms_Nm:.3g} N m")
             print(f"  K (N m/rad) =\n{e.K}\n  +- ({int(e.ci_level * 100)} %)\n{e.ci_quantile * e.K_std}")
             print(f"  K_sym =\n{e.K_sym}")
+        for name, p in out.get("parameters", {}).get("parameters", {}).items():
+            print(f"  {name} = {p['value']:.6g} +- {p['std']:.2g}")
         for f in figures:
             print(f"figure: {f}")
     return 0

@@ -118,7 +118,8 @@ def verify_increments(R0: np.ndarray, K: np.ndarray, dtau_A_Nm: np.ndarray, R_ac
 
 def verify_log(estimates: Sequence[StiffnessEstimate], log: MeasurementLog, model: Model,
                use: str = "K_D", load: str = "total") -> Verification:
-    """Predict every row of ``log`` from the estimate whose reference pose is nearest.
+    """Predict every row of ``log`` from the estimate of its cycle (same cycle id), else
+    from the estimate whose reference pose is nearest.
 
     ``load="total"``: increment of the total load measured at the actual pose
     (the paper's Column A); ``load="external"``: only the external moment is
@@ -132,6 +133,8 @@ def verify_log(estimates: Sequence[StiffnessEstimate], log: MeasurementLog, mode
     R = log.R
     refs = np.array([e.R_ref for e in estimates])
     nearest = np.argmin(so3.angle_between(refs[None], R[:, None]), axis=1)
+    by_cycle = {e.cycle: j for j, e in enumerate(estimates) if e.cycle is not None}
+    nearest = np.array([by_cycle.get(int(c), j) for c, j in zip(log.cycle, nearest)])
     tau_load = log.tau_ext_A_Nm + model.weight_moment(R)
     R_est = np.empty_like(R)
     dtau = np.empty((len(R), 3))

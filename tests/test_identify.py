@@ -172,8 +172,9 @@ def test_identify_log_and_cli(rig, model, tmp_path, capsys):
     log.to_csv(path)
     out = tmp_path / "id.json"
     assert main(["identify", str(path), "--json", str(out), "--figures", str(tmp_path / "figs"),
-                 "--order", "2"]) == 0
+                 "--order", "2", "--fit-parameters", "shared"]) == 0
     data = json.loads(out.read_text())
+    assert data["parameters"]["parameters"]["k"]["value"] == pytest.approx(rig.cable_stiffness_N_per_m[0], rel=1e-6)
     assert [c["cycle"] for c in data["cycles"]] == [0, 1]
     assert all({"K_D", "K", "K_sym", "condition", "K_ci"} <= set(c) for c in data["cycles"])
     assert len(list((tmp_path / "figs").glob("*.png"))) == 2
