@@ -4,6 +4,7 @@ import json
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from csjm_opt import so3
 from csjm_opt.cli import main
@@ -136,3 +137,15 @@ def test_cli_preprocess(rig, truth, tmp_path, capsys):
     assert main(["preprocess", str(raw), "-o", str(raw)]) == 2          # never the input
     assert "input" in capsys.readouterr().err
     assert main(["preprocess", str(tmp_path / "none.csv"), "-o", str(tmp_path / "x.csv")]) == 2
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(st.floats(-3, 3), min_size=3, max_size=3), st.lists(st.floats(-5, 5), min_size=3, max_size=3),
+       st.integers(3, 9), st.integers(0, 2**31 - 1))
+def test_rigid_fit_law(rotvec, shift, n_points, seed):
+    """Law: the fit of exactly transformed points returns the transform (any rotation, any shift)."""
+    rng = np.random.default_rng(seed)
+    P = rng.normal(size=(n_points, 3))
+    R_true = so3.exp(np.array(rotvec))
+    R, p, rms = fit_rigid_transform(P, P @ R_true.T + np.array(shift))
+    assert np.allclose(R, R_true, atol=1e-9) and np.allclose(p, shift, atol=1e-9) and rms < 1e-9
