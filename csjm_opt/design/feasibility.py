@@ -26,7 +26,7 @@ import itertools
 import numpy as np
 
 _PAIRS = np.array(list(itertools.combinations(range(6), 2)))   # (15, 2)
-#: Relative rank threshold: sigma_min(J) / sigma_max(J) below this counts as rank deficient.
+#: Relative flatness below which the moment set counts as rank deficient (J of rank < 3).
 RANK_TOL = 1e-9
 
 
@@ -43,20 +43,22 @@ def wrench_margin_Nm(J: np.ndarray, tau_load_A_Nm: np.ndarray, t_min_N: float,
     single = tau.ndim == 2
     if single:
         tau = tau[:, None, :]
-    normals = np.cross(J[:, _PAIRS[:, 0]], J[:, _PAIRS[:, 1]])            # (n, 15, 3)
+    g_a, g_b = J[:, _PAIRS[:, 0]], J[:, _PAIRS[:, 1]]
+    normals = np.cross(g_a, g_b)                                           # (n, 15, 3)
     norms = np.linalg.norm(normals, axis=-1)
-    scale = np.linalg.norm(J[:, _PAIRS[:, 0]], axis=-1) * np.linalg.norm(J[:, _PAIRS[:, 1]], axis=-1)
+    scale = np.linalg.norm(g_a, axis=-1) * np.linalg.norm(g_b, axis=-1)
     valid = norms > 1e-12 * np.maximum(scale, 1e-300)
     unit = normals / np.where(valid, norms, 1.0)[..., None]
     h = 0.5 * (t_max_N - t_min_N)
-    support = h * np.abs(np.einsum("npk,nik->npi", unit, J)).sum(axis=-1)  # (n, 15)
+    width = np.abs(unit @ np.swapaxes(J, 1, 2)).sum(axis=-1)              # (n, 15): sum_i |n.g_i|
     centre = 0.5 * (t_min_N + t_max_N) * J.sum(axis=1)                     # J^T t_mid, (n, 3)
-    offset = np.einsum("npk,nmk->nmp", unit, -tau - centre[:, None, :])     # (n, m, 15)
-    slack = np.where(valid[:, None, :], support[:, None, :] - np.abs(offset), np.inf)
+    offset = (-tau - centre[:, None, :]) @ np.swapaxes(unit, 1, 2)         # (n, m, 15)
+    slack = np.where(valid[:, None, :], h * width[:, None, :] - np.abs(offset), np.inf)
     margin = slack.min(axis=-1)
-    sv = np.linalg.svd(J, compute_uv=False)
-    deficient = sv[:, -1] <= RANK_TOL * np.maximum(sv[:, 0], 1e-300)
-    margin = np.where(deficient[:, None], -np.inf, margin)
+    # rank < 3: every valid normal is the one plane normal and no generator leaves the plane
+    g_max = np.linalg.norm(J, axis=-1).max(axis=-1)
+    flat = np.where(valid, width, 0.0).max(axis=-1) <= RANK_TOL * np.maximum(g_max, 1e-300)
+    margin = np.where(flat[:, None], -np.inf, margin)
     return margin[:, 0] if single else margin
 
 
