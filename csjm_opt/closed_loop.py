@@ -53,6 +53,7 @@ class ClosedLoopLog:
     K: np.ndarray                # (n, 3, 3) achieved cable stiffness of the plant
     K_target: np.ndarray         # (n, 3, 3) target (nan when the controller sets none)
     step_time_s: np.ndarray      # (n,) wall time of read + control + command + simulate (nan at 0)
+    step_cpu_s: np.ndarray       # (n,) the same as thread CPU time (excludes preemption by other processes)
 
     @property
     def pose_error_rad(self) -> np.ndarray:
@@ -72,7 +73,8 @@ class ClosedLoopLog:
                 "max_pose_error_rad": float(np.max(err)), "final_pose_error_rad": float(err[-1]),
                 "final_stiffness_error_Nm_per_rad": float(self.stiffness_error[-1]),
                 "min_tension_N": float(np.min(self.tensions_N)), "max_tension_N": float(np.max(self.tensions_N)),
-                "median_step_time_s": float(np.median(dt)) if len(dt) else float("nan")}
+                "median_step_time_s": float(np.median(dt)) if len(dt) else float("nan"),
+                "median_step_cpu_s": float(np.median(self.step_cpu_s[1:])) if len(dt) else float("nan")}
 
 
 def simulate(rig: Rig, controller: Controller, load: LoadProfile, duration_s: float, dt_s: float = 1e-3,
@@ -97,12 +99,13 @@ def simulate(rig: Rig, controller: Controller, load: LoadProfile, duration_s: fl
     t = np.arange(n + 1) * dt_s
     out = {name: np.full((n + 1,) + shape, np.nan) for name, shape in
            [("R", (3, 3)), ("R_meas", (3, 3)), ("R_ref", (3, 3)), ("tau", (3,)), ("T_cmd", (6,)),
-            ("T", (6,)), ("K", (3, 3)), ("K_target", (3, 3)), ("dt", ())]}
+            ("T", (6,)), ("K", (3, 3)), ("K_target", (3, 3)), ("dt", ()), ("cpu", ())]}
     out["R"][0], out["tau"][0], out["R_ref"][0] = R, load(0.0), controller.reference(0.0)
+    tau_next = load(0.0)
     for k in range(n):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.thread_time()
         # 1. read
-        tau_true = load(t[k])
+        tau_true = tau_next
         tau_meas = tau_true + (point_force_terms(R, F, P)[0] if len(F) else 0.0)
         R_meas = R
         if noise.angle_sigma_rad > 0:
@@ -113,13 +116,15 @@ def simulate(rig: Rig, controller: Controller, load: LoadProfile, duration_s: fl
         try:
             cmd = controller(Observation(float(t[k]), R_meas, tau_meas))
             # 4. simulate
-            eq = solver.solve(cmd.rest_lengths_m, load(t[k + 1]), R)
+            tau_next = load(t[k + 1])
+            eq = solver.solve(cmd.rest_lengths_m, tau_next, R)
         except CsjmError as exc:
             _at_time(exc, float(t[k]))
             raise
         R = eq.R
         out["dt"][k + 1] = time.perf_counter() - t0
-        out["R"][k + 1], out["R_meas"][k], out["tau"][k + 1] = R, R_meas, load(t[k + 1])
+        out["cpu"][k + 1] = time.thread_time() - c0
+        out["R"][k + 1], out["R_meas"][k], out["tau"][k + 1] = R, R_meas, tau_next
         out["R_ref"][k + 1] = controller.reference(float(t[k + 1]))
         out["T_cmd"][k + 1], out["T"][k + 1], out["K"][k + 1] = cmd.tensions_N, eq.tensions_N, eq.K
         if cmd.K_target is not None:
@@ -127,7 +132,7 @@ def simulate(rig: Rig, controller: Controller, load: LoadProfile, duration_s: fl
     out["R_meas"][n] = R
     out["T"][0], out["K"][0] = out["T"][min(1, n)], out["K"][min(1, n)]
     return ClosedLoopLog(t, out["R"], out["R_meas"], out["R_ref"], out["tau"], out["T_cmd"], out["T"],
-                         out["K"], out["K_target"], out["dt"])
+                         out["K"], out["K_target"], out["dt"], out["cpu"])
 
 
 def _at_time(exc: CsjmError, t_s: float) -> CsjmError:

@@ -219,28 +219,56 @@ class Shaper:
 
     Keeps the stiffness basis while the pose is unchanged and warm-starts the
     exact active-set solver from the previous active set. Inputs are trusted.
+    With ``compiled`` (default) the basis, the QP matrices and the primal-dual
+    active-set iterations run in :mod:`csjm_opt.loop_kernels` (numba); the
+    numpy solver of :mod:`csjm_opt.dense_qp` (with its finite primal
+    active-set fallback) takes over whenever they do not settle.
     """
 
-    def __init__(self, rig: Rig, regularization: float = REGULARIZATION):
+    def __init__(self, rig: Rig, regularization: float = REGULARIZATION, compiled: bool = True):
         self.rig = rig
         self.regularization = regularization
+        self.compiled = compiled
         self._lo, self._hi = np.full(6, rig.t_min_N), np.full(6, rig.t_max_N)
         self._basis: StiffnessBasis | None = None
         self._active = (np.zeros(6, bool), np.zeros(6, bool))
+        terms = _terms(rig)
+        self._geom = (terms.A, terms.B, terms.k)
+        self._weight = (rig.weight_B_N[None], np.asarray(rig.com_A_m, float)[None])
 
     def basis(self, R: np.ndarray) -> StiffnessBasis:
         if self._basis is None or not np.array_equal(self._basis.R, R):
-            self._basis = stiffness_basis(self.rig, np.array(R, float))
+            R = np.array(R, float)
+            if self.compiled:
+                from . import loop_kernels
+
+                J, K0, G = loop_kernels.stiffness_basis(*self._geom, R)
+                self._basis = StiffnessBasis(R, J, K0, G, point_force_terms(R, *self._weight)[0])
+            else:
+                self._basis = stiffness_basis(self.rig, R)
         return self._basis
 
     def solve(self, R: np.ndarray, tau_ext: np.ndarray, objective: StiffnessObjective,
               x0: np.ndarray | None = None) -> tuple[np.ndarray, StiffnessBasis, dense_qp.DenseQPResult]:
         """Tensions (6,), the basis used and the QP result; raises InfeasibleLoad/SolverError."""
         basis = self.basis(R)
-        P, q, A, b = qp_matrices(basis, tau_ext, objective, self.rig.t_mid_N, self.regularization)
         if x0 is not None:
             tol = 1e-5 * max(1.0, self.rig.t_max_N)
             self._active = (x0 <= self.rig.t_min_N + tol, x0 >= self.rig.t_max_N - tol)
+        if self.compiled:
+            from . import loop_kernels
+
+            P, q, A, b = loop_kernels.shaping_qp(basis.G, basis.K0, objective.L, objective.s, objective.w, basis.J,
+                                                 tau_ext + basis.tau_weight_A_Nm, self.rig.t_mid_N,
+                                                 self.regularization)
+            x, nu, z, lower, upper, it, status = loop_kernels.pdas(P, q, A, b, self._lo, self._hi,
+                                                                   self._active[0].copy(), self._active[1].copy(),
+                                                                   8, 1e-10)
+            if status == 0:
+                self._active = (lower, upper)
+                return x, basis, dense_qp.DenseQPResult(x, nu, z, lower, upper, it, "pdas", True)
+        else:
+            P, q, A, b = qp_matrices(basis, tau_ext, objective, self.rig.t_mid_N, self.regularization)
         res = dense_qp.solve(P, q, A, b, self._lo, self._hi, *self._active)
         if not res.converged or res.kkt_error(P, q, A, b, self._lo, self._hi) > 1e-6 * max(1.0, np.abs(q).max()):
             dist = feasibility_distance_Nm(basis.J, -b, self.rig.t_min_N, self.rig.t_max_N)

@@ -24,8 +24,9 @@ convergence; ``"unstable"``: converged to an unstable equilibrium with all
 cables taut; an unstable one with slack cables counts as ``"slack"``).
 
 The Newton terms are evaluated in closed form (:mod:`csjm_opt.cable_terms`,
-checked against the CasADi model in the tests), cheap enough for a 1 kHz
-simulation loop.
+checked against the CasADi model in the tests); by default the Newton loop
+runs compiled (:mod:`csjm_opt.loop_kernels`, numba), ``compiled=False``
+runs the numpy reference. Cheap enough for a 1 kHz simulation loop.
 """
 
 from __future__ import annotations
@@ -127,7 +128,7 @@ class EquilibriumSolver:
 
     def __init__(self, rig: Rig, point_forces: Sequence[PointForce] = (), include_weight: bool = True,
                  tol_Nm: float = 1e-11, max_iter: int = 100, max_step_rad: float = 0.25,
-                 allow_slack: bool = True, continuation_steps: int = 8):
+                 allow_slack: bool = True, continuation_steps: int = 8, compiled: bool = True):
         forces = list(point_forces)
         if include_weight and rig.platform_mass_kg > 0:
             forces.append((rig.weight_B_N, np.asarray(rig.com_A_m, float)))
@@ -135,16 +136,29 @@ class EquilibriumSolver:
         self._evaluate = _Evaluator(rig, forces)
         self.tol_Nm, self.max_iter, self.max_step_rad = tol_Nm, max_iter, max_step_rad
         self.allow_slack, self.continuation_steps = allow_slack, continuation_steps
+        self.compiled = compiled
+        terms = cable_terms_for(rig)
+        self._kernel_args = (terms.A, terms.B, terms.k, self._evaluate._F, self._evaluate._P)
+
+    def _newton(self, l: np.ndarray, R0: np.ndarray, tau_ext: np.ndarray):
+        if not self.compiled:
+            return _newton(self._evaluate, l, R0, tau_ext, self.tol_Nm, self.max_iter, self.max_step_rad)
+        from . import loop_kernels
+
+        R, *terms, it, ok = loop_kernels.newton(
+            *self._kernel_args, np.ascontiguousarray(R0, dtype=np.float64), np.ascontiguousarray(l, dtype=np.float64),
+            np.ascontiguousarray(tau_ext, dtype=np.float64), self.tol_Nm, self.max_iter, self.max_step_rad,
+            MAX_EXCURSION_RAD)
+        return (R, tuple(terms), it), bool(ok)
 
     def solve(self, l: np.ndarray, tau_ext: np.ndarray, R_init: np.ndarray) -> Equilibrium:
         """Equilibrium for rest lengths ``l`` (6,) and moment ``tau_ext`` (3,) from ``R_init``."""
-        args = (self._evaluate, l, self.tol_Nm, self.max_iter, self.max_step_rad)
-        state, ok = _newton(*args[:2], R_init, tau_ext, *args[2:])
+        state, ok = self._newton(l, R_init, tau_ext)
         if not ok and self.continuation_steps > 0 and np.any(tau_ext):
             # load continuation: equilibrium without tau_ext first, then increments
             R = R_init
             for s in np.linspace(0.0, 1.0, self.continuation_steps + 1):
-                state, ok = _newton(*args[:2], R, s * tau_ext, *args[2:])
+                state, ok = self._newton(l, R, s * tau_ext)
                 if not ok:
                     break
                 R = state[0]
@@ -171,7 +185,8 @@ def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.nda
                       point_forces: Sequence[PointForce] = (), R_init: np.ndarray | None = None,
                       include_weight: bool = True, model: Model | None = None, tol_Nm: float = 1e-11,
                       max_iter: int = 100, max_step_rad: float = 0.25, allow_slack: bool = True,
-                      continuation_steps: int = 8, verify_tol_Nm: float = 1e-9) -> Equilibrium:
+                      continuation_steps: int = 8, verify_tol_Nm: float = 1e-9,
+                      compiled: bool = True) -> Equilibrium:
     """Equilibrium of ``rig`` with rest lengths ``l`` (m) under the given loads.
 
     ``tau_ext_A_Nm`` is a moment fixed in {A}; ``point_forces`` are
@@ -192,7 +207,7 @@ def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.nda
     R0 = np.eye(3) if R_init is None else as_rotation(R_init, "R_init")
     forces = [(as_vector3(f, "force_B"), as_vector3(p, "point_A")) for f, p in point_forces]
     solver = EquilibriumSolver(rig, forces, include_weight, tol_Nm, max_iter, max_step_rad,
-                               allow_slack, continuation_steps)
+                               allow_slack, continuation_steps, compiled)
     eq = solver.solve(l, tau_ext, R0)
     # independent check with the CasADi model
     T = model.tensions_from_rest(eq.R, l)
