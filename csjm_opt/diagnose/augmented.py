@@ -18,6 +18,7 @@ offset: pretension error). Parameter vector: nuisance, then each effect's.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from typing import Sequence
 
 import numpy as np
@@ -36,13 +37,35 @@ class Rows:
 
     rest_lengths_m: np.ndarray     # (n, 6)
     tau_meas_A_Nm: np.ndarray      # (n, 3)
-    slip_sign: np.ndarray          # (n, 6) sliding direction of each cable (friction)
+    cycle: np.ndarray              # (n,) rows of a cycle consecutive, in time order
+    cable_steps_m: np.ndarray      # (n, 6) change of each cable length since the previous row
+                                   # of the cycle (from measured poses; 0 on a cycle's first row)
+    # Sequential mode (forward prediction row after row): the previous row's
+    # path state and cable lengths (NaN on a cycle's first row), else None.
+    state_prev: np.ndarray | None = None
+    lengths_prev_m: np.ndarray | None = None
 
     def __len__(self) -> int:
         return self.rest_lengths_m.shape[0]
 
     def take(self, idx: np.ndarray) -> "Rows":
-        return Rows(self.rest_lengths_m[idx], self.tau_meas_A_Nm[idx], self.slip_sign[idx])
+        """Rows ``idx`` (whole cycles, in order, for the sequence to stay meaningful)."""
+        opt = [None if a is None else a[idx] for a in (self.state_prev, self.lengths_prev_m)]
+        return Rows(self.rest_lengths_m[idx], self.tau_meas_A_Nm[idx], self.cycle[idx],
+                    self.cable_steps_m[idx], *opt)
+
+    @functools.cached_property
+    def positions(self) -> np.ndarray:
+        """Position of each row within its cycle (0 = first row)."""
+        first = np.r_[True, self.cycle[1:] != self.cycle[:-1]]
+        start = np.maximum.accumulate(np.where(first, np.arange(len(first)), 0))
+        return np.arange(len(first)) - start
+
+    @functools.cached_property
+    def sequence(self) -> list[np.ndarray]:
+        """Row indices at position 1, 2, ... within their cycle (position 0 = first rows)."""
+        pos = self.positions
+        return [np.flatnonzero(pos == j) for j in range(1, int(pos.max(initial=0)) + 1)]
 
 
 @dataclasses.dataclass
@@ -55,8 +78,11 @@ class Evaluation:
     tau_ext_A_Nm: np.ndarray
     R_cable: np.ndarray
     link_rotation: np.ndarray
-    slip_sign: np.ndarray
+    rows: Rows
+    cable_stiffness_N_per_m: np.ndarray
     tau_weight_A_Nm: np.ndarray | None = None
+    lengths_m: np.ndarray | None = None       # cable lengths at R_cable (set before adjust_tension)
+    state_out: np.ndarray | None = None       # path state after this row (path-dependent effects)
 
 
 class AugmentedModel:
@@ -94,6 +120,10 @@ class AugmentedModel:
         return np.concatenate([np.full(2, -np.inf)] + [e.lower_bounds for e in self.effects])
 
     @property
+    def upper_bounds(self) -> np.ndarray:
+        return np.concatenate([np.full(2, np.inf)] + [e.upper_bounds for e in self.effects])
+
+    @property
     def prior_sd(self) -> np.ndarray:
         """Ridge prior sd per parameter (inf = no prior)."""
         parts = [np.full(2, np.inf)]
@@ -102,17 +132,25 @@ class AugmentedModel:
         return np.concatenate(parts)
 
     def x0(self) -> np.ndarray:
-        return np.zeros(self.n_params)
+        return np.concatenate([np.zeros(2)] + [e.x0() for e in self.effects])
 
     def effect_params(self, theta: np.ndarray) -> list[np.ndarray]:
         return [theta[self._offsets[i + 1]:self._offsets[i + 2]] for i in range(len(self.effects))]
 
+    @property
+    def path_dependent(self) -> bool:
+        return any(getattr(e, "path_dependent", False) for e in self.effects)
+
     def balance(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray) -> np.ndarray:
         """Moment balance residual ``g`` (n, 3) N m at measured-body poses ``R_m``."""
+        return self.evaluate(R_m, rows, theta)[0]
+
+    def evaluate(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray) -> tuple[np.ndarray, Evaluation]:
+        """``(g, evaluation)``; the evaluation holds intermediate quantities (path state, lengths)."""
         theta = np.asarray(theta, float)
         n = len(rows)
         eye = np.broadcast_to(np.eye(3), (n, 3, 3))
-        ev = Evaluation(self._A, self._B, self._mr, rows.tau_meas_A_Nm, R_m, eye, rows.slip_sign)
+        ev = Evaluation(self._A, self._B, self._mr, rows.tau_meas_A_Nm, R_m, eye, rows, self._k)
         params = self.effect_params(theta)
         for e, p in zip(self.effects, params):
             e.adjust_load(ev, p)
@@ -122,25 +160,48 @@ class AugmentedModel:
         for e, p in zip(self.effects, params):
             e.adjust_geometry(ev, p)
         lengths, J = kin.cable_terms(ev.R_cable, ev.A_m, ev.B_m)
+        ev.lengths_m = lengths
         stretch = lengths - (rows.rest_lengths_m + theta[1])
         T = np.exp(theta[0]) * self._k * np.maximum(stretch, 0.0)
         for e, p in zip(self.effects, params):
             T = e.adjust_tension(ev, stretch, T, p)
         tau_load = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm
-        return np.einsum("nij,ni->nj", J, T) + np.einsum("nij,nj->ni", ev.link_rotation, tau_load)
+        g = np.einsum("nij,ni->nj", J, T) + np.einsum("nij,nj->ni", ev.link_rotation, tau_load)
+        return g, ev
 
     def predict_poses(self, rows: Rows, theta: np.ndarray, R_init: np.ndarray) -> kin.PoseSolution:
-        """Equilibrium poses of the measured body for each row (forward statics)."""
-        return kin.solve_poses(lambda R: self.balance(R, rows, theta), R_init)
+        """Equilibrium poses of the measured body for each row (forward statics).
+
+        Path-dependent models are stepped row after row within each cycle (all
+        cycles at once), each row starting from the state the model itself
+        reached on the previous row: predictions use only the log's inputs.
+        """
+        if not self.path_dependent:
+            return kin.solve_poses(lambda R: self.balance(R, rows, theta), R_init)
+        n = len(rows)
+        R_out, res = np.array(R_init, float), np.zeros(n)
+        state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
+        pos = rows.positions
+        it = 0
+        for j in range(int(pos.max(initial=0)) + 1):
+            idx = np.flatnonzero(pos == j)
+            prev = idx - 1 if j > 0 else None
+            sub = dataclasses.replace(rows.take(idx),
+                                      state_prev=np.zeros((len(idx), 6)) if prev is None else state[prev],
+                                      lengths_prev_m=np.full((len(idx), 6), np.nan) if prev is None else lengths[prev])
+            R0 = R_init[idx] if prev is None else R_out[prev]
+            sol = kin.solve_poses(lambda R, sub=sub: self.balance(R, sub, theta), R0)
+            _, ev = self.evaluate(sol.R, sub, theta)
+            R_out[idx], res[idx] = sol.R, sol.residual_Nm
+            state[idx] = ev.state_out if ev.state_out is not None else 0.0
+            lengths[idx] = ev.lengths_m
+            it = max(it, sol.iterations)
+        return kin.PoseSolution(R_out, res, it)
 
 
-def slip_signs(cycle: np.ndarray, cable_lengths_m: np.ndarray, eps_m: float = 1e-7) -> np.ndarray:
-    """Sliding direction of each cable per row: sign of the length change since the previous row
-    of the same cycle (kept when the change is below ``eps_m``); 0 on a cycle's first row."""
-    s = np.zeros_like(cable_lengths_m)
-    for i in range(1, len(cycle)):
-        if cycle[i] != cycle[i - 1]:
-            continue
-        d = cable_lengths_m[i] - cable_lengths_m[i - 1]
-        s[i] = np.where(np.abs(d) > eps_m, np.sign(d), s[i - 1])
-    return s
+def cable_steps(cycle: np.ndarray, cable_lengths_m: np.ndarray) -> np.ndarray:
+    """Length change of each cable since the previous row of the same cycle (0 on first rows)."""
+    d = np.zeros_like(cable_lengths_m)
+    same = cycle[1:] == cycle[:-1]
+    d[1:][same] = (cable_lengths_m[1:] - cable_lengths_m[:-1])[same]
+    return d

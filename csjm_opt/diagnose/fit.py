@@ -87,9 +87,9 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
         return r
 
     x0 = (model.x0() if theta0 is None else np.asarray(theta0)) / scales
-    lb = model.lower_bounds / scales
-    x0 = np.maximum(x0, lb)
-    sol = least_squares(res, x0, bounds=(lb, np.full_like(lb, np.inf)), method="trf",
+    lb, ub = model.lower_bounds / scales, model.upper_bounds / scales
+    x0 = np.clip(x0, lb, ub)
+    sol = least_squares(res, x0, bounds=(lb, ub), method="trf",
                         x_scale=1.0, xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
     x = sol.x
     Jfull = sol.jac
@@ -98,7 +98,7 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     rss = float(rd @ rd)
     N = rd.size
     # effective parameters: trace of the hat matrix of the data rows; active bounds drop out
-    free = ~((x <= lb + 1e-9) & np.isfinite(lb))
+    free = ~(((x <= lb + 1e-9) & np.isfinite(lb)) | ((x >= ub - 1e-9) & np.isfinite(ub)))
     JtJ = Jfull[:, free].T @ Jfull[:, free]
     JtJ_inv = np.linalg.pinv(JtJ)
     p_eff = float(np.trace(Jd[:, free] @ JtJ_inv @ Jd[:, free].T))

@@ -9,8 +9,9 @@ what the cables and load fail to balance where the platform really is.
 
 The table also carries what the fits need: the tangent ``G = dg/dzeta`` at
 the measured pose (``G ~ -K``), per-row whitening of the linearised pose
-pose residual under instrument noise (moment noise through ``G^-1``, plus tracker noise), and the sliding direction of each
-cable from the sequence of predicted poses within each cycle (friction).
+pose residual under instrument noise (moment noise through ``G^-1``, plus tracker noise), and the length change of each
+cable from row to row within each cycle at the measured poses (friction fits).
+Everything here uses only the log's inputs and the rig file.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from ..instruments import InstrumentNoise
 from ..logfile import MeasurementLog
 from ..rig import Rig
 from . import kinematics as kin
-from .augmented import AugmentedModel, Rows, slip_signs
+from .augmented import AugmentedModel, Rows, cable_steps
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -104,10 +105,10 @@ def compute_residuals(rig: Rig, log: MeasurementLog, noise: InstrumentNoise | No
     n = len(log)
     model = AugmentedModel(rig)
     theta = model.x0()
-    rows0 = Rows(log.rest_lengths_m, log.tau_ext_A_Nm, np.zeros((n, 6)))
+    rows0 = Rows(log.rest_lengths_m, log.tau_ext_A_Nm, np.asarray(log.cycle), np.zeros((n, 6)))
     sol = model.predict_poses(rows0, theta, R_meas)
-    lengths, _ = kin.cable_terms(sol.R, np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m))
-    rows = Rows(log.rest_lengths_m, log.tau_ext_A_Nm, slip_signs(log.cycle, lengths))
+    lengths, _ = kin.cable_terms(R_meas, np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m))
+    rows = Rows(log.rest_lengths_m, log.tau_ext_A_Nm, np.asarray(log.cycle), cable_steps(log.cycle, lengths))
     g = model.balance(R_meas, rows, theta)
     G = kin.tangent(lambda R: model.balance(R, rows, theta), R_meas, g)
     Ginv = np.linalg.inv(G)

@@ -5,7 +5,7 @@ times the instrument noise floor (about 2-3 mrad) on the paper rig's loads:
 
 ================  ===========================================================
 hole_offsets      each hole coordinate ~ N(0, (1.0 mm * severity)^2)
-friction          mu_beta_i = 0.05 * severity * U(0.7, 1.3), rho = 0.1
+friction          mu_beta_i = 0.03 * severity * U(0.7, 1.3), rho = 0.1
 cable_hardening   h = 15 /m * severity
 link_compliance   C = 0.004 rad/(N m) * severity * SPD with eigenvalues U(0.5, 1.5)
 sensor_bias       |b| = 0.12 N m * severity, random direction
@@ -39,7 +39,7 @@ def inject(plant: Plant, effect: str, severity: float, rng: np.random.Generator)
                           base_holes_B_m=rig.base_holes_B_m + rng.normal(0, 1e-3 * s, (6, 3)))
         changes = {"rig": rig}
     elif effect == "friction":
-        changes = {"friction_mu_beta": 0.05 * s * rng.uniform(0.7, 1.3, 6)}
+        changes = {"friction_mu_beta": 0.03 * s * rng.uniform(0.7, 1.3, 6)}
     elif effect == "cable_hardening":
         changes = {"hardening_per_m": 15.0 * s}
     elif effect == "link_compliance":

@@ -8,9 +8,9 @@ through one or more hooks, each given the effect's own parameter slice ``p``:
 ``adjust_geometry``  hole positions;
 ``adjust_tension``   the tension law ``T(e)`` of the cables (``e = c - l``).
 
-Every hook defaults to "no change", and every effect's parameters are zero
-for the nominal model, so augmented models nest the nominal one (a nested
-F-test applies). ``scales`` are typical magnitudes (for the optimiser and for
+Every hook defaults to "no change", and every effect reduces to the nominal
+model when its strength parameters are zero (``x0`` starts there), so
+augmented models nest the nominal one (a nested F-test applies). ``scales`` are typical magnitudes (for the optimiser and for
 the weak ridge prior that keeps rank-deficient fits well posed).
 """
 
@@ -43,9 +43,17 @@ class Effect(abc.ABC):
         return np.full(len(self.param_names), -np.inf)
 
     @property
+    def upper_bounds(self) -> np.ndarray:
+        return np.full(len(self.param_names), np.inf)
+
+    @property
     def prior_sd(self) -> np.ndarray | None:
         """Standard deviation of a zero-mean ridge prior, or None for no prior."""
         return None
+
+    def x0(self) -> np.ndarray:
+        """Starting values (the nominal model)."""
+        return np.zeros(self.n_params)
 
     @property
     def n_params(self) -> int:

@@ -1,15 +1,26 @@
 """``friction``: Coulomb (capstan) friction of the cables at the base guide holes.
 
 Where a cable slides through its guide hole, the tension on the platform side
-is the drive-side tension times ``exp(+mu_beta)`` when the cable is drawn out
-towards the platform (its length ``c_i`` grows) and ``exp(-mu_beta)`` when it
-is pulled back, so the platform feels a tension *band* that depends on the
-direction of motion: path-dependent, and the order of rows within a cycle
-matters (loading and unloading branches differ: hysteresis).
+is the drive-side tension ``T_d`` times ``exp(+mu_beta)`` when the cable is
+drawn out towards the platform (its length ``c_i`` grows) and
+``exp(-mu_beta)`` when it is pulled back; while it sticks, the ratio lies
+inside that band. So ``T_p = T_d exp(mu_beta_i s_i)`` with a band position
+``s_i in [-1, 1]`` that follows the cable's motion as a play (stop) operator::
 
-The sliding direction of each cable in each row, ``s_i in {-1, 0, +1}``, is
-taken from the row sequence of its cycle (``ev.slip_sign``; 0 for the first
-row of a cycle, whose state is unknown). Six parameters ``mu_beta_i >= 0``.
+    s_i[j] = clip(s_i[j-1] + dc_i[j] / travel_i[j], -1, 1),   s_i[first row] = 0
+    travel_i = f mu_beta_i T_d,i / k_i
+
+While a cable sticks, only its platform-side segment (a fraction ``rho`` of
+the cable's compliance) stretches, so a length change ``dc`` moves ``T_p`` by
+``k dc / rho``, and half the band is crossed after ``rho mu_beta T / k``.
+The factor ``f >= 0`` (about ``rho``) is fitted (``f -> 0``: pure sliding,
+``s = sign(dc)``). Path-dependent: the order of rows within a
+cycle matters, and loading and unloading branches differ (hysteresis). The
+length changes ``dc`` come from the measured poses when fitting, and from
+the model's own predicted poses, row after row, when predicting held-out
+cycles (:meth:`AugmentedModel.predict_poses`), so predictions need only
+the log's inputs. A cycle's first row is taken as settled (``s = 0``). Seven parameters
+(``mu_beta_1..6 >= 0``, ``f >= 0``).
 """
 
 from __future__ import annotations
@@ -19,26 +30,50 @@ import numpy as np
 from .base import Effect
 
 
+def band_position(rows, travel_m: np.ndarray) -> np.ndarray:
+    """``s`` (n, 6) of the play operator over each cycle's rows (``travel_m`` (n, 6) > 0)."""
+    s = np.zeros_like(rows.cable_steps_m)
+    gain = 1.0 / np.maximum(travel_m, 1e-12)
+    for idx in rows.sequence:
+        s[idx] = np.clip(s[idx - 1] + rows.cable_steps_m[idx] * gain[idx], -1.0, 1.0)
+    return s
+
+
 class Friction(Effect):
-    """Capstan factor ``mu_i beta_i`` (dimensionless) of each cable's guide hole."""
+    """Capstan factor ``mu_i beta_i`` of each guide hole and the stick travel (m)."""
 
     name = "friction"
-    description = "capstan friction at guide holes: T_platform = T_drive exp(mu_beta_i s_i), s_i = sliding direction"
+    path_dependent = True
+    description = ("capstan friction at guide holes: T_platform = T_drive exp(mu_beta_i s_i), "
+                   "s_i a play operator of the cable's motion")
 
     @property
     def param_names(self):
-        return tuple(f"mu_beta_{i + 1}" for i in range(6))
+        return tuple(f"mu_beta_{i + 1}" for i in range(6)) + ("stick_travel_factor",)
 
     @property
     def scales(self):
-        return np.full(6, 0.05)
+        return np.r_[np.full(6, 0.03), 0.5]
 
     @property
     def lower_bounds(self):
-        return np.zeros(6)
+        return np.zeros(7)
+
+    def x0(self) -> np.ndarray:
+        return np.r_[np.zeros(6), 0.5]
 
     def adjust_tension(self, ev, stretch_m, T_N, p):
-        return T_N * np.exp(ev.slip_sign * p)
+        mu_beta, factor = p[:6], p[6]
+        k = ev.cable_stiffness_N_per_m
+        travel = factor * mu_beta * np.maximum(T_N, 1e-3) / k
+        rows = ev.rows
+        if rows.state_prev is None:                  # whole log at measured poses
+            s = band_position(rows, travel)
+        else:                                        # one row per cycle, sequential prediction
+            step = np.nan_to_num(ev.lengths_m - rows.lengths_prev_m)
+            s = np.clip(rows.state_prev + step / np.maximum(travel, 1e-12), -1.0, 1.0)
+        ev.state_out = s
+        return T_N * np.exp(s * mu_beta)
 
     def describe(self, p):
-        return {"tension_band_percent": (100 * (np.exp(np.asarray(p)) - 1)).tolist()}
+        return {"tension_band_percent": (100 * (np.exp(np.asarray(p[:6])) - 1)).tolist()}
