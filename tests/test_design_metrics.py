@@ -137,3 +137,18 @@ def test_invalid_design_is_recorded_not_raised():
     record = evaluate_design({"platform_d12_m": 0.0002}, settings)
     assert record["status"] == "invalid" and "platform_holes" in record["error"]
     assert record["workspace_fraction"] is None
+
+
+def test_shaping_range_agrees_with_the_shaping_modules_lps(rig, model):
+    """Cross-check with issue 5's per-pose HiGHS LPs (csjm_opt.reachable), its own K basis."""
+    reachable = pytest.importorskip("csjm_opt.reachable")
+    shaping = pytest.importorskip("csjm_opt.shaping")
+    Rs = OrientationSampling(n=5, max_tilt_deg=35.0, seed=9).rotations()
+    K0, Ki = stiffness_affine_parts(model, Rs)
+    J = model.jacobian(Rs)
+    tau_load = LOADS.taus_ext_A_Nm[3] + model.weight_moment(Rs)
+    U = np.eye(3)
+    lo, hi = directional_stiffness_range(J, tau_load, K0, Ki, rig.t_min_N, rig.t_max_N, U)
+    for p, R in enumerate(Rs):
+        ref = reachable.directional_range(shaping.stiffness_basis(rig, R), tau_load[p], U, rig.t_min_N, rig.t_max_N)
+        np.testing.assert_allclose(np.column_stack([lo[p], hi[p]]), ref, rtol=1e-7, atol=1e-7)

@@ -12,9 +12,11 @@ other 3 at a bound (20 bases x 8 bound patterns = 160 candidates per pose).
 Enumerating them all, in numpy, solves every LP of a batch exactly and at
 once; it also certifies feasibility (P is empty iff no candidate is valid).
 
-This is the design-study stand-in for the shaping controller of issue 5
-(``csjm_opt.shaping``): it answers "what stiffness range can shaping reach
-here", not "which tensions give this K".
+It answers "what stiffness range can shaping reach here", not "which
+tensions give this K" (that is :func:`csjm_opt.shaping.shape_stiffness`).
+:func:`csjm_opt.reachable.directional_range` solves the same LPs one pose at a
+time with HiGHS; this batched form is what a sweep over thousands of poses
+needs, and tests/test_design_metrics.py checks the two agree.
 """
 
 from __future__ import annotations
