@@ -44,6 +44,11 @@ def table3(tau0_A_Nm: np.ndarray = pd.TAU0_A_NM) -> dict[str, Any]:
         "symmetry_error_corrected": _antisym(K),
         "symmetry_error_K_D": _antisym(pd.TABLE3_K_D),
         "eig_sym_corrected": np.linalg.eigvalsh(0.5 * (K + K.T)),
+        # antisymmetric part of K_D as a multiple c of hat(tau0) (least squares): theory with
+        # tau0 the total load gives c = +1/2 (K symmetric); the printed K_D gives about -1.06
+        "antisym_K_D_over_hat_tau0": float(so3.vee(0.5 * (pd.TABLE3_K_D - pd.TABLE3_K_D.T)) @ tau0_A_Nm
+                                           / (tau0_A_Nm @ tau0_A_Nm)),
+        "symmetry_error_K_D_plus_hat_tau0": _antisym(pd.TABLE3_K_D + so3.hat(tau0_A_Nm)),
         "det_K_printed": float(np.linalg.det(pd.TABLE3_K)),
         "det_K_corrected": float(np.linalg.det(K)),
     }
@@ -99,6 +104,14 @@ def paper_report() -> dict[str, Any]:
         + ", ".join(f"{x:.3f}" for x in e3) + " rad; printed "
         + ", ".join(f"{x:.3f}" for x in pd.TABLE4_E_THETA_RAD) + " rad.",
     ]
+    errata.append(
+        "Observation (not in ERRATA): the antisymmetric part of the printed K_D is "
+        f"{t3['antisym_K_D_over_hat_tau0']:.2f} hat(tau0); the theory (K_D - K_D^T = hat(tau_load)) "
+        "expects +0.50 hat(tau0) if tau0 is the total load, so no K_L = -1/2 hat(tau) makes the printed "
+        f"K symmetric (K_D + hat(tau0) would: asymmetry {t3['symmetry_error_K_D_plus_hat_tau0']:.3f}). "
+        "Cause not established: load components in a frame fixed in {B} would add -hat(tau) to "
+        "K_D (antisymmetric part -1/2 hat(tau)) and a flipped sign of tau0 would give -1/2 hat(tau0); "
+        "neither alone explains -1.06.")
     table4_rows = [{"case": i + 1, "dtau_A_Nm": pd.TABLE4_DTAU_A_NM[i], "R_est": t4["R_est_K_D"][i],
                     "R_est_printed": pd.TABLE4_R_EST[i], "R_act": pd.TABLE4_R_ACT[i],
                     "E_theta_rad": float(e3[i]), "E_theta_printed_rad": float(pd.TABLE4_E_THETA_RAD[i]),
