@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import warnings
 import numpy as np
 import qpsolvers
 from scipy import sparse
@@ -321,7 +322,9 @@ def _solve_qpsolvers(problem: qpsolvers.Problem, solver: str) -> np.ndarray | No
                            f"{', '.join(qpsolvers.available_solvers)} (or 'active_set')", "solver")
     opts = {"eps_abs": 1e-10, "eps_rel": 1e-10, "verbose": False, "max_iter": 20000} if solver == "osqp" else {}
     try:
-        sol = qpsolvers.solve_problem(problem, solver=solver, **opts)
+        with warnings.catch_warnings():  # solver chatter (status warnings) is reported by our own checks
+            warnings.simplefilter("ignore")
+            sol = qpsolvers.solve_problem(problem, solver=solver, **opts)
     except Exception as exc:  # noqa: BLE001 - backend errors are wrapped, never leaked
         raise SolverError(f"{solver} failed: {exc}", solver) from exc
     return sol.x if sol.found and sol.x is not None else None
