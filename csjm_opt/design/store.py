@@ -56,8 +56,11 @@ class ResultStore:
 
     def __init__(self, path: str | Path, settings_digest: str):
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:
+            raise DesignError(f"cannot open results file: {exc.strerror}", "--out", str(self.path)) from exc
         try:
             if fcntl is not None:
                 try:

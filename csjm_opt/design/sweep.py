@@ -23,6 +23,7 @@ import concurrent.futures
 import dataclasses
 import hashlib
 import json
+import signal
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -74,7 +75,7 @@ def design_id(settings_digest: str, params: dict[str, float]) -> str:
 
 
 def evaluate_design(params: dict[str, float], settings: EvaluationSettings) -> dict[str, Any]:
-    """Metrics record of one design (``status`` "ok", or "invalid" with the reason)."""
+    """Metrics record of one design: ``status`` "ok", "invalid" (geometry rejected) or "error"."""
     start = time.perf_counter()
     try:
         rig = design_rig({**settings.base, **params}, settings.limits)
@@ -82,7 +83,12 @@ def evaluate_design(params: dict[str, float], settings: EvaluationSettings) -> d
         return {"params": params, "status": "invalid", "error": str(exc), "metrics": None,
                 "workspace_fraction": None, "min_stiffness_Nm_per_rad": None,
                 "seconds": time.perf_counter() - start}
-    m = evaluate(rig, settings.sampling, settings.loads, settings.options).as_dict()
+    try:
+        m = evaluate(rig, settings.sampling, settings.loads, settings.options).as_dict()
+    except CsjmError as exc:  # deterministic: recorded, so a resumed run does not retry it
+        return {"params": params, "status": "error", "error": f"{type(exc).__name__}: {exc}",
+                "metrics": None, "workspace_fraction": None, "min_stiffness_Nm_per_rad": None,
+                "seconds": time.perf_counter() - start}
     return {"params": params, "status": "ok", "error": None, "metrics": m,
             "workspace_fraction": m["workspace_fraction"],
             "min_stiffness_Nm_per_rad": m["min_stiffness_Nm_per_rad"],
@@ -136,13 +142,18 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
 
 def _run_processes(todo: list[tuple[int, dict]], settings: EvaluationSettings,
                    workers: int) -> Iterator[tuple[int, dict[str, Any]]]:
-    pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers)
+    pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint)
     try:
         futures = {pool.submit(evaluate_design, p, settings): i for i, p in todo}
         for future in concurrent.futures.as_completed(futures):
             yield futures[future], future.result()
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _ignore_sigint() -> None:
+    """Workers leave Ctrl-C to the parent, which stops the pool and keeps the file whole."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _run_dask(todo: list[tuple[int, dict]], settings: EvaluationSettings, scheduler: str | None,
