@@ -124,6 +124,8 @@ def run_identify(args: argparse.Namespace) -> int:
                   f"{e.symmetry_error:.3g}, residual rms {e.residual_rms_Nm:.3g} N m")
             print(f"  K (N m/rad) =\n{e.K}\n  +- ({int(e.ci_level * 100)} %)\n{e.ci_quantile * e.K_std}")
             print(f"  K_sym =\n{e.K_sym}")
+            for problem in e.problems():
+                print(f"  warning: {problem}")
         for name, p in out.get("parameters", {}).get("parameters", {}).items():
             print(f"  {name} = {p['value']:.6g} +- {p['std']:.2g}")
         for f in figures:
