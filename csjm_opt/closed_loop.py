@@ -80,8 +80,16 @@ class ClosedLoopLog:
 def simulate(rig: Rig, controller: Controller, load: LoadProfile, duration_s: float, dt_s: float = 1e-3,
              R_init: np.ndarray | None = None, noise: InstrumentNoise | None = None,
              rng: np.random.Generator | None = None, plant_rig: Rig | None = None,
-             point_forces: Sequence[PointForce] = (), reset: bool = True) -> ClosedLoopLog:
-    """Run ``controller`` on the simulated rig for ``duration_s`` with step ``dt_s`` (see module doc)."""
+             point_forces: Sequence[PointForce] = (), reset: bool = True,
+             progress: bool | None = None) -> ClosedLoopLog:
+    """Run ``controller`` on the simulated rig for ``duration_s`` with step ``dt_s`` (see module doc).
+
+    ``progress``: tqdm bar on stderr (default: only for runs over 20000 steps on a terminal).
+    """
+    import sys
+
+    from tqdm import tqdm
+
     if not (dt_s > 0 and duration_s > 0):
         raise InvalidInput(f"expected duration_s > 0 and dt_s > 0, got {duration_s}, {dt_s}", "dt_s")
     n = int(round(duration_s / dt_s))
@@ -102,7 +110,9 @@ def simulate(rig: Rig, controller: Controller, load: LoadProfile, duration_s: fl
             ("T", (6,)), ("K", (3, 3)), ("K_target", (3, 3)), ("dt", ()), ("cpu", ())]}
     out["R"][0], out["tau"][0], out["R_ref"][0] = R, load(0.0), controller.reference(0.0)
     tau_next = load(0.0)
-    for k in range(n):
+    if progress is None:
+        progress = n > 20000 and sys.stderr.isatty()
+    for k in tqdm(range(n), desc="closed loop", unit="step", disable=not progress, file=sys.stderr):
         t0, c0 = time.perf_counter(), time.thread_time()
         # 1. read
         tau_true = tau_next
