@@ -12,8 +12,8 @@ of ``J^T``). Shaping solves the QP (build, then solve)::
     subject to  J^T T + tau_load = 0,   tau_load = tau_ext + tau_weight   (in {A})
                 t_min <= T <= t_max
 
-Objectives (each a set of linear functionals ``L_k`` of K with targets
-``s_k``): ``"frobenius"`` (entries of K, elementwise weights ``W`` (3, 3):
+Objectives (:mod:`csjm_opt.shaping_objective`; each a set of linear
+functionals ``L_k`` of K with targets ``s_k``): ``"frobenius"`` (entries of K, elementwise weights ``W`` (3, 3):
 ``||K - K_target||_W^2 = sum W_ab (K_ab - K_target_ab)^2``), ``"eigen"``
 (``u_k^T K u_k`` along the eigenvectors ``u_k`` of ``K_target``, targets its
 eigenvalues: shapes the principal stiffnesses, ignores coupling), and
@@ -34,6 +34,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import warnings
+
 import numpy as np
 import qpsolvers
 from scipy import sparse
@@ -44,9 +45,9 @@ from .errors import InfeasibleLoad, InvalidInput, SolverError
 from .model import Model
 from .planner import feasibility_distance_Nm
 from .rig import Rig
+from .shaping_objective import OBJECTIVES, StiffnessObjective, make_objective  # noqa: F401 (re-export)
 from .validate import as_array, as_rotation, as_vector3
 
-OBJECTIVES = ("frobenius", "eigen", "directional")
 #: Default tie-breaking regulariser, relative to the mean curvature of the objective.
 REGULARIZATION = 1e-10
 
@@ -63,51 +64,6 @@ class StiffnessBasis:
 
     def K(self, tensions_N: np.ndarray) -> np.ndarray:
         return self.K0 + np.einsum("i,ijk->jk", tensions_N, self.G)
-
-
-@dataclasses.dataclass(frozen=True, eq=False)
-class StiffnessObjective:
-    """``sum_k w_k (L_k . vec K - s_k)^2``: functionals ``L`` (m, 9), targets ``s`` (m,), weights ``w``."""
-
-    name: str
-    L: np.ndarray
-    s: np.ndarray
-    w: np.ndarray
-
-    def residual(self, K: np.ndarray) -> float:
-        """Weighted residual ``sqrt(sum w_k (L_k . vec K - s_k)^2)`` (N m/rad)."""
-        e = self.L @ K.reshape(9) - self.s
-        return float(np.sqrt(np.sum(self.w * e * e)))
-
-
-def make_objective(K_target: np.ndarray, weights: np.ndarray | None = None, objective: str = "frobenius",
-                   directions: np.ndarray | None = None) -> StiffnessObjective:
-    """Objective of the given kind for ``K_target`` (3, 3); see the module docstring for ``weights``."""
-    if objective not in OBJECTIVES:
-        raise InvalidInput(f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}", "objective")
-    Kt = as_array(K_target, (3, 3), "K_target")
-    Kt = 0.5 * (Kt + Kt.T)
-    if objective == "frobenius":
-        W = np.ones((3, 3)) if weights is None else as_array(weights, (3, 3), "weights")
-        if np.any(W < 0):
-            raise InvalidInput("weights must be >= 0", "weights")
-        return StiffnessObjective("frobenius", np.eye(9), Kt.reshape(9), 0.5 * (W + W.T).reshape(9))
-    if objective == "eigen":
-        lam, U = np.linalg.eigh(Kt)
-        U = U.T
-    else:
-        if directions is None:
-            raise InvalidInput("objective='directional' needs directions (n, 3)", "directions")
-        U = as_array(np.atleast_2d(directions), (None, 3), "directions")
-        norms = np.linalg.norm(U, axis=1)
-        if np.any(norms < 1e-12):
-            raise InvalidInput("directions must be non-zero", "directions")
-        U = U / norms[:, None]
-        lam = np.einsum("ki,ij,kj->k", U, Kt, U)
-    w = np.ones(len(U)) if weights is None else as_array(np.ravel(weights), (len(U),), "weights")
-    if np.any(w < 0):
-        raise InvalidInput("weights must be >= 0", "weights")
-    return StiffnessObjective(objective, np.einsum("ki,kj->kij", U, U).reshape(len(U), 9), lam, w)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
