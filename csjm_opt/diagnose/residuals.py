@@ -52,6 +52,12 @@ class ResidualTable:
         return rms(self.zeta_rad)
 
     @property
+    def instrument_floor_rad(self) -> float:
+        """RMS pose residual the instrument noise alone would give: ``sqrt(mean tr Cov_zeta)``."""
+        L = np.linalg.inv(self.whiten)
+        return float(np.sqrt(np.mean(np.sum(L ** 2, axis=(1, 2)))))
+
+    @property
     def tilt_rad(self) -> np.ndarray:
         """Angle between the platform z axis and the base z axis."""
         return np.arccos(np.clip(self.R_meas[:, 2, 2], -1, 1))

@@ -1,8 +1,12 @@
 """Candidate scoring and selection: held-out by cycle, BIC, a significance test.
 
-Every candidate is the nominal model with its nuisance parameters (stiffness
-scale, common rest-length offset) plus one effect; the baseline is the
-nominal model with the nuisance parameters only. Fits use linearised,
+The *baseline* is the nominal model exactly as the rig file gives it (no
+fitting: its held-out and training errors are its plain errors on those
+rows); this is the sim-to-real gap the user sees. Every candidate is the
+nominal model with its nuisance parameters (stiffness scale, common
+rest-length offset) plus one effect; the *null* model ``nominal_refit`` has
+the nuisance parameters only, so a candidate must explain more than a
+recalibration of the nominal parameters would. Fits use linearised,
 whitened pose residuals (:mod:`.fit`); held-out scores use full forward
 statics of the fitted model on rows the fit did not see: ``TEST.csv`` when
 given, else grouped K-fold cross-validation by ``cycle`` (K = min(5, cycles),
@@ -12,10 +16,16 @@ Decision (stated level ``ALPHA = 0.01``): a candidate *beats the nominal
 model significantly* when (1) the nested F-test of its effect parameters on
 the training rows rejects "all zero" at ``ALPHA / 6`` (Bonferroni over the six
 candidates, family-wise level ``ALPHA``), and (2) its held-out RMS is below
-the baseline's with a one-sided paired t-test over held-out cycles at
+``nominal_refit``'s with a one-sided paired t-test over held-out cycles at
 ``HELDOUT_ALPHA = 0.05``. Among those, the lowest BIC is selected; otherwise
 ``none``. Other significant candidates whose held-out errors are not
 significantly worse than the selected one's are reported as confounded.
+
+Noise floor: the smaller of the within-cycle estimate (:mod:`.noise`) and
+the best fit's whitened residual scale times the instrument-noise floor;
+both only overestimate the noise when a model misses something. The gap's
+systematic part is ``sqrt(rms^2 - floor^2)``; ``fraction_explained =
+1 - systematic(after) / systematic(before)``.
 """
 
 from __future__ import annotations
@@ -70,10 +80,10 @@ class Diagnosis:
 
     train: ResidualTable
     test: ResidualTable | None
-    baseline: CandidateScore
+    baseline: CandidateScore          # nominal refit (null model of the tests)
     candidates: dict[str, CandidateScore]
     noise_floor_rad: float
-    noise_dof: int
+    noise_estimates: dict
     tests: dict[str, dict]
     selected: str
     confounded_with: list[str]
@@ -85,12 +95,25 @@ class Diagnosis:
         return self.baseline if self.selected == "none" else self.candidates[self.selected]
 
     @property
+    def heldout_table(self) -> ResidualTable:
+        return self.test if self.test is not None else self.train
+
+    @property
+    def nominal_heldout_rms_rad(self) -> float:
+        """The rig file's model on the held-out rows (no fitting)."""
+        return self.heldout_table.rms_rad
+
+    def fraction(self, after_rad: float) -> float:
+        sb = systematic(self.nominal_heldout_rms_rad, self.noise_floor_rad)
+        return float(1.0 - systematic(after_rad, self.noise_floor_rad) / sb) if sb > 0 else 0.0
+
+    @property
     def gap(self) -> dict[str, float]:
-        before, after = self.baseline.heldout_rms_rad, self.selected_score.heldout_rms_rad
-        sb, sa = systematic(before, self.noise_floor_rad), systematic(after, self.noise_floor_rad)
-        frac = 1.0 - sa / sb if sb > 0 else 0.0
-        return {"before_rad": before, "after_rad": after, "fraction_explained": float(frac),
-                "systematic_before_rad": sb, "systematic_after_rad": sa}
+        before, after = self.nominal_heldout_rms_rad, self.selected_score.heldout_rms_rad
+        return {"before_rad": before, "after_rad": after, "fraction_explained": self.fraction(after),
+                "systematic_before_rad": systematic(before, self.noise_floor_rad),
+                "systematic_after_rad": systematic(after, self.noise_floor_rad),
+                "fraction_explained_by_nominal_refit": self.fraction(self.baseline.heldout_rms_rad)}
 
     def as_json(self) -> dict:
         cands = []
@@ -102,14 +125,19 @@ class Diagnosis:
                           "derived": f.model.effects[0].describe(f.theta[2:]),
                           "bic": f.bic, "p_eff": f.p_eff, "rank": f.rank, "n_params": f.model.n_params,
                           "condition": f.condition, "identifiable": f.identifiable,
-                          "failed_forward_solves": sc.failed_rows, **self.tests[name]})
+                          "failed_forward_solves": sc.failed_rows,
+                          "fraction_explained": self.fraction(sc.heldout_rms_rad), **self.tests[name]})
         b = self.baseline
         return {
-            "baseline": {"heldout_rms_rad": b.heldout_rms_rad, "train_rms_rad": b.train_rms_rad,
-                         "bic": b.fit.bic, "nuisance": b.fit.params(False),
-                         "nominal_as_given_rms_rad": self.train.rms_rad},
+            "baseline": {"heldout_rms_rad": self.nominal_heldout_rms_rad, "train_rms_rad": self.train.rms_rad,
+                         "model": "nominal, rig file as given (no fitted parameters)",
+                         "failed_forward_solves": int(np.sum(~self.train.converged))},
+            "nominal_refit": {"heldout_rms_rad": b.heldout_rms_rad, "train_rms_rad": b.train_rms_rad,
+                              "bic": b.fit.bic, "params": b.fit.params(False), "param_sd": b.fit.param_sd(False),
+                              "model": "nominal + common stiffness scale + common rest-length offset; "
+                                       "null model of the significance tests"},
             "noise_floor_rad": self.noise_floor_rad,
-            "noise_floor_dof": self.noise_dof,
+            "noise_floor_estimates": self.noise_estimates,
             "candidates": cands,
             "selected": self.selected,
             "confounded_with": self.confounded_with,
@@ -185,9 +213,6 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     train = compute_residuals(rig, log, noise)
     test_table = compute_residuals(rig, test, noise) if test is not None else None
     folds = None if test is not None else folds_by_cycle(train.cycle)
-    floor, dof = noise_floor(train)
-    if not np.isfinite(floor):
-        floor = float("nan")
     steps = [None] + names
     bar = progress(total=len(steps), desc="diagnose: fitting candidates") if progress else None
     baseline = score(AugmentedModel(rig), train, test_table, folds)
@@ -200,10 +225,13 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
             bar.update(1)
     if bar:
         bar.close()
-    if not np.isfinite(floor):   # too few rows per cycle: fall back on the best fit's residual
-        best = min(cands.values(), key=lambda c: c.fit.bic, default=baseline)
-        floor = float(np.sqrt(best.fit.sigma2 / max(best.fit.rss / best.fit.n_obs, 1e-300))
-                      * rms(best.fit.zeta_lin_rad))
+    local, dof = noise_floor(train)
+    instrument = train.instrument_floor_rad
+    best_sigma2 = min([baseline.fit.sigma2] + [c.fit.sigma2 for c in cands.values()])
+    fitted = float(np.sqrt(best_sigma2) * instrument)
+    floor = min(local, fitted) if np.isfinite(local) else fitted
+    estimates = {"within_cycle_rad": local, "within_cycle_dof": dof, "best_fit_rad": fitted,
+                 "instrument_model_rad": instrument}
     tests, significant = {}, []
     for name, sc in cands.items():
         F, p_f = nested_f_test(baseline.fit, sc.fit)
@@ -220,6 +248,6 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
                 confounded.append(name)
     sel_score = baseline if selected == "none" else cands[selected]
     held_table = test_table if test_table is not None else train
-    loc = localise(held_table, baseline.heldout_zeta_rad, sel_score.heldout_zeta_rad, floor)
+    loc = localise(held_table, held_table.zeta_rad, sel_score.heldout_zeta_rad, floor)
     remaining = remaining_signature(held_table, sel_score.heldout_zeta_rad, floor)
-    return Diagnosis(train, test_table, baseline, cands, floor, dof, tests, selected, confounded, loc, remaining)
+    return Diagnosis(train, test_table, baseline, cands, floor, estimates, tests, selected, confounded, loc, remaining)

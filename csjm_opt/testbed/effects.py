@@ -9,7 +9,7 @@ friction          mu_beta_i = 0.03 * severity * U(0.7, 1.3), rho = 0.1
 cable_hardening   h = 15 /m * severity
 link_compliance   C = 0.004 rad/(N m) * severity * SPD with eigenvalues U(0.5, 1.5)
 sensor_bias       |b| = 0.12 N m * severity, random direction
-mass_com          mass * (1 +- 0.15 severity), com + 8 mm * severity random direction
+mass_com          mass * (1 +- 0.2 severity), com + 15 mm * severity random direction
 ================  ===========================================================
 """
 
@@ -48,8 +48,8 @@ def inject(plant: Plant, effect: str, severity: float, rng: np.random.Generator)
     elif effect == "sensor_bias":
         changes = {"sensor_bias_A_Nm": 0.12 * s * _unit(rng)}
     elif effect == "mass_com":
-        rig = rig.replace(platform_mass_kg=rig.platform_mass_kg * (1 + 0.15 * s * rng.choice([-1.0, 1.0])),
-                          com_A_m=np.asarray(rig.com_A_m) + 8e-3 * s * _unit(rng))
+        rig = rig.replace(platform_mass_kg=rig.platform_mass_kg * (1 + 0.2 * s * rng.choice([-1.0, 1.0])),
+                          com_A_m=np.asarray(rig.com_A_m) + 15e-3 * s * _unit(rng))
         changes = {"rig": rig}
     else:
         raise ValueError(f"unknown effect {effect!r}; expected one of {EFFECT_NAMES}")

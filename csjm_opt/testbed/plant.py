@@ -26,6 +26,19 @@ from .. import so3
 from ..diagnose import kinematics as kin
 from ..rig import Rig
 
+#: Width (N) of the rounding of the play operator's corners (keeps Newton's method happy).
+SMOOTH_N = 0.02
+
+
+def _softplus(z: np.ndarray, w: float) -> np.ndarray:
+    return w * np.logaddexp(0.0, z / w)
+
+
+def _smooth_clip(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, w: float) -> np.ndarray:
+    """``clip(x, lo, hi)`` with corners rounded over about ``w``."""
+    return lo + _softplus(x - lo, w) - _softplus(x - hi, w)
+
+
 EFFECT_NAMES = ("hole_offsets", "friction", "cable_hardening", "link_compliance", "sensor_bias", "mass_com")
 
 
@@ -59,23 +72,32 @@ class Plant:
         R_out = np.empty((n, 3, 3))
         R_prev = np.array(R_init[starts], float)
         u_state = np.full((len(starts), 6), np.nan)           # stuck platform-side lengths
+        tau_prev = np.array(tau_ext_A_Nm[starts], float)
+        path = bool(np.any(self.friction_mu_beta > 0))
         for j in range(int((ends - starts).max())):
             live = np.flatnonzero(starts + j < ends)
             idx = starts[live] + j
             l, tau = rest_lengths_m[idx], tau_ext_A_Nm[idx]
-            u = u_state[live]
+            # path-dependent plants are loaded quasi-statically: the load moves
+            # from the previous row's to this row's in small steps
+            substeps = 8 if (path and j > 0) else 1
+            R, u = R_prev[live], u_state[live]
+            for q in range(1, substeps + 1):
+                tau_q = tau_prev[live] + (tau - tau_prev[live]) * q / substeps
 
-            def g(R, l=l, tau=tau, u=u):
-                return self._balance(R, l, tau, u)[0]
+                def g(R, l=l, tau_q=tau_q, u=u):
+                    return self._balance(R, l, tau_q, u)[0]
 
-            sol = kin.solve_poses(g, R_prev[live], tol_Nm=1e-10)
-            if not np.all(sol.converged(1e-7)):
-                bad = idx[~sol.converged(1e-7)]
-                raise RuntimeError(f"plant has no equilibrium for rows {bad.tolist()}")
-            _, u_new = self._balance(sol.R, l, tau, u)
-            u_state[live] = u_new
-            R_prev[live] = sol.R
-            R_out[idx] = sol.R
+                sol = kin.solve_poses(g, R, tol_Nm=1e-10)
+                if not np.all(sol.converged(1e-7)):
+                    bad = idx[~sol.converged(1e-7)]
+                    raise RuntimeError(f"plant has no equilibrium for rows {bad.tolist()}")
+                R = sol.R
+                _, u = self._balance(R, l, tau_q, u)
+            u_state[live] = u
+            R_prev[live] = R
+            tau_prev[live] = tau
+            R_out[idx] = R
         return R_out
 
     def measured_moment(self, tau_ext_A_Nm: np.ndarray) -> np.ndarray:
@@ -106,4 +128,4 @@ class Plant:
         lo = k * e / (rho + (1 - rho) * r)        # r_- = 1/r
         hi = k * e / (rho + (1 - rho) / r)
         stick = np.where(np.isnan(u), T_free, (k / rho) * (c - np.nan_to_num(u)))
-        return np.clip(stick, np.minimum(lo, hi), np.maximum(lo, hi))
+        return _smooth_clip(stick, np.minimum(lo, hi), np.maximum(lo, hi), SMOOTH_N)

@@ -29,13 +29,25 @@ import numpy as np
 
 from .base import Effect
 
+#: Smallest stick travel (m): keeps the play operator continuous in the pose for
+#: forward solves (a pure sign switch has no equilibrium at a reversal).
+MIN_TRAVEL_M = 5e-6
+#: Rounding of the band's edges (in units of the half band).
+CORNER = 0.02
+
+
+def _clip_band(s: np.ndarray) -> np.ndarray:
+    """``clip(s, -1, 1)`` with corners rounded over ``CORNER`` (forward solves need continuity of slope)."""
+    w = CORNER
+    return -1.0 + w * np.logaddexp(0.0, (s + 1.0) / w) - w * np.logaddexp(0.0, (s - 1.0) / w)
+
 
 def band_position(rows, travel_m: np.ndarray) -> np.ndarray:
     """``s`` (n, 6) of the play operator over each cycle's rows (``travel_m`` (n, 6) > 0)."""
     s = np.zeros_like(rows.cable_steps_m)
-    gain = 1.0 / np.maximum(travel_m, 1e-12)
+    gain = 1.0 / travel_m
     for idx in rows.sequence:
-        s[idx] = np.clip(s[idx - 1] + rows.cable_steps_m[idx] * gain[idx], -1.0, 1.0)
+        s[idx] = _clip_band(s[idx - 1] + rows.cable_steps_m[idx] * gain[idx])
     return s
 
 
@@ -65,13 +77,13 @@ class Friction(Effect):
     def adjust_tension(self, ev, stretch_m, T_N, p):
         mu_beta, factor = p[:6], p[6]
         k = ev.cable_stiffness_N_per_m
-        travel = factor * mu_beta * np.maximum(T_N, 1e-3) / k
+        travel = np.maximum(factor * mu_beta * np.maximum(T_N, 1e-3) / k, MIN_TRAVEL_M)
         rows = ev.rows
         if rows.state_prev is None:                  # whole log at measured poses
             s = band_position(rows, travel)
         else:                                        # one row per cycle, sequential prediction
             step = np.nan_to_num(ev.lengths_m - rows.lengths_prev_m)
-            s = np.clip(rows.state_prev + step / np.maximum(travel, 1e-12), -1.0, 1.0)
+            s = _clip_band(rows.state_prev + step / travel)
         ev.state_out = s
         return T_N * np.exp(s * mu_beta)
 
