@@ -33,10 +33,10 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import linprog
 
-from .errors import InfeasibleLoad, SolverError
+from .errors import InfeasibleLoad, InvalidInput, SolverError
 from .rig import Rig
 from .shaping import StiffnessBasis, stiffness_basis
-from .validate import as_rotation, as_vector3
+from .validate import as_array, as_rotation, as_vector3
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -107,6 +107,22 @@ def directional_range(basis: StiffnessBasis, tau_load: np.ndarray, directions: n
         out[k, 0] = c0 + g @ _lp(g, basis.J, tau_load, t_min, t_max)
         out[k, 1] = c0 + g @ _lp(-g, basis.J, tau_load, t_min, t_max)
     return out
+
+
+def directional_stiffness_range(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray,
+                                directions: np.ndarray) -> np.ndarray:
+    """``[min, max]`` of ``u^T K u`` (N m/rad) over all feasible tensions at ``R``, per direction (n, 2)."""
+    R = as_rotation(R)
+    tau_ext = as_vector3(tau_ext_A_Nm, "tau_ext")
+    U = as_array(np.atleast_2d(directions), (None, 3), "directions")
+    if np.any(np.linalg.norm(U, axis=1) < 1e-12):
+        raise InvalidInput("directions must be non-zero", "directions")
+    basis = stiffness_basis(rig, R)
+    tau_load = tau_ext + basis.tau_weight_A_Nm
+    if len(feasible_vertices(basis.J, tau_load, rig.t_min_N, rig.t_max_N)) == 0:
+        raise InfeasibleLoad(f"no feasible tensions hold tau_ext={np.round(tau_ext, 4).tolist()} N m at this pose",
+                             R, tau_ext, float("nan"))
+    return directional_range(basis, tau_load, U, rig.t_min_N, rig.t_max_N)
 
 
 def _cutting_plane(basis: StiffnessBasis, tau_load: np.ndarray, t_min: float, t_max: float, which: str,

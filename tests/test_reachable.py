@@ -6,7 +6,8 @@ import numpy as np
 
 from csjm_opt import so3
 from csjm_opt.design import shaping_range
-from csjm_opt.reachable import directional_range, feasible_vertices, plot_reachable_set, reachable_set
+from csjm_opt.reachable import (directional_range, directional_stiffness_range, feasible_vertices,
+                               plot_reachable_set, reachable_set)
 from scipy.optimize import minimize
 
 R_POSE = so3.exp(np.array([-0.08, 0.12, 0.05]))
@@ -52,6 +53,18 @@ def test_directional_range_exact(rig, model):
         model.jacobian(R_POSE)[None], rs.tau_load_A_Nm[None], rs.basis.K0[None], rs.basis.G[None],
         rig.t_min_N, rig.t_max_N, Un[:3])
     assert np.allclose(lo[0], got[:3, 0], atol=1e-8) and np.allclose(hi[0], got[:3, 1], atol=1e-8)
+    assert np.allclose(directional_stiffness_range(rig, R_POSE, TAU, U), got, atol=1e-12)
+
+
+def test_directional_range_errors(rig):
+    import pytest
+
+    import csjm_opt as co
+
+    with pytest.raises(co.InfeasibleLoad):
+        directional_stiffness_range(rig, R_POSE, np.array([30.0, 0, 0]), np.eye(3))
+    with pytest.raises(co.InvalidInput):
+        directional_stiffness_range(rig, R_POSE, TAU, np.zeros((1, 3)))
 
 
 def test_eigenvalue_ranges_bound_samples(rig, model):
