@@ -192,7 +192,7 @@ def plot_reachable_set(rs: ReachableSet, path: str | Path, t_min_N: float, t_max
     import matplotlib.pyplot as plt
 
     path = Path(path)
-    fig = plt.figure(figsize=(10, 4.2))
+    fig = plt.figure(figsize=(12, 4.4))
     ax = fig.add_subplot(1, 2, 1)
     for i in range(3):
         lo, hi = rs.eigen_ranges[i]
@@ -223,7 +223,7 @@ def plot_reachable_set(rs: ReachableSet, path: str | Path, t_min_N: float, t_max
         ax2.plot(phi, np.einsum("ni,ij,nj->n", dirs, K, dirs), color=f"C{j + 1}", lw=1.2, label=name)
     ax2.set_rmin(0.0)
     ax2.set_title(r"$u^T K u$ for $u$ in the {A} x-y plane (N m/rad)", fontsize=9)
-    ax2.legend(fontsize=7, loc="lower left", bbox_to_anchor=(-0.1, -0.15))
+    ax2.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.08, 1.0))
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.stem + ".tmp" + path.suffix)
