@@ -140,3 +140,14 @@ def test_slack_command_raises_with_time(rig, model):
         simulate(rig, FixedRestLengths(rig, l), Constant(np.zeros(3)), 0.002)
     with pytest.raises(co.InvalidInput):
         simulate(rig, FixedRestLengths(rig, l), Constant(np.zeros(3)), 0.0)
+
+
+def test_moving_reference_tracked_with_one_step_lag(rig):
+    """A slowly rotating reference: the plant reaches the pose commanded one step earlier."""
+    w = np.array([0.0, 0.0, 0.5])                                              # rad/s about z
+    ref = lambda t: R_REF @ so3.exp(w * t)                                     # noqa: E731
+    log = simulate(rig, TensionPlanningController(rig, ref), Constant(TAU_STEP), 0.02, dt_s=1e-3)
+    lag = np.linalg.norm(w) * 1e-3
+    assert np.allclose(log.pose_error_rad[2:], lag, rtol=1e-6)
+    for k in range(1, len(log.t_s)):
+        assert so3.angle_between(log.R[k], ref(log.t_s[k - 1])) < 1e-9
