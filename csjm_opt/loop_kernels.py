@@ -140,7 +140,8 @@ def shaping_qp(G, K0, L, s, w, J, tau_load, t_mid, rho_rel):
     d = s - L @ K0.reshape(9)
     MW = M.T * w
     H = MW @ M
-    rho = rho_rel * max(np.trace(H) / 6.0, 1e-300)
+    curvature = np.trace(H) / 6.0
+    rho = rho_rel * (curvature if curvature > 1e-300 else 1.0)
     P = 2.0 * (H + rho * np.eye(6))
     q = -2.0 * (MW @ d + rho * t_mid)
     return P, q, J.T.copy(), -tau_load

@@ -151,7 +151,8 @@ def qp_matrices(basis: StiffnessBasis, tau_ext: np.ndarray, objective: Stiffness
     d = objective.s - objective.L @ basis.K0.reshape(9)
     MW = M.T * objective.w
     H = MW @ M
-    rho = regularization * max(float(np.trace(H)) / 6.0, 1e-300)
+    curvature = float(np.trace(H)) / 6.0
+    rho = regularization * (curvature if curvature > 1e-300 else 1.0)   # all-zero weights: regulariser only
     P = 2.0 * (H + rho * np.eye(6))
     q = -2.0 * (MW @ d + rho * t_mid)
     return P, q, basis.J.T, -(tau_ext + basis.tau_weight_A_Nm)

@@ -8,7 +8,9 @@ tensions it is a convex quadratic in the tensions (:mod:`csjm_opt.shaping`):
   ``||K - K_target||_W^2 = sum_ab W_ab (K_ab - K_target_ab)^2``;
 * ``"eigen"``: ``u_k^T K u_k`` along the eigenvectors ``u_k`` of ``K_target``
   with its eigenvalues as targets (principal stiffnesses; coupling ignored),
-  ``weights`` (3,);
+  ``weights`` (3,). For repeated eigenvalues the eigenvectors are not unique
+  and the basis ``numpy.linalg.eigh`` returns is used: prefer ``"frobenius"``
+  for (nearly) isotropic targets;
 * ``"directional"``: ``u^T K u`` along given unit ``directions`` (n, 3) with
   targets ``u^T K_target u``, ``weights`` (n,).
 """

@@ -179,6 +179,13 @@ def co_directional_max(rig, model, u):
     return -res.fun
 
 
+def test_zero_weights_fall_back_to_mid_range(rig, model):
+    """With every weight zero only the regulariser remains: the plan closest to mid-range."""
+    res = shape_stiffness(rig, R_POSE, TAU, np.eye(3), weights=np.zeros((3, 3)), model=model)
+    plan = co.plan_tensions(rig, R_POSE, TAU, model=model)
+    assert np.allclose(res.tensions, plan.tensions_N, atol=1e-6)
+
+
 def test_infeasible_load_raises(rig, model):
     with pytest.raises(co.InfeasibleLoad):
         shape_stiffness(rig, R_POSE, np.array([30.0, 0, 0]), np.eye(3) * 20, model=model)
