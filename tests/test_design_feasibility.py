@@ -1,0 +1,46 @@
+"""Laws of the exact zonotope feasibility test (any Jacobian, any load)."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+from scipy.optimize import linprog
+
+from csjm_opt.design.feasibility import feasible, wrench_margin_Nm
+from csjm_opt.design.shaping_range import vertices
+
+finite = st.floats(-1.0, 1.0, allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=60, deadline=None)
+@given(J=arrays(float, (6, 3), elements=finite), load=arrays(float, (3,), elements=st.floats(-150, 150)),
+       t_min=st.floats(0.0, 20.0), span=st.floats(1.0, 200.0))
+def test_margin_sign_is_the_lp_verdict_and_vertices_exist_iff_feasible(J, load, t_min, span):
+    t_max = t_min + span
+    margin = wrench_margin_Nm(J[None], load[None], t_min, t_max)[0]
+    assume(np.linalg.svd(J, compute_uv=False)[-1] > 1e-3 and abs(margin) > 1e-6)
+    res = linprog(np.zeros(6), A_eq=J.T, b_eq=-load, bounds=[(t_min, t_max)] * 6, method="highs")
+    assert res.status in (0, 2)
+    assert (margin > 0) == (res.status == 0)
+    _, ok = vertices(J[None], load[None], t_min, t_max)
+    assert ok.any() == (margin > 0)
+
+
+@settings(max_examples=40, deadline=None)
+@given(J=arrays(float, (6, 3), elements=finite), T=arrays(float, (6,), elements=st.floats(0.0, 1.0)))
+def test_moments_of_admissible_tensions_are_inside(J, T):
+    t_min, t_max = 5.0, 150.0
+    T = t_min + T * (t_max - t_min)
+    tau_load = -(J.T @ T)                               # held exactly by T
+    assume(np.linalg.svd(J, compute_uv=False)[-1] > 1e-3)
+    assert wrench_margin_Nm(J[None], tau_load[None], t_min, t_max)[0] >= -1e-9
+    # scaling the load far out always leaves the set
+    assert not feasible(J[None], (1e6 * (tau_load + 1.0))[None], t_min, t_max)[0]
+
+
+def test_rank_deficient_jacobian_is_infeasible():
+    J = np.zeros((6, 3))
+    J[:, :2] = np.random.default_rng(0).normal(size=(6, 2))   # all moments in the x-y plane
+    assert wrench_margin_Nm(J[None], np.zeros((1, 3)), 5.0, 150.0)[0] == -np.inf
