@@ -15,7 +15,7 @@ import sys
 from .errors import CsjmError
 
 #: Modules that register subcommands, in help order.
-COMMAND_MODULES = ("cli_core", "cli_demo", "cli_identify", "cli_diagnose", "cli_sweep")
+COMMAND_MODULES = ("cli_core", "cli_demo", "cli_shape", "cli_identify", "cli_diagnose", "cli_sweep")
 
 
 class UsageError(CsjmError):

@@ -283,7 +283,7 @@ def _check_solver(solver: str) -> None:
 
 
 def _solve_qp(problem: qpsolvers.Problem, solver: str) -> np.ndarray | None:
-    opts = {"eps_abs": 1e-9, "eps_rel": 1e-9, "polish": True, "verbose": False} if solver == "osqp" else {}
+    opts = {"eps_abs": 1e-9, "eps_rel": 1e-9, "verbose": False} if solver == "osqp" else {}  # we polish ourselves
     try:
         with warnings.catch_warnings():  # infeasibility is reported by InfeasibleLoad instead
             warnings.simplefilter("ignore")

@@ -199,7 +199,7 @@ def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.nda
     is verified with the CasADi model (``model``): its residual
     ``||J^T T + tau_load||`` must be below ``verify_tol_Nm``.
     """
-    model = model or Model(rig)
+    model = model if model is not None and model.rig is rig else Model(rig)
     l = as_array(rest_lengths_m, (6,), "rest_lengths")
     if np.any(l <= 0):
         raise InvalidInput(f"rest lengths must be positive, got {np.round(l, 6).tolist()} m", "rest_lengths")
@@ -272,5 +272,5 @@ def _newton_step(K_t: np.ndarray, g: np.ndarray, max_step_rad: float) -> np.ndar
 
 def rest_lengths_for(rig: Rig, R: np.ndarray, tensions_N: np.ndarray, model: Model | None = None) -> np.ndarray:
     """Rest lengths ``l = c(R) - T / k`` that give tensions ``T`` at ``R`` (m)."""
-    model = model or Model(rig)
+    model = model if model is not None and model.rig is rig else Model(rig)
     return model.rest_lengths(as_rotation(R), as_array(tensions_N, (6,), "tensions"))

@@ -207,3 +207,13 @@ def test_bad_rest_lengths_rejected(rig, model):
         solve_equilibrium(rig, -np.ones(6), model=model)
     with pytest.raises(co.InvalidInput):
         solve_equilibrium(rig, np.ones(5), model=model)
+
+
+def test_model_of_another_rig_is_not_used(rig):
+    """A Model built for a different rig must not leak into the solve."""
+    other = rig.replace(cable_stiffness_N_per_m=np.full(6, 3000.0))
+    plan = co.plan_tensions(other, np.eye(3), np.zeros(3))
+    l = rest_lengths_for(other, np.eye(3), plan.tensions_N)
+    eq = solve_equilibrium(other, l, np.zeros(3), model=co.Model(rig))
+    assert eq.residual_Nm < 1e-9
+    assert np.allclose(eq.R, np.eye(3), atol=1e-9)
