@@ -20,6 +20,7 @@ skips every design already in the file.
 from __future__ import annotations
 
 import concurrent.futures
+import concurrent.futures.process
 import dataclasses
 import hashlib
 import json
@@ -30,7 +31,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-from ..errors import CsjmError, DesignError
+from ..errors import CsjmError, DesignError, SolverError
 from .geometry import design_rig
 from .metrics import evaluate
 from .store import ResultStore
@@ -147,6 +148,9 @@ def _run_processes(todo: list[tuple[int, dict]], settings: EvaluationSettings,
         futures = {pool.submit(evaluate_design, p, settings): i for i, p in todo}
         for future in concurrent.futures.as_completed(futures):
             yield futures[future], future.result()
+    except concurrent.futures.process.BrokenProcessPool as exc:
+        raise SolverError("a worker process died (out of memory or killed); finished designs are "
+                          "saved, run the same command again to resume", "processes") from exc
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
 
