@@ -18,6 +18,7 @@ is timed on a subset of orientations and extrapolated linearly to 1,000
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import tempfile
 import time
@@ -102,7 +103,8 @@ def main() -> None:
     parser.add_argument("--dask", action="store_true", help="also time a local Dask cluster (2 workers)")
     args = parser.parse_args()
     spec = bench_spec(args.designs)
-    print(f"{args.designs} designs x 1,000 orientations x {len(LOADS)} loads, median of {args.repeats} runs")
+    print(f"{args.designs} designs x 1,000 orientations x {len(LOADS)} loads, median of {args.repeats} runs; "
+          f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f} (other work skews the ratios)")
     serial, serial_steady = time_sweep(spec, args.repeats, workers=1)
     print(f"serial (1 process)        : {serial:7.1f} designs/s  ({1000 / serial_steady:.1f} ms/design compute)")
     parallel, _ = time_sweep(spec, args.repeats, workers=2)
