@@ -28,6 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="run on the Dask distributed scheduler at ADDRESS (e.g. tcp://host:8786)")
     p.add_argument("--dask", action="store_true",
                    help="run on Dask; without --scheduler, start a local Dask cluster")
+    p.add_argument("--limit", type=int, default=None, metavar="N",
+                   help="stop after computing N designs (run again to continue)")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.add_argument("--json", metavar="PATH", help="write the designs and speed as JSON ('-' = stdout)")
     p.set_defaults(func=run)
@@ -40,13 +42,17 @@ def run(args: argparse.Namespace) -> int:
         refuse_input_overwrite(args.json, args.sweep, args.out)
     if args.workers < 1:
         raise DesignError(f"expected an integer >= 1, got {args.workers}", "--workers")
+    if args.limit is not None and args.limit < 1:
+        raise DesignError(f"expected an integer >= 1, got {args.limit}", "--limit")
     result = run_sweep(spec, args.out, workers=args.workers, scheduler=args.scheduler, dask=args.dask,
-                       progress=False if args.no_progress else None)
+                       progress=False if args.no_progress else None, stop_after=args.limit)
     ok = [r for r in result.records if r["status"] == "ok"]
     best = max(ok, key=lambda r: (r["workspace_fraction"] or 0.0), default=None)
     print(f"{len(result.records)} designs ({result.computed} computed, {result.skipped} from "
           f"{args.out}), {len(result.records) - len(ok)} invalid, "
-          f"{result.designs_per_second:.1f} designs/s", file=sys.stderr if args.json == "-" else sys.stdout)
+          f"{result.designs_per_second:.1f} designs/s"
+          + ("" if result.complete else f"; {len(spec.designs()) - len(result.records)} designs left, "
+             "run again to continue"), file=sys.stderr if args.json == "-" else sys.stdout)
     if best is not None and args.json != "-":
         print(f"largest workspace: {best['workspace_fraction']:.3f} at {best['params']}")
     if args.json:

@@ -93,3 +93,17 @@ def test_refuses_to_overwrite_its_input_and_bad_options(capsys, tmp_path, sweep_
     code, _, err = _run(capsys, "sweep", sweep_file)
     assert code == 2 and "--out" in err
     assert sweep_file.read_text() == SWEEP
+
+
+def test_limit_splits_a_sweep_and_a_larger_grid_reuses_finished_designs(capsys, tmp_path, sweep_file):
+    out = tmp_path / "r.jsonl"
+    code, stdout, _ = _run(capsys, "sweep", sweep_file, "--out", out, "--limit", "3", "--workers", "1")
+    assert code == 0 and "3 computed" in stdout and "1 designs left" in stdout
+    code, stdout, _ = _run(capsys, "sweep", sweep_file, "--out", out, "--workers", "1")
+    assert code == 0 and "(1 computed, 3 from" in stdout
+    bigger = tmp_path / "bigger.toml"
+    bigger.write_text(SWEEP.replace("values = [0.08, 0.095]", "values = [0.08, 0.095, 0.11]"))
+    code, stdout, _ = _run(capsys, "sweep", bigger, "--out", out, "--workers", "1")
+    assert code == 0 and "6 designs (2 computed, 4 from" in stdout
+    code, _, err = _run(capsys, "sweep", sweep_file, "--out", out, "--limit", "0")
+    assert code == 2 and "--limit" in err
