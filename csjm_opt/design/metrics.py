@@ -54,7 +54,8 @@ from ..rig import Rig
 from . import feasibility, shaping_range
 from .sampling import OrientationSampling, tilt_torsion_angles, tilt_torsion_rotations
 
-#: Infeasible samples refined by bisection for the tilt cone, and bisection steps (2^-8 of the tilt: 0.18 deg at 45 deg).
+#: Infeasible samples refined by bisection for the tilt cone, and bisection steps
+#: (2^-8 of the sample's tilt: 0.18 deg at 45 deg).
 CONE_RAYS = 64
 CONE_BISECTIONS = 8
 
