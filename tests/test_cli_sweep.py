@@ -33,6 +33,10 @@ def _run(capsys, *argv):
     return code, out, err
 
 
+def _without_timings(designs: list[dict]) -> list[dict]:
+    return [{**d, "metrics": {k: v for k, v in d["metrics"].items() if k != "seconds"}} for d in designs]
+
+
 @pytest.fixture
 def sweep_file(tmp_path):
     path = tmp_path / "sweep.toml"
@@ -66,8 +70,7 @@ def test_sweep_on_a_local_dask_cluster(capsys, tmp_path, sweep_file):
                         tmp_path / "dask.json", "--dask", "--workers", "1")
     assert code == 0, err
     local, dask = (json.loads((tmp_path / f"{n}.json").read_text())["designs"] for n in ("local", "dask"))
-    strip = lambda ds: [{k: v for k, v in d.items() if k != "metrics"} | {"metrics": {k: v for k, v in d["metrics"].items() if k != "seconds"}} for d in ds]  # noqa: E731
-    assert strip(local) == strip(dask)
+    assert _without_timings(local) == _without_timings(dask)
 
 
 @pytest.mark.parametrize("text, needle", [
