@@ -86,10 +86,32 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
             r = np.concatenate([r, (x * scales)[has_prior] / prior[has_prior]])
         return r
 
+    def jac(x: np.ndarray) -> np.ndarray:
+        """Gauss-Newton Jacobian: ``W G^-1 dg/dx`` (the ``dG/dx G^-1 g`` term vanishes at a perfect fit)."""
+        theta = x * scales
+
+        def g(R: np.ndarray, th: np.ndarray = theta) -> np.ndarray:
+            return model.balance(R, rows, th)
+
+        g0 = g(R_meas)
+        Ginv = np.linalg.inv(kin.tangent(g, R_meas, g0, h=1e-6))
+        WGinv = W @ Ginv
+        Jd = np.empty((g0.size, len(x)))
+        for j in range(len(x)):
+            step = 1e-6 * max(1.0, abs(x[j]))
+            th = theta.copy()
+            th[j] += step * scales[j]
+            Jd[:, j] = np.einsum("nij,nj->ni", WGinv, (g(R_meas, th) - g0) / step).ravel()
+        if has_prior.any():
+            P = np.zeros((int(has_prior.sum()), len(x)))
+            P[np.arange(P.shape[0]), np.flatnonzero(has_prior)] = scales[has_prior] / prior[has_prior]
+            Jd = np.vstack([Jd, P])
+        return Jd
+
     x0 = (model.x0() if theta0 is None else np.asarray(theta0)) / scales
     lb, ub = model.lower_bounds / scales, model.upper_bounds / scales
     x0 = np.clip(x0, lb, ub)
-    sol = least_squares(res, x0, bounds=(lb, ub), method="trf",
+    sol = least_squares(res, x0, jac=jac, bounds=(lb, ub), method="trf",
                         x_scale=1.0, xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
     x = sol.x
     Jfull = sol.jac

@@ -17,13 +17,14 @@ model significantly* when (1) the nested F-test of its effect parameters on
 the training rows rejects "all zero" at ``ALPHA / 6`` (Bonferroni over the six
 candidates, family-wise level ``ALPHA``), and (2) its held-out RMS is below
 ``nominal_refit``'s with a one-sided paired t-test over held-out cycles at
-``HELDOUT_ALPHA = 0.05``. Among those, the lowest BIC is selected; otherwise
+``HELDOUT_ALPHA = 0.10``. Among those, the lowest BIC is selected; otherwise
 ``none``. Other significant candidates whose held-out errors are not
 significantly worse than the selected one's are reported as confounded.
 
 Noise floor: the smaller of the within-cycle estimate (:mod:`.noise`) and
-the best fit's whitened residual scale times the instrument-noise floor;
-both only overestimate the noise when a model misses something. The gap's
+the best model's whitened forward-statics residual scale on its training rows
+(``sqrt(RSS / (N - p_eff))``) times the instrument-noise floor; both only
+overestimate the noise when a model misses something. The gap's
 systematic part is ``sqrt(rms^2 - floor^2)``; ``fraction_explained =
 1 - systematic(after) / systematic(before)``.
 """
@@ -47,7 +48,7 @@ from .noise import noise_floor, systematic
 from .residuals import ResidualTable, compute_residuals, pose_residuals, rms
 
 ALPHA = 0.01
-HELDOUT_ALPHA = 0.05
+HELDOUT_ALPHA = 0.10
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -68,6 +69,11 @@ class CandidateScore:
     @property
     def train_rms_rad(self) -> float:
         return rms(self.train_zeta_rad)
+
+    def noise_scale(self, table: ResidualTable) -> float:
+        """Whitened forward residual variance on the training rows, ``RSS / (N - p_eff)``."""
+        r = np.einsum("nij,nj->ni", table.whiten, self.train_zeta_rad)
+        return float(np.sum(r ** 2) / max(r.size - self.fit.p_eff, 1.0))
 
     def cycle_mse(self) -> dict[int, float]:
         sq = np.sum(self.heldout_zeta_rad ** 2, axis=1)
@@ -227,7 +233,7 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
         bar.close()
     local, dof = noise_floor(train)
     instrument = train.instrument_floor_rad
-    best_sigma2 = min([baseline.fit.sigma2] + [c.fit.sigma2 for c in cands.values()])
+    best_sigma2 = min(c.noise_scale(train) for c in [baseline, *cands.values()])
     fitted = float(np.sqrt(best_sigma2) * instrument)
     floor = min(local, fitted) if np.isfinite(local) else fitted
     estimates = {"within_cycle_rad": local, "within_cycle_dof": dof, "best_fit_rad": fitted,

@@ -1,0 +1,86 @@
+"""``csjm diagnose``: SPEC JSON, report folder, bad logs, inputs never overwritten."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from csjm_opt.cli import main
+from csjm_opt.testbed import simulate_experiment
+
+
+@pytest.fixture(scope="module")
+def logs(tmp_path_factory, rig):
+    d = tmp_path_factory.mktemp("diag")
+    rng = np.random.default_rng(40)
+    train = simulate_experiment(rig, 6, rng, effect="sensor_bias", severity=1.5)
+    test = simulate_experiment(rig, 3, rng, effect=None, first_cycle=100)
+    return train.to_csv(d / "data.csv"), test.to_csv(d / "test.csv")
+
+
+def test_json_and_report(logs, tmp_path, capsys):
+    data, _ = logs
+    out = tmp_path / "out.json"
+    rc = main(["diagnose", str(data), "--json", str(out), "--report", str(tmp_path / "rep"),
+               "--effects", "sensor_bias", "cable_hardening", "--no-progress"])
+    assert rc == 0
+    j = json.loads(out.read_text())
+    assert set(j["baseline"]) >= {"heldout_rms_rad", "train_rms_rad"}
+    assert set(j["gap"]) >= {"before_rad", "after_rad", "fraction_explained"}
+    for c in j["candidates"]:
+        assert set(c) >= {"effect", "heldout_rms_rad", "params", "bic"}
+    assert j["selected"] == "sensor_bias"
+    assert isinstance(j["localisation"], dict) and j["noise_floor_rad"] > 0
+    for name in ("index.md", "diagnosis.json", "residual_map.png", "hysteresis.png", "candidates.png",
+                 "before_after.png"):
+        assert (tmp_path / "rep" / name).stat().st_size > 0
+    assert "selected: sensor_bias" in capsys.readouterr().out
+
+
+def test_test_file_is_the_heldout_set(logs, tmp_path):
+    data, test = logs
+    out = tmp_path / "o.json"
+    assert main(["diagnose", str(data), "--test", str(test), "--json", str(out), "--effects", "sensor_bias",
+                 "--no-progress"]) == 0
+    j = json.loads(out.read_text())
+    assert j["heldout"] == "test file" and j["rows"]["test"] == 27
+
+
+def test_bad_log_is_a_clear_error(tmp_path, capsys, logs):
+    data, _ = logs
+    lines = data.read_text().splitlines()
+    lines[3] = lines[3].replace(lines[3].split(",")[9], "abc", 1)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("\n".join(lines) + "\n")
+    assert main(["diagnose", str(bad), "--json", str(tmp_path / "x.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "bad.csv:4" in err and "not a number" in err
+    assert not (tmp_path / "x.json").exists()
+
+
+def test_input_is_never_overwritten(logs, capsys):
+    data, test = logs
+    before = data.read_bytes()
+    assert main(["diagnose", str(data), "--json", str(data)]) == 2
+    assert main(["diagnose", str(data), "--test", str(test), "--json", str(test)]) == 2
+    assert data.read_bytes() == before
+    assert "refusing to overwrite" in capsys.readouterr().err
+
+
+def test_one_cycle_without_test_file_is_refused(tmp_path, rig, capsys):
+    log = simulate_experiment(rig, 1, np.random.default_rng(41))
+    path = log.to_csv(tmp_path / "one.csv")
+    assert main(["diagnose", str(path), "--json", str(tmp_path / "o.json"), "--no-progress"]) == 2
+    assert "at least 2 cycles" in capsys.readouterr().err
+
+
+def test_demo_step_contract(rig, tmp_path):
+    from csjm_opt.demo_diagnose import run_demo
+
+    out = run_demo(rig, tmp_path / "diagnosis", np.random.default_rng(42), effect="sensor_bias",
+                   severity=1.5, n_cycles=6)
+    json.dumps(out)                                   # JSON-able
+    assert out["injected"] == "sensor_bias" and out["selected"] in out["candidates"] | {"none": 0}
+    assert (tmp_path / "diagnosis" / out["report"]).exists() and (tmp_path / "diagnosis" / out["log"]).exists()
