@@ -93,8 +93,12 @@ def before_after(d: Diagnosis, path: Path) -> Path:
     return plots.save(fig, path)
 
 
-def _fmt(x: float, scale: float = 1e3) -> str:
-    return f"{scale * x:.3f}" if np.isfinite(x) else "n/a"
+def _fmt(x: float | None, scale: float = 1e3) -> str:
+    return f"{scale * x:.3f}" if x is not None and np.isfinite(x) else "n/a"
+
+
+def _g(x: float | None, spec: str = ".3g") -> str:
+    return format(x, spec) if x is not None and np.isfinite(x) else "n/a"
 
 
 def markdown(d: Diagnosis, j: dict, data_name: str) -> str:
@@ -105,36 +109,38 @@ def markdown(d: Diagnosis, j: dict, data_name: str) -> str:
            f"- held-out rows: {j['heldout']} ({j['rows']['test'] or j['rows']['train']} rows)",
            f"- gap before (nominal model, rig file): {_fmt(g['before_rad'])} mrad; after: {_fmt(g['after_rad'])} mrad",
            f"- noise floor: {_fmt(j['noise_floor_rad'])} mrad; systematic gap {_fmt(g['systematic_before_rad'])} "
-           f"-> {_fmt(g['systematic_after_rad'])} mrad; fraction explained {g['fraction_explained']:.2f} "
-           f"(of which a recalibration of stiffness/pretension alone gives {g['fraction_explained_by_nominal_refit']:.2f})",
+           f"-> {_fmt(g['systematic_after_rad'])} mrad; fraction explained {_g(g['fraction_explained'], '.2f')} "
+           f"(of which a recalibration of stiffness/pretension alone gives "
+           f"{_g(g['fraction_explained_by_nominal_refit'], '.2f')})",
            f"- decision rule: {j['significance']['test']}; family-wise alpha = {ALPHA} "
            f"({j['significance']['per_candidate_alpha']:.4f} per candidate), held-out alpha = "
            f"{j['significance']['heldout_alpha']}",
            f"- remaining signature after the selected model: "
            f"{'yes' if j['remaining_signature'].get('significant') else 'no'} "
-           f"(p = {j['remaining_signature'].get('p_value', float('nan')):.3g})", "",
+           f"(p = {_g(j['remaining_signature'].get('p_value'))})", "",
            "## Candidates", "",
            "| effect | held-out RMS (mrad) | train RMS (mrad) | BIC | F-test p | held-out p | significant "
            "| rank / params | condition | fraction explained |", "|---|---|---|---|---|---|---|---|---|---|",
            f"| nominal (rig file) | {_fmt(j['baseline']['heldout_rms_rad'])} | {_fmt(j['baseline']['train_rms_rad'])} "
            "| | | | | 0 | | 0 |",
            f"| nominal_refit | {_fmt(j['nominal_refit']['heldout_rms_rad'])} | "
-           f"{_fmt(j['nominal_refit']['train_rms_rad'])} | {j['nominal_refit']['bic']:.1f} | | | | 2 | | "
-           f"{g['fraction_explained_by_nominal_refit']:.2f} |"]
+           f"{_fmt(j['nominal_refit']['train_rms_rad'])} | {_g(j['nominal_refit']['bic'], '.1f')} | | | | 2 | | "
+           f"{_g(g['fraction_explained_by_nominal_refit'], '.2f')} |"]
     for c in j["candidates"]:
-        out.append(f"| {c['effect']} | {_fmt(c['heldout_rms_rad'])} | {_fmt(c['train_rms_rad'])} | {c['bic']:.1f} "
-                   f"| {c['p_value']:.2g} | {c['heldout_p_value']:.2g} | {'yes' if c['significant'] else 'no'} "
-                   f"| {c['rank']} / {c['n_params']} | {c['condition']:.3g} | {c['fraction_explained']:.2f} |")
+        out.append(f"| {c['effect']} | {_fmt(c['heldout_rms_rad'])} | {_fmt(c['train_rms_rad'])} | {_g(c['bic'], '.1f')} "
+                   f"| {_g(c['p_value'], '.2g')} | {_g(c['heldout_p_value'], '.2g')} "
+                   f"| {'yes' if c['significant'] else 'no'} "
+                   f"| {c['rank']} / {c['n_params']} | {_g(c['condition'])} | {_g(c['fraction_explained'], '.2f')} |")
     sel = next((c for c in j["candidates"] if c["effect"] == j["selected"]), None)
     if sel is not None:
         out += ["", f"## Fitted parameters of `{sel['effect']}` (+- 1 standard error)", "",
                 "| parameter | value | sd |", "|---|---|---|"]
-        out += [f"| {k} | {v:.4g} | {sel['param_sd'][k]:.2g} |" for k, v in sel["params"].items()]
-        out += [f"| {k} (nuisance) | {v:.4g} | |" for k, v in sel["nuisance"].items()]
+        out += [f"| {k} | {_g(v, '.4g')} | {_g(sel['param_sd'][k], '.2g')} |" for k, v in sel["params"].items()]
+        out += [f"| {k} (nuisance) | {_g(v, '.4g')} | |" for k, v in sel["nuisance"].items()]
         if sel["derived"]:
             out += ["", "Derived: `" + str(sel["derived"]) + "`"]
         if not sel["identifiable"]:
-            out += ["", f"Note: the augmented fit is ill-conditioned (condition {sel['condition']:.3g}, rank "
+            out += ["", f"Note: the augmented fit is ill-conditioned (condition {_g(sel['condition'])}, rank "
                         f"{sel['rank']} of {sel['n_params']}); some parameter combinations are not determined "
                         "by these data (a weak prior keeps them near zero)."]
     loc = j["localisation"]
@@ -150,7 +156,7 @@ def markdown(d: Diagnosis, j: dict, data_name: str) -> str:
     if hb.get("pairs"):
         out += ["", f"Hysteresis (loading minus unloading at matched loads, {hb['pairs']} pairs): "
                     f"{_fmt(hb['rms_up_minus_down_rad'])} mrad before (noise alone: "
-                    f"{_fmt(hb['expected_from_noise_rad'])}; p = {hb['p_value']:.2g}), "
+                    f"{_fmt(hb['expected_from_noise_rad'])}; p = {_g(hb['p_value'], '.2g')}), "
                     f"{_fmt(ha['rms_up_minus_down_rad'])} mrad after."]
     out += ["", "## Figures", "", "![residual map](residual_map.png)", "", "![hysteresis](hysteresis.png)", "",
             "![candidates](candidates.png)", "", "![before/after](before_after.png)", "",

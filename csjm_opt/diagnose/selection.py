@@ -122,6 +122,10 @@ class Diagnosis:
                 "fraction_explained_by_nominal_refit": self.fraction(self.baseline.heldout_rms_rad)}
 
     def as_json(self) -> dict:
+        """SPEC.md keys (and more); strict JSON: non-finite numbers become ``null``."""
+        return _strict(self._as_dict())
+
+    def _as_dict(self) -> dict:
         cands = []
         for name, sc in self.candidates.items():
             f = sc.fit
@@ -158,6 +162,23 @@ class Diagnosis:
             "localisation": self.localisation,
             "rows": {"train": len(self.train), "test": 0 if self.test is None else len(self.test)},
         }
+
+
+def _strict(x):
+    """Plain Python types, NaN/inf -> None (strict JSON)."""
+    if isinstance(x, dict):
+        return {str(k): _strict(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_strict(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _strict(x.tolist())
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return float(x) if np.isfinite(x) else None
+    return x
 
 
 def folds_by_cycle(cycle: np.ndarray, k: int = 5) -> list[np.ndarray]:
