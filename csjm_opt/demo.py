@@ -31,6 +31,7 @@ class DemoContext:
     out_dir: Path
     rng: np.random.Generator
     quick: bool
+    seed: int = 0
     summary: dict = dataclasses.field(default_factory=dict)
     shared: dict = dataclasses.field(default_factory=dict)
 
@@ -77,17 +78,16 @@ def step_shaping(ctx: DemoContext) -> dict:
 
 
 def step_experiment_identify_verify(ctx: DemoContext) -> dict:
+    """A simulated identification experiment (paper noise), then identify, verify, fit parameters."""
     from .demo_identify import run_demo
-    from .testbed import simulate_experiment
+    from .testbed.identification import simulate_identification_experiment
 
-    n_cycles = 4 if ctx.quick else 8
-    log = simulate_experiment(ctx.rig, n_cycles=n_cycles, rng=ctx.rng)
-    test_log = simulate_experiment(ctx.rig, n_cycles=2, rng=ctx.rng)
+    log = simulate_identification_experiment(ctx.rig, n_cycles=3 if ctx.quick else 6, rng=ctx.rng,
+                                             loads_per_cycle=20)
     data = ctx.out_dir / "experiment"
     data.mkdir(exist_ok=True)
     log.to_csv(data / "log.csv", overwrite=True)
-    test_log.to_csv(data / "test_log.csv", overwrite=True)
-    out = run_demo(ctx.rig, log, data, test_log=test_log)
+    out = run_demo(ctx.rig, log, data)  # held out: every other load row of each cycle
     out["log"] = "experiment/log.csv"
     return out
 
@@ -111,7 +111,8 @@ def run(out_dir: str | Path = "csjm_report", seed: int = 0, quick: bool = False,
     """Run every step; returns the summary (also written to ``summary.json``)."""
     from tqdm import tqdm
 
-    ctx = DemoContext(rig or paper_rig(), prepare_out_dir(Path(out_dir)), np.random.default_rng(seed), quick)
+    ctx = DemoContext(rig or paper_rig(), prepare_out_dir(Path(out_dir)), np.random.default_rng(seed), quick,
+                      seed)
     bar = tqdm(STEPS, desc="csjm demo", unit="step", disable=not progress)
     for name, step in bar:
         bar.set_postfix_str(name)
@@ -125,15 +126,46 @@ def run(out_dir: str | Path = "csjm_report", seed: int = 0, quick: bool = False,
 
 
 def _report(ctx: DemoContext) -> str:
-    lines = ["# csjm demo report", "", f"Rig: paper rig (Section IV-A); seed {ctx.rng.bit_generator.state['state']['state'] % 1000}.", ""]
+    """The report folder's README.md: every step's numbers, then every figure."""
+    lines = ["# csjm demo report", "",
+             f"Rig: the paper rig (Section IV-A, `rigs/paper.toml`); seed {ctx.seed}; "
+             f"{'quick' if ctx.quick else 'full'} run. Numbers are SI (rad, N, N m, N m/rad).", ""]
     for name, result in ctx.summary.items():
-        lines += [f"## {name}", ""]
-        for key, value in result.items():
-            if isinstance(value, (int, float, str)):
-                lines.append(f"- {key}: {value}")
-        for fig in sorted(ctx.out_dir.rglob("*.png")):
-            pass
-        lines.append("")
-    lines += ["## Figures", ""] + [f"![{p.stem}]({p.relative_to(ctx.out_dir).as_posix()})"
-                                   for p in sorted(ctx.out_dir.rglob("*.png"))]
+        lines += [f"## {name}", ""] + _render(result) + [""]
+    lines += ["## Figures", ""]
+    for p in sorted(ctx.out_dir.rglob("*.png")):
+        rel = p.relative_to(ctx.out_dir).as_posix()
+        lines += [f"### {rel}", "", f"![{p.stem}]({rel})", ""]
     return "\n".join(lines) + "\n"
+
+
+def _render(value, depth: int = 0) -> list[str]:
+    """Markdown bullets for a JSON-able summary (matrices inline, long lists shortened)."""
+    pad = "  " * depth
+    out: list[str] = []
+    for key, item in value.items():
+        if isinstance(item, dict):
+            out.append(f"{pad}- {key}:")
+            out += _render(item, depth + 1)
+        elif isinstance(item, list) and item and all(isinstance(x, dict) for x in item):
+            out.append(f"{pad}- {key}: {len(item)} entries")
+            for entry in item[:8]:
+                scalars = {k: v for k, v in entry.items() if not isinstance(v, (list, dict))}
+                out.append(f"{pad}  - " + ", ".join(f"{k} {_fmt(v)}" for k, v in scalars.items()))
+        else:
+            out.append(f"{pad}- {key}: {_fmt(item)}")
+    return out
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    if isinstance(v, list):
+        arr = np.asarray(v, dtype=object)
+        if arr.ndim == 2 and arr.size <= 16 and all(isinstance(x, (int, float)) for x in arr.ravel()):
+            return "`" + np.array2string(np.asarray(v, float), precision=3, suppress_small=True,
+                                         separator=", ").replace("\n", "") + "`"
+        if len(v) > 8:
+            return f"[{', '.join(_fmt(x) for x in v[:6])}, ... ({len(v)} items)]"
+        return "[" + ", ".join(_fmt(x) for x in v) + "]"
+    return str(v)
