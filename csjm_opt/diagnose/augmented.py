@@ -134,6 +134,16 @@ class AugmentedModel:
     def x0(self) -> np.ndarray:
         return np.concatenate([np.zeros(2)] + [e.x0() for e in self.effects])
 
+    def starts(self) -> list[np.ndarray]:
+        """Starting parameter vectors: the nominal model, then each effect's extra starts."""
+        out = [self.x0()]
+        for i, e in enumerate(self.effects):
+            for alt in e.extra_starts():
+                x = self.x0()
+                x[self._offsets[i + 1]:self._offsets[i + 2]] = alt
+                out.append(x)
+        return out
+
     def effect_params(self, theta: np.ndarray) -> list[np.ndarray]:
         return [theta[self._offsets[i + 1]:self._offsets[i + 2]] for i in range(len(self.effects))]
 

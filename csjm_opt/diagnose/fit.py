@@ -108,11 +108,15 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
             Jd = np.vstack([Jd, P])
         return Jd
 
-    x0 = (model.x0() if theta0 is None else np.asarray(theta0)) / scales
     lb, ub = model.lower_bounds / scales, model.upper_bounds / scales
-    x0 = np.clip(x0, lb, ub)
-    sol = least_squares(res, x0, jac=jac, bounds=(lb, ub), method="trf",
-                        x_scale=1.0, xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
+    starts = model.starts() if theta0 is None else [np.asarray(theta0)]
+    sol = None
+    for start in starts:     # best of the starts (more than one only where an effect asks for it)
+        x0 = np.clip(start / scales, lb, ub)
+        trial = least_squares(res, x0, jac=jac, bounds=(lb, ub), method="trf",
+                              x_scale=1.0, xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
+        if sol is None or trial.cost < sol.cost:
+            sol = trial
     x = sol.x
     Jfull = sol.jac
     Jd = Jfull[:3 * len(table)]

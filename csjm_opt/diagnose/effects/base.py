@@ -55,6 +55,10 @@ class Effect(abc.ABC):
         """Starting values (the nominal model)."""
         return np.zeros(self.n_params)
 
+    def extra_starts(self) -> list[np.ndarray]:
+        """Further starting values for effects that trade off with the nuisance parameters."""
+        return []
+
     @property
     def n_params(self) -> int:
         return len(self.param_names)

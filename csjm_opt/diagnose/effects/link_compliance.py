@@ -4,7 +4,9 @@ The tracked, loaded body is joined to the cable platform by a link with
 symmetric compliance ``C`` (rad/(N m), in {A}); the moment it carries, the
 external moment plus the body's weight, ``tau_m``, twists it by
 ``phi = C tau_m``: ``R_meas = R_cable exp(hat(phi))``. The cables balance
-``exp(hat(phi)) tau_m``. Six parameters (upper triangle of ``C``).
+``exp(hat(phi)) tau_m``. Six parameters (upper triangle of ``C``; diagonal
+``>= 0``). ``C`` and the nominal stiffness scale trade off (both soften the
+joint), so the fit also starts from a soft link.
 """
 
 from __future__ import annotations
@@ -36,6 +38,15 @@ class LinkCompliance(Effect):
     @property
     def scales(self):
         return np.full(6, 2e-3)
+
+    @property
+    def lower_bounds(self):
+        """A compliance has a non-negative diagonal (necessary for positive semi-definite)."""
+        return np.where(_IU[0] == _IU[1], 0.0, -np.inf)
+
+    def extra_starts(self):
+        # the stiffness scale and C trade off (both soften the joint): also start from a soft link
+        return [np.where(_IU[0] == _IU[1], 5e-3, 0.0)]
 
     def adjust_pose(self, ev, p):
         phi = (ev.tau_ext_A_Nm + ev.tau_weight_A_Nm) @ compliance_matrix(p)  # C symmetric
