@@ -35,6 +35,7 @@ from .controllers.base import Controller, Observation
 from .errors import CsjmError, InvalidInput
 from .instruments import InstrumentNoise
 from .load_profiles import LoadProfile
+from .plots import save
 from .rig import Rig
 from .statics import EquilibriumSolver, PointForce
 
@@ -175,7 +176,7 @@ def plot_closed_loop(log: ClosedLoopLog, out_dir: str | Path, prefix: str = "clo
     axes[2].set_ylabel("tensions (N)")
     axes[2].set_xlabel("time (s)")
     fig.tight_layout()
-    paths = [_save(fig, out_dir / f"{prefix}.png")]
+    paths = [save(fig, out_dir / f"{prefix}.png")]
     plt.close(fig)
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
@@ -195,13 +196,6 @@ def plot_closed_loop(log: ClosedLoopLog, out_dir: str | Path, prefix: str = "clo
     axes[1].set_ylabel(r"$||K - K_{target}||_F$ (N m/rad)")
     axes[1].set_xlabel("time (s)")
     fig.tight_layout()
-    paths.append(_save(fig, out_dir / f"{prefix}_K.png"))
-    plt.close(fig)
+    paths.append(save(fig, out_dir / f"{prefix}_K.png"))
     return paths
 
-
-def _save(fig, path: Path) -> Path:
-    tmp = path.with_name(path.stem + ".tmp" + path.suffix)
-    fig.savefig(tmp, dpi=110)
-    tmp.replace(path)
-    return path

@@ -16,6 +16,7 @@ import numpy as np
 from .errors import IllConditionedData
 from .identify import identify_stiffness
 from .model import Model
+from .plots import save
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -72,8 +73,4 @@ def plot_convergence(curve: ConvergenceCurve, path: str | Path, title: str = "")
     ax.set_title(title or "Convergence of the identified stiffness (Figure 5)")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save(fig, path)

@@ -31,9 +31,12 @@ import itertools
 from pathlib import Path
 
 import numpy as np
+
+from .plots import save
 from scipy.optimize import linprog
 
 from .errors import InfeasibleLoad, InvalidInput, SolverError
+from .plots import save
 from .rig import Rig
 from .shaping import StiffnessBasis, stiffness_basis
 from .validate import as_array, as_rotation, as_vector3
@@ -225,10 +228,5 @@ def plot_reachable_set(rs: ReachableSet, path: str | Path, t_min_N: float, t_max
     ax2.set_title(r"$u^T K u$ for $u$ in the {A} x-y plane (N m/rad)", fontsize=9)
     ax2.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.08, 1.0))
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.stem + ".tmp" + path.suffix)
-    fig.savefig(tmp, dpi=120)
-    plt.close(fig)
-    tmp.replace(path)
-    return path
+    return save(fig, path)
 

@@ -31,6 +31,7 @@ from .errors import InvalidInput
 from .identify import StiffnessEstimate
 from .logfile import MeasurementLog
 from .model import Model
+from .plots import save
 from .validate import as_array, as_rotation, as_rotations
 
 
@@ -167,8 +168,4 @@ def plot_verification(results: Sequence[Verification], path: str | Path, title: 
     ax.set_title(title or "Verification of the identified stiffness (63)-(65)")
     ax.legend()
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save(fig, path)
