@@ -63,6 +63,14 @@ def summarise(records: list[dict]) -> str:
                          f"{1e3 * np.median([r['gap']['after_rad'] for r in rs]):.2f} | "
                          f"{1e3 * np.median([r['noise_floor_rad'] for r in rs]):.2f} | "
                          + (f"{min(fr):.2f} / {np.median(fr):.2f} |" if fr else "- |"))
+    named = [r for r in records if r["effect"] != "none" and r["selected"] == r["effect"]]
+    for k in (1, 2):
+        big = [r for r in named if r["gap"]["systematic_before_rad"] >= k * r["noise_floor_rad"]]
+        if big:
+            n80 = sum(r["gap"]["fraction_explained"] >= 0.8 for r in big)
+            lines.append(f"\nCorrectly named logs whose systematic gap is >= {k}x the noise floor: {len(big)}; "
+                         f"held-out gap closed by >= 80 % of its systematic part in {n80} "
+                         f"(min {min(r['gap']['fraction_explained'] for r in big):.2f}).")
     secs = [r["seconds"] for r in records]
     lines += ["", f"Median time per log (simulate + diagnose, {records[0]['rows']} rows): {np.median(secs):.1f} s."]
     return "\n".join(lines) + "\n"
@@ -80,7 +88,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--effects", nargs="+", default=list(VOCABULARY))
     ap.add_argument("--out", default="studies/diagnose_confusion")
+    ap.add_argument("--summarise", action="store_true", help="only re-summarise OUT.json")
     args = ap.parse_args(argv)
+    out = Path(args.out)
+    if args.summarise:
+        text = summarise(json.loads(out.with_suffix(".json").read_text()))
+        out.with_suffix(".md").write_text(text)
+        print(text)
+        return 0
     jobs = [(e, (1.0 if e == "none" else s), seed, args.cycles) for e in args.effects
             for s in (args.severities if e != "none" else [1.0]) for seed in range(args.seeds)]
     jobs += [("none", 1.0, seed, args.cycles) for seed in range(args.seeds, args.seeds * 2)
@@ -89,7 +104,6 @@ def main(argv: list[str] | None = None) -> int:
     with ProcessPoolExecutor(args.workers) as pool:
         for rec in tqdm(pool.map(run_one, jobs), total=len(jobs), file=sys.stderr, desc="confusion study"):
             records.append(rec)
-    out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.with_suffix(".json").write_text(json.dumps(records, indent=1) + "\n")
     text = summarise(records)
