@@ -10,7 +10,8 @@ Physics (independent of the diagnosis's fitting models where it can be):
   length ``u`` is fixed, ``T_p = (k / rho)(c - u)``; it slips when
   ``T_p / T_d`` leaves ``[exp(-mu_beta), exp(+mu_beta)]`` (capstan law), and
   then ``T_p`` sits on the band's edge (a play operator: rate independent,
-  path dependent). A cycle starts settled (``T_p = T_d``);
+  path dependent). A cycle starts settled (``T_p = T_d``) unless
+  ``friction_start`` says otherwise;
 * link compliance: the loaded, tracked body is joined to the cable platform
   by a symmetric compliance ``C``, ``R_meas = R_cable exp(hat(C tau_m))``;
 * sensor bias: the F/T reading is offset by a constant ``b`` in {A}.
@@ -50,6 +51,7 @@ class Plant:
     hardening_per_m: float = 0.0
     friction_mu_beta: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(6))
     friction_platform_fraction: float = 0.1    # rho: compliance share of the platform-side segment
+    friction_start: float = 0.0                # band position at a cycle's first row (0 settled, -1 pulled in)
     link_compliance_rad_per_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((3, 3)))
     sensor_bias_A_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
     effects: tuple[str, ...] = ()
@@ -127,5 +129,6 @@ class Plant:
         r = np.exp(self.friction_mu_beta)
         lo = k * e / (rho + (1 - rho) * r)        # r_- = 1/r
         hi = k * e / (rho + (1 - rho) / r)
-        stick = np.where(np.isnan(u), T_free, (k / rho) * (c - np.nan_to_num(u)))
+        start = k * e * np.exp(self.friction_start * self.friction_mu_beta)   # first row: T_p = T_d r^s0
+        stick = np.where(np.isnan(u), start, (k / rho) * (c - np.nan_to_num(u)))
         return _smooth_clip(stick, np.minimum(lo, hi), np.maximum(lo, hi), SMOOTH_N)

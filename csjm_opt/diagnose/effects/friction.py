@@ -19,8 +19,10 @@ cycle matters, and loading and unloading branches differ (hysteresis). The
 length changes ``dc`` come from the measured poses when fitting, and from
 the model's own predicted poses, row after row, when predicting held-out
 cycles (:meth:`AugmentedModel.predict_poses`), so predictions need only
-the log's inputs. A cycle's first row is taken as settled (``s = 0``). Seven parameters
-(``mu_beta_1..6 >= 0``, ``f >= 0``).
+the log's inputs. A cycle's first row starts at a fitted band position ``s_0`` shared by all
+cables (0: settled; -1: every cable last pulled in by its drive, as when the
+drives have just tensioned the cables). Eight parameters
+(``mu_beta_1..6 >= 0``, ``f >= 0``, ``-1 <= s_0 <= 1``).
 """
 
 from __future__ import annotations
@@ -42,9 +44,9 @@ def _clip_band(s: np.ndarray) -> np.ndarray:
     return -1.0 + w * np.logaddexp(0.0, (s + 1.0) / w) - w * np.logaddexp(0.0, (s - 1.0) / w)
 
 
-def band_position(rows, travel_m: np.ndarray) -> np.ndarray:
+def band_position(rows, travel_m: np.ndarray, s0: float = 0.0) -> np.ndarray:
     """``s`` (n, 6) of the play operator over each cycle's rows (``travel_m`` (n, 6) > 0)."""
-    s = np.zeros_like(rows.cable_steps_m)
+    s = np.full_like(rows.cable_steps_m, s0)
     gain = 1.0 / travel_m
     for idx in rows.sequence:
         s[idx] = _clip_band(s[idx - 1] + rows.cable_steps_m[idx] * gain[idx])
@@ -61,29 +63,34 @@ class Friction(Effect):
 
     @property
     def param_names(self):
-        return tuple(f"mu_beta_{i + 1}" for i in range(6)) + ("stick_travel_factor",)
+        return tuple(f"mu_beta_{i + 1}" for i in range(6)) + ("stick_travel_factor", "first_row_state")
 
     @property
     def scales(self):
-        return np.r_[np.full(6, 0.03), 0.5]
+        return np.r_[np.full(6, 0.03), 0.5, 0.5]
 
     @property
     def lower_bounds(self):
-        return np.zeros(7)
+        return np.r_[np.zeros(7), -1.0]
+
+    @property
+    def upper_bounds(self):
+        return np.r_[np.full(7, np.inf), 1.0]
 
     def x0(self) -> np.ndarray:
-        return np.r_[np.zeros(6), 0.5]
+        return np.r_[np.zeros(6), 0.5, 0.0]
 
     def adjust_tension(self, ev, stretch_m, T_N, p):
-        mu_beta, factor = p[:6], p[6]
+        mu_beta, factor, s0 = p[:6], p[6], p[7]
         k = ev.cable_stiffness_N_per_m
         travel = np.maximum(factor * mu_beta * np.maximum(T_N, 1e-3) / k, MIN_TRAVEL_M)
         rows = ev.rows
         if rows.state_prev is None:                  # whole log at measured poses
-            s = band_position(rows, travel)
+            s = band_position(rows, travel, s0)
         else:                                        # one row per cycle, sequential prediction
-            step = np.nan_to_num(ev.lengths_m - rows.lengths_prev_m)
-            s = _clip_band(rows.state_prev + step / travel)
+            first = np.isnan(rows.lengths_prev_m)
+            step = np.where(first, 0.0, ev.lengths_m - np.nan_to_num(rows.lengths_prev_m))
+            s = np.where(first, s0, _clip_band(rows.state_prev + step / travel))
         ev.state_out = s
         return T_N * np.exp(s * mu_beta)
 
