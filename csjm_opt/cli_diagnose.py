@@ -74,6 +74,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"gap: {1e3 * g['before_rad']:.3f} -> {1e3 * g['after_rad']:.3f} mrad held-out RMS; noise floor "
               f"{1e3 * result['noise_floor_rad']:.3f} mrad; systematic part explained {g['fraction_explained']:.0%}")
         for c in result["candidates"]:
+            if c.get("error"):
+                print(f"   {c['effect']:16s} {c['error']}")
+                continue
             mark = "*" if c["effect"] == result["selected"] else " "
             print(f" {mark} {c['effect']:16s} held-out {1e3 * c['heldout_rms_rad']:8.3f} mrad  BIC {c['bic']:9.1f}  "
                   f"p {c['p_value']:.2g}{'  significant' if c['significant'] else ''}")

@@ -64,3 +64,11 @@ def test_injected_effect_is_named_and_gap_closes(rig, effect, severity, seed):
     assert sel["significant"] and sel["p_value"] < ALPHA / 6
     assert sel["heldout_rms_rad"] < j["nominal_refit"]["heldout_rms_rad"]
     assert sel["bic"] == min(c["bic"] for c in j["candidates"] if c["significant"])
+
+
+def test_two_effects_dominant_selected_second_reported(rig):
+    log = simulate_experiment(rig, 10, np.random.default_rng(37), effect=["friction", "sensor_bias"], severity=1.5)
+    j = diagnose(rig, log).as_json()
+    assert j["selected"] == "friction"          # the larger gap
+    assert j["secondary"]["effect"] == "sensor_bias"
+    assert j["secondary"]["fraction_explained"] > j["gap"]["fraction_explained"]

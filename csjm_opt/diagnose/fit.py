@@ -94,7 +94,7 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
             return model.balance(R, rows, th)
 
         g0 = g(R_meas)
-        Ginv = np.linalg.inv(kin.tangent(g, R_meas, g0, h=1e-6))
+        Ginv = _safe_inv(kin.tangent(g, R_meas, g0, h=1e-6))
         WGinv = W @ Ginv
         Jd = np.empty((g0.size, len(x)))
         for j in range(len(x)):
@@ -149,4 +149,15 @@ def linearised_zeta(model: AugmentedModel, table: ResidualTable, theta: np.ndarr
 
     g0 = g(table.R_meas)
     G = kin.tangent(g, table.R_meas, g0, h=1e-6)
-    return np.linalg.solve(G, g0[..., None])[..., 0]
+    zeta = np.einsum("nij,nj->ni", _safe_inv(G), g0)
+    # a parameter trial that leaves a row without a tangent (all cables slack) costs 1 rad, not a crash
+    return np.where(np.isfinite(zeta), np.clip(zeta, -1.0, 1.0), 1.0)
+
+
+def _safe_inv(G: np.ndarray) -> np.ndarray:
+    """Batched inverse; singular or non-finite rows get a pseudo-inverse (or zeros)."""
+    G = np.where(np.isfinite(G), G, 0.0)
+    try:
+        return np.linalg.inv(G)
+    except np.linalg.LinAlgError:
+        return np.linalg.pinv(G)

@@ -115,6 +115,7 @@ def markdown(d: Diagnosis, j: dict, data_name: str) -> str:
            f"- decision rule: {j['significance']['test']}; family-wise alpha = {ALPHA} "
            f"({j['significance']['per_candidate_alpha']:.4f} per candidate), held-out alpha = "
            f"{j['significance']['heldout_alpha']}",
+           f"- second effect on top of the selected one: `{j['secondary']['effect']}`",
            f"- remaining signature after the selected model: "
            f"{'yes' if j['remaining_signature'].get('significant') else 'no'} "
            f"(p = {_g(j['remaining_signature'].get('p_value'))})", "",
@@ -127,6 +128,9 @@ def markdown(d: Diagnosis, j: dict, data_name: str) -> str:
            f"{_fmt(j['nominal_refit']['train_rms_rad'])} | {_g(j['nominal_refit']['bic'], '.1f')} | | | | 2 | | "
            f"{_g(g['fraction_explained_by_nominal_refit'], '.2f')} |"]
     for c in j["candidates"]:
+        if c.get("error"):
+            out.append(f"| {c['effect']} | {c['error']} | | | | | no | | | |")
+            continue
         out.append(f"| {c['effect']} | {_fmt(c['heldout_rms_rad'])} | {_fmt(c['train_rms_rad'])} | {_g(c['bic'], '.1f')} "
                    f"| {_g(c['p_value'], '.2g')} | {_g(c['heldout_p_value'], '.2g')} "
                    f"| {'yes' if c['significant'] else 'no'} "

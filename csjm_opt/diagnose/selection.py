@@ -95,6 +95,8 @@ class Diagnosis:
     confounded_with: list[str]
     localisation: dict
     remaining: dict
+    secondary: dict
+    failed: dict = dataclasses.field(default_factory=dict)   # effect -> error message
 
     @property
     def selected_score(self) -> CandidateScore:
@@ -137,6 +139,9 @@ class Diagnosis:
                           "condition": f.condition, "identifiable": f.identifiable,
                           "failed_forward_solves": sc.failed_rows,
                           "fraction_explained": self.fraction(sc.heldout_rms_rad), **self.tests[name]})
+        for name, msg in self.failed.items():
+            cands.append({"effect": name, "heldout_rms_rad": None, "params": {}, "bic": None, "significant": False,
+                          "error": msg})
         b = self.baseline
         return {
             "baseline": {"heldout_rms_rad": self.nominal_heldout_rms_rad, "train_rms_rad": self.train.rms_rad,
@@ -159,6 +164,8 @@ class Diagnosis:
             "heldout": "test file" if self.test is not None else "grouped K-fold by cycle",
             "gap": self.gap,
             "remaining_signature": self.remaining,
+            "secondary": {**self.secondary, **({"fraction_explained": self.fraction(self.secondary["heldout_rms_rad"])}
+                                                 if "heldout_rms_rad" in self.secondary else {})},
             "localisation": self.localisation,
             "rows": {"train": len(self.train), "test": 0 if self.test is None else len(self.test)},
         }
@@ -246,8 +253,12 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     if bar:
         bar.update(1)
     cands: dict[str, CandidateScore] = {}
+    failed: dict[str, str] = {}
     for name in names:
-        cands[name] = score(AugmentedModel(rig, [make_effect(name, rig)]), train, test_table, folds)
+        try:
+            cands[name] = score(AugmentedModel(rig, [make_effect(name, rig)]), train, test_table, folds)
+        except (np.linalg.LinAlgError, ValueError) as exc:   # a candidate that cannot be fitted is reported
+            failed[name] = f"fit failed: {exc}"
         if bar:
             bar.update(1)
     if bar:
@@ -274,7 +285,39 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
             if name != selected and paired_heldout_test(cands[name], cands[selected]) >= HELDOUT_ALPHA:
                 confounded.append(name)
     sel_score = baseline if selected == "none" else cands[selected]
+    secondary = {"effect": "none", "tried": []}
+    if selected != "none" and len(names) > 1:
+        secondary = secondary_effect(rig, train, test_table, folds, selected, sel_score, names)
     held_table = test_table if test_table is not None else train
     loc = localise(held_table, held_table.zeta_rad, sel_score.heldout_zeta_rad, floor)
     remaining = remaining_signature(held_table, sel_score.heldout_zeta_rad, floor)
-    return Diagnosis(train, test_table, baseline, cands, floor, estimates, tests, selected, confounded, loc, remaining)
+    return Diagnosis(train, test_table, baseline, cands, floor, estimates, tests, selected, confounded, loc,
+                     remaining, secondary, failed)
+
+
+def secondary_effect(rig: Rig, train: ResidualTable, test: ResidualTable | None, folds, selected: str,
+                     sel: CandidateScore, names: Sequence[str]) -> dict:
+    """Is a second effect on top of the selected one significant (same two tests, Bonferroni over the rest)?
+
+    Reported beside ``selected`` (which stays one word of the vocabulary) for logs with several effects.
+    """
+    rest = [n for n in names if n != selected]
+    tried, ok = [], []
+    for name in rest:
+        try:
+            sc = score(AugmentedModel(rig, [make_effect(selected, rig), make_effect(name, rig)]), train, test, folds)
+        except (np.linalg.LinAlgError, ValueError) as exc:
+            tried.append({"effect": name, "error": f"fit failed: {exc}", "significant": False})
+            continue
+        F, p = nested_f_test(sel.fit, sc.fit)
+        ph = paired_heldout_test(sel, sc)
+        significant = p < ALPHA / len(rest) and ph < HELDOUT_ALPHA and sc.heldout_rms_rad < sel.heldout_rms_rad
+        tried.append({"effect": name, "heldout_rms_rad": sc.heldout_rms_rad, "bic": sc.fit.bic, "p_value": p,
+                      "heldout_p_value": ph, "significant": bool(significant)})
+        if significant:
+            ok.append((sc.fit.bic, name, sc))
+    if not ok:
+        return {"effect": "none", "tried": tried}
+    _, name, sc = min(ok, key=lambda t: t[0])
+    return {"effect": name, "heldout_rms_rad": sc.heldout_rms_rad, "params": sc.fit.params(),
+            "tried": tried}
