@@ -239,8 +239,11 @@ def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
 
 def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
              effects: Sequence[str] | None = None, noise: InstrumentNoise | None = None,
-             progress: Callable | None = None) -> Diagnosis:
-    """Residuals, noise floor, every candidate scored, the selection, localisation."""
+             progress: Callable | None = None, secondary: bool = True) -> Diagnosis:
+    """Residuals, noise floor, every candidate scored, the selection, localisation.
+
+    ``secondary=False`` skips the search for a second effect (it does not change ``selected``).
+    """
     from .localisation import localise, remaining_signature
 
     names = list(EFFECTS) if effects is None else list(effects)
@@ -248,7 +251,8 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     test_table = compute_residuals(rig, test, noise) if test is not None else None
     folds = None if test is not None else folds_by_cycle(train.cycle)
     steps = [None] + names
-    bar = progress(total=len(steps), desc="diagnose: fitting candidates") if progress else None
+    total = len(steps) + (len(names) - 1 if secondary else 0)
+    bar = progress(total=total, desc="diagnose: fitting candidates") if progress else None
     baseline = score(AugmentedModel(rig), train, test_table, folds)
     if bar:
         bar.update(1)
@@ -261,8 +265,6 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
             failed[name] = f"fit failed: {exc}"
         if bar:
             bar.update(1)
-    if bar:
-        bar.close()
     local, dof = noise_floor(train)
     instrument = train.instrument_floor_rad
     best_sigma2 = min(c.noise_scale(train) for c in [baseline, *cands.values()])
@@ -285,18 +287,21 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
             if name != selected and paired_heldout_test(cands[name], cands[selected]) >= HELDOUT_ALPHA:
                 confounded.append(name)
     sel_score = baseline if selected == "none" else cands[selected]
-    secondary = {"effect": "none", "tried": []}
-    if selected != "none" and len(names) > 1:
-        secondary = secondary_effect(rig, train, test_table, folds, selected, sel_score, names)
+    second = {"effect": "none", "tried": []}
+    if secondary and selected != "none" and len(names) > 1:
+        second = secondary_effect(rig, train, test_table, folds, selected, sel_score, names,
+                                  tick=bar.update if bar else None)
+    if bar:
+        bar.close()
     held_table = test_table if test_table is not None else train
     loc = localise(held_table, held_table.zeta_rad, sel_score.heldout_zeta_rad, floor)
     remaining = remaining_signature(held_table, sel_score.heldout_zeta_rad, floor)
     return Diagnosis(train, test_table, baseline, cands, floor, estimates, tests, selected, confounded, loc,
-                     remaining, secondary, failed)
+                     remaining, second, failed)
 
 
 def secondary_effect(rig: Rig, train: ResidualTable, test: ResidualTable | None, folds, selected: str,
-                     sel: CandidateScore, names: Sequence[str]) -> dict:
+                     sel: CandidateScore, names: Sequence[str], tick: Callable | None = None) -> dict:
     """Is a second effect on top of the selected one significant (same two tests, Bonferroni over the rest)?
 
     Reported beside ``selected`` (which stays one word of the vocabulary) for logs with several effects.
@@ -309,6 +314,9 @@ def secondary_effect(rig: Rig, train: ResidualTable, test: ResidualTable | None,
         except (np.linalg.LinAlgError, ValueError) as exc:
             tried.append({"effect": name, "error": f"fit failed: {exc}", "significant": False})
             continue
+        finally:
+            if tick:
+                tick(1)
         F, p = nested_f_test(sel.fit, sc.fit)
         ph = paired_heldout_test(sel, sc)
         significant = p < ALPHA / len(rest) and ph < HELDOUT_ALPHA and sc.heldout_rms_rad < sel.heldout_rms_rad
