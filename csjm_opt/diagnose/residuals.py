@@ -43,6 +43,7 @@ class ResidualTable:
     whiten: np.ndarray            # (n, 3, 3) W with W zeta ~ N(0, I) under instrument noise
     branch: np.ndarray            # (n,) +1 loading, -1 unloading, 0 first row of a cycle
     tau_weight_A_Nm: np.ndarray   # (n, 3) nominal weight moment at R_meas
+    noise: InstrumentNoise        # the instrument model behind ``whiten``
 
     def __len__(self) -> int:
         return len(self.cycle)
@@ -78,7 +79,8 @@ class ResidualTable:
     def take(self, idx: np.ndarray) -> "ResidualTable":
         idx = np.asarray(idx)
         fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
-        out = {k: (v.take(idx) if isinstance(v, Rows) else v[idx]) for k, v in fields.items()}
+        out = {k: (v.take(idx) if isinstance(v, Rows) else v if isinstance(v, InstrumentNoise) else v[idx])
+               for k, v in fields.items()}
         return ResidualTable(**out)
 
 
@@ -117,13 +119,17 @@ def compute_residuals(rig: Rig, log: MeasurementLog, noise: InstrumentNoise | No
     rows = Rows(log.rest_lengths_m, log.tau_ext_A_Nm, np.asarray(log.cycle), cable_steps(log.cycle, lengths))
     g = model.balance(R_meas, rows, theta)
     G = kin.tangent(lambda R: model.balance(R, rows, theta), R_meas, g)
-    Ginv = np.linalg.inv(G)
-    cov = (Ginv * np.asarray(noise.tau_sigma_Nm) ** 2) @ np.swapaxes(Ginv, 1, 2)
-    cov = cov + (noise.angle_sigma_rad ** 2 + 1e-12) * np.eye(3)
-    L = np.linalg.cholesky(cov)
-    whiten = np.linalg.inv(L)
+    whiten = np.linalg.inv(np.linalg.cholesky(pose_noise_cov(G, noise)))
     mr = rig.platform_mass_kg * np.asarray(rig.com_A_m)
     tau_w = kin.weight_moment(R_meas, mr, np.asarray(rig.gravity_B_m_per_s2))
     return ResidualTable(np.asarray(log.cycle), rows, R_meas, sol.R, sol.converged(1e-6),
                          pose_residuals(sol.R, R_meas), g, G, whiten,
-                         branches(log.cycle, log.tau_ext_A_Nm), tau_w)
+                         branches(log.cycle, log.tau_ext_A_Nm), tau_w, noise)
+
+
+def pose_noise_cov(G: np.ndarray, noise: InstrumentNoise) -> np.ndarray:
+    """Covariance (n, 3, 3) of a predicted-minus-measured pose under instrument noise, for tangent ``G``:
+    moment noise through ``G^-1`` plus tracker noise."""
+    Ginv = np.linalg.inv(G)
+    cov = (Ginv * np.asarray(noise.tau_sigma_Nm) ** 2) @ np.swapaxes(Ginv, 1, 2)
+    return cov + (noise.angle_sigma_rad ** 2 + 1e-12) * np.eye(3)

@@ -21,12 +21,18 @@ candidates, family-wise level ``ALPHA``), and (2) its held-out RMS is below
 ``none``. Other significant candidates whose held-out errors are not
 significantly worse than the selected one's are reported as confounded.
 
-Noise floor: the smaller of the within-cycle estimate (:mod:`.noise`) and
-the best model's whitened forward-statics residual scale on its training rows
-(``sqrt(RSS / (N - p_eff))``) times the instrument-noise floor; both only
-overestimate the noise when a model misses something. The gap's
-systematic part is ``sqrt(rms^2 - floor^2)``; ``fraction_explained =
-1 - systematic(after) / systematic(before)``.
+Noise floor: the data's noise level relative to the instrument model
+(Tables 1-2) comes from two estimates, both of which can only overestimate it when a
+model misses something: the within-cycle estimate
+(:mod:`.noise`) and the selected model's (``nominal_refit`` for ``none``)
+whitened forward-statics residual on its training rows
+(``sqrt(RSS / (N - p_eff))``; the selection does not use the floor),
+pooled when they agree within sampling error, else the smaller one. A model's floor is that level
+propagated through the model's own tangent (a softer model turns the same
+moment noise into more pose noise); ``noise_floor_rad`` is the nominal
+model's. The gap's systematic part is ``sqrt(rms^2 - floor^2)`` against each
+model's own floor; ``fraction_explained = 1 - systematic(after) /
+systematic(before)``.
 """
 
 from __future__ import annotations
@@ -45,7 +51,8 @@ from .augmented import AugmentedModel
 from .effects import EFFECTS, make_effect
 from .fit import FitResult, fit_model
 from .noise import noise_floor, systematic
-from .residuals import ResidualTable, compute_residuals, pose_residuals, rms
+from . import kinematics as kin
+from .residuals import ResidualTable, compute_residuals, pose_noise_cov, pose_residuals, rms
 
 ALPHA = 0.01
 HELDOUT_ALPHA = 0.10
@@ -61,6 +68,8 @@ class CandidateScore:
     heldout_cycle: np.ndarray       # (n_heldout,)
     train_zeta_rad: np.ndarray      # forward-statics residuals on training rows (full fit)
     failed_rows: int                # forward solves that did not converge
+    instrument_floor_rad: float     # instrument noise propagated through this model's own tangent
+    noise_ratio2: float             # whitened (own tangent) training residual variance, RSS / (N - p_eff)
 
     @property
     def heldout_rms_rad(self) -> float:
@@ -70,10 +79,6 @@ class CandidateScore:
     def train_rms_rad(self) -> float:
         return rms(self.train_zeta_rad)
 
-    def noise_scale(self, table: ResidualTable) -> float:
-        """Whitened forward residual variance on the training rows, ``RSS / (N - p_eff)``."""
-        r = np.einsum("nij,nj->ni", table.whiten, self.train_zeta_rad)
-        return float(np.sum(r ** 2) / max(r.size - self.fit.p_eff, 1.0))
 
     def cycle_mse(self) -> dict[int, float]:
         sq = np.sum(self.heldout_zeta_rad ** 2, axis=1)
@@ -111,17 +116,27 @@ class Diagnosis:
         """The rig file's model on the held-out rows (no fitting)."""
         return self.heldout_table.rms_rad
 
-    def fraction(self, after_rad: float) -> float:
+    def floor_of(self, sc: CandidateScore | None) -> float:
+        """Noise floor of a model: the data's noise level propagated through the model's own tangent."""
+        if sc is None:
+            return self.noise_floor_rad
+        return self.noise_estimates["noise_scale"] * sc.instrument_floor_rad
+
+    def fraction(self, sc: CandidateScore) -> float:
+        """``1 - systematic(after) / systematic(before)``, each against its own model's noise floor."""
         sb = systematic(self.nominal_heldout_rms_rad, self.noise_floor_rad)
-        return float(1.0 - systematic(after_rad, self.noise_floor_rad) / sb) if sb > 0 else 0.0
+        sa = systematic(sc.heldout_rms_rad, self.floor_of(sc))
+        return float(1.0 - sa / sb) if sb > 0 else 0.0
 
     @property
     def gap(self) -> dict[str, float]:
-        before, after = self.nominal_heldout_rms_rad, self.selected_score.heldout_rms_rad
-        return {"before_rad": before, "after_rad": after, "fraction_explained": self.fraction(after),
+        sel = self.selected_score
+        before, after = self.nominal_heldout_rms_rad, sel.heldout_rms_rad
+        return {"before_rad": before, "after_rad": after, "fraction_explained": self.fraction(sel),
                 "systematic_before_rad": systematic(before, self.noise_floor_rad),
-                "systematic_after_rad": systematic(after, self.noise_floor_rad),
-                "fraction_explained_by_nominal_refit": self.fraction(self.baseline.heldout_rms_rad)}
+                "systematic_after_rad": systematic(after, self.floor_of(sel)),
+                "noise_floor_after_rad": self.floor_of(sel),
+                "fraction_explained_by_nominal_refit": self.fraction(self.baseline)}
 
     def as_json(self) -> dict:
         """SPEC.md keys (and more); strict JSON: non-finite numbers become ``null``."""
@@ -138,7 +153,8 @@ class Diagnosis:
                           "bic": f.bic, "p_eff": f.p_eff, "rank": f.rank, "n_params": f.model.n_params,
                           "condition": f.condition, "identifiable": f.identifiable,
                           "failed_forward_solves": sc.failed_rows,
-                          "fraction_explained": self.fraction(sc.heldout_rms_rad), **self.tests[name]})
+                          "fraction_explained": self.fraction(sc), "noise_floor_rad": self.floor_of(sc),
+                          **self.tests[name]})
         for name, msg in self.failed.items():
             cands.append({"effect": name, "heldout_rms_rad": None, "params": {}, "bic": None, "significant": False,
                           "error": msg})
@@ -164,11 +180,23 @@ class Diagnosis:
             "heldout": "test file" if self.test is not None else "grouped K-fold by cycle",
             "gap": self.gap,
             "remaining_signature": self.remaining,
-            "secondary": {**self.secondary, **({"fraction_explained": self.fraction(self.secondary["heldout_rms_rad"])}
-                                                 if "heldout_rms_rad" in self.secondary else {})},
+            "secondary": {k: v for k, v in self.secondary.items() if k != "score"}
+            | ({"fraction_explained": self.fraction(self.secondary["score"])} if "score" in self.secondary else {}),
             "localisation": self.localisation,
             "rows": {"train": len(self.train), "test": 0 if self.test is None else len(self.test)},
         }
+
+
+def combine_scales(s1: float, dof1: float, s2: float, dof2: float) -> float:
+    """Noise level from two estimates (relative sd ``sqrt(2/dof)`` each in variance): pooled when they
+    agree within 2.5 sd, else the smaller one (a misfit only inflates an estimate)."""
+    if not np.isfinite(s1) or dof1 <= 0:
+        return s2
+    v1, v2 = s1 ** 2, s2 ** 2
+    sd = np.hypot(v1 * np.sqrt(2 / dof1), v2 * np.sqrt(2 / max(dof2, 1)))
+    if abs(v1 - v2) <= 2.5 * sd:
+        return float(np.sqrt((v1 * dof1 + v2 * dof2) / (dof1 + dof2)))
+    return float(min(s1, s2))
 
 
 def _strict(x):
@@ -217,7 +245,15 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
             ho = model.predict_poses(part.rows, f.theta, part.R_meas)
             zeta[held] = pose_residuals(ho.R, part.R_meas)
             failed += int(np.sum(~ho.converged(1e-6)))
-    return CandidateScore(model.name, full, zeta, cyc, train_zeta, failed)
+    # the model's own noise propagation: a softer model turns the same moment noise into more pose noise
+    def g(R: np.ndarray) -> np.ndarray:
+        return model.balance(R, train.rows, full.theta)
+
+    cov = pose_noise_cov(kin.tangent(g, train.R_meas, h=1e-6), train.noise)
+    instrument = float(np.sqrt(np.mean(np.trace(cov, axis1=1, axis2=2))))
+    r = np.linalg.solve(np.linalg.cholesky(cov), train_zeta[..., None])[..., 0]
+    ratio2 = float(np.sum(r ** 2) / max(r.size - full.p_eff, 1.0))
+    return CandidateScore(model.name, full, zeta, cyc, train_zeta, failed, instrument, ratio2)
 
 
 def nested_f_test(base: FitResult, cand: FitResult) -> tuple[float, float]:
@@ -265,13 +301,6 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
             failed[name] = f"fit failed: {exc}"
         if bar:
             bar.update(1)
-    local, dof = noise_floor(train)
-    instrument = train.instrument_floor_rad
-    best_sigma2 = min(c.noise_scale(train) for c in [baseline, *cands.values()])
-    fitted = float(np.sqrt(best_sigma2) * instrument)
-    floor = min(local, fitted) if np.isfinite(local) else fitted
-    estimates = {"within_cycle_rad": local, "within_cycle_dof": dof, "best_fit_rad": fitted,
-                 "instrument_model_rad": instrument}
     tests, significant = {}, []
     for name, sc in cands.items():
         F, p_f = nested_f_test(baseline.fit, sc.fit)
@@ -287,6 +316,16 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
             if name != selected and paired_heldout_test(cands[name], cands[selected]) >= HELDOUT_ALPHA:
                 confounded.append(name)
     sel_score = baseline if selected == "none" else cands[selected]
+    local, dof = noise_floor(train)
+    instrument = train.instrument_floor_rad
+    scale_fit = float(np.sqrt(sel_score.noise_ratio2))
+    scale = combine_scales(local / instrument if np.isfinite(local) else float("nan"), 3 * dof,
+                           scale_fit, 3 * len(train) - sel_score.fit.p_eff)
+    floor = scale * instrument
+    estimates = {"within_cycle_rad": local, "within_cycle_dof": dof, "selected_fit_rad": scale_fit * instrument,
+                 "instrument_model_rad": instrument, "noise_scale": scale,
+                 "per_model_rad": {n: scale * c.instrument_floor_rad for n, c in
+                                   [("nominal_refit", baseline), *cands.items()]}}
     second = {"effect": "none", "tried": []}
     if secondary and selected != "none" and len(names) > 1:
         second = secondary_effect(rig, train, test_table, folds, selected, sel_score, names,
@@ -328,4 +367,4 @@ def secondary_effect(rig: Rig, train: ResidualTable, test: ResidualTable | None,
         return {"effect": "none", "tried": tried}
     _, name, sc = min(ok, key=lambda t: t[0])
     return {"effect": name, "heldout_rms_rad": sc.heldout_rms_rad, "params": sc.fit.params(),
-            "tried": tried}
+            "tried": tried, "score": sc}
