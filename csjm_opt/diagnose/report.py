@@ -146,7 +146,7 @@ def markdown(d: Diagnosis, j: dict, data_name: str) -> str:
         if not sel["identifiable"]:
             out += ["", f"Note: the augmented fit is ill-conditioned (condition {_g(sel['condition'])}, rank "
                         f"{sel['rank']} of {sel['n_params']}); some parameter combinations are not determined "
-                        "by these data (a weak prior keeps them near zero)."]
+                        "by these data (hole_offsets: a weak prior keeps them near zero)."]
     loc = j["localisation"]
     out += ["", "## Where the gap lies (held-out rows)", "", "| breakdown | group | rows | before (mrad) | after (mrad) |",
             "|---|---|---|---|---|"]

@@ -176,7 +176,7 @@ class Diagnosis:
                              "heldout_alpha": HELDOUT_ALPHA,
                              "test": "nested F-test on whitened linearised residuals (training rows), "
                                      "Bonferroni over candidates, and one-sided paired t-test of "
-                                     "per-cycle held-out MSE against the baseline"},
+                                     "per-cycle held-out MSE, both against nominal_refit; held-out RMS must also be lower"},
             "heldout": "test file" if self.test is not None else "grouped K-fold by cycle",
             "gap": self.gap,
             "remaining_signature": self.remaining,
