@@ -32,7 +32,7 @@ from .reachable import ReachableSet, directional_stiffness_range, plot_reachable
 from .rig import Rig, load_rig, paper_rig
 from .shaping import Shaper, ShapingResult, build_shaping_qp, shape_stiffness
 from .statics import Equilibrium, EquilibriumSolver, rest_lengths_for, solve_equilibrium
-from .testbed import simulate_experiment
+from .testbed import Plant, make_plant, simulate_experiment
 from .testbed.identification import simulate_identification_experiment
 from .verify import (Verification, estimation_error, plot_verification, predict_pose,
                      predict_pose_external, verify_increments, verify_log)
@@ -43,13 +43,13 @@ __all__ = sorted([
     "ClosedLoopLog", "ConvergenceCurve", "CsjmError", "DataFileError", "DesignError",
     "DesignMetrics", "Diagnosis", "Equilibrium", "EquilibriumSolver", "IllConditionedData",
     "InfeasibleLoad", "InstrumentNoise", "InvalidInput", "LoadSet", "MeasurementLog", "Model",
-    "NoEquilibrium", "NotARotation", "OrientationSampling", "ParameterFit", "ReachableSet", "Rig",
+    "NoEquilibrium", "NotARotation", "OrientationSampling", "ParameterFit", "Plant", "ReachableSet", "Rig",
     "RigFileError", "Shaper", "ShapingResult", "SolverError", "StiffnessEstimate", "SweepResult",
     "SweepSpec", "TensionPlan", "TensionPlanBatch", "Verification", "__version__",
     "build_shaping_qp", "build_tension_qp", "build_tension_qp_for", "check_fit", "controllers",
     "convergence_curve", "design", "diagnose", "diagnose_log", "directional_stiffness_range",
     "estimation_error", "evaluate_design", "fit_parameters", "fit_rigid_transform",
-    "identify_log", "identify_stiffness", "load_profiles", "load_rig", "paper_data",
+    "identify_log", "identify_stiffness", "load_profiles", "load_rig", "make_plant", "paper_data",
     "paper_report", "paper_rig", "plan_tensions", "plan_tensions_batch", "plot_closed_loop",
     "plot_convergence", "plot_reachable_set", "plot_verification", "predict_pose",
     "predict_pose_external", "preprocess_file", "preprocess_text", "reachable_set",
