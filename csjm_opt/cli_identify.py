@@ -44,7 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--ci-level", type=float, default=0.95, help="confidence level (default 0.95)")
     p.add_argument("--bootstrap", type=int, default=0, metavar="N", help="pairs-bootstrap resamples")
     p.add_argument("--max-condition", type=float, default=None,
-                   help="largest accepted condition number of the excitation (default 1e3)")
+                   help="largest accepted condition number of the excitation (default 100)")
     p.add_argument("--fit-parameters", choices=("none", "shared", "per-cable"), default="none",
                    help="also fit the cable stiffness (shared or per cable) and rest-length offsets "
                    "over the whole log, with standard deviations")
@@ -82,7 +82,7 @@ def run_preprocess(args: argparse.Namespace) -> int:
 def run_identify(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .identify import MAX_CONDITION, identify_log
+    from .identify import MAX_CONDITION, identify_cycles, identify_log
     from .stiffness_fits import n_parameters
     from .identify_figures import convergence_curve, plot_convergence
     from .instruments import InstrumentNoise
@@ -100,7 +100,10 @@ def run_identify(args: argparse.Namespace) -> int:
     noise = InstrumentNoise.paper() if args.noise == "paper" else None
     options = dict(order=args.order, noise=noise, ci_level=args.ci_level, bootstrap=args.bootstrap,
                    max_condition=args.max_condition or MAX_CONDITION)
-    estimates = identify_log(log, rig, args.cycle, model, **options)
+    if args.cycle is None:  # cycles that cannot determine K are reported, not fatal
+        estimates, skipped = identify_cycles(log, rig, model, **options)
+    else:
+        estimates, skipped = identify_log(log, rig, args.cycle, model, **options), []
     figures = []
     if args.figures:
         for e in estimates:
@@ -109,7 +112,8 @@ def run_identify(args: argparse.Namespace) -> int:
                                       n_min=n_parameters(args.order) + 1, **options | {"bootstrap": 0})
             figures.append(str(plot_convergence(curve, Path(args.figures) / f"convergence_cycle{e.cycle}.png",
                                                 f"Cycle {e.cycle}: det K against measurements")))
-    out = {"source": str(args.data), "cycles": [e.as_dict() for e in estimates], "figures": figures}
+    out = {"source": str(args.data), "cycles": [e.as_dict() for e in estimates], "skipped": skipped,
+           "figures": figures}
     if args.fit_parameters != "none":
         from .param_fit import fit_parameters
 
@@ -126,6 +130,8 @@ def run_identify(args: argparse.Namespace) -> int:
             print(f"  K_sym =\n{e.K_sym}")
             for problem in e.problems():
                 print(f"  warning: {problem}")
+        for s in skipped:
+            print(f"cycle {s['cycle']}: skipped: {s['reason']}")
         for name, p in out.get("parameters", {}).get("parameters", {}).items():
             print(f"  {name} = {p['value']:.6g} +- {p['std']:.2g}")
         for f in figures:

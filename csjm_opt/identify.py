@@ -257,3 +257,25 @@ def identify_log(log: MeasurementLog, rig: Rig, cycle: int | None = None, model:
         except IllConditionedData as exc:
             raise IllConditionedData(f"cycle {c}: {exc}", exc.condition, exc.rank) from exc
     return out
+
+
+def identify_cycles(log: MeasurementLog, rig: Rig, model: Model | None = None,
+                    **options: Any) -> tuple[list[StiffnessEstimate], list[dict[str, Any]]]:
+    """Every cycle that can be identified, and the others with the reason.
+
+    A log may mix identification cycles with cycles that load along one
+    direction (hysteresis or diagnosis cycles), which cannot determine K; those
+    are returned as ``{"cycle", "reason", "condition"}`` instead of stopping the
+    whole log. Raises the first :class:`IllConditionedData` when no cycle works.
+    """
+    model = model or Model(rig)
+    estimates, skipped, first_error = [], [], None
+    for c in log.cycle_ids:
+        try:
+            estimates.extend(identify_log(log, rig, c, model, **options))
+        except IllConditionedData as exc:
+            first_error = first_error or exc
+            skipped.append({"cycle": c, "reason": str(exc), "condition": exc.condition})
+    if not estimates and first_error is not None:
+        raise first_error
+    return estimates, skipped

@@ -211,3 +211,31 @@ def test_problems_flag_asymmetry(big_log, model):
     tau = noisy.tau_ext_A_Nm + dz @ (3.0 * so3.hat([0.0, 0.0, 1.0])).T
     bad = identify_stiffness(noisy.R, tau, model, noise=InstrumentNoise.paper())
     assert any("asymmetric" in p for p in bad.problems())
+
+
+def test_identify_cli_skips_cycles_that_cannot_determine_K(tmp_path, capsys):
+    """A diagnosis-style cycle (one load direction) is reported as skipped, the others identified."""
+    import csjm_opt as co
+    from csjm_opt import cli
+    from csjm_opt.logfile import MeasurementLog
+    from csjm_opt.testbed import simulate_experiment
+    from csjm_opt.testbed.identification import simulate_identification_experiment
+
+    rig = co.paper_rig()
+    rng = np.random.default_rng(5)
+    good = simulate_identification_experiment(rig, 1, rng, loads_per_cycle=12)
+    one_direction = simulate_experiment(rig, 1, rng, first_cycle=7)
+    mixed = MeasurementLog.from_arrays(
+        np.r_[good.cycle, one_direction.cycle], np.vstack([good.rest_lengths_m, one_direction.rest_lengths_m]),
+        np.vstack([good.tau_ext_A_Nm, one_direction.tau_ext_A_Nm]),
+        np.vstack([good.rotvec_rad, one_direction.rotvec_rad]))
+    path = tmp_path / "mixed.csv"
+    mixed.to_csv(path)
+    assert cli.main(["identify", str(path), "--json", str(tmp_path / "out.json")]) == 0
+    out = json.loads((tmp_path / "out.json").read_text())
+    assert [c["cycle"] for c in out["cycles"]] == [0]
+    assert [s["cycle"] for s in out["skipped"]] == [7]
+    assert "three directions" in out["skipped"][0]["reason"]
+    capsys.readouterr()
+    assert cli.main(["identify", str(path), "--cycle", "7"]) == 2
+    assert "cycle 7" in capsys.readouterr().err
