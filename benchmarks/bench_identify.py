@@ -18,6 +18,8 @@ import numpy as np
 from scipy.optimize import least_squares
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import median_time  # noqa: E402
 
 from identify_sim import add_noise, load_directions, simulate_log  # noqa: E402
 
@@ -26,15 +28,6 @@ from csjm_opt.identify import identify_stiffness  # noqa: E402
 from csjm_opt.instruments import InstrumentNoise  # noqa: E402
 from csjm_opt.model import Model  # noqa: E402
 from csjm_opt.param_fit import fit_parameters  # noqa: E402
-
-
-def median_time(f, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        f()
-        times.append(time.perf_counter() - t)
-    return float(np.median(times))
 
 
 def main() -> None:

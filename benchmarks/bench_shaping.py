@@ -27,10 +27,13 @@ import argparse
 import json
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from scipy.optimize import minimize
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import median_time  # noqa: E402
 from csjm_opt import so3
 from csjm_opt.closed_loop import simulate
 from csjm_opt.controllers import StiffnessShapingController
@@ -45,13 +48,7 @@ K_TARGET = np.diag([30.0, 12.0, 25.0])
 
 
 def _median_us(fn, repeats: int) -> float:
-    fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return 1e6 * float(np.median(times))
+    return 1e6 * median_time(fn, repeats, warmup=1)
 
 
 def slsqp_solve(shaper: Shaper, R: np.ndarray, tau: np.ndarray, objective, x0: np.ndarray) -> np.ndarray:

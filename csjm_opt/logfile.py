@@ -120,15 +120,7 @@ class MeasurementLog:
                 cell = cell.strip()
                 if cell == "":
                     raise DataFileError("missing value", source, line, name)
-                try:
-                    x = float(cell)
-                except ValueError:
-                    raise DataFileError(f"not a number: {cell!r}", source, line, name) from None
-                if not np.isfinite(x):
-                    raise DataFileError(f"not finite: {cell!r}", source, line, name)
-                if name in ("sample", "cycle") and x != int(x):
-                    raise DataFileError(f"expected an integer, got {cell!r}", source, line, name)
-                nums.append(x)
+                nums.append(parse_number(cell, name, source, line, integer=name in ("sample", "cycle")))
             values.append(nums)
             extras.append(row[len(COLUMNS):] + [""] * (len(extra_names) - (len(row) - len(COLUMNS))))
             lines.append(line)
@@ -156,6 +148,21 @@ class MeasurementLog:
                        + [repr(float(x)) for x in self.rotvec_rad[i]]
                        + [str(v[i]) for v in self.extra.values()])
         return buf.getvalue()
+
+
+def parse_number(cell: str, column: str, source: str | None, line: int, integer: bool = False) -> float | int:
+    """A finite number (an ``int`` if ``integer``) from a CSV cell, or a :class:`DataFileError`."""
+    try:
+        x = float(cell)
+    except ValueError:
+        raise DataFileError(f"not a number: {cell!r}", source, line, column) from None
+    if not np.isfinite(x):
+        raise DataFileError(f"not finite: {cell!r}", source, line, column)
+    if integer:
+        if x != int(x):
+            raise DataFileError(f"expected an integer, got {cell!r}", source, line, column)
+        return int(x)
+    return x
 
 
 def _check_rows(log: MeasurementLog, source: str | None, lines: np.ndarray) -> None:

@@ -50,7 +50,7 @@ import numpy as np
 
 from . import so3
 from .errors import DataFileError, IllConditionedData
-from .logfile import MeasurementLog
+from .logfile import MeasurementLog, parse_number
 from .rig import Rig
 
 RAW_COLUMNS = ("record", "sample", "cycle", "name", "x", "y", "z", "rx", "ry", "rz", "px", "py", "pz",
@@ -135,7 +135,8 @@ def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int,
                 if col in _REQUIRED[kind]:
                     raise DataFileError(f"missing value for a {kind} record", source, line, col)
                 continue
-            values[col] = cell if col == "name" else _number(cell, col, source, line)
+            values[col] = cell if col == "name" else parse_number(cell, col, source, line,
+                                                                     integer=col in ("sample", "cycle"))
         if kind == "sample":
             given = [c for c in _POSE if c in values]
             if given and len(given) != 6:
@@ -143,20 +144,6 @@ def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int,
                                     [c for c in _POSE if c not in values][0])
         records[kind].append((line, values))
     return records
-
-
-def _number(cell: str, col: str, source: str | None, line: int) -> float | int:
-    try:
-        x = float(cell)
-    except ValueError:
-        raise DataFileError(f"not a number: {cell!r}", source, line, col) from None
-    if not np.isfinite(x):
-        raise DataFileError(f"not finite: {cell!r}", source, line, col)
-    if col in ("sample", "cycle"):
-        if x != int(x):
-            raise DataFileError(f"expected an integer, got {cell!r}", source, line, col)
-        return int(x)
-    return x
 
 
 def preprocess_text(text: str, rig: Rig, source: str | None = None, origin_tol_m: float = DEFAULT_ORIGIN_TOL_M,
