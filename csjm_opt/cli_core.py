@@ -15,13 +15,18 @@ from .rig import load_rig
 from .validate import as_vector3
 
 
-def add_pose_arguments(p: argparse.ArgumentParser) -> None:
-    """Arguments shared by commands that take a rig, a pose and a load."""
+def add_rig_pose_load(p: argparse.ArgumentParser) -> None:
+    """``--rig``, ``--rotvec`` and ``--tau``: shared by commands that take a rig, a pose and a load."""
     p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
     p.add_argument("--rotvec", nargs=3, type=float, required=True, metavar=("RX", "RY", "RZ"),
                    help="orientation of {A} in {B} as a rotation vector (rad)")
     p.add_argument("--tau", nargs=3, type=float, default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
                    help="external moment about O in {A} (N m), platform weight excluded")
+
+
+def add_pose_arguments(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``plan`` and ``stiffness``: rig, pose, load, reference tension, solver, JSON."""
+    add_rig_pose_load(p)
     p.add_argument("--t-ref", type=float, default=None,
                    help="reference tension of the objective (N; default mid-range)")
     p.add_argument("--solver", default="osqp", help="qpsolvers backend or 'active_set' (default osqp)")

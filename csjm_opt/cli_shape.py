@@ -7,6 +7,7 @@ import argparse
 import numpy as np
 
 from . import so3
+from .cli_core import add_rig_pose_load
 from .errors import InvalidInput
 from .fileio import atomic_write_json
 from .model import Model
@@ -22,11 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "a target: weighted Frobenius (default), principal ('eigen') or directional objective. "
                        "Reports the achieved K, the residual, whether the target is reached and the active "
                        "bounds; --reachable adds the reachable range of each eigenvalue of K.")
-    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
-    p.add_argument("--rotvec", nargs=3, type=float, required=True, metavar=("RX", "RY", "RZ"),
-                   help="orientation of {A} in {B} as a rotation vector (rad)")
-    p.add_argument("--tau", nargs=3, type=float, default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
-                   help="external moment about O in {A} (N m), platform weight excluded")
+    add_rig_pose_load(p)
     p.add_argument("--target", nargs=9, type=float, required=True, metavar="K",
                    help="target K row by row: K11 K12 K13 K21 ... K33 (N m/rad; symmetrised)")
     p.add_argument("--weights", nargs="+", type=float, default=None, metavar="W",
