@@ -12,9 +12,18 @@ import json
 import os
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from .errors import InvalidInput
+
+
+def read_text(path: str | Path, error: Callable[[str], Exception], what: str = "file",
+              encoding: str = "utf-8") -> str:
+    """A file's text; an unreadable file raises ``error("cannot read <what>: <reason>")`` (chained)."""
+    try:
+        return Path(path).read_text(encoding=encoding)
+    except OSError as exc:
+        raise error(f"cannot read {what}: {exc.strerror}") from exc
 
 
 def atomic_write_text(path: str | Path, text: str, overwrite: bool = True) -> Path:

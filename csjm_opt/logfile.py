@@ -23,7 +23,7 @@ import numpy as np
 
 from . import so3
 from .errors import DataFileError
-from .fileio import atomic_write_text
+from .fileio import atomic_write_text, read_text
 
 COLUMNS = ("sample", "cycle", "l1", "l2", "l3", "l4", "l5", "l6",
            "tau_x", "tau_y", "tau_z", "rx", "ry", "rz")
@@ -88,10 +88,7 @@ class MeasurementLog:
     def from_csv(cls, path: str | Path) -> "MeasurementLog":
         """Read and validate a log file."""
         path = Path(path)
-        try:
-            text = path.read_text(encoding="utf-8-sig")
-        except OSError as exc:
-            raise DataFileError(f"cannot read: {exc.strerror}", str(path)) from exc
+        text = read_text(path, lambda msg: DataFileError(msg, str(path)), "log file", encoding="utf-8-sig")
         return cls.from_text(text, str(path))
 
     @classmethod

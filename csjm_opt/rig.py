@@ -27,7 +27,7 @@ import numpy as np
 
 from . import hexagon
 from .errors import RigFileError
-from .fileio import atomic_write_text
+from .fileio import atomic_write_text, read_text
 
 #: Shared cable-plus-drive stiffness of the built-in paper rig (N/m). The paper
 #: gives none. K is affine in k for fixed tensions, so k was chosen by least
@@ -120,10 +120,7 @@ class Rig:
     def from_toml(cls, path: str | Path) -> "Rig":
         """Read a rig file (SPEC.md format)."""
         path = Path(path)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise RigFileError(f"cannot read rig file: {exc.strerror}", str(path)) from exc
+        text = read_text(path, lambda msg: RigFileError(msg, str(path)), "rig file")
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:

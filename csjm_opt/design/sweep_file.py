@@ -49,6 +49,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from ..errors import DesignError
+from ..fileio import read_text
 from .geometry import PARAMETERS, SCALAR_PARAMETERS, GeometryLimits, design_rig
 from .metrics import LoadSet, MetricOptions
 from .sampling import OrientationSampling
@@ -128,10 +129,7 @@ class SweepSpec:
     @classmethod
     def from_toml(cls, path: str | Path) -> "SweepSpec":
         path = Path(path)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise DesignError(f"cannot read sweep file: {exc.strerror}", path=str(path)) from exc
+        text = read_text(path, lambda msg: DesignError(msg, path=str(path)), "sweep file")
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
