@@ -24,10 +24,10 @@ from _common import median_time  # noqa: E402
 from identify_sim import add_noise, load_directions, simulate_log  # noqa: E402
 
 from csjm_opt import paper_rig, so3  # noqa: E402
-from csjm_opt.identify import identify_stiffness  # noqa: E402
-from csjm_opt.instruments import InstrumentNoise  # noqa: E402
-from csjm_opt.model import Model  # noqa: E402
-from csjm_opt.param_fit import fit_parameters  # noqa: E402
+from csjm_opt.identification.identify import identify_stiffness  # noqa: E402
+from csjm_opt.measurement.instruments import InstrumentNoise  # noqa: E402
+from csjm_opt.model.numeric import Model  # noqa: E402
+from csjm_opt.identification.param_fit import fit_parameters  # noqa: E402
 
 
 def main() -> None:

@@ -20,7 +20,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import csjm_opt as co  # noqa: E402
-from csjm_opt.casadi_model import build_functions  # noqa: E402
+from csjm_opt.model.casadi_model import build_functions  # noqa: E402
 from _common import median_time, row  # noqa: E402
 
 

@@ -35,12 +35,12 @@ from scipy.optimize import minimize
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import median_time  # noqa: E402
 from csjm_opt import so3
-from csjm_opt.closed_loop import simulate
-from csjm_opt.controllers import StiffnessShapingController
-from csjm_opt.instruments import InstrumentNoise
-from csjm_opt.load_profiles import Constant, Sinusoid
-from csjm_opt.rig import paper_rig
-from csjm_opt.shaping import Shaper, make_objective, qp_matrices, shape_stiffness
+from csjm_opt.control.closed_loop import simulate
+from csjm_opt.control.controllers import StiffnessShapingController
+from csjm_opt.measurement.instruments import InstrumentNoise
+from csjm_opt.control.load_profiles import Constant, Sinusoid
+from csjm_opt.model.rig import paper_rig
+from csjm_opt.shaping.shaper import Shaper, make_objective, qp_matrices, shape_stiffness
 
 R_POSE = so3.exp(np.array([0.1, -0.05, 0.02]))
 TAU = np.array([0.3, -0.2, 0.1])
@@ -105,7 +105,7 @@ def run(repeats: int = 300, steps: int = 1000) -> dict:
     step = log.step_time_s[1:]
     # controller part alone: read (noise) + shape + command, on the logged observations
     ctrl.reset()
-    from csjm_opt.controllers import Observation
+    from csjm_opt.control.controllers import Observation
 
     def control_only(k=[0]):  # noqa: B006 - counter
         k[0] = (k[0] + 1) % steps

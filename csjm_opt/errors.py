@@ -134,3 +134,7 @@ class DesignError(InvalidInput):
         super().__init__(where + message, key)
         self.key = key
         self.path = path
+
+
+class UsageError(InvalidInput):
+    """Bad command-line usage (unknown option, missing argument, bad value)."""

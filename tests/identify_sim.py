@@ -11,10 +11,10 @@ from __future__ import annotations
 import numpy as np
 
 from csjm_opt import so3
-from csjm_opt.logfile import MeasurementLog
-from csjm_opt.model import Model
-from csjm_opt.planner import plan_tensions
-from csjm_opt.statics import rest_lengths_for, solve_equilibrium
+from csjm_opt.measurement.logfile import MeasurementLog
+from csjm_opt.model.numeric import Model
+from csjm_opt.planning.planner import plan_tensions
+from csjm_opt.model.statics import rest_lengths_for, solve_equilibrium
 
 
 def load_directions(n: int, rng: np.random.Generator) -> np.ndarray:
@@ -69,13 +69,13 @@ def add_noise(log: MeasurementLog, noise, rng: np.random.Generator) -> Measureme
 def raw_text_from_log(log, rig, R_LB, p_LB, R_AS, p_AS, base_points_B, rng, point_sigma_m=0.0,
                       tau_sigma_Nm=0.0, platform_points_A=None, ft_includes_weight=False,
                       force_A_N=None):
-    """Write a raw instrument CSV (csjm_opt.preprocess format) that preprocesses back to ``log``.
+    """Write a raw instrument CSV (csjm_opt.measurement.preprocess format) that preprocesses back to ``log``.
 
     Inverse of preprocessing, written independently: tracker points map B -> L
     (``p_L = R_LB p_B + p_LB``), F/T reading ``f_S = R_AS^T f_A``,
     ``tau_S = R_AS^T (tau_A - p_AS x f_A)``.
     """
-    from csjm_opt.preprocess import RAW_COLUMNS
+    from csjm_opt.measurement.preprocess import RAW_COLUMNS
 
     def cell(v):
         if isinstance(v, str):

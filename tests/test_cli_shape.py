@@ -8,12 +8,14 @@ import numpy as np
 import pytest
 
 import csjm_opt as co
-from csjm_opt import cli, cli_shape, so3
+from csjm_opt import cli, so3
+from csjm_opt.cli import app as cli_main
+from csjm_opt.cli import shape as cli_shape
 
 
 def _parser():
-    p = cli._Parser(prog="csjm")
-    sub = p.add_subparsers(dest="command", parser_class=cli._Parser)
+    p = cli_main._Parser(prog="csjm")
+    sub = p.add_subparsers(dest="command", parser_class=cli_main._Parser)
     cli_shape.register(sub)
     return p
 

@@ -7,12 +7,12 @@ import pytest
 
 import csjm_opt as co
 from csjm_opt import so3
-from csjm_opt.closed_loop import plot_closed_loop, simulate
-from csjm_opt.controllers import (Command, Controller, Observation, StiffnessShapingController,
+from csjm_opt.control.closed_loop import plot_closed_loop, simulate
+from csjm_opt.control.controllers import (Command, Controller, Observation, StiffnessShapingController,
                                   TensionPlanningController)
-from csjm_opt.instruments import InstrumentNoise
-from csjm_opt.load_profiles import Constant, Ramp, Sinusoid, Step
-from csjm_opt.shaping import shape_stiffness
+from csjm_opt.measurement.instruments import InstrumentNoise
+from csjm_opt.control.load_profiles import Constant, Ramp, Sinusoid, Step
+from csjm_opt.shaping.shaper import shape_stiffness
 
 R_REF = so3.exp(np.array([0.08, 0.05, -0.03]))
 TAU_STEP = np.array([0.3, -0.4, 0.1])

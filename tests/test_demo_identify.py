@@ -4,8 +4,8 @@ import json
 
 import numpy as np
 
-from csjm_opt.demo_identify import run_demo
-from csjm_opt.instruments import InstrumentNoise
+from csjm_opt.report.identify_step import run_demo
+from csjm_opt.measurement.instruments import InstrumentNoise
 from identify_sim import add_noise, load_directions, simulate_log
 
 

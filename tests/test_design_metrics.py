@@ -144,9 +144,9 @@ def test_invalid_design_is_recorded_not_raised():
 
 
 def test_shaping_range_agrees_with_the_shaping_modules_lps(rig, model):
-    """Cross-check with issue 5's per-pose HiGHS LPs (csjm_opt.reachable), its own K basis."""
-    reachable = pytest.importorskip("csjm_opt.reachable")
-    shaping = pytest.importorskip("csjm_opt.shaping")
+    """Cross-check with issue 5's per-pose HiGHS LPs (csjm_opt.shaping.reachable), its own K basis."""
+    reachable = pytest.importorskip("csjm_opt.shaping.reachable")
+    shaping = pytest.importorskip("csjm_opt.shaping.shaper")
     Rs = OrientationSampling(n=5, max_tilt_deg=35.0, seed=9).rotations()
     K0, Ki = stiffness_affine_parts(model, Rs)
     J = model.jacobian(Rs)

@@ -10,8 +10,8 @@ from csjm_opt.diagnose.augmented import AugmentedModel
 from csjm_opt.diagnose.effects import EFFECTS, make_effect
 from csjm_opt.diagnose.fit import fit_model
 from csjm_opt.diagnose.residuals import compute_residuals, pose_residuals
-from csjm_opt.instruments import InstrumentNoise
-from csjm_opt.statics import solve_equilibrium
+from csjm_opt.measurement.instruments import InstrumentNoise
+from csjm_opt.model.statics import solve_equilibrium
 from csjm_opt.testbed import make_plant, simulate_experiment
 
 

@@ -8,9 +8,9 @@ import pytest
 from csjm_opt import so3
 from csjm_opt.cli import main
 from csjm_opt.errors import IllConditionedData
-from csjm_opt.identify import identify_log, identify_stiffness
-from csjm_opt.identify_figures import convergence_curve, plot_convergence
-from csjm_opt.instruments import InstrumentNoise
+from csjm_opt.identification.identify import identify_log, identify_stiffness
+from csjm_opt.identification.figures import convergence_curve, plot_convergence
+from csjm_opt.measurement.instruments import InstrumentNoise
 from identify_sim import add_noise, load_directions, simulate_cycle, simulate_log
 
 ROTVEC_REF = np.array([0.12, -0.06, 0.03])
@@ -217,7 +217,7 @@ def test_identify_cli_skips_cycles_that_cannot_determine_K(tmp_path, capsys):
     """A diagnosis-style cycle (one load direction) is reported as skipped, the others identified."""
     import csjm_opt as co
     from csjm_opt import cli
-    from csjm_opt.logfile import MeasurementLog
+    from csjm_opt.measurement.logfile import MeasurementLog
     from csjm_opt.testbed import simulate_experiment
     from csjm_opt.testbed.identification import simulate_identification_experiment
 

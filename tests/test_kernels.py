@@ -3,7 +3,9 @@
 import numpy as np
 
 import csjm_opt as co
-from csjm_opt import active_set, kernels, so3
+from csjm_opt import so3
+from csjm_opt.planning import _active_set as active_set
+from csjm_opt.planning import _kernels as kernels
 
 
 def test_kernel_jacobian_and_weight_match_casadi_model(rig, model):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from csjm_opt import DataFileError, so3
-from csjm_opt.logfile import COLUMNS, MeasurementLog
+from csjm_opt.measurement.logfile import COLUMNS, MeasurementLog
 
 HEADER = ",".join(COLUMNS)
 

@@ -10,7 +10,7 @@ import pytest
 
 import csjm_opt as co
 from csjm_opt import so3
-from csjm_opt.validate import as_rotation
+from csjm_opt._validate import as_rotation
 from tests.conftest import R0_CORRECTED, cable_energy, fd_gradient, fd_hessian, rodrigues
 
 

@@ -8,7 +8,7 @@ from scipy.optimize import linprog, minimize
 
 import csjm_opt as co
 from csjm_opt import so3
-from csjm_opt.planner import build_tension_qp, feasibility_distance_Nm
+from csjm_opt.planning.planner import build_tension_qp, feasibility_distance_Nm
 
 
 def _independent_feasible(J, tau_load, t_min, t_max, margin=1e-3):

@@ -9,8 +9,8 @@ from hypothesis import given, settings, strategies as st
 from csjm_opt import so3
 from csjm_opt.cli import main
 from csjm_opt.errors import DataFileError, IllConditionedData
-from csjm_opt.logfile import MeasurementLog
-from csjm_opt.preprocess import fit_rigid_transform, preprocess_text, weight_moment_A, wrench_to_A
+from csjm_opt.measurement.logfile import MeasurementLog
+from csjm_opt.measurement.preprocess import fit_rigid_transform, preprocess_text, weight_moment_A, wrench_to_A
 from identify_sim import raw_text_from_log
 
 R_LB = so3.exp(np.array([0.3, -1.2, 2.0]))

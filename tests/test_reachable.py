@@ -6,7 +6,7 @@ import numpy as np
 
 from csjm_opt import so3
 from csjm_opt.design import shaping_range
-from csjm_opt.reachable import (directional_range, directional_stiffness_range, feasible_vertices,
+from csjm_opt.shaping.reachable import (directional_range, directional_stiffness_range, feasible_vertices,
                                plot_reachable_set, reachable_set)
 from scipy.optimize import minimize
 

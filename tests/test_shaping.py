@@ -15,7 +15,7 @@ from scipy.optimize import minimize
 
 import csjm_opt as co
 from csjm_opt import so3
-from csjm_opt.shaping import build_shaping_qp, make_objective, shape_stiffness, stiffness_basis
+from csjm_opt.shaping.shaper import build_shaping_qp, make_objective, shape_stiffness, stiffness_basis
 
 R_POSE = so3.exp(np.array([0.1, -0.05, 0.02]))
 TAU = np.array([0.3, -0.2, 0.1])
@@ -117,7 +117,7 @@ def test_reachable_targets_property(rig, model, move):
 
 def test_reachable_target_at_bounds(rig, model):
     """A target built from tensions on a bound: recovered, and that bound reported active."""
-    from csjm_opt.reachable import feasible_vertices
+    from csjm_opt.shaping.reachable import feasible_vertices
 
     J = model.jacobian(R_POSE)
     V = feasible_vertices(J, TAU + model.weight_moment(R_POSE), rig.t_min_N, rig.t_max_N)

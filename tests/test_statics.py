@@ -14,8 +14,8 @@ from hypothesis import strategies as st
 
 import csjm_opt as co
 from csjm_opt import so3
-from csjm_opt.cable_terms import CableTerms, point_force_terms
-from csjm_opt.statics import EquilibriumSolver, rest_lengths_for, solve_equilibrium
+from csjm_opt.model.cable_terms import CableTerms, point_force_terms
+from csjm_opt.model.statics import EquilibriumSolver, rest_lengths_for, solve_equilibrium
 
 from conftest import cable_energy, fd_gradient, fd_hessian, rodrigues
 

@@ -9,10 +9,10 @@ import pytest
 
 from csjm_opt import so3
 from csjm_opt.diagnose import kinematics as kin
-from csjm_opt.instruments import InstrumentNoise
-from csjm_opt.logfile import MeasurementLog
-from csjm_opt.model import Model
-from csjm_opt.statics import solve_equilibrium
+from csjm_opt.measurement.instruments import InstrumentNoise
+from csjm_opt.measurement.logfile import MeasurementLog
+from csjm_opt.model.numeric import Model
+from csjm_opt.model.statics import solve_equilibrium
 from csjm_opt.testbed import Plant, design_cycles, make_plant, simulate_experiment, up_down
 
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from csjm_opt import InvalidInput, NotARotation, so3
-from csjm_opt.validate import as_rotation, as_rotations, as_vector3
+from csjm_opt._validate import as_rotation, as_rotations, as_vector3
 from tests.conftest import R0_CORRECTED
 
 

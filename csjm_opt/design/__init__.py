@@ -8,8 +8,14 @@ design), :mod:`.sweep_file` (TOML description), :mod:`.store` (crash-safe
 JSON Lines results), :mod:`.sweep` (parallel, resumable runner; processes or Dask).
 """
 
-from .geometry import (PAPER_DESIGN, PARAMETERS, GeometryLimits, check_holes, design_holes,
-                       design_rig)
+from .geometry import (
+    PAPER_DESIGN,
+    PARAMETERS,
+    GeometryLimits,
+    check_holes,
+    design_holes,
+    design_rig,
+)
 from .metrics import DesignMetrics, LoadSet, MetricOptions, PoseMetrics, evaluate, evaluate_poses
 from .sampling import OrientationSampling, tilt_torsion_angles, tilt_torsion_rotations
 from .sweep import SweepResult, evaluate_design, run_sweep

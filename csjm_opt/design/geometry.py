@@ -5,7 +5,7 @@ A design is a flat mapping of named parameters (the vocabulary is
 Unspecified parameters take the paper's Section IV-A values, so ``{}`` is the
 paper's design. Each body (platform {A}, base {B}) is either
 
-* a semi-regular hexagon (:mod:`csjm_opt.hexagon`): chords ``*_d12_m`` and
+* a semi-regular hexagon (:mod:`csjm_opt.model.hexagon`): chords ``*_d12_m`` and
   ``*_d23_m``, or equivalently circle radius ``*_radius_m`` and central angle
   ``*_gamma_deg`` of chord 1-2 (give one pair, not both), rotated by
   ``*_theta0_deg`` about z, at height ``+oo_a_m`` (platform, above O) or
@@ -32,9 +32,9 @@ from typing import Any
 
 import numpy as np
 
-from .. import hexagon
+from ..model import hexagon
 from ..errors import DesignError, InvalidInput
-from ..rig import PAPER_CABLE_STIFFNESS_N_PER_M, PAPER_COM_A_M, PAPER_MASS_KG, Rig, paper_rig
+from ..model.rig import PAPER_CABLE_STIFFNESS_N_PER_M, PAPER_COM_A_M, PAPER_MASS_KG, Rig, paper_rig
 
 _BODIES = {"platform": "A", "base": "B"}
 _SCALARS = {

@@ -13,7 +13,7 @@ Definitions (all over the orientations of an :class:`OrientationSampling`):
   The infeasible samples of smallest tilt are refined by bisection along
   their tilt ray (azimuth, torsion fixed) to the feasibility boundary.
 * Stiffness at a feasible pose is K (SPEC.md load convention) with the
-  planner's tensions (closest to mid-range, :func:`csjm_opt.planner`'s QP,
+  planner's tensions (closest to mid-range, :func:`csjm_opt.planning.planner`'s QP,
   solved by the batched exact active-set method) for the *stiffness load*,
   the first load of the set. ``min_stiffness_Nm_per_rad`` is the smallest
   eigenvalue of K over feasible poses; ``max_condition`` the largest
@@ -46,11 +46,11 @@ from typing import Any
 
 import numpy as np
 
-from .. import active_set
+from ..planning import _active_set as active_set
 from ..errors import DesignError, InfeasibleLoad
-from ..model import Model
-from ..planner import plan_tensions
-from ..rig import Rig
+from ..model.numeric import Model
+from ..planning.planner import plan_tensions
+from ..model.rig import Rig
 from . import feasibility, shaping_range
 from .sampling import OrientationSampling, tilt_torsion_angles, tilt_torsion_rotations
 

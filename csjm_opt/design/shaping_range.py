@@ -4,7 +4,7 @@ At a fixed pose and load, the tensions that hold the load form the polytope
 ``P = {T : J^T T = -tau_load, t_min <= T <= t_max}`` (6 unknowns, 3
 equalities: a 3-dimensional polytope). The stiffness is affine in the
 tensions, ``K(T) = K0 + sum_i T_i K_i`` (``K = J^T Kdiag J - D(T) + 1/2
-hat(J^T T)``, csjm_opt.casadi_model), so the directional stiffness
+hat(J^T T)``, csjm_opt.model.casadi_model), so the directional stiffness
 ``u^T K(T) u`` along a unit vector ``u`` is linear in T, and its range over P
 is a pair of linear programs. Their optima lie at vertices of P, i.e. basic
 feasible solutions: 3 basic tensions solved from the equilibrium with the
@@ -13,8 +13,8 @@ Enumerating them all, in numpy, solves every LP of a batch exactly and at
 once; it also certifies feasibility (P is empty iff no candidate is valid).
 
 It answers "what stiffness range can shaping reach here", not "which
-tensions give this K" (that is :func:`csjm_opt.shaping.shape_stiffness`).
-:func:`csjm_opt.reachable.directional_range` solves the same LPs one pose at a
+tensions give this K" (that is :func:`csjm_opt.shaping.shaper.shape_stiffness`).
+:func:`csjm_opt.shaping.reachable.directional_range` solves the same LPs one pose at a
 time with HiGHS; this batched form is what a sweep over thousands of poses
 needs, and tests/test_design_metrics.py checks the two agree.
 """

@@ -49,7 +49,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from ..errors import DesignError
-from ..fileio import read_text
+from .._fileio import read_text
 from .geometry import PARAMETERS, SCALAR_PARAMETERS, GeometryLimits, design_rig
 from .metrics import LoadSet, MetricOptions
 from .sampling import OrientationSampling

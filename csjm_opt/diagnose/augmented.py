@@ -23,7 +23,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..rig import Rig
+from ..model.rig import Rig
 from . import kinematics as kin
 from .effects import Effect
 

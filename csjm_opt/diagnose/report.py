@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import plots
-from ..fileio import atomic_write_json, atomic_write_text
+from .. import _plotting as plots
+from .._fileio import atomic_write_json, atomic_write_text
 from .selection import ALPHA, Diagnosis
 
 

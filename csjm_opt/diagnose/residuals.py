@@ -21,9 +21,9 @@ import dataclasses
 import numpy as np
 
 from .. import so3
-from ..instruments import InstrumentNoise
-from ..logfile import MeasurementLog
-from ..rig import Rig
+from ..measurement.instruments import InstrumentNoise
+from ..measurement.logfile import MeasurementLog
+from ..model.rig import Rig
 from . import kinematics as kin
 from .augmented import AugmentedModel, Rows, cable_steps
 

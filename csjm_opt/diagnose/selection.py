@@ -44,9 +44,9 @@ import numpy as np
 from scipy import stats
 
 from ..errors import InvalidInput
-from ..instruments import InstrumentNoise
-from ..logfile import MeasurementLog
-from ..rig import Rig
+from ..measurement.instruments import InstrumentNoise
+from ..measurement.logfile import MeasurementLog
+from ..model.rig import Rig
 from .augmented import AugmentedModel
 from .effects import EFFECTS, make_effect
 from .fit import FitResult, fit_model

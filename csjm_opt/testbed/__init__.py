@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from .design import CycleDesign, design_cycles, up_down
-from .effects import inject, make_plant
+from .cycles import CycleDesign, design_cycles, up_down
+from .injection import inject, make_plant
 from .plant import EFFECT_NAMES, Plant
 from .simulate import simulate_experiment
 

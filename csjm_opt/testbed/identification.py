@@ -1,6 +1,6 @@
 """Identification experiments: many load directions around each reference pose.
 
-The diagnosis cycles of :mod:`csjm_opt.testbed.design` load along one
+The diagnosis cycles of :mod:`csjm_opt.testbed.cycles` load along one
 direction each, which is right for hysteresis but cannot identify a 3x3 K
 per cycle (the displacements span one direction). An identification cycle,
 like the paper's 85 measurements at R0 (Section IV-B), holds rest lengths
@@ -17,13 +17,13 @@ import numpy as np
 
 from .. import so3
 from ..errors import CsjmError
-from ..instruments import InstrumentNoise
-from ..logfile import MeasurementLog
-from ..model import Model
-from ..planner import plan_tensions
-from ..rig import Rig
-from ..statics import rest_lengths_for, solve_equilibrium
-from .effects import make_plant
+from ..measurement.instruments import InstrumentNoise
+from ..measurement.logfile import MeasurementLog
+from ..model.numeric import Model
+from ..planning.planner import plan_tensions
+from ..model.rig import Rig
+from ..model.statics import rest_lengths_for, solve_equilibrium
+from .injection import make_plant
 from .plant import Plant
 
 

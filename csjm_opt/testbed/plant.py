@@ -2,7 +2,7 @@
 
 Physics (independent of the diagnosis's fitting models where it can be):
 
-* hole offsets and mass/centre of mass: a perturbed :class:`~csjm_opt.rig.Rig`;
+* hole offsets and mass/centre of mass: a perturbed :class:`~csjm_opt.model.rig.Rig`;
 * cable hardening: ``T = k e (1 + h e)``;
 * friction at the base guide holes: each cable is split at its hole into a
   platform-side segment (fraction ``rho`` of the compliance) and a drive-side
@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import so3
 from ..diagnose import kinematics as kin
-from ..rig import Rig
+from ..model.rig import Rig
 
 #: Width (N) of the rounding of the play operator's corners (keeps Newton's method happy).
 SMOOTH_N = 0.02

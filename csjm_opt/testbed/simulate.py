@@ -7,11 +7,11 @@ from typing import Iterable
 import numpy as np
 
 from .. import so3
-from ..instruments import InstrumentNoise
-from ..logfile import MeasurementLog
-from ..rig import Rig
-from .design import design_cycles
-from .effects import make_plant
+from ..measurement.instruments import InstrumentNoise
+from ..measurement.logfile import MeasurementLog
+from ..model.rig import Rig
+from .cycles import design_cycles
+from .injection import make_plant
 from .plant import Plant
 
 

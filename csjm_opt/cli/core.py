@@ -1,0 +1,99 @@
+"""``csjm plan`` and ``csjm stiffness``: tensions and K at one pose."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from .. import so3
+from ..model.stiffness import stiffness
+from .._fileio import atomic_write_json
+from ..model.numeric import Model
+from ..planning.planner import TensionPlan, plan_tensions
+from ..model.rig import load_rig
+from .._validate import as_vector3
+
+
+def add_rig_pose_load(p: argparse.ArgumentParser) -> None:
+    """``--rig``, ``--rotvec`` and ``--tau``: shared by commands that take a rig, a pose and a load."""
+    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
+    p.add_argument("--rotvec", nargs=3, type=float, required=True, metavar=("RX", "RY", "RZ"),
+                   help="orientation of {A} in {B} as a rotation vector (rad)")
+    p.add_argument("--tau", nargs=3, type=float, default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
+                   help="external moment about O in {A} (N m), platform weight excluded")
+
+
+def add_pose_arguments(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``plan`` and ``stiffness``: rig, pose, load, reference tension, solver, JSON."""
+    add_rig_pose_load(p)
+    p.add_argument("--t-ref", type=float, default=None,
+                   help="reference tension of the objective (N; default mid-range)")
+    p.add_argument("--solver", default="osqp", help="qpsolvers backend or 'active_set' (default osqp)")
+    p.add_argument("--json", metavar="PATH", help="write machine-readable output ('-' = stdout)")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("plan", help="cable tensions that hold a pose under a load",
+                       description="Plan the six cable tensions (QP, t_min <= t <= t_max) that hold "
+                       "the platform at a pose under an external moment plus its own weight.")
+    add_pose_arguments(p)
+    p.set_defaults(func=run_plan)
+    p = sub.add_parser("stiffness", help="stiffness K at a pose (tensions as planned)",
+                       description="Plan tensions for the pose and load, then the stiffness K "
+                       "(N m/rad; Levi-Civita Hessian of the cable energy, SPEC.md convention).")
+    add_pose_arguments(p)
+    p.set_defaults(func=run_stiffness)
+
+
+def _plan(args: argparse.Namespace) -> tuple[TensionPlan, Model, np.ndarray, np.ndarray]:
+    rig = load_rig(args.rig)
+    model = Model(rig)
+    rotvec = as_vector3(args.rotvec, "--rotvec")
+    tau = as_vector3(args.tau, "--tau")
+    plan = plan_tensions(rig, so3.exp(rotvec), tau, t_ref_N=args.t_ref, solver=args.solver, model=model)
+    return plan, model, rotvec, tau
+
+
+def _plan_json(plan: TensionPlan, rotvec: np.ndarray, tau: np.ndarray) -> dict:
+    return {"tensions_N": plan.tensions_N.tolist(), "rotvec": rotvec.tolist(), "tau_ext": tau.tolist(),
+            "equilibrium_residual_Nm": plan.equilibrium_residual_Nm,
+            "tau_weight_Nm": plan.tau_weight_A_Nm.tolist(),
+            "bound_margins_N": plan.bound_margins_N.tolist(), "active_bounds": plan.active_bounds,
+            "solver": plan.solver}
+
+
+def _print_plan(plan: TensionPlan) -> None:
+    print("cable   tension (N)   margin (N)")
+    for i, (t, m) in enumerate(zip(plan.tensions_N, plan.bound_margins_N)):
+        print(f"  {i + 1}    {t:11.4f}   {m:10.4f}")
+    print(f"equilibrium residual: {plan.equilibrium_residual_Nm:.2e} N m; "
+          f"weight moment {np.round(plan.tau_weight_A_Nm, 4).tolist()} N m; "
+          f"active bounds: {', '.join(plan.active_bounds) or 'none'}")
+
+
+def run_plan(args: argparse.Namespace) -> int:
+    plan, _, rotvec, tau = _plan(args)
+    if args.json:
+        atomic_write_json(args.json, _plan_json(plan, rotvec, tau))
+    if args.json != "-":
+        _print_plan(plan)
+    return 0
+
+
+def run_stiffness(args: argparse.Namespace) -> int:
+    plan, model, rotvec, tau = _plan(args)
+    K = stiffness(model.rig, plan.R, plan.tensions_N, model=model)
+    eig = np.linalg.eigvalsh(K)
+    if args.json:
+        out = _plan_json(plan, rotvec, tau)
+        out.update({"K": K.tolist(), "eigenvalues_Nm_per_rad": eig.tolist()})
+        atomic_write_json(args.json, out)
+    if args.json != "-":
+        _print_plan(plan)
+        print("K (N m/rad):")
+        for row in K:
+            print("  " + "  ".join(f"{x:10.4f}" for x in row))
+        print(f"eigenvalues: {np.round(eig, 4).tolist()}"
+              + ("" if eig[0] > 0 else "  (not positive definite: unstable pose)"))
+    return 0

@@ -1,0 +1,83 @@
+"""``csjm diagnose DATA.csv --rig RIG [--test TEST.csv] --json OUT [--report DIR]``.
+
+Where the nominal model and the rig disagree, which unmodelled effect explains
+it, and how much of the gap it closes on held-out cycles (SPEC.md keys and
+vocabulary; see :mod:`csjm_opt.diagnose.selection` for the decision rule).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..diagnose import EFFECTS
+from ..errors import InvalidInput
+from .._fileio import atomic_write_json, refuse_input_overwrite
+from ..measurement.logfile import MeasurementLog
+from ..model.rig import load_rig
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("diagnose", help="which unmodelled effect explains the model-rig gap",
+                       description="Compare a measurement log (SPEC.md CSV) with the nominal model of the "
+                       "rig: residuals and where they lie, every candidate effect (" + ", ".join(EFFECTS)
+                       + ") fitted jointly with the nominal stiffness scale and pretension and scored on "
+                       "held-out cycles, the selected effect (or none) and the gap it closes.")
+    p.add_argument("data", metavar="DATA.csv", help="measurement log (SPEC.md format)")
+    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
+    p.add_argument("--test", metavar="TEST.csv", default=None,
+                   help="held-out log (default: grouped cross-validation by cycle)")
+    p.add_argument("--json", metavar="OUT", default=None, help="write the diagnosis as JSON ('-' = stdout)")
+    p.add_argument("--report", metavar="DIR", default=None, help="write a Markdown report with figures here")
+    p.add_argument("--effects", nargs="+", choices=list(EFFECTS), default=None,
+                   help="candidates to try (default: all)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..diagnose import diagnose
+    from ..diagnose.report import write_report
+
+    inputs = [args.data, args.test, args.rig]
+    if args.json:
+        refuse_input_overwrite(args.json, *inputs)
+    if args.report:
+        report = Path(args.report)
+        for item in inputs:
+            if item is not None and Path(item).resolve().parent == report.resolve() \
+                    and Path(item).name in ("index.md", "diagnosis.json"):
+                raise InvalidInput(f"--report {report} would overwrite input {item}", "--report")
+        if report.exists() and not report.is_dir():
+            raise InvalidInput(f"--report {report} exists and is not a folder", "--report")
+    rig = load_rig(args.rig)
+    log = MeasurementLog.from_csv(args.data)
+    test = MeasurementLog.from_csv(args.test) if args.test else None
+    progress = None
+    if not args.no_progress:
+        from functools import partial
+
+        from tqdm import tqdm
+
+        progress = partial(tqdm, file=sys.stderr, disable=None, leave=False)
+    diagnosis = diagnose(rig, log, test, effects=args.effects, progress=progress)
+    result = diagnosis.as_json()
+    if args.json:
+        atomic_write_json(args.json, result)
+    if args.report:
+        write_report(diagnosis, args.report, Path(args.data).name)
+    if args.json != "-":
+        g = result["gap"]
+        print(f"selected: {result['selected']}"
+              + (f" (confounded with {', '.join(result['confounded_with'])})" if result["confounded_with"] else ""))
+        print(f"gap: {1e3 * g['before_rad']:.3f} -> {1e3 * g['after_rad']:.3f} mrad held-out RMS; noise floor "
+              f"{1e3 * result['noise_floor_rad']:.3f} mrad; systematic part explained {g['fraction_explained']:.0%}")
+        for c in result["candidates"]:
+            if c.get("error"):
+                print(f"   {c['effect']:16s} {c['error']}")
+                continue
+            mark = "*" if c["effect"] == result["selected"] else " "
+            print(f" {mark} {c['effect']:16s} held-out {1e3 * c['heldout_rms_rad']:8.3f} mrad  BIC {c['bic']:9.1f}  "
+                  f"p {c['p_value']:.2g}{'  significant' if c['significant'] else ''}")
+    return 0

@@ -1,0 +1,150 @@
+"""``csjm preprocess``, ``csjm identify`` and ``csjm paper`` (Section III-IV of the paper)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..errors import InvalidInput
+from .._fileio import atomic_write_json, refuse_input_overwrite
+from ..model.rig import load_rig
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("preprocess", help="raw tracker/F/T CSV -> measurement log",
+                       description="Turn a raw instrument CSV (tracker base points, platform poses "
+                       "in the tracker frame, F/T readings in the sensor frame; format in "
+                       "csjm_opt/preprocess.py and the README) into the measurement log of SPEC.md: "
+                       "least-squares base frame fit, pose in {B} (53)-(54), wrench moved to {A} "
+                       "about O (55), weight handled explicitly (56).")
+    p.add_argument("raw", metavar="RAW.csv", help="raw instrument CSV")
+    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
+    p.add_argument("-o", "--output", required=True, metavar="LOG.csv", help="measurement log to write")
+    p.add_argument("--force", action="store_true", help="replace an existing output file")
+    p.add_argument("--origin-tol", type=float, default=None, metavar="M",
+                   help="largest accepted distance between the origins of {A} and {B} (m, default 2e-3)")
+    p.add_argument("--ft-includes-weight", action="store_true",
+                   help="the F/T moment includes the platform weight: subtract it (56)")
+    p.add_argument("--json", metavar="PATH", help="write a summary ('-' = stdout)")
+    p.set_defaults(func=run_preprocess)
+
+    p = sub.add_parser("identify", help="identify K per load cycle of a measurement log",
+                       description="Per cycle (first row = reference): K_D by (49), K = K_D + K_L with "
+                       "K_L = -1/2 hat(tau_load) (errata 1-2), an affine least-squares estimate with "
+                       "confidence intervals, a symmetric-constrained estimate K_sym, and the "
+                       "condition number of the excitation.")
+    p.add_argument("data", metavar="DATA.csv", help="measurement log (SPEC.md format)")
+    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
+    p.add_argument("--cycle", type=int, default=None, help="only this cycle id")
+    p.add_argument("--order", type=int, choices=(1, 2, 3), default=1,
+                   help="1: linear fit (paper); 2, 3: add terms up to that degree in dzeta "
+                   "(less finite-displacement bias; needs 11 / 21 rows)")
+    p.add_argument("--noise", choices=("none", "paper"), default="none",
+                   help="'paper': weight and correct with the instrument uncertainties of Tables 1-2")
+    p.add_argument("--ci-level", type=float, default=0.95, help="confidence level (default 0.95)")
+    p.add_argument("--bootstrap", type=int, default=0, metavar="N", help="pairs-bootstrap resamples")
+    p.add_argument("--max-condition", type=float, default=None,
+                   help="largest accepted condition number of the excitation (default 100)")
+    p.add_argument("--fit-parameters", choices=("none", "shared", "per-cable"), default="none",
+                   help="also fit the cable stiffness (shared or per cable) and rest-length offsets "
+                   "over the whole log, with standard deviations")
+    p.add_argument("--json", metavar="PATH", help="write machine-readable output ('-' = stdout)")
+    p.add_argument("--figures", metavar="DIR", help="write the Figure 5 convergence curve per cycle")
+    p.set_defaults(func=run_identify)
+
+    p = sub.add_parser("paper", help="reproduce the paper's Tables 3 and 4 and check them",
+                       description="Recompute Table 3 (K_D, K_L, K) and Table 4 (estimated poses, E_theta) "
+                       "from the paper's printed numbers; report where the printed numbers disagree "
+                       "with the equations (errata 1-5).")
+    p.add_argument("--json", metavar="PATH", help="write machine-readable output ('-' = stdout)")
+    p.set_defaults(func=run_paper)
+
+
+def run_preprocess(args: argparse.Namespace) -> int:
+    from ..measurement.preprocess import DEFAULT_ORIGIN_TOL_M, preprocess_file
+
+    refuse_input_overwrite(args.output, args.raw, args.rig)
+    if args.json:
+        refuse_input_overwrite(args.json, args.raw, args.rig, args.output)
+    rig = load_rig(args.rig)
+    tol = DEFAULT_ORIGIN_TOL_M if args.origin_tol is None else args.origin_tol
+    log, info = preprocess_file(args.raw, rig, origin_tol_m=tol, ft_includes_weight=args.ft_includes_weight)
+    log.to_csv(args.output, overwrite=args.force)
+    summary = {"output": str(args.output), "rows": len(log), "cycles": log.cycle_ids, **info}
+    if args.json:
+        atomic_write_json(args.json, summary)
+    if args.json != "-":
+        print(f"wrote {args.output}: {len(log)} rows, {len(log.cycle_ids)} cycles; base fit rms "
+              f"{info['base_fit_rms_m'] * 1e6:.1f} um, max origin offset {info['max_origin_offset_m'] * 1e3:.3f} mm")
+    return 0
+
+
+def run_identify(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from ..identification.identify import MAX_CONDITION, identify_cycles, identify_log
+    from ..identification.stiffness_fits import n_parameters
+    from ..identification.figures import convergence_curve, plot_convergence
+    from ..measurement.instruments import InstrumentNoise
+    from ..measurement.logfile import MeasurementLog
+    from ..model.numeric import Model
+
+    for out in (args.json, args.figures):
+        if out:
+            refuse_input_overwrite(out, args.data, args.rig)
+    if not 0 < args.ci_level < 1:
+        raise InvalidInput(f"--ci-level: expected a number in (0, 1), got {args.ci_level}", "--ci-level")
+    rig = load_rig(args.rig)
+    log = MeasurementLog.from_csv(args.data)
+    model = Model(rig)
+    noise = InstrumentNoise.paper() if args.noise == "paper" else None
+    options = dict(order=args.order, noise=noise, ci_level=args.ci_level, bootstrap=args.bootstrap,
+                   max_condition=args.max_condition or MAX_CONDITION)
+    if args.cycle is None:  # cycles that cannot determine K are reported, not fatal
+        estimates, skipped = identify_cycles(log, rig, model, **options)
+    else:
+        estimates, skipped = identify_log(log, rig, args.cycle, model, **options), []
+    figures = []
+    if args.figures:
+        for e in estimates:
+            rows = log.cycle_rows(e.cycle)
+            curve = convergence_curve(log.R[rows], log.tau_ext_A_Nm[rows], model,
+                                      n_min=n_parameters(args.order) + 1, **options | {"bootstrap": 0})
+            figures.append(str(plot_convergence(curve, Path(args.figures) / f"convergence_cycle{e.cycle}.png",
+                                                f"Cycle {e.cycle}: det K against measurements")))
+    out = {"source": str(args.data), "cycles": [e.as_dict() for e in estimates], "skipped": skipped,
+           "figures": figures}
+    if args.fit_parameters != "none":
+        from ..identification.param_fit import fit_parameters
+
+        fit = fit_parameters(log, rig, shared_stiffness=args.fit_parameters == "shared", noise=noise, model=model)
+        out["parameters"] = fit.summary()
+    if args.json:
+        atomic_write_json(args.json, out)
+    if args.json != "-":
+        np.set_printoptions(precision=3, suppress=True)
+        for e in estimates:
+            print(f"cycle {e.cycle}: {e.n_rows} rows, condition {e.condition:.3g}, symmetry error "
+                  f"{e.symmetry_error:.3g}, residual rms {e.residual_rms_Nm:.3g} N m")
+            print(f"  K (N m/rad) =\n{e.K}\n  +- ({int(e.ci_level * 100)} %)\n{e.ci_quantile * e.K_std}")
+            print(f"  K_sym =\n{e.K_sym}")
+            for problem in e.problems():
+                print(f"  warning: {problem}")
+        for s in skipped:
+            print(f"cycle {s['cycle']}: skipped: {s['reason']}")
+        for name, p in out.get("parameters", {}).get("parameters", {}).items():
+            print(f"  {name} = {p['value']:.6g} +- {p['std']:.2g}")
+        for f in figures:
+            print(f"figure: {f}")
+    return 0
+
+
+def run_paper(args: argparse.Namespace) -> int:
+    from ..identification.paper_tables import format_report, paper_report
+
+    report = paper_report()
+    if args.json:
+        atomic_write_json(args.json, report)
+    if args.json != "-":
+        print(format_report(report))
+    return 0

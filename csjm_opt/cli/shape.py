@@ -1,0 +1,78 @@
+"""``csjm shape``: tensions that hold a pose and bring K closest to a target (stiffness shaping)."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from .. import so3
+from .core import add_rig_pose_load
+from ..errors import InvalidInput
+from .._fileio import atomic_write_json
+from ..model.numeric import Model
+from ..model.rig import load_rig
+from ..shaping.shaper import OBJECTIVES, shape_stiffness
+from .._validate import as_vector3
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("shape", help="shape the stiffness K toward a target at a pose",
+                       description="Choose the six cable tensions (t_min <= t <= t_max) that hold the pose "
+                       "under the load and bring the stiffness K (N m/rad, SPEC.md convention) closest to "
+                       "a target: weighted Frobenius (default), principal ('eigen') or directional objective. "
+                       "Reports the achieved K, the residual, whether the target is reached and the active "
+                       "bounds; --reachable adds the reachable range of each eigenvalue of K.")
+    add_rig_pose_load(p)
+    p.add_argument("--target", nargs=9, type=float, required=True, metavar="K",
+                   help="target K row by row: K11 K12 K13 K21 ... K33 (N m/rad; symmetrised)")
+    p.add_argument("--weights", nargs="+", type=float, default=None, metavar="W",
+                   help="frobenius: 9 elementwise weights; eigen: 3; directional: one per direction")
+    p.add_argument("--objective", choices=OBJECTIVES, default="frobenius")
+    p.add_argument("--direction", nargs=3, type=float, action="append", metavar=("UX", "UY", "UZ"),
+                   help="a direction in {A} for --objective directional (repeatable)")
+    p.add_argument("--solver", default="osqp", help="qpsolvers backend or 'active_set' (default osqp)")
+    p.add_argument("--reachable", action="store_true", help="also compute the reachable eigenvalue ranges")
+    p.add_argument("--json", metavar="PATH", help="write machine-readable output ('-' = stdout)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    rig = load_rig(args.rig)
+    rotvec = as_vector3(args.rotvec, "--rotvec")
+    tau = as_vector3(args.tau, "--tau")
+    K_target = np.array(args.target, float).reshape(3, 3)
+    weights = None
+    if args.weights is not None:
+        weights = np.array(args.weights, float)
+        if args.objective == "frobenius":
+            if weights.size != 9:
+                raise InvalidInput(f"--weights: expected 9 values for the frobenius objective, got {weights.size}",
+                                   "--weights")
+            weights = weights.reshape(3, 3)
+    R = so3.exp(rotvec)
+    res = shape_stiffness(rig, R, tau, K_target, weights=weights, objective=args.objective,
+                          directions=np.array(args.direction) if args.direction else None, solver=args.solver,
+                          model=Model(rig))
+    out = {"rotvec": rotvec.tolist(), "tau_ext": tau.tolist(), **res.as_dict()}
+    if args.reachable:
+        from ..shaping.reachable import reachable_set
+
+        out["reachable"] = reachable_set(rig, R, tau).as_dict()
+    if args.json:
+        atomic_write_json(args.json, out)
+    if args.json != "-":
+        print("cable   tension (N)")
+        for i, t in enumerate(res.tensions_N):
+            print(f"  {i + 1}    {t:11.4f}")
+        print("achieved K (N m/rad):")
+        for row in res.K:
+            print("  " + "  ".join(f"{v:10.4f}" for v in row))
+        print(f"{res.objective.name} residual {res.residual:.4g} N m/rad "
+              f"({'target reached' if res.exact else 'target not reachable: constrained optimum'}); "
+              f"active bounds: {', '.join(res.active_bounds) or 'none'}; "
+              f"equilibrium residual {res.equilibrium_residual_Nm:.2e} N m")
+        if args.reachable:
+            for i, (lo, hi) in enumerate(out["reachable"]["eigen_ranges_Nm_per_rad"]):
+                print(f"  lambda_{i + 1} reachable in [{lo:.3f}, {hi:.3f}] N m/rad")
+    return 0

@@ -1,0 +1,60 @@
+"""``csjm sweep``: run a hole-geometry design sweep described in a TOML file."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..design.sweep import run_sweep
+from ..design.sweep_file import SweepSpec
+from ..errors import DesignError
+from .._fileio import atomic_write_json, refuse_input_overwrite
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "sweep", help="hole-geometry design sweep (workspace, stiffness, margins)",
+        description="Evaluate every design of a sweep description (TOML; see studies/paper_sweep.toml "
+        "and the README): wrench-feasible workspace, stiffness, tension and wrench margins, "
+        "shaping range. Results are appended to RESULTS (JSON Lines) as designs finish; "
+        "running again with the same RESULTS resumes, skipping finished designs.")
+    p.add_argument("sweep", metavar="SWEEP.toml", help="sweep description")
+    p.add_argument("--out", required=True, metavar="RESULTS",
+                   help="result file (JSON Lines; created, or resumed when it exists)")
+    p.add_argument("--workers", type=int, default=2,
+                   help="local worker processes (default 2; 1 = run in this process); "
+                   "with --dask, the size of the local cluster")
+    p.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="run on the Dask distributed scheduler at ADDRESS (e.g. tcp://host:8786)")
+    p.add_argument("--dask", action="store_true",
+                   help="run on Dask; without --scheduler, start a local Dask cluster")
+    p.add_argument("--limit", type=int, default=None, metavar="N",
+                   help="stop after computing N designs (run again to continue)")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    p.add_argument("--json", metavar="PATH", help="write the designs and speed as JSON ('-' = stdout)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    spec = SweepSpec.from_toml(args.sweep)
+    refuse_input_overwrite(args.out, args.sweep)
+    if args.json:
+        refuse_input_overwrite(args.json, args.sweep, args.out)
+    if args.workers < 1:
+        raise DesignError(f"expected an integer >= 1, got {args.workers}", "--workers")
+    if args.limit is not None and args.limit < 1:
+        raise DesignError(f"expected an integer >= 1, got {args.limit}", "--limit")
+    result = run_sweep(spec, args.out, workers=args.workers, scheduler=args.scheduler, dask=args.dask,
+                       progress=False if args.no_progress else None, stop_after=args.limit)
+    ok = [r for r in result.records if r["status"] == "ok"]
+    best = max(ok, key=lambda r: (r["workspace_fraction"] or 0.0), default=None)
+    print(f"{len(result.records)} designs ({result.computed} computed, {result.skipped} from "
+          f"{args.out}), {len(result.records) - len(ok)} invalid, "
+          f"{result.designs_per_second:.1f} designs/s"
+          + ("" if result.complete else f"; {len(spec.designs()) - len(result.records)} designs left, "
+             "run again to continue"), file=sys.stderr if args.json == "-" else sys.stdout)
+    if best is not None and args.json != "-":
+        print(f"largest workspace: {best['workspace_fraction']:.3f} at {best['params']}")
+    if args.json:
+        atomic_write_json(args.json, result.as_json())
+    return 0

@@ -1,0 +1,201 @@
+"""Controller-in-the-loop simulation of a CSJM under a load profile (quasi-static).
+
+Each step ``k`` (time ``t_k = k dt``):
+
+1. **read**: the measured pose and external moment, the true ones plus
+   optional :class:`~csjm_opt.measurement.instruments.InstrumentNoise` (pose noise as
+   ``R exp(hat(n))``, ``n ~ N(0, sigma^2 I)``; moment noise per axis). The
+   measured moment includes the moments of the plant's dead-weight point
+   forces (an F/T sensor under the platform sees them), not its own weight;
+2. **control**: ``command = controller(observation)``;
+3. **command**: the drives take the command's rest lengths;
+4. **simulate**: the plant (``plant_rig``, the controller's rig by default)
+   settles at the equilibrium for those rest lengths under the load at
+   ``t_{k+1}`` (:class:`~csjm_opt.model.statics.EquilibriumSolver`, warm-started
+   from the previous pose; dynamics are not modelled).
+
+The :class:`ClosedLoopLog` holds the time series (true and measured pose,
+pose error to the controller's reference, commanded and actual tensions,
+achieved K of the plant against the target, wall time per step) and
+:func:`plot_closed_loop` draws them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from .. import so3
+from ..model.cable_terms import point_force_terms
+from .controllers.base import Controller, Observation
+from ..errors import CsjmError, InvalidInput
+from ..measurement.instruments import InstrumentNoise
+from .load_profiles import LoadProfile
+from .._plotting import save
+from ..model.rig import Rig
+from ..model.statics import EquilibriumSolver, PointForce
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ClosedLoopLog:
+    """Time series of one run; index 0 is the initial state."""
+
+    t_s: np.ndarray              # (n,)
+    R: np.ndarray                # (n, 3, 3) true pose
+    R_meas: np.ndarray           # (n, 3, 3) measured pose (what the controller read at t_k)
+    R_ref: np.ndarray            # (n, 3, 3) controller's reference
+    tau_ext_A_Nm: np.ndarray     # (n, 3) true external moment
+    tensions_cmd_N: np.ndarray   # (n, 6) tensions the controller planned (nan at 0)
+    tensions_N: np.ndarray       # (n, 6) actual tensions of the plant
+    K: np.ndarray                # (n, 3, 3) achieved cable stiffness of the plant
+    K_target: np.ndarray         # (n, 3, 3) target (nan when the controller sets none)
+    step_time_s: np.ndarray      # (n,) wall time of read + control + command + simulate (nan at 0)
+    step_cpu_s: np.ndarray       # (n,) the same as thread CPU time (excludes preemption by other processes)
+
+    @property
+    def pose_error_rad(self) -> np.ndarray:
+        """``||log(R_ref^T R)||`` per sample (rad)."""
+        return np.linalg.norm(so3.log(np.swapaxes(self.R_ref, 1, 2) @ self.R), axis=-1)
+
+    @property
+    def stiffness_error(self) -> np.ndarray:
+        """``||K - K_target||_F`` per sample (N m/rad; nan without target)."""
+        return np.linalg.norm((self.K - self.K_target).reshape(len(self.t_s), 9), axis=1)
+
+    def summary(self) -> dict:
+        """JSON-able summary of the run."""
+        dt = self.step_time_s[1:]
+        err = self.pose_error_rad
+        return {"steps": int(len(self.t_s) - 1), "duration_s": float(self.t_s[-1] - self.t_s[0]),
+                "max_pose_error_rad": float(np.max(err)), "final_pose_error_rad": float(err[-1]),
+                "final_stiffness_error_Nm_per_rad": float(self.stiffness_error[-1]),
+                "min_tension_N": float(np.min(self.tensions_N)), "max_tension_N": float(np.max(self.tensions_N)),
+                "median_step_time_s": float(np.median(dt)) if len(dt) else float("nan"),
+                "median_step_cpu_s": float(np.median(self.step_cpu_s[1:])) if len(dt) else float("nan")}
+
+
+def simulate(rig: Rig, controller: Controller, load: LoadProfile, duration_s: float, dt_s: float = 1e-3,
+             R_init: np.ndarray | None = None, noise: InstrumentNoise | None = None,
+             rng: np.random.Generator | None = None, plant_rig: Rig | None = None,
+             point_forces: Sequence[PointForce] = (), reset: bool = True,
+             progress: bool | None = None) -> ClosedLoopLog:
+    """Run ``controller`` on the simulated rig for ``duration_s`` with step ``dt_s`` (see module doc).
+
+    ``progress``: tqdm bar on stderr (default: only for runs over 20000 steps on a terminal).
+    """
+    import sys
+
+    from tqdm import tqdm
+
+    if not (dt_s > 0 and duration_s > 0):
+        raise InvalidInput(f"expected duration_s > 0 and dt_s > 0, got {duration_s}, {dt_s}", "dt_s")
+    n = int(round(duration_s / dt_s))
+    plant = plant_rig or rig
+    noise = noise or InstrumentNoise.none()
+    rng = rng or np.random.default_rng(0)
+    sigma_tau = np.asarray(noise.tau_sigma_Nm, float)
+    F = np.array([f for f, _ in point_forces], float).reshape(-1, 3)
+    P = np.array([p for _, p in point_forces], float).reshape(-1, 3)
+    solver = EquilibriumSolver(plant, point_forces=list(point_forces))
+    if reset:
+        controller.reset()
+    R = np.array(controller.reference(0.0) if R_init is None else R_init, float)
+
+    t = np.arange(n + 1) * dt_s
+    out = {name: np.full((n + 1,) + shape, np.nan) for name, shape in
+           [("R", (3, 3)), ("R_meas", (3, 3)), ("R_ref", (3, 3)), ("tau", (3,)), ("T_cmd", (6,)),
+            ("T", (6,)), ("K", (3, 3)), ("K_target", (3, 3)), ("dt", ()), ("cpu", ())]}
+    out["R"][0], out["tau"][0], out["R_ref"][0] = R, load(0.0), controller.reference(0.0)
+    tau_next = load(0.0)
+    if progress is None:
+        progress = n > 20000 and sys.stderr.isatty()
+    for k in tqdm(range(n), desc="closed loop", unit="step", disable=not progress, file=sys.stderr):
+        t0, c0 = time.perf_counter(), time.thread_time()
+        # 1. read
+        tau_true = tau_next
+        tau_meas = tau_true + (point_force_terms(R, F, P)[0] if len(F) else 0.0)
+        R_meas = R
+        if noise.angle_sigma_rad > 0:
+            R_meas = R @ so3.exp(noise.angle_sigma_rad * rng.standard_normal(3))
+        if np.any(sigma_tau > 0):
+            tau_meas = tau_meas + sigma_tau * rng.standard_normal(3)
+        # 2. control, 3. command
+        try:
+            cmd = controller(Observation(float(t[k]), R_meas, tau_meas))
+            # 4. simulate
+            tau_next = load(t[k + 1])
+            eq = solver.solve(cmd.rest_lengths_m, tau_next, R)
+        except CsjmError as exc:
+            _at_time(exc, float(t[k]))
+            raise
+        R = eq.R
+        out["dt"][k + 1] = time.perf_counter() - t0
+        out["cpu"][k + 1] = time.thread_time() - c0
+        out["R"][k + 1], out["R_meas"][k], out["tau"][k + 1] = R, R_meas, tau_next
+        out["R_ref"][k + 1] = controller.reference(float(t[k + 1]))
+        out["T_cmd"][k + 1], out["T"][k + 1], out["K"][k + 1] = cmd.tensions_N, eq.tensions_N, eq.K
+        if cmd.K_target is not None:
+            out["K_target"][k + 1] = cmd.K_target
+    out["R_meas"][n] = R
+    out["T"][0], out["K"][0] = out["T"][min(1, n)], out["K"][min(1, n)]
+    return ClosedLoopLog(t, out["R"], out["R_meas"], out["R_ref"], out["tau"], out["T_cmd"], out["T"],
+                         out["K"], out["K_target"], out["dt"], out["cpu"])
+
+
+def _at_time(exc: CsjmError, t_s: float) -> CsjmError:
+    """Prefix the simulation time to an error's message (same class, same data)."""
+    exc.args = (f"at t = {t_s:.4f} s: {exc.args[0] if exc.args else exc}",) + tuple(exc.args[1:])
+    return exc
+
+
+def plot_closed_loop(log: ClosedLoopLog, out_dir: str | Path, prefix: str = "closed_loop",
+                     t_min_N: float | None = None, t_max_N: float | None = None) -> list[Path]:
+    """Figures: pose error, load and tensions (``<prefix>.png``); achieved vs target K (``<prefix>_K.png``)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    t = log.t_s
+    fig, axes = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True)
+    axes[0].semilogy(t, np.maximum(1e3 * log.pose_error_rad, 1e-10), color="C3")
+    axes[0].set_ylabel("pose error (mrad, floor 1e-10)")
+    axes[1].plot(t, log.tau_ext_A_Nm, label=[r"$\tau_x$", r"$\tau_y$", r"$\tau_z$"])
+    axes[1].set_ylabel("external moment (N m)")
+    axes[1].legend(fontsize=7, ncol=3)
+    axes[2].plot(t, log.tensions_N, lw=1.0)
+    for bound in (t_min_N, t_max_N):
+        if bound is not None:
+            axes[2].axhline(bound, color="k", ls=":", lw=0.8)
+    axes[2].set_ylabel("tensions (N)")
+    axes[2].set_xlabel("time (s)")
+    fig.tight_layout()
+    paths = [save(fig, out_dir / f"{prefix}.png")]
+    plt.close(fig)
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
+    lam = np.linalg.eigvalsh(log.K)
+    has_target = np.all(np.isfinite(log.K_target.reshape(len(t), 9)), axis=1)
+    lam_t = np.full_like(lam, np.nan)
+    if np.any(has_target):
+        Kt = log.K_target[has_target]
+        lam_t[has_target] = np.linalg.eigvalsh(0.5 * (Kt + np.swapaxes(Kt, 1, 2)))
+    for i in range(3):
+        axes[0].plot(t, lam[:, i], color=f"C{i}", label=rf"achieved $\lambda_{i + 1}$")
+        axes[0].plot(t, lam_t[:, i], color=f"C{i}", ls="--", lw=1.0, label=rf"target $\lambda_{i + 1}$")
+    axes[0].set_ylabel("eigenvalues of K (N m/rad)")
+    axes[0].set_xlabel("time (s)")
+    axes[0].legend(fontsize=6, ncol=2)
+    axes[1].plot(t, log.stiffness_error, color="C3")
+    axes[1].set_ylabel(r"$||K - K_{target}||_F$ (N m/rad)")
+    axes[1].set_xlabel("time (s)")
+    fig.tight_layout()
+    paths.append(save(fig, out_dir / f"{prefix}_K.png"))
+    return paths
+

@@ -1,0 +1,56 @@
+"""Stiffness shaping: hold the pose with tensions that bring K closest to a (time-varying) target."""
+
+from __future__ import annotations
+
+from typing import Callable, Union
+
+import numpy as np
+
+from ...model.rig import Rig
+from ...shaping.shaper import REGULARIZATION, Shaper, StiffnessObjective, make_objective
+from ..._validate import as_array
+from .base import Observation, PoseHoldingController, PoseReference
+
+#: A stiffness target: a fixed (3, 3) matrix (N m/rad) or a function of time returning one.
+StiffnessReference = Union[np.ndarray, Callable[[float], np.ndarray]]
+
+
+class StiffnessShapingController(PoseHoldingController):
+    """Shapes K toward ``K_target`` (see :func:`csjm_opt.shape_stiffness`) at every step.
+
+    Uses the loop form :class:`csjm_opt.shaping.shaper.Shaper`: the stiffness basis is
+    reused while the commanded pose is unchanged and the exact active-set QP
+    is warm-started from the previous step, so a step costs tens of
+    microseconds. ``objective``/``weights``/``directions`` as in
+    :func:`csjm_opt.shaping.shaper.make_objective`.
+    """
+
+    def __init__(self, rig: Rig, R_ref: PoseReference, K_target: StiffnessReference,
+                 weights: np.ndarray | None = None, objective: str = "frobenius",
+                 directions: np.ndarray | None = None, integral_gain: float = 0.0,
+                 regularization: float = REGULARIZATION):
+        super().__init__(rig, R_ref, integral_gain)
+        self._K_target = K_target if callable(K_target) else as_array(K_target, (3, 3), "K_target")
+        self._objective_args = (weights, objective, directions)
+        self._shaper = Shaper(rig, regularization)
+        self._cache: tuple[np.ndarray, StiffnessObjective] | None = None
+        self._last_T: np.ndarray | None = None
+
+    def reset(self) -> None:
+        super().reset()
+        self._shaper = Shaper(self.rig, self._shaper.regularization)
+        self._last_T = None
+
+    def target(self, time_s: float) -> np.ndarray:
+        return self._K_target(time_s) if callable(self._K_target) else self._K_target
+
+    def _objective(self, K_target: np.ndarray) -> StiffnessObjective:
+        if self._cache is None or not np.array_equal(self._cache[0], K_target):
+            self._cache = (np.array(K_target, float), make_objective(K_target, *self._objective_args))
+        return self._cache[1]
+
+    def tensions(self, R_cmd: np.ndarray, observation: Observation):
+        K_target = self.target(observation.time_s)
+        T, basis, _ = self._shaper.solve(R_cmd, observation.tau_ext_A_Nm, self._objective(K_target))
+        self._last_T = T
+        return T, np.asarray(K_target, float), basis.K(T)

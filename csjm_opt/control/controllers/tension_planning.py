@@ -1,0 +1,25 @@
+"""Plain tension planning: hold the pose, tensions closest to a reference (no stiffness shaping)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...model.numeric import Model
+from ...planning.planner import plan_tensions
+from ...model.rig import Rig
+from .base import Observation, PoseHoldingController, PoseReference
+
+
+class TensionPlanningController(PoseHoldingController):
+    """Tensions from :func:`csjm_opt.plan_tensions` (min ``||T - t_ref||`` holding the measured load)."""
+
+    def __init__(self, rig: Rig, R_ref: PoseReference, t_ref_N: np.ndarray | None = None,
+                 integral_gain: float = 0.0, solver: str = "active_set"):
+        super().__init__(rig, R_ref, integral_gain)
+        self.t_ref_N = t_ref_N
+        self.solver = solver
+        self._model = Model(rig)
+
+    def tensions(self, R_cmd: np.ndarray, observation: Observation):
+        plan = plan_tensions(self.rig, R_cmd, observation.tau_ext_A_Nm, self.t_ref_N, self.solver, self._model)
+        return plan.tensions_N, None, None

@@ -1,0 +1,171 @@
+"""Verification of an identified stiffness (Section IV-C): predicted pose under a load increment.
+
+(61)-(62): ``dzeta_est = K^-1 dtau``, ``R_est = R0 exp(hat(dzeta_est))``;
+(63)-(65): ``E_theta = ||log(R_act^T R_est)||``.
+
+Which matrix? ``K_D = dtau_load/dzeta`` is, by its definition (48a), the
+first-order map from a displacement to the change of the load's {A}
+components, so ``dtau = K_D dzeta`` to first order and ``K_D^-1`` is the right
+predictor for a measured increment of the moment's components. ``K = K_D -
+1/2 hat(tau_load)`` is the covariant (energy-Hessian) stiffness; it differs
+from ``K_D`` by the connection term and using it in (61), as the paper's text
+says, is off by ``1/2 hat(tau_load)``. The paper's Table 4 column C was in
+fact computed with ``K_D`` (ERRATA 4). Both are offered (``use="K_D"``, the
+default, or ``use="K"``).
+
+The load increment is either given as a total-load increment (the paper's
+Column A) or, with a model, as an external increment: the weight moment's
+change at the (unknown) new pose is then found by a fixed-point iteration.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from .. import so3
+from ..errors import InvalidInput
+from .identify import StiffnessEstimate
+from ..measurement.logfile import MeasurementLog
+from ..model.numeric import Model
+from .._plotting import save
+from .._validate import as_array, as_rotation, as_rotations
+
+
+def predict_pose(R0: np.ndarray, K: np.ndarray, dtau_A_Nm: np.ndarray) -> np.ndarray:
+    """(61)-(62): ``R0 exp(hat(K^-1 dtau))`` for one increment (3,) or a stack (n, 3)."""
+    R0 = as_rotation(R0, "R0")
+    K = as_array(K, (3, 3), "K")
+    dtau = np.asarray(dtau_A_Nm, float)
+    dzeta = np.linalg.solve(K, dtau.T).T
+    return R0 @ so3.exp(dzeta)
+
+
+def predict_pose_external(R0: np.ndarray, K_D: np.ndarray, tau_load_ref_A_Nm: np.ndarray,
+                          tau_ext_A_Nm: np.ndarray, model: Model, iterations: int = 50,
+                          tol_rad: float = 1e-13) -> np.ndarray:
+    """Pose under a new external moment (n, 3), weight moment re-evaluated at the predicted pose.
+
+    Solves ``tau_ext + tau_weight(R0 exp(dzeta)) - tau_load_ref = K_D dzeta`` by fixed point.
+    """
+    R0 = as_rotation(R0, "R0")
+    tau_ext = np.atleast_2d(np.asarray(tau_ext_A_Nm, float))
+    dzeta = np.zeros_like(tau_ext)
+    for _ in range(iterations):
+        R = R0 @ so3.exp(dzeta)
+        new = np.linalg.solve(K_D, (tau_ext + model.weight_moment(R) - tau_load_ref_A_Nm).T).T
+        done = np.max(np.abs(new - dzeta)) < tol_rad
+        dzeta = new
+        if done:
+            break
+    out = R0 @ so3.exp(dzeta)
+    return out if np.ndim(tau_ext_A_Nm) == 2 else out[0]
+
+
+def estimation_error(R_act: np.ndarray, R_est: np.ndarray) -> np.ndarray:
+    """(63)-(65): ``E_theta = ||log(R_act^-1 R_est)||`` (rad), batched."""
+    return so3.angle_between(R_act, R_est)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Verification:
+    """Predicted against measured poses over a set of load increments."""
+
+    use: str                      # "K_D" or "K"
+    dtau_A_Nm: np.ndarray         # (n, 3) load increments (total load)
+    R_act: np.ndarray             # (n, 3, 3)
+    R_est: np.ndarray             # (n, 3, 3)
+    labels: tuple[str, ...] = ()
+
+    @property
+    def E_theta_rad(self) -> np.ndarray:
+        return estimation_error(self.R_act, self.R_est)
+
+    @property
+    def rms_rad(self) -> float:
+        return float(np.sqrt(np.mean(self.E_theta_rad ** 2))) if len(self.R_act) else float("nan")
+
+    @property
+    def max_rad(self) -> float:
+        return float(np.max(self.E_theta_rad)) if len(self.R_act) else float("nan")
+
+    def table(self) -> str:
+        """Plain-text table: case, load increment, E_theta."""
+        lines = [f"{'case':>10}  {'dtau_x':>8} {'dtau_y':>8} {'dtau_z':>8}  {'E_theta (rad)':>13}"]
+        for i, (d, e) in enumerate(zip(self.dtau_A_Nm, self.E_theta_rad)):
+            label = self.labels[i] if i < len(self.labels) else str(i + 1)
+            lines.append(f"{label:>10}  {d[0]:8.3f} {d[1]:8.3f} {d[2]:8.3f}  {e:13.5f}")
+        lines.append(f"{'rms':>10}  {'':26}  {self.rms_rad:13.5f}   (predicted with {self.use})")
+        return "\n".join(lines)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"use": self.use, "rms_rad": self.rms_rad, "max_rad": self.max_rad,
+                "cases": [{"case": self.labels[i] if i < len(self.labels) else i + 1,
+                           "dtau_A_Nm": self.dtau_A_Nm[i].tolist(), "R_est": self.R_est[i].tolist(),
+                           "R_act": self.R_act[i].tolist(), "E_theta_rad": float(e)}
+                          for i, e in enumerate(self.E_theta_rad)]}
+
+
+def verify_increments(R0: np.ndarray, K: np.ndarray, dtau_A_Nm: np.ndarray, R_act: np.ndarray,
+                      use: str = "K_D", labels: Sequence[str] = ()) -> Verification:
+    """Table 4: predict each ``R_est`` from ``R0``, ``K`` and ``dtau``; compare with ``R_act``."""
+    dtau = as_array(dtau_A_Nm, (None, 3), "dtau")
+    R_act = as_rotations(R_act, "R_act")
+    return Verification(use, dtau, R_act, predict_pose(R0, K, dtau), tuple(labels))
+
+
+def verify_log(estimates: Sequence[StiffnessEstimate], log: MeasurementLog, model: Model,
+               use: str = "K_D", load: str = "total") -> Verification:
+    """Predict every row of ``log`` from the estimate of its cycle (same cycle id), else
+    from the estimate whose reference pose is nearest.
+
+    ``load="total"``: increment of the total load measured at the actual pose
+    (the paper's Column A); ``load="external"``: only the external moment is
+    known and the weight moment is re-evaluated at the predicted pose (needs
+    ``use="K_D"``).
+    """
+    if use not in ("K_D", "K") or load not in ("total", "external"):
+        raise InvalidInput(f"use must be K_D or K and load total or external, got {use!r}, {load!r}", "use")
+    if not estimates:
+        raise InvalidInput("no stiffness estimates to verify", "estimates")
+    R = log.R
+    refs = np.array([e.R_ref for e in estimates])
+    nearest = np.argmin(so3.angle_between(refs[None], R[:, None]), axis=1)
+    by_cycle = {e.cycle: j for j, e in enumerate(estimates) if e.cycle is not None}
+    nearest = np.array([by_cycle.get(int(c), j) for c, j in zip(log.cycle, nearest)])
+    tau_load = log.tau_ext_A_Nm + model.weight_moment(R)
+    R_est = np.empty_like(R)
+    dtau = np.empty((len(R), 3))
+    for i, j in enumerate(nearest):
+        e = estimates[j]
+        dtau[i] = tau_load[i] - e.tau_load_ref_A_Nm
+        if load == "external":
+            R_est[i] = predict_pose_external(e.R_ref, getattr(e, use), e.tau_load_ref_A_Nm,
+                                             log.tau_ext_A_Nm[i], model)
+        else:
+            R_est[i] = predict_pose(e.R_ref, getattr(e, use), dtau[i])
+    labels = tuple(f"{int(c)}/{int(s)}" for c, s in zip(log.cycle, log.sample))
+    return Verification(use, dtau, R, R_est, labels)
+
+
+def plot_verification(results: Sequence[Verification], path: str | Path, title: str = "") -> Path:
+    """Bar chart of E_theta per held-out case, one series per verification (e.g. K_D and K)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    width = 0.8 / max(1, len(results))
+    for k, res in enumerate(results):
+        x = np.arange(len(res.E_theta_rad)) + k * width
+        ax.bar(x, res.E_theta_rad, width, label=f"{res.use} (rms {res.rms_rad:.4f} rad)")
+    ax.set_xlabel("held-out case")
+    ax.set_ylabel(r"$E_\theta$ (rad)")
+    ax.set_title(title or "Verification of the identified stiffness (63)-(65)")
+    ax.legend()
+    fig.tight_layout()
+    return save(fig, path)

@@ -1,0 +1,8 @@
+"""Measurements: the log file, tracker/force-sensor preprocessing (Section III-B), instrument noise."""
+
+from .instruments import InstrumentNoise
+from .logfile import MeasurementLog
+from .preprocess import fit_rigid_transform, preprocess_file, preprocess_text
+
+__all__ = ["InstrumentNoise", "MeasurementLog", "fit_rigid_transform", "preprocess_file",
+           "preprocess_text"]

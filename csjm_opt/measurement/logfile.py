@@ -1,0 +1,182 @@
+"""Measurement logs: the CSV format of SPEC.md, read strictly and written atomically.
+
+One row per static equilibrium, in time order. Header (exactly these columns
+first, extra columns allowed after them)::
+
+    sample,cycle,l1,l2,l3,l4,l5,l6,tau_x,tau_y,tau_z,rx,ry,rz
+
+``l1..l6`` rest lengths (m); ``tau_*`` the external moment about O in {A}
+(N m, platform weight excluded); ``r*`` the measured orientation of {A} in {B}
+as a rotation vector (rad). Rows of one ``cycle`` are consecutive. Malformed
+input raises :class:`DataFileError` naming the file and line; nothing is
+silently dropped.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+from pathlib import Path
+
+import numpy as np
+
+from .. import so3
+from ..errors import DataFileError
+from .._fileio import atomic_write_text, read_text
+
+COLUMNS = ("sample", "cycle", "l1", "l2", "l3", "l4", "l5", "l6",
+           "tau_x", "tau_y", "tau_z", "rx", "ry", "rz")
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class MeasurementLog:
+    """A measurement log; arrays share a leading axis ``n`` (rows in time order)."""
+
+    sample: np.ndarray              # (n,) int
+    cycle: np.ndarray               # (n,) int
+    rest_lengths_m: np.ndarray      # (n, 6)
+    tau_ext_A_Nm: np.ndarray        # (n, 3)
+    rotvec_rad: np.ndarray          # (n, 3)
+    extra: dict = dataclasses.field(default_factory=dict)  # column name -> (n,) str array
+    source: str | None = None
+
+    def __len__(self) -> int:
+        return int(self.sample.shape[0])
+
+    @property
+    def R(self) -> np.ndarray:
+        """Measured orientations (n, 3, 3)."""
+        return so3.exp(self.rotvec_rad)
+
+    @property
+    def cycle_ids(self) -> list[int]:
+        """Cycle ids in order of first appearance."""
+        _, first = np.unique(self.cycle, return_index=True)
+        return [int(self.cycle[i]) for i in sorted(first)]
+
+    def cycle_rows(self, cycle: int) -> np.ndarray:
+        """Row indices of one cycle (time order)."""
+        rows = np.flatnonzero(self.cycle == cycle)
+        if rows.size == 0:
+            raise DataFileError(f"no cycle {cycle} (cycles: {self.cycle_ids})", self.source)
+        return rows
+
+    def subset(self, rows: np.ndarray) -> "MeasurementLog":
+        """The log restricted to ``rows`` (kept in the given order)."""
+        rows = np.asarray(rows)
+        return MeasurementLog(self.sample[rows], self.cycle[rows], self.rest_lengths_m[rows],
+                              self.tau_ext_A_Nm[rows], self.rotvec_rad[rows],
+                              {k: v[rows] for k, v in self.extra.items()}, self.source)
+
+    # ------------------------------------------------------------ construction
+    @classmethod
+    def from_arrays(cls, cycle, rest_lengths_m, tau_ext_A_Nm, R_or_rotvec, sample=None,
+                    extra: dict | None = None) -> "MeasurementLog":
+        """Build from arrays; ``R_or_rotvec`` is (n, 3, 3) rotations or (n, 3) rotation vectors."""
+        X = np.asarray(R_or_rotvec, float)
+        rotvec = so3.log(X) if X.ndim == 3 else X
+        n = rotvec.shape[0]
+        sample = np.arange(n) if sample is None else np.asarray(sample, int)
+        log = cls(sample, np.asarray(cycle, int), np.asarray(rest_lengths_m, float).reshape(n, 6),
+                  np.asarray(tau_ext_A_Nm, float).reshape(n, 3), rotvec,
+                  {k: np.asarray(v) for k, v in (extra or {}).items()})
+        _check_rows(log, None, lines=np.arange(2, n + 2))
+        return log
+
+    @classmethod
+    def from_csv(cls, path: str | Path) -> "MeasurementLog":
+        """Read and validate a log file."""
+        path = Path(path)
+        text = read_text(path, lambda msg: DataFileError(msg, str(path)), "log file", encoding="utf-8-sig")
+        return cls.from_text(text, str(path))
+
+    @classmethod
+    def from_text(cls, text: str, source: str | None = None) -> "MeasurementLog":
+        reader = csv.reader(io.StringIO(text))
+        try:
+            header = [h.strip() for h in next(reader)]
+        except StopIteration:
+            raise DataFileError("empty file: expected a header " + ",".join(COLUMNS), source, 1)
+        if tuple(header[:len(COLUMNS)]) != COLUMNS:
+            missing = [c for c in COLUMNS if c not in header]
+            detail = f"missing {missing}" if missing else f"got {header[:len(COLUMNS)]}"
+            raise DataFileError(f"header must start with {','.join(COLUMNS)}; {detail}", source, 1)
+        extra_names = header[len(COLUMNS):]
+        values, extras, lines = [], [], []
+        for row in reader:
+            line = reader.line_num
+            if not row or all(not c.strip() for c in row):
+                continue  # blank line
+            if len(row) < len(COLUMNS):
+                raise DataFileError(f"expected {len(header)} values, got {len(row)}", source, line)
+            if len(row) > len(header):
+                raise DataFileError(f"expected {len(header)} values, got {len(row)}", source, line)
+            nums = []
+            for name, cell in zip(COLUMNS, row):
+                cell = cell.strip()
+                if cell == "":
+                    raise DataFileError("missing value", source, line, name)
+                nums.append(parse_number(cell, name, source, line, integer=name in ("sample", "cycle")))
+            values.append(nums)
+            extras.append(row[len(COLUMNS):] + [""] * (len(extra_names) - (len(row) - len(COLUMNS))))
+            lines.append(line)
+        if not values:
+            raise DataFileError("no data rows", source, 2)
+        V = np.asarray(values)
+        E = np.asarray(extras, dtype=str).reshape(len(values), len(extra_names))
+        log = cls(V[:, 0].astype(int), V[:, 1].astype(int), V[:, 2:8], V[:, 8:11], V[:, 11:14],
+                  {name: E[:, j] for j, name in enumerate(extra_names)}, source)
+        _check_rows(log, source, np.asarray(lines))
+        return log
+
+    def to_csv(self, path: str | Path, overwrite: bool = False) -> Path:
+        """Write atomically; an existing file is kept unless ``overwrite``."""
+        return atomic_write_text(path, self.to_text(), overwrite=overwrite)
+
+    def to_text(self) -> str:
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(COLUMNS + tuple(self.extra))
+        for i in range(len(self)):
+            w.writerow([int(self.sample[i]), int(self.cycle[i])]
+                       + [repr(float(x)) for x in self.rest_lengths_m[i]]
+                       + [repr(float(x)) for x in self.tau_ext_A_Nm[i]]
+                       + [repr(float(x)) for x in self.rotvec_rad[i]]
+                       + [str(v[i]) for v in self.extra.values()])
+        return buf.getvalue()
+
+
+def parse_number(cell: str, column: str, source: str | None, line: int, integer: bool = False) -> float | int:
+    """A finite number (an ``int`` if ``integer``) from a CSV cell, or a :class:`DataFileError`."""
+    try:
+        x = float(cell)
+    except ValueError:
+        raise DataFileError(f"not a number: {cell!r}", source, line, column) from None
+    if not np.isfinite(x):
+        raise DataFileError(f"not finite: {cell!r}", source, line, column)
+    if integer:
+        if x != int(x):
+            raise DataFileError(f"expected an integer, got {cell!r}", source, line, column)
+        return int(x)
+    return x
+
+
+def _check_rows(log: MeasurementLog, source: str | None, lines: np.ndarray) -> None:
+    seen: dict[int, int] = {}
+    for i, s in enumerate(log.sample):
+        if int(s) in seen:
+            raise DataFileError(f"duplicate sample id {int(s)} (first on line {seen[int(s)]})",
+                                source, int(lines[i]), "sample")
+        seen[int(s)] = int(lines[i])
+    closed: set[int] = set()
+    for i in range(1, len(log)):
+        prev, cur = int(log.cycle[i - 1]), int(log.cycle[i])
+        if cur != prev:
+            closed.add(prev)
+            if cur in closed:
+                raise DataFileError(f"rows of cycle {cur} are not consecutive", source,
+                                    int(lines[i]), "cycle")
+    if np.any(log.rest_lengths_m <= 0):
+        i = int(np.argmax(np.any(log.rest_lengths_m <= 0, axis=1)))
+        raise DataFileError("rest lengths must be positive", source, int(lines[i]), "l1..l6")

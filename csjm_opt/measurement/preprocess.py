@@ -1,0 +1,241 @@
+"""Raw instrument data -> measurement log (Section III-B, (51)-(56), ERRATA 6).
+
+Raw CSV format (one file, UTF-8, comma separated, SI units: m, rad, N, N m)
+---------------------------------------------------------------------------
+Header: exactly these columns, in any order (a free-text ``note`` column is
+also allowed)::
+
+    record,sample,cycle,name,x,y,z,rx,ry,rz,px,py,pz,fx,fy,fz,mx,my,mz,l1,l2,l3,l4,l5,l6
+
+Each row is one record; the cells a record does not use must be empty.
+
+``base_point`` (at least 3 non-collinear points; all are used, repeats allowed)
+    ``name``; ``x,y,z`` the point measured by the tracker in {L}; ``px,py,pz``
+    the same point's nominal coordinates in the base frame {B}.
+``sensor`` (exactly one)
+    pose of the F/T sensor frame {S} in {A}: ``x,y,z`` origin of {S} in {A};
+    ``rx,ry,rz`` rotation vector of {S} in {A}.
+``sample`` (one per static equilibrium, in time order)
+    ``sample`` (unique integer id), ``cycle`` (integer; rows of a cycle
+    consecutive, first row = reference), ``l1..l6`` commanded rest lengths;
+    ``fx,fy,fz,mx,my,mz`` the F/T reading in {S}; and *either* the platform
+    pose measured in {L} (``x,y,z`` origin of {A}, ``rx,ry,rz`` rotation
+    vector of {A} in {L}) *or* empty pose cells and ``platform_point`` records.
+``platform_point`` (optional, at least 3 per sample without a direct pose)
+    ``sample``; ``name``; ``x,y,z`` measured in {L}; ``px,py,pz`` nominal in {A}.
+
+Processing
+----------
+1. ``{B}`` in ``{L}`` by a least-squares rigid fit of all base points
+   (Kabsch/Umeyama without scale, ERRATA 6) instead of the 4x4 inverse of (52).
+2. ``{A}`` in ``{B}``: ``T_BA = T_LB^-1 T_LA`` (53); the origins must coincide
+   (54): ``||p_BA|| <= origin_tol_m`` or a :class:`DataFileError` names the line.
+3. Wrench moved to {A} about O (55): with ``(R_AS, p_AS)`` the pose of {S}
+   in {A}, ``f_A = R_AS f_S`` and ``tau_A = R_AS tau_S + p_AS x f_A``
+   (``= Ad^T_{T_SA} W_S`` in (f, tau) order).
+4. Weight (56): ``tau_G = r_G x (R_BA^T m g_B)`` in {A} is written to extra
+   columns ``tauw_x..z``; the log's ``tau_*`` exclude it (SPEC.md). If the
+   F/T moment includes the platform weight (``ft_includes_weight``), it is
+   subtracted.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import so3
+from ..errors import DataFileError, IllConditionedData
+from .logfile import MeasurementLog, parse_number
+from ..model.rig import Rig
+
+RAW_COLUMNS = ("record", "sample", "cycle", "name", "x", "y", "z", "rx", "ry", "rz", "px", "py", "pz",
+               "fx", "fy", "fz", "mx", "my", "mz", "l1", "l2", "l3", "l4", "l5", "l6")
+_NUMERIC = RAW_COLUMNS[4:]
+_POSE = ("x", "y", "z", "rx", "ry", "rz")
+_REQUIRED = {
+    "base_point": ("name", "x", "y", "z", "px", "py", "pz"),
+    "sensor": _POSE,
+    "sample": ("sample", "cycle", "fx", "fy", "fz", "mx", "my", "mz", "l1", "l2", "l3", "l4", "l5", "l6"),
+    "platform_point": ("sample", "name", "x", "y", "z", "px", "py", "pz"),
+}
+_OPTIONAL = {"sample": _POSE}
+DEFAULT_ORIGIN_TOL_M = 2e-3
+
+
+def fit_rigid_transform(P_src: np.ndarray, P_dst: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """Least-squares ``(R, p)`` with ``P_dst ~ P_src R^T + p`` (Kabsch/Umeyama, no scale); rms residual."""
+    P_src, P_dst = np.asarray(P_src, float), np.asarray(P_dst, float)
+    if len(P_src) < 3:
+        raise IllConditionedData(f"a rigid fit needs at least 3 points, got {len(P_src)}", float("inf"), len(P_src))
+    a, b = P_src.mean(axis=0), P_dst.mean(axis=0)
+    A, B = P_src - a, P_dst - b
+    s = np.linalg.svd(A, compute_uv=False)
+    if s[1] <= 1e-9 * max(s[0], 1e-300):
+        raise IllConditionedData("points for the rigid fit are collinear", float("inf"), 1)
+    U, _, Vt = np.linalg.svd(B.T @ A)
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])
+    R = U @ D @ Vt
+    p = b - R @ a
+    rms = float(np.sqrt(np.mean(np.sum((P_src @ R.T + p - P_dst) ** 2, axis=1))))
+    return R, p, rms
+
+
+def wrench_to_A(f_S_N: np.ndarray, tau_S_Nm: np.ndarray, R_AS: np.ndarray,
+                p_AS_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(55): force and moment about O in {A} from an F/T reading in {S}; batched over rows."""
+    f_A = np.asarray(f_S_N) @ R_AS.T
+    tau_A = np.asarray(tau_S_Nm) @ R_AS.T + np.cross(p_AS_m, f_A)
+    return f_A, tau_A
+
+
+def weight_moment_A(rig: Rig, R_BA: np.ndarray) -> np.ndarray:
+    """(56) with coincident origins: ``r_G x (R^T m g)`` in {A} (N m); batched."""
+    f_A = (rig.platform_mass_kg * rig.gravity_B_m_per_s2) @ R_BA  # rows: R^T f for each R
+    return np.cross(rig.com_A_m, f_A)
+
+
+def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int, dict[str, Any]]]]:
+    """Strict parse: records by kind, each ``(line, {column: value})``; errors name the line."""
+    reader = csv.reader(io.StringIO(text))
+    try:
+        header = [h.strip() for h in next(reader)]
+    except StopIteration:
+        raise DataFileError("empty file: expected the raw header " + ",".join(RAW_COLUMNS), source, 1)
+    unknown = [h for h in header if h not in RAW_COLUMNS and h != "note"]
+    missing = [c for c in RAW_COLUMNS if c not in header]
+    if unknown or missing or len(set(header)) != len(header):
+        raise DataFileError(f"raw header must hold the columns {','.join(RAW_COLUMNS)} (any order, "
+                            f"plus 'note'); missing {missing}, unknown {unknown}", source, 1)
+    records: dict[str, list] = {k: [] for k in _REQUIRED}
+    for row in reader:
+        line = reader.line_num
+        if not row or all(not c.strip() for c in row):
+            continue
+        if len(row) != len(header):
+            raise DataFileError(f"expected {len(header)} values, got {len(row)}", source, line)
+        cells = {h: c.strip() for h, c in zip(header, row)}
+        kind = cells["record"]
+        if kind not in _REQUIRED:
+            raise DataFileError(f"unknown record {kind!r} (expected one of {sorted(_REQUIRED)})",
+                                source, line, "record")
+        allowed = set(_REQUIRED[kind]) | set(_OPTIONAL.get(kind, ())) | {"record", "note"}
+        values: dict[str, Any] = {}
+        for col in RAW_COLUMNS[1:]:
+            cell = cells[col]
+            if col not in allowed:
+                if cell:
+                    raise DataFileError(f"a {kind} record has no {col!r} value (got {cell!r})", source, line, col)
+                continue
+            if not cell:
+                if col in _REQUIRED[kind]:
+                    raise DataFileError(f"missing value for a {kind} record", source, line, col)
+                continue
+            values[col] = cell if col == "name" else parse_number(cell, col, source, line,
+                                                                     integer=col in ("sample", "cycle"))
+        if kind == "sample":
+            given = [c for c in _POSE if c in values]
+            if given and len(given) != 6:
+                raise DataFileError("a sample's pose needs all of x,y,z,rx,ry,rz or none", source, line,
+                                    [c for c in _POSE if c not in values][0])
+        records[kind].append((line, values))
+    return records
+
+
+def preprocess_text(text: str, rig: Rig, source: str | None = None, origin_tol_m: float = DEFAULT_ORIGIN_TOL_M,
+                    ft_includes_weight: bool = False) -> tuple[MeasurementLog, dict[str, Any]]:
+    """Raw CSV text -> (MeasurementLog, summary dict)."""
+    rec = parse_raw(text, source)
+    base = rec["base_point"]
+    if len(base) < 3:
+        raise DataFileError(f"need at least 3 base_point records, got {len(base)}", source)
+    P_B = np.array([[v["px"], v["py"], v["pz"]] for _, v in base])
+    P_L = np.array([[v["x"], v["y"], v["z"]] for _, v in base])
+    try:
+        R_LB, p_LB, base_rms = fit_rigid_transform(P_B, P_L)
+    except IllConditionedData as exc:
+        raise DataFileError(f"base points: {exc}", source, base[0][0]) from exc
+    if len(rec["sensor"]) != 1:
+        raise DataFileError(f"need exactly one sensor record, got {len(rec['sensor'])}", source,
+                            rec["sensor"][1][0] if len(rec["sensor"]) > 1 else None)
+    s = rec["sensor"][0][1]
+    R_AS, p_AS = so3.exp(np.array([s["rx"], s["ry"], s["rz"]])), np.array([s["x"], s["y"], s["z"]])
+    points: dict[int, list] = {}
+    for line, v in rec["platform_point"]:
+        points.setdefault(v["sample"], []).append((line, v))
+    samples = rec["sample"]
+    if not samples:
+        raise DataFileError("no sample records", source)
+    seen: dict[int, int] = {}
+    rows = []
+    for line, v in samples:
+        sid = v["sample"]
+        if sid in seen:
+            raise DataFileError(f"duplicate sample id {sid} (first on line {seen[sid]})", source, line, "sample")
+        seen[sid] = line
+        R_LA, p_LA = _platform_pose_L(v, points.pop(sid, []), source, line)
+        R_BA = R_LB.T @ R_LA                                   # (53)
+        p_BA = R_LB.T @ (p_LA - p_LB)
+        offset = float(np.linalg.norm(p_BA))
+        if offset > origin_tol_m:                              # (54)
+            raise DataFileError(f"origin of {{A}} is {offset * 1e3:.3f} mm from the origin of {{B}} "
+                                f"(tolerance {origin_tol_m * 1e3:g} mm): frames or base points wrong?",
+                                source, line)
+        rows.append((line, v, R_BA, offset))
+    if points:
+        sid, lst = next(iter(points.items()))
+        raise DataFileError(f"platform_point for sample {sid}, which has no sample record", source, lst[0][0])
+    R_BA = np.array([r[2] for r in rows])
+    f_S = np.array([[r[1]["fx"], r[1]["fy"], r[1]["fz"]] for r in rows])
+    tau_S = np.array([[r[1]["mx"], r[1]["my"], r[1]["mz"]] for r in rows])
+    f_A, tau_A = wrench_to_A(f_S, tau_S, R_AS, p_AS)          # (55)
+    tau_G = weight_moment_A(rig, R_BA)                        # (56)
+    tau_ext = tau_A - tau_G if ft_includes_weight else tau_A
+    extra = {"fx_A": f_A[:, 0], "fy_A": f_A[:, 1], "fz_A": f_A[:, 2],
+             "tauw_x": tau_G[:, 0], "tauw_y": tau_G[:, 1], "tauw_z": tau_G[:, 2],
+             "origin_offset_m": np.array([r[3] for r in rows])}
+    extra = {k: np.array([repr(float(x)) for x in v]) for k, v in extra.items()}
+    try:
+        log = MeasurementLog.from_arrays([r[1]["cycle"] for r in rows],
+                                         [[r[1][f"l{i}"] for i in range(1, 7)] for r in rows],
+                                         tau_ext, R_BA, sample=[r[1]["sample"] for r in rows], extra=extra)
+    except DataFileError as exc:  # re-anchor row numbers to raw lines
+        idx = (exc.line or 2) - 2
+        raise DataFileError(str(exc).split(": ", 1)[-1], source, rows[min(idx, len(rows) - 1)][0],
+                            exc.column) from exc
+    log = MeasurementLog(log.sample, log.cycle, log.rest_lengths_m, log.tau_ext_A_Nm, log.rotvec_rad,
+                         log.extra, source)
+    info = {"base_points": len(base), "base_fit_rms_m": base_rms, "R_LB": R_LB.tolist(), "p_LB_m": p_LB.tolist(),
+            "max_origin_offset_m": float(max(r[3] for r in rows)), "ft_includes_weight": ft_includes_weight}
+    return log, info
+
+
+def _platform_pose_L(v: dict, pts: list, source: str | None, line: int) -> tuple[np.ndarray, np.ndarray]:
+    if "x" in v:
+        if pts:
+            raise DataFileError("sample has both a direct pose and platform_point records", source, line)
+        return so3.exp(np.array([v["rx"], v["ry"], v["rz"]])), np.array([v["x"], v["y"], v["z"]])
+    if len(pts) < 3:
+        raise DataFileError(f"sample {v['sample']} has no pose and {len(pts)} platform_point records "
+                            "(need at least 3)", source, line)
+    P_A = np.array([[p["px"], p["py"], p["pz"]] for _, p in pts])
+    P_L = np.array([[p["x"], p["y"], p["z"]] for _, p in pts])
+    try:
+        R, p, _ = fit_rigid_transform(P_A, P_L)
+    except IllConditionedData as exc:
+        raise DataFileError(f"platform points of sample {v['sample']}: {exc}", source, pts[0][0]) from exc
+    return R, p
+
+
+def preprocess_file(path: str | Path, rig: Rig, **options: Any) -> tuple[MeasurementLog, dict[str, Any]]:
+    """Read a raw CSV file and preprocess it (see :func:`preprocess_text`)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except OSError as exc:
+        raise DataFileError(f"cannot read: {exc.strerror}", str(path)) from exc
+    return preprocess_text(text, rig, str(path), **options)

@@ -1,0 +1,241 @@
+"""The rig: hole geometry, cable stiffness, tension bounds and platform mass.
+
+A :class:`Rig` is immutable; arrays are read-only copies. It reads and writes
+the TOML format of SPEC.md::
+
+    [geometry]
+    platform_holes = [[x, y, z], ...]   # six rows, A_i in {A}, m
+    base_holes     = [[x, y, z], ...]   # six rows, B_i in {B}, m
+    [cables]
+    stiffness = [k1, ..., k6]           # N/m, each cable with its drive
+    t_min = 5.0                         # N
+    t_max = 150.0                       # N
+    [platform]
+    mass = 0.4913                       # kg
+    com = [0.0, 0.0, 0.081]             # m, in {A}
+    gravity = [0.0, 0.0, -9.81]         # m/s^2, in {B}
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import hexagon
+from ..errors import RigFileError
+from .._fileio import atomic_write_text, read_text
+
+#: Shared cable-plus-drive stiffness of the built-in paper rig (N/m). The paper
+#: gives none. K is affine in k for fixed tensions, so k was chosen by least
+#: squares: the model's K at the corrected R0 under Table 3's pre-load (as the
+#: total load), tensions planned from mid-range, fitted to the symmetric part of
+#: Table 3's K_D gives k = 4638 N/m, rounded to 4600. Eigenvalues of K are then
+#: about 17, 27, 29 N m/rad against K_D's 6.8, 28.9, 30.6. See README and
+#: ``tests/test_rig.py``.
+PAPER_CABLE_STIFFNESS_N_PER_M = 4600.0
+PAPER_T_MIN_N = 5.0
+PAPER_T_MAX_N = 150.0
+PAPER_MASS_KG = 0.4913          # G = 4.82 N (Section IV-A) at g = 9.81
+PAPER_COM_A_M = (0.0, 0.0, 0.081)
+STANDARD_GRAVITY_B = (0.0, 0.0, -9.81)
+
+_SCHEMA: dict[str, dict[str, tuple[int, ...]]] = {
+    "geometry": {"platform_holes": (6, 3), "base_holes": (6, 3)},
+    "cables": {"stiffness": (6,), "t_min": (), "t_max": ()},
+    "platform": {"mass": (), "com": (3,), "gravity": (3,)},
+}
+
+
+def _frozen(value: Any) -> np.ndarray:
+    arr = np.array(value, dtype=np.float64)
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Rig:
+    """A cable-driven spherical joint module (units SI, frames per SPEC.md)."""
+
+    platform_holes_A_m: np.ndarray      # (6, 3) A_i in {A}
+    base_holes_B_m: np.ndarray          # (6, 3) B_i in {B}
+    cable_stiffness_N_per_m: np.ndarray  # (6,)
+    t_min_N: float
+    t_max_N: float
+    platform_mass_kg: float = PAPER_MASS_KG
+    com_A_m: np.ndarray = dataclasses.field(default_factory=lambda: _frozen(PAPER_COM_A_M))
+    gravity_B_m_per_s2: np.ndarray = dataclasses.field(default_factory=lambda: _frozen(STANDARD_GRAVITY_B))
+
+    def __post_init__(self) -> None:
+        data = self.as_dict()
+        _check(data, path=None)
+        for field in ("platform_holes_A_m", "base_holes_B_m", "cable_stiffness_N_per_m",
+                      "com_A_m", "gravity_B_m_per_s2"):
+            object.__setattr__(self, field, _frozen(getattr(self, field)))
+        object.__setattr__(self, "t_min_N", float(self.t_min_N))
+        object.__setattr__(self, "t_max_N", float(self.t_max_N))
+        object.__setattr__(self, "platform_mass_kg", float(self.platform_mass_kg))
+
+    # ------------------------------------------------------------ derived
+    @property
+    def weight_B_N(self) -> np.ndarray:
+        """Platform weight force in {B} (N)."""
+        return self.platform_mass_kg * self.gravity_B_m_per_s2
+
+    @property
+    def t_mid_N(self) -> np.ndarray:
+        """Mid-range tension, the planner's default reference (N), shape (6,)."""
+        return np.full(6, 0.5 * (self.t_min_N + self.t_max_N))
+
+    def replace(self, **changes: Any) -> "Rig":
+        """A copy with some fields changed (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+    # ------------------------------------------------------------ conversion
+    def as_dict(self) -> dict[str, dict[str, Any]]:
+        """Nested dict in the TOML layout of SPEC.md (plain Python numbers)."""
+        tolist = lambda a: np.asarray(a, dtype=float).tolist()  # noqa: E731
+        return {
+            "geometry": {"platform_holes": tolist(self.platform_holes_A_m),
+                         "base_holes": tolist(self.base_holes_B_m)},
+            "cables": {"stiffness": tolist(self.cable_stiffness_N_per_m),
+                       "t_min": float(self.t_min_N), "t_max": float(self.t_max_N)},
+            "platform": {"mass": float(self.platform_mass_kg), "com": tolist(self.com_A_m),
+                         "gravity": tolist(self.gravity_B_m_per_s2)},
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any], path: str | None = None) -> "Rig":
+        """Build from the nested TOML layout; errors name the key (and file)."""
+        _check(data, path)
+        g, c, p = data["geometry"], data["cables"], data["platform"]
+        return cls(platform_holes_A_m=g["platform_holes"], base_holes_B_m=g["base_holes"],
+                   cable_stiffness_N_per_m=c["stiffness"], t_min_N=c["t_min"], t_max_N=c["t_max"],
+                   platform_mass_kg=p["mass"], com_A_m=p["com"], gravity_B_m_per_s2=p["gravity"])
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> "Rig":
+        """Read a rig file (SPEC.md format)."""
+        path = Path(path)
+        text = read_text(path, lambda msg: RigFileError(msg, str(path)), "rig file")
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise RigFileError(f"not valid TOML: {exc}", str(path)) from exc
+        return cls.from_dict(data, str(path))
+
+    def to_toml(self, path: str | Path | None = None, overwrite: bool = False) -> str:
+        """TOML text of this rig; written atomically to ``path`` when given.
+
+        An existing file is never replaced unless ``overwrite=True``.
+        """
+        text = _format_toml(self.as_dict())
+        if path is not None:
+            atomic_write_text(path, text, overwrite=overwrite)
+        return text
+
+
+def paper_rig(cable_stiffness_N_per_m: float = PAPER_CABLE_STIFFNESS_N_PER_M) -> Rig:
+    """The rig of the paper's Section IV-A (hole pairing as the paper labels it)."""
+    platform, base = hexagon.paper_holes()
+    return Rig(platform_holes_A_m=platform, base_holes_B_m=base,
+               cable_stiffness_N_per_m=np.full(6, float(cable_stiffness_N_per_m)),
+               t_min_N=PAPER_T_MIN_N, t_max_N=PAPER_T_MAX_N)
+
+
+def load_rig(spec: str | Path | None) -> Rig:
+    """A rig from a path, or the built-in paper rig for ``None`` / ``"paper"``."""
+    if spec is None or str(spec) == "paper":
+        return paper_rig()
+    return Rig.from_toml(spec)
+
+
+def _format_toml(data: dict[str, dict[str, Any]]) -> str:
+    """Compact, human-editable TOML (one hole per line); round-trips through tomllib.
+
+    Written by hand rather than with tomli-w, whose arrays put every number on
+    its own line, which makes a rig file hard to read and edit.
+    """
+    units = {"platform_holes": "m, A_i in {A}", "base_holes": "m, B_i in {B}",
+             "stiffness": "N/m, cable with drive", "t_min": "N", "t_max": "N", "mass": "kg",
+             "com": "m, in {A}", "gravity": "m/s^2, in {B}"}
+    lines = ["# csjm_opt rig file (SI units; frames per SPEC.md)"]
+    for section, table in data.items():
+        lines.append(f"\n[{section}]")
+        for key, value in table.items():
+            if isinstance(value, list) and value and isinstance(value[0], list):
+                rows = ",\n".join("    [" + ", ".join(repr(float(x)) for x in row) + "]" for row in value)
+                lines.append(f"{key} = [  # {units[key]}\n{rows},\n]")
+            elif isinstance(value, list):
+                lines.append(f"{key} = [" + ", ".join(repr(float(x)) for x in value) + f"]  # {units[key]}")
+            else:
+                lines.append(f"{key} = {float(value)!r}  # {units[key]}")
+    return "\n".join(lines) + "\n"
+
+
+# ---------------------------------------------------------------- validation
+def _check(data: Any, path: str | None) -> None:
+    if not isinstance(data, dict):
+        raise RigFileError(f"expected a table, got {type(data).__name__}", path)
+    for section in data:
+        if section not in _SCHEMA:
+            raise RigFileError(f"unknown section (expected one of {sorted(_SCHEMA)})", path, section)
+    for section, keys in _SCHEMA.items():
+        table = data.get(section)
+        if not isinstance(table, dict):
+            raise RigFileError("missing section", path, section)
+        for key in table:
+            if key not in keys:
+                raise RigFileError(f"unknown key (expected one of {sorted(keys)})", path,
+                                   f"{section}.{key}")
+        for key, shape in keys.items():
+            dotted = f"{section}.{key}"
+            if key not in table:
+                raise RigFileError("missing key", path, dotted)
+            value = table[key]
+            if isinstance(value, bool) or _has_non_number(value):
+                raise RigFileError(f"expected numbers, got {value!r:.60}", path, dotted)
+            arr = np.asarray(value, dtype=float) if _rectangular(value) else None
+            if arr is None or arr.shape != shape:
+                got = "ragged rows" if arr is None else f"shape {arr.shape}"
+                want = "a number" if shape == () else f"shape {shape}"
+                raise RigFileError(f"expected {want}, got {got}", path, dotted)
+            if not np.all(np.isfinite(arr)):
+                raise RigFileError("expected finite numbers (no nan or inf)", path, dotted)
+    c, p, g = data["cables"], data["platform"], data["geometry"]
+    k = np.asarray(c["stiffness"], dtype=float)
+    if np.any(k <= 0):
+        raise RigFileError(f"cable stiffness must be positive, got {k.tolist()}", path, "cables.stiffness")
+    if not float(c["t_min"]) >= 0:
+        raise RigFileError(f"t_min must be >= 0 (cables only pull), got {c['t_min']}", path, "cables.t_min")
+    if not float(c["t_min"]) < float(c["t_max"]):
+        raise RigFileError(f"t_min must be < t_max, got t_min={c['t_min']}, t_max={c['t_max']}",
+                           path, "cables.t_max")
+    if float(p["mass"]) < 0:
+        raise RigFileError(f"mass must be >= 0, got {p['mass']}", path, "platform.mass")
+    A, B = np.asarray(g["platform_holes"], float), np.asarray(g["base_holes"], float)
+    gaps = np.linalg.norm(B - A, axis=1)  # cable length at R = I
+    if np.any(gaps < 1e-6):
+        i = int(np.argmin(gaps))
+        raise RigFileError(f"platform hole {i + 1} coincides with base hole {i + 1} at R = I",
+                           path, "geometry.base_holes")
+    for name, P in (("platform_holes", A), ("base_holes", B)):
+        if np.any(np.linalg.norm(P, axis=1) < 1e-6):
+            raise RigFileError("a hole lies at the joint centre O", path, f"geometry.{name}")
+
+
+def _has_non_number(value: Any) -> bool:
+    if isinstance(value, list):
+        return any(_has_non_number(v) for v in value)
+    return isinstance(value, bool) or not isinstance(value, (int, float))
+
+
+def _rectangular(value: Any) -> bool:
+    try:
+        np.asarray(value, dtype=float)
+    except ValueError:
+        return False
+    return True

@@ -1,0 +1,288 @@
+"""Stiffness shaping: tensions that hold a load and make K as close as possible to a target.
+
+For fixed cable stiffness ``k`` the stiffness of SPEC.md is affine in the
+tensions (:mod:`csjm_opt.model.cable_terms`)::
+
+    K(T) = K0 + sum_i t_i G_i,     K0 = J^T diag(k) J,   G_i = Hess(c_i)
+
+and the six cables leave three redundant tension directions (the null space
+of ``J^T``). Shaping solves the QP (build, then solve)::
+
+    minimise    sum_k w_k (L_k . vec K(T) - s_k)^2 + rho ||T - t_mid||^2
+    subject to  J^T T + tau_load = 0,   tau_load = tau_ext + tau_weight   (in {A})
+                t_min <= T <= t_max
+
+Objectives (:mod:`csjm_opt.shaping.objectives`; each a set of linear
+functionals ``L_k`` of K with targets ``s_k``): ``"frobenius"`` (entries of K, elementwise weights ``W`` (3, 3):
+``||K - K_target||_W^2 = sum W_ab (K_ab - K_target_ab)^2``), ``"eigen"``
+(``u_k^T K u_k`` along the eigenvectors ``u_k`` of ``K_target``, targets its
+eigenvalues: shapes the principal stiffnesses, ignores coupling), and
+``"directional"`` (``u^T K u`` along given ``directions``, targets
+``u^T K_target u``). ``rho`` is a tiny regulariser (``regularization`` times
+the mean curvature) toward mid-range tensions, which only breaks ties.
+
+:func:`build_shaping_qp` returns the :class:`qpsolvers.Problem`;
+:func:`shape_stiffness` solves it (OSQP by default, polished to round-off by
+the exact active-set solver of :mod:`csjm_opt.planning._dense_qp`, or ``"active_set"``
+alone) and returns a self-checking :class:`ShapingResult`. :class:`Shaper`
+is the allocation-light form for control loops (no qpsolvers round trip,
+basis reused while the pose does not change, active set warm-started).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import warnings
+
+import numpy as np
+import qpsolvers
+from scipy import sparse
+
+from ..planning import _dense_qp as dense_qp
+from ..model.cable_terms import CableTerms, point_force_terms
+from ..errors import InfeasibleLoad, InvalidInput, SolverError
+from ..model.numeric import Model
+from ..planning.planner import feasibility_distance_Nm
+from ..model.rig import Rig
+from .objectives import OBJECTIVES, StiffnessObjective, make_objective  # noqa: F401 (re-export)
+from .._validate import as_array, as_rotation, as_vector3
+
+#: Default tie-breaking regulariser, relative to the mean curvature of the objective.
+REGULARIZATION = 1e-10
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class StiffnessBasis:
+    """``K(T) = K0 + sum_i T_i G_i`` at one pose, with J and the weight moment there."""
+
+    R: np.ndarray             # (3, 3)
+    J: np.ndarray             # (6, 3)
+    K0: np.ndarray            # (3, 3) N m/rad, J^T diag(k) J
+    G: np.ndarray             # (6, 3, 3) m, dK/dt_i
+    tau_weight_A_Nm: np.ndarray  # (3,)
+
+    def K(self, tensions_N: np.ndarray) -> np.ndarray:
+        return self.K0 + np.einsum("i,ijk->jk", tensions_N, self.G)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ShapingResult:
+    """Shaped tensions for one pose and load; checks itself."""
+
+    tensions_N: np.ndarray       # (6,)
+    K: np.ndarray                # (3, 3) achieved stiffness, N m/rad (CasADi model)
+    K_target: np.ndarray         # (3, 3)
+    objective: StiffnessObjective
+    R: np.ndarray
+    tau_ext_A_Nm: np.ndarray
+    tau_weight_A_Nm: np.ndarray
+    J: np.ndarray
+    t_min_N: float
+    t_max_N: float
+    solver: str
+    exact_tol: float             # residual (N m/rad) below which the target counts as reached
+    kkt_error: float             # of the QP solution (exact active-set check)
+
+    @property
+    def tensions(self) -> np.ndarray:
+        """Alias of ``tensions_N`` (SPEC.md name)."""
+        return self.tensions_N
+
+    @property
+    def residual(self) -> float:
+        """Weighted residual of the objective (weighted Frobenius by default), N m/rad."""
+        return self.objective.residual(self.K)
+
+    @property
+    def frobenius_error(self) -> float:
+        """Unweighted ``||K - K_target||_F`` (N m/rad)."""
+        return float(np.linalg.norm(self.K - self.K_target))
+
+    @property
+    def exact(self) -> bool:
+        """The target is reached (residual below ``exact_tol``)."""
+        return self.residual <= self.exact_tol
+
+    @property
+    def equilibrium_residual_Nm(self) -> float:
+        """``||J^T T + tau_load||`` (N m)."""
+        return float(np.linalg.norm(self.J.T @ self.tensions_N + self.tau_ext_A_Nm + self.tau_weight_A_Nm))
+
+    @property
+    def bound_violation_N(self) -> float:
+        return float(max(0.0, np.max(self.t_min_N - self.tensions_N), np.max(self.tensions_N - self.t_max_N)))
+
+    @property
+    def active_bounds(self) -> list[str]:
+        """Cables at a bound, e.g. ``["t3=t_min", "t5=t_max"]``."""
+        tol = 1e-7 * max(1.0, self.t_max_N)
+        return ([f"t{i + 1}=t_min" for i in np.flatnonzero(self.tensions_N <= self.t_min_N + tol)]
+                + [f"t{i + 1}=t_max" for i in np.flatnonzero(self.tensions_N >= self.t_max_N - tol)])
+
+    def is_valid(self, eq_tol_Nm: float = 1e-8, bound_tol_N: float = 1e-9) -> bool:
+        return self.equilibrium_residual_Nm <= eq_tol_Nm and self.bound_violation_N <= bound_tol_N
+
+    def as_dict(self) -> dict:
+        """JSON-able summary."""
+        return {"tensions_N": self.tensions_N.tolist(), "K": self.K.tolist(), "K_target": self.K_target.tolist(),
+                "objective": self.objective.name, "residual": self.residual, "exact": self.exact,
+                "frobenius_error": self.frobenius_error, "active_bounds": self.active_bounds,
+                "equilibrium_residual_Nm": self.equilibrium_residual_Nm, "solver": self.solver}
+
+
+# --------------------------------------------------------------------- build
+@functools.lru_cache(maxsize=64)
+def _terms(rig: Rig) -> CableTerms:
+    return CableTerms.from_rig(rig)
+
+
+def stiffness_basis(rig: Rig, R: np.ndarray) -> StiffnessBasis:
+    """``J, K0, G`` and the weight moment at ``R`` (closed form; trusted ``R``)."""
+    J, K0, G = _terms(rig).stiffness_basis(R)
+    tau_w, _ = point_force_terms(R, rig.weight_B_N[None], np.asarray(rig.com_A_m)[None])
+    return StiffnessBasis(R, J, K0, G, tau_w)
+
+
+def qp_matrices(basis: StiffnessBasis, tau_ext: np.ndarray, objective: StiffnessObjective,
+                t_mid: np.ndarray, regularization: float = REGULARIZATION):
+    """Dense ``P, q, A, b`` of the shaping QP (``1/2 x^T P x + q^T x``, ``A x = b``)."""
+    M = objective.L @ basis.G.reshape(6, 9).T                     # (m, 6)
+    d = objective.s - objective.L @ basis.K0.reshape(9)
+    MW = M.T * objective.w
+    H = MW @ M
+    curvature = float(np.trace(H)) / 6.0
+    rho = regularization * (curvature if curvature > 1e-300 else 1.0)   # all-zero weights: regulariser only
+    P = 2.0 * (H + rho * np.eye(6))
+    q = -2.0 * (MW @ d + rho * t_mid)
+    return P, q, basis.J.T, -(tau_ext + basis.tau_weight_A_Nm)
+
+
+def build_shaping_qp(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray, K_target: np.ndarray,
+                     weights: np.ndarray | None = None, objective: str = "frobenius",
+                     directions: np.ndarray | None = None,
+                     regularization: float = REGULARIZATION) -> qpsolvers.Problem:
+    """The shaping QP at ``R`` under ``tau_ext`` as a :class:`qpsolvers.Problem` (solver-free)."""
+    R = as_rotation(R)
+    tau_ext = as_vector3(tau_ext_A_Nm, "tau_ext")
+    obj = make_objective(K_target, weights, objective, directions)
+    P, q, A, b = qp_matrices(stiffness_basis(rig, R), tau_ext, obj, rig.t_mid_N, regularization)
+    return qpsolvers.Problem(P=sparse.csc_matrix(P), q=q, A=sparse.csc_matrix(A), b=b,
+                             lb=np.full(6, rig.t_min_N), ub=np.full(6, rig.t_max_N))
+
+
+# --------------------------------------------------------------------- solve
+class Shaper:
+    """Reusable shaping solver for one rig (control loops).
+
+    Keeps the stiffness basis while the pose is unchanged and warm-starts the
+    exact active-set solver from the previous active set. Inputs are trusted.
+    With ``compiled`` (default) the basis, the QP matrices and the primal-dual
+    active-set iterations run in :mod:`csjm_opt.control._loop_kernels` (numba); the
+    numpy solver of :mod:`csjm_opt.planning._dense_qp` (with its finite primal
+    active-set fallback) takes over whenever they do not settle.
+    """
+
+    def __init__(self, rig: Rig, regularization: float = REGULARIZATION, compiled: bool = True):
+        self.rig = rig
+        self.regularization = regularization
+        self.compiled = compiled
+        self._lo, self._hi = np.full(6, rig.t_min_N), np.full(6, rig.t_max_N)
+        self._basis: StiffnessBasis | None = None
+        self._active = (np.zeros(6, bool), np.zeros(6, bool))
+        terms = _terms(rig)
+        self._geom = (terms.A, terms.B, terms.k)
+        self._weight = (rig.weight_B_N[None], np.asarray(rig.com_A_m, float)[None])
+
+    def basis(self, R: np.ndarray) -> StiffnessBasis:
+        if self._basis is None or not np.array_equal(self._basis.R, R):
+            R = np.array(R, float)
+            if self.compiled:
+                from ..control import _loop_kernels as loop_kernels
+
+                J, K0, G = loop_kernels.stiffness_basis(*self._geom, R)
+                self._basis = StiffnessBasis(R, J, K0, G, point_force_terms(R, *self._weight)[0])
+            else:
+                self._basis = stiffness_basis(self.rig, R)
+        return self._basis
+
+    def solve(self, R: np.ndarray, tau_ext: np.ndarray, objective: StiffnessObjective,
+              x0: np.ndarray | None = None) -> tuple[np.ndarray, StiffnessBasis, dense_qp.DenseQPResult]:
+        """Tensions (6,), the basis used and the QP result; raises InfeasibleLoad/SolverError."""
+        basis = self.basis(R)
+        if x0 is not None:
+            tol = 1e-5 * max(1.0, self.rig.t_max_N)
+            self._active = (x0 <= self.rig.t_min_N + tol, x0 >= self.rig.t_max_N - tol)
+        if self.compiled:
+            from ..control import _loop_kernels as loop_kernels
+
+            P, q, A, b = loop_kernels.shaping_qp(basis.G, basis.K0, objective.L, objective.s, objective.w, basis.J,
+                                                 tau_ext + basis.tau_weight_A_Nm, self.rig.t_mid_N,
+                                                 self.regularization)
+            x, nu, z, lower, upper, it, status = loop_kernels.pdas(P, q, A, b, self._lo, self._hi,
+                                                                   self._active[0].copy(), self._active[1].copy(),
+                                                                   8, 1e-10)
+            if status == 0:
+                self._active = (lower, upper)
+                return x, basis, dense_qp.DenseQPResult(x, nu, z, lower, upper, it, "pdas", True)
+        else:
+            P, q, A, b = qp_matrices(basis, tau_ext, objective, self.rig.t_mid_N, self.regularization)
+        res = dense_qp.solve(P, q, A, b, self._lo, self._hi, *self._active)
+        if not res.converged or res.kkt_error(P, q, A, b, self._lo, self._hi) > 1e-6 * max(1.0, np.abs(q).max()):
+            dist = feasibility_distance_Nm(basis.J, -b, self.rig.t_min_N, self.rig.t_max_N)
+            if dist > 1e-8:
+                raise InfeasibleLoad(f"load tau_ext={np.round(tau_ext, 4).tolist()} N m cannot be held at this "
+                                     f"pose with {self.rig.t_min_N:g} N <= t <= {self.rig.t_max_N:g} N: it lies "
+                                     f"{dist:.3g} N m outside the wrench-feasible set", R, tau_ext, dist)
+            raise SolverError("shaping QP: active-set solver did not converge", "dense_qp")
+        self._active = (res.lower, res.upper)
+        return res.x, basis, res
+
+
+def shape_stiffness(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray, K_target: np.ndarray,
+                    weights: np.ndarray | None = None, objective: str = "frobenius",
+                    directions: np.ndarray | None = None, solver: str = "osqp",
+                    regularization: float = REGULARIZATION, exact_tol: float = 1e-6,
+                    model: Model | None = None) -> ShapingResult:
+    """Tensions within bounds that hold ``tau_ext`` (N m, {A}) at ``R`` with K closest to ``K_target``.
+
+    ``solver``: a qpsolvers backend (``"osqp"``, ``"clarabel"``, ...) whose
+    answer is polished exactly by the active-set method, or ``"active_set"``
+    alone. The result reports the achieved K (CasADi model), the weighted
+    residual, whether the target was reached (``exact``: residual below
+    ``exact_tol`` N m/rad) and the active bounds.
+    """
+    model = model or Model(rig)
+    R = as_rotation(R)
+    tau_ext = as_vector3(tau_ext_A_Nm, "tau_ext")
+    obj = make_objective(K_target, weights, objective, directions)
+    shaper = Shaper(rig, regularization)
+    x0 = None
+    if solver != "active_set":
+        x0 = _solve_qpsolvers(build_shaping_qp(rig, R, tau_ext, K_target, weights, objective, directions,
+                                               regularization), solver)
+    T, basis, res = shaper.solve(R, tau_ext, obj, x0)
+    P, q, A, b = qp_matrices(basis, tau_ext, obj, rig.t_mid_N, regularization)
+    Kt = as_array(K_target, (3, 3), "K_target")
+    result = ShapingResult(T, model.stiffness(R, T), 0.5 * (Kt + Kt.T), obj, R, tau_ext, model.weight_moment(R), model.jacobian(R), rig.t_min_N,
+                           rig.t_max_N, solver, exact_tol, res.kkt_error(P, q, A, b, shaper._lo, shaper._hi))
+    if not result.is_valid():
+        raise SolverError(f"shaped tensions fail their check: equilibrium residual "
+                          f"{result.equilibrium_residual_Nm:.3g} N m, bound violation "
+                          f"{result.bound_violation_N:.3g} N", solver)
+    return result
+
+
+def _solve_qpsolvers(problem: qpsolvers.Problem, solver: str) -> np.ndarray | None:
+    if solver not in qpsolvers.available_solvers:
+        raise InvalidInput(f"unknown QP solver {solver!r}; installed: "
+                           f"{', '.join(qpsolvers.available_solvers)} (or 'active_set')", "solver")
+    opts = {"eps_abs": 1e-10, "eps_rel": 1e-10, "verbose": False, "max_iter": 20000} if solver == "osqp" else {}
+    try:
+        with warnings.catch_warnings():  # solver chatter (status warnings) is reported by our own checks
+            warnings.simplefilter("ignore")
+            sol = qpsolvers.solve_problem(problem, solver=solver, **opts)
+    except Exception as exc:  # noqa: BLE001 - backend errors are wrapped, never leaked
+        raise SolverError(f"{solver} failed: {exc}", solver) from exc
+    return sol.x if sol.found and sol.x is not None else None
+
