@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from csjm_opt.diagnose import kinematics as kin
+from csjm_opt.model import kinematics as kin
 from csjm_opt.diagnose.augmented import AugmentedModel
 from csjm_opt.diagnose.effects import EFFECTS, make_effect
 from csjm_opt.diagnose.fit import fit_model

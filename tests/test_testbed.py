@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from csjm_opt import so3
-from csjm_opt.diagnose import kinematics as kin
+from csjm_opt.model import kinematics as kin
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.measurement.logfile import MeasurementLog
 from csjm_opt.model.numeric import Model

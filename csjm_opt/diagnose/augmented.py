@@ -24,7 +24,7 @@ from typing import Sequence
 import numpy as np
 
 from ..model.rig import Rig
-from . import kinematics as kin
+from ..model import kinematics as kin
 from .effects import Effect
 
 NUISANCE_NAMES = ("log_k_scale", "dl_common_m")

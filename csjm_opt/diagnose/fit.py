@@ -19,7 +19,7 @@ import dataclasses
 import numpy as np
 from scipy.optimize import least_squares
 
-from . import kinematics as kin
+from ..model import kinematics as kin
 from .augmented import AugmentedModel
 from .residuals import ResidualTable
 

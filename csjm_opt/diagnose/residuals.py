@@ -24,7 +24,7 @@ from .. import so3
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import Rig
-from . import kinematics as kin
+from ..model import kinematics as kin
 from .augmented import AugmentedModel, Rows, cable_steps
 
 

@@ -51,7 +51,7 @@ from .augmented import AugmentedModel
 from .effects import EFFECTS, make_effect
 from .fit import FitResult, fit_model
 from .noise import noise_floor, systematic
-from . import kinematics as kin
+from ..model import kinematics as kin
 from .residuals import ResidualTable, compute_residuals, pose_noise_cov, pose_residuals, rms
 
 ALPHA = 0.01

@@ -24,7 +24,7 @@ import dataclasses
 import numpy as np
 
 from .. import so3
-from ..diagnose import kinematics as kin
+from ..model import kinematics as kin
 from ..model.rig import Rig
 
 #: Width (N) of the rounding of the play operator's corners (keeps Newton's method happy).

@@ -1,6 +1,6 @@
 """Batched cable kinematics and a batched forward-statics solver (numpy).
 
-The diagnosis evaluates the moment balance of many rows at once, for many
+The diagnosis and the testbed evaluate the moment balance of many rows at once, for many
 parameter vectors, so it does not go through CasADi row by row. Conventions
 are those of SPEC.md and :mod:`csjm_opt.model.casadi_model`: cable ``i`` runs from
 the platform hole ``a_i`` (in {A}) to the base hole ``b_i`` (in {B}); in {A}
