@@ -84,6 +84,7 @@ def run_identify(args: argparse.Namespace) -> int:
 
     from ..identification.identify import MAX_CONDITION, identify_cycles, identify_log
     from ..identification.stiffness_fits import n_parameters
+    from .._plotting import save
     from ..identification.figures import convergence_curve, plot_convergence
     from ..measurement.instruments import InstrumentNoise
     from ..measurement.logfile import MeasurementLog
@@ -107,11 +108,12 @@ def run_identify(args: argparse.Namespace) -> int:
     figures = []
     if args.figures:
         for e in estimates:
+            assert e.cycle is not None  # identify_log fills it
             rows = log.cycle_rows(e.cycle)
             curve = convergence_curve(log.R[rows], log.tau_ext_A_Nm[rows], model,
                                       n_min=n_parameters(args.order) + 1, **options | {"bootstrap": 0})
-            figures.append(str(plot_convergence(curve, Path(args.figures) / f"convergence_cycle{e.cycle}.png",
-                                                f"Cycle {e.cycle}: det K against measurements")))
+            ax = plot_convergence(curve, title=f"Cycle {e.cycle}: det K against measurements")
+            figures.append(str(save(ax.figure, Path(args.figures) / f"convergence_cycle{e.cycle}.png")))
     out = {"source": str(args.data), "cycles": [e.as_dict() for e in estimates], "skipped": skipped,
            "figures": figures}
     if args.fit_parameters != "none":

@@ -132,7 +132,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
                 computed += 1
                 bar.update(1)
                 if stop_after is not None and computed >= stop_after:
-                    stream.close()
+                    getattr(stream, "close", lambda: None)()
                     break
         finally:
             bar.close()

@@ -131,7 +131,8 @@ def markdown(d: Diagnosis, j: dict, data_name: str) -> str:
         if c.get("error"):
             out.append(f"| {c['effect']} | {c['error']} | | | | | no | | | |")
             continue
-        out.append(f"| {c['effect']} | {_fmt(c['heldout_rms_rad'])} | {_fmt(c['train_rms_rad'])} | {_g(c['bic'], '.1f')} "
+        out.append(f"| {c['effect']} | {_fmt(c['heldout_rms_rad'])} | {_fmt(c['train_rms_rad'])} "
+                   f"| {_g(c['bic'], '.1f')} "
                    f"| {_g(c['p_value'], '.2g')} | {_g(c['heldout_p_value'], '.2g')} "
                    f"| {'yes' if c['significant'] else 'no'} "
                    f"| {c['rank']} / {c['n_params']} | {_g(c['condition'])} | {_g(c['fraction_explained'], '.2f')} |")
@@ -148,7 +149,8 @@ def markdown(d: Diagnosis, j: dict, data_name: str) -> str:
                         f"{sel['rank']} of {sel['n_params']}); some parameter combinations are not determined "
                         "by these data (hole_offsets: a weak prior keeps them near zero)."]
     loc = j["localisation"]
-    out += ["", "## Where the gap lies (held-out rows)", "", "| breakdown | group | rows | before (mrad) | after (mrad) |",
+    out += ["", "## Where the gap lies (held-out rows)", "",
+            "| breakdown | group | rows | before (mrad) | after (mrad) |",
             "|---|---|---|---|---|"]
     for key in ("by_tilt", "by_azimuth", "by_load_magnitude", "by_load_direction", "by_branch"):
         for grp in loc[key]:

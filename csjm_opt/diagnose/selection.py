@@ -176,7 +176,8 @@ class Diagnosis:
                              "heldout_alpha": HELDOUT_ALPHA,
                              "test": "nested F-test on whitened linearised residuals (training rows), "
                                      "Bonferroni over candidates, and one-sided paired t-test of "
-                                     "per-cycle held-out MSE, both against nominal_refit; held-out RMS must also be lower"},
+                                     "per-cycle held-out MSE, both against nominal_refit; "
+                                     "held-out RMS must also be lower"},
             "heldout": "test file" if self.test is not None else "grouped K-fold by cycle",
             "gap": self.gap,
             "remaining_signature": self.remaining,
@@ -238,7 +239,7 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
         failed += int(np.sum(~ho.converged(1e-6)))
     else:
         zeta, cyc = np.empty((len(train), 3)), train.cycle
-        for held in folds:
+        for held in folds or ():
             keep = np.setdiff1d(np.arange(len(train)), held)
             f = fit_model(model, train.take(keep), theta0=full.theta)
             part = train.take(held)

@@ -122,7 +122,10 @@ class StiffnessEstimate:
 
     def covers(self, K_true: np.ndarray, which: str = "K") -> np.ndarray:
         """(3, 3) mask: does the interval of ``which`` (K, K_sym, bootstrap) contain ``K_true``?"""
-        lo, hi = {"K": self.K_ci, "K_sym": self.K_sym_ci, "bootstrap": self.bootstrap_K_ci}[which]
+        interval = {"K": self.K_ci, "K_sym": self.K_sym_ci, "bootstrap": self.bootstrap_K_ci}[which]
+        if interval is None:
+            raise InvalidInput("no bootstrap interval: identify with bootstrap > 0", "which")
+        lo, hi = interval
         return (lo <= K_true) & (K_true <= hi)
 
     def is_well_conditioned(self, max_condition: float = MAX_CONDITION) -> bool:
@@ -245,7 +248,7 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
         cov_K=fit["cov_K"], cov_K_sym=sym["cov_K"], ci_level=ci_level, ci_quantile=q,
         condition=cond, singular_values_rad=s,
         residual_rms_Nm=float(np.sqrt(np.mean(np.sum(fit["resid"] ** 2, axis=1)))),
-        chi2_per_dof=chi2, bootstrap_K_ci=boot, design_condition=fit["design_condition"])
+        chi2_per_dof=chi2, bootstrap_K_ci=boot, design_condition=float(fit["design_condition"]))
 
 
 # ---------------------------------------------------------------- whole logs

@@ -97,7 +97,7 @@ class MeasurementLog:
         try:
             header = [h.strip() for h in next(reader)]
         except StopIteration:
-            raise DataFileError("empty file: expected a header " + ",".join(COLUMNS), source, 1)
+            raise DataFileError("empty file: expected a header " + ",".join(COLUMNS), source, 1) from None
         if tuple(header[:len(COLUMNS)]) != COLUMNS:
             missing = [c for c in COLUMNS if c not in header]
             detail = f"missing {missing}" if missing else f"got {header[:len(COLUMNS)]}"

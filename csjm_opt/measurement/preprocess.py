@@ -105,7 +105,7 @@ def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int,
     try:
         header = [h.strip() for h in next(reader)]
     except StopIteration:
-        raise DataFileError("empty file: expected the raw header " + ",".join(RAW_COLUMNS), source, 1)
+        raise DataFileError("empty file: expected the raw header " + ",".join(RAW_COLUMNS), source, 1) from None
     unknown = [h for h in header if h not in RAW_COLUMNS and h != "note"]
     missing = [c for c in RAW_COLUMNS if c not in header]
     if unknown or missing or len(set(header)) != len(header):

@@ -58,7 +58,7 @@ def _stiffness_parts(R: ca.SX, T: ca.SX, k: ca.SX, A: ca.SX, B: ca.SX) -> dict[s
     return {"J": J, "lengths": lengths, "tau": tau, "D": D, "JtKJ": JtKJ}
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def build_functions() -> dict[str, ca.Function]:
     """All model functions, built once per process (on first use, not at import)."""
     R = ca.SX.sym("R", 3, 3)

@@ -74,7 +74,7 @@ def solve_poses(g: Residual, R_init: np.ndarray, tol_Nm: float = 1e-10, max_iter
     g0 = g(R)
     norm = np.linalg.norm(g0, axis=1)
     it = 0
-    for it in range(1, max_iter + 1):
+    for it in range(1, max_iter + 1):  # noqa: B007 (the count is reported after the loop)
         active = norm > tol_Nm
         if not np.any(active):
             break

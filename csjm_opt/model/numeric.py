@@ -10,7 +10,7 @@ functions in :mod:`csjm_opt.model.stiffness` validate them.
 from __future__ import annotations
 
 import functools
-from typing import Callable
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -121,13 +121,13 @@ class Model:
 
 
 @functools.lru_cache(maxsize=32)
-def _mapped(name: str, n: int, compiled: bool = False) -> Callable:
+def _mapped(name: str, n: int, compiled: bool = False) -> Any:
     """``build_functions()[name].map(n)``, cached by size (JIT-compiled C if asked)."""
     f = _jit(name) if compiled else build_functions()[name]
     return f.map(n, "serial")
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _jit(name: str) -> ca.Function:
     f = build_functions()[name]
     mx = f.mx_in()

@@ -36,6 +36,7 @@ import functools
 from typing import Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import so3
 from .cable_terms import CableTerms, point_force_terms
@@ -181,7 +182,7 @@ class EquilibriumSolver:
         return eq
 
 
-def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray = (0.0, 0.0, 0.0),
+def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: npt.ArrayLike = (0.0, 0.0, 0.0),
                       point_forces: Sequence[PointForce] = (), R_init: np.ndarray | None = None,
                       include_weight: bool = True, model: Model | None = None, tol_Nm: float = 1e-11,
                       max_iter: int = 100, max_step_rad: float = 0.25, allow_slack: bool = True,

@@ -22,8 +22,10 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import qpsolvers
 from scipy import sparse
 from scipy.optimize import lsq_linear
@@ -160,7 +162,7 @@ def build_tension_qp_for(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray,
 SOLVERS = ("auto", "active_set")
 
 
-def plan_tensions(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray = (0.0, 0.0, 0.0),
+def plan_tensions(rig: Rig, R: np.ndarray, tau_ext_A_Nm: npt.ArrayLike = (0.0, 0.0, 0.0),
                   t_ref_N: np.ndarray | None = None, solver: str = "auto",
                   model: Model | None = None) -> TensionPlan:
     """Tensions that hold ``tau_ext`` (N m, {A}) at ``R``, closest to ``t_ref`` (N).
@@ -230,8 +232,8 @@ def plan_tensions_batch(rig: Rig, Rs: np.ndarray, taus_A_Nm: np.ndarray | None =
     batch = TensionPlanBatch(T, Rs, taus, tau_w, J, rig.t_min_N, rig.t_max_N, solver, int(todo.size))
     bad = (batch.equilibrium_residual_Nm > FEASIBILITY_TOL_NM) | (batch.bound_violation_N > 1e-9)
     if np.any(bad):
-        i = int(np.argmax(bad))
-        raise _infeasible(J[i], taus[i] + tau_w[i], rig, Rs[i], taus[i], index=i)
+        k = int(np.argmax(bad))
+        raise _infeasible(J[k], taus[k] + tau_w[k], rig, Rs[k], taus[k], index=k)
     return batch
 
 
@@ -269,7 +271,7 @@ def _rotation(R: np.ndarray) -> np.ndarray:
     return as_rotation(R)
 
 
-def _vector3(v: np.ndarray, name: str) -> np.ndarray:
+def _vector3(v: npt.ArrayLike, name: str) -> np.ndarray:
     arr = np.asarray(v, dtype=np.float64) if not isinstance(v, str) else None
     if arr is not None and arr.shape == (3,) and np.isfinite(arr).all():
         return arr
@@ -283,6 +285,7 @@ def _check_solver(solver: str) -> None:
 
 
 def _solve_qp(problem: qpsolvers.Problem, solver: str) -> np.ndarray | None:
+    opts: dict[str, Any]
     opts = {"eps_abs": 1e-9, "eps_rel": 1e-9, "verbose": False} if solver == "osqp" else {}  # we polish ourselves
     try:
         with warnings.catch_warnings():  # infeasibility is reported by InfeasibleLoad instead

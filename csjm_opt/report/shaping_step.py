@@ -8,9 +8,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import so3
-from ..control.closed_loop import plot_closed_loop, simulate
+from ..control.closed_loop import plot_closed_loop, plot_closed_loop_stiffness, simulate
+from .._plotting import save
 from ..control.controllers import StiffnessShapingController
 from .._fileio import atomic_write_json
 from ..control.load_profiles import Constant, Sinusoid, Step
@@ -26,7 +28,7 @@ PAPER_R0 = np.array([[0.992, -0.060, -0.111], [0.090, 0.952, 0.292], [0.088, -0.
 DEMO_TAU_EXT = np.array([0.2, -0.5, 0.1])
 
 
-def soft_stiff_targets(rig: Rig, R: np.ndarray, tau_ext: np.ndarray, direction: np.ndarray = (1.0, 0.0, 0.0),
+def soft_stiff_targets(rig: Rig, R: np.ndarray, tau_ext: np.ndarray, direction: npt.ArrayLike = (1.0, 0.0, 0.0),
                        margin: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
     """Two reachable targets (N m/rad) at ``R`` under ``tau_ext``: softest and stiffest along ``direction``.
 
@@ -64,16 +66,19 @@ def run_demo(rig: Rig, out_dir: Path, R: np.ndarray | None = None, tau_ext: np.n
     unreach = shape_stiffness(rig, R, tau, iso, model=model)
 
     # 2. reachable set figure, with the two shaped results marked
-    fig_reach = plot_reachable_set(rs, out_dir / "reachable_set.png", rig.t_min_N, rig.t_max_N,
-                                   {"shaped (reachable target)": reach.K, "shaped (isotropic target)": unreach.K})
+    ax_eig, _ = plot_reachable_set(rs, rig.t_min_N, rig.t_max_N, {"shaped (reachable target)": reach.K,
+                                                                   "shaped (isotropic target)": unreach.K})
+    fig_reach = save(ax_eig.figure, out_dir / "reachable_set.png")
 
     # 3. closed loop: hold R, step + sinusoidal disturbance about x, soft/stiff (about x) switching at half time
     half = duration_s / 2
     target = lambda t: K_soft if t < half else K_stiff                         # noqa: E731
-    load = Constant(tau) + Step(0.2 * duration_s, [0.15, 0.0, 0.0]) + Sinusoid([0.05, 0.0, 0.0], 10.0)
+    load = (Constant(tau) + Step(0.2 * duration_s, np.array([0.15, 0.0, 0.0]))
+            + Sinusoid(np.array([0.05, 0.0, 0.0]), 10.0))
     ctrl = StiffnessShapingController(rig, R, target)
     log = simulate(rig, ctrl, load, duration_s, dt_s)
-    figs = plot_closed_loop(log, out_dir, prefix="closed_loop", t_min_N=rig.t_min_N, t_max_N=rig.t_max_N)
+    figs = [save(plot_closed_loop(log, rig.t_min_N, rig.t_max_N)[0].figure, out_dir / "closed_loop.png"),
+            save(plot_closed_loop_stiffness(log)[0].figure, out_dir / "closed_loop_K.png")]
     summ = log.summary()
 
     summary = {
