@@ -1,6 +1,6 @@
 """SO(3) helpers: hat, vee, exp, log, on numpy arrays and CasADi symbols.
 
-Conventions (SPEC.md): ``R`` is the orientation of {A} in {B}; body-frame
+Conventions (docs/conventions.md): ``R`` is the orientation of {A} in {B}; body-frame
 canonical coordinates ``zeta`` with ``R = R_ref @ exp(hat(zeta))``, paper (1)-(3).
 Numpy versions broadcast over leading axes: ``exp`` takes (..., 3) and returns
 (..., 3, 3). Small-angle branches keep everything finite at zero, and ``log``

@@ -56,7 +56,7 @@ def test_noise_free_recovery_1e_6(small_cycle, model):
 
 
 def test_load_and_cable_views_agree(small_cycle, model):
-    """ERRATA 2: identified K_D = dtau_load/dzeta = -d(J^T T)/dzeta at fixed rest lengths."""
+    """Erratum 2: identified K_D = dtau_load/dzeta = -d(J^T T)/dzeta at fixed rest lengths."""
     R, tau, l, ref = small_cycle
     e = identify_stiffness(R, tau, model, order=2)
     h, D = 1e-6, np.zeros((3, 3))

@@ -41,7 +41,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run_plan)
     p = sub.add_parser("stiffness", help="stiffness K at a pose (tensions as planned)",
                        description="Plan tensions for the pose and load, then the stiffness K "
-                       "(N m/rad; Levi-Civita Hessian of the cable energy, SPEC.md convention).")
+                       "(N m/rad; Levi-Civita Hessian of the cable energy, convention of docs/conventions.md).")
     add_pose_arguments(p)
     p.set_defaults(func=run_stiffness)
 

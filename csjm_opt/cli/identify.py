@@ -14,7 +14,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("preprocess", help="raw tracker/F/T CSV -> measurement log",
                        description="Turn a raw instrument CSV (tracker base points, platform poses "
                        "in the tracker frame, F/T readings in the sensor frame; format in "
-                       "csjm_opt/preprocess.py and the README) into the measurement log of SPEC.md: "
+                       "csjm_opt/preprocess.py and the README) into the measurement log of docs/conventions.md: "
                        "least-squares base frame fit, pose in {B} (53)-(54), wrench moved to {A} "
                        "about O (55), weight handled explicitly (56).")
     p.add_argument("raw", metavar="RAW.csv", help="raw instrument CSV")
@@ -33,7 +33,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "K_L = -1/2 hat(tau_load) (errata 1-2), an affine least-squares estimate with "
                        "confidence intervals, a symmetric-constrained estimate K_sym, and the "
                        "condition number of the excitation.")
-    p.add_argument("data", metavar="DATA.csv", help="measurement log (SPEC.md format)")
+    p.add_argument("data", metavar="DATA.csv", help="measurement log (format in docs/conventions.md)")
     p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
     p.add_argument("--cycle", type=int, default=None, help="only this cycle id")
     p.add_argument("--order", type=int, choices=(1, 2, 3), default=1,

@@ -57,7 +57,7 @@ class SweepResult:
         return self.computed / self.seconds if self.computed and self.seconds > 0 else 0.0
 
     def as_json(self) -> dict[str, Any]:
-        """The ``csjm sweep --json`` document (SPEC.md keys plus more)."""
+        """The ``csjm sweep --json`` document (docs/conventions.md keys plus more)."""
         designs = []
         for r in self.records:
             designs.append({"params": r["params"], "status": r["status"],

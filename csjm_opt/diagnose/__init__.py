@@ -8,7 +8,7 @@ from __future__ import annotations
 from .effects import EFFECTS, Effect, make_effect
 from .selection import ALPHA, Diagnosis, diagnose
 
-#: The SPEC.md vocabulary of ``effect`` / ``selected``.
+#: The docs/conventions.md vocabulary of ``effect`` / ``selected``.
 VOCABULARY = ("none",) + tuple(EFFECTS)
 
 __all__ = ["ALPHA", "EFFECTS", "VOCABULARY", "Diagnosis", "Effect", "diagnose", "make_effect"]

@@ -139,7 +139,7 @@ class Diagnosis:
                 "fraction_explained_by_nominal_refit": self.fraction(self.baseline)}
 
     def as_json(self) -> dict:
-        """SPEC.md keys (and more); strict JSON: non-finite numbers become ``null``."""
+        """docs/conventions.md keys (and more); strict JSON: non-finite numbers become ``null``."""
         return _strict(self._as_dict())
 
     def _as_dict(self) -> dict:

@@ -5,7 +5,7 @@ For one load cycle (rows in time order, the first row is the reference)::
     dzeta_i = log(R_ref^T R_i)                        body frame, (46)
     tau_load_i = tau_ext_i + tau_weight(R_i)          total load (55)-(56), in {A}
     K_D ~ dtau_load / dzeta                           (48a), estimated by (49)
-    K = K_D + K_L,  K_L = -1/2 hat(tau_load_ref)      (47), corrected (ERRATA 1-2)
+    K = K_D + K_L,  K_L = -1/2 hat(tau_load_ref)      (47), corrected (errata 1-2)
 
 Three estimates are returned together in :class:`StiffnessEstimate`:
 

@@ -10,7 +10,7 @@ predictor for a measured increment of the moment's components. ``K = K_D -
 1/2 hat(tau_load)`` is the covariant (energy-Hessian) stiffness; it differs
 from ``K_D`` by the connection term and using it in (61), as the paper's text
 says, is off by ``1/2 hat(tau_load)``. The paper's Table 4 column C was in
-fact computed with ``K_D`` (ERRATA 4). Both are offered (``use="K_D"``, the
+fact computed with ``K_D`` (erratum 4). Both are offered (``use="K_D"``, the
 default, or ``use="K"``).
 
 The load increment is either given as a total-load increment (the paper's

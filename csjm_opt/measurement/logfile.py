@@ -1,4 +1,4 @@
-"""Measurement logs: the CSV format of SPEC.md, read strictly and written atomically.
+"""Measurement logs: the CSV format of docs/conventions.md, read strictly and written atomically.
 
 One row per static equilibrium, in time order. Header (exactly these columns
 first, extra columns allowed after them)::

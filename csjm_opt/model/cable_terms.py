@@ -14,7 +14,7 @@ a cable length in body coordinates ``R exp(hat(zeta))`` is::
                 - 1/2 (u_i a_i^T + a_i u_i^T) + (u_i . a_i) I
 
 so the cable energy ``Phi = sum 1/2 k_i (c_i - l_i)^2`` has Hessian
-``K = sum_i k_i j_i j_i^T + sum_i t_i Hess(c_i)``: the SPEC.md stiffness,
+``K = sum_i k_i j_i j_i^T + sum_i t_i Hess(c_i)``: the docs/conventions.md stiffness,
 affine in the tensions ``t_i`` for fixed ``k`` (slack cables: ``k_i -> 0``).
 A force ``f`` fixed in {B} at platform point ``r`` (in {A}) has moment
 ``r x R^T f`` and energy Hessian ``(f_A . r) I - 1/2 (f_A r^T + r f_A^T)``.
@@ -70,7 +70,7 @@ class CableTerms:
         return J, (J.T * self.k) @ J, self.length_hessians(c, U, J)
 
     def stiffness(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
-        """K (SPEC.md load convention) for tensions T at R (all cables taut, stiffness k)."""
+        """K (load convention of docs/conventions.md) for tensions T at R (all cables taut, stiffness k)."""
         J, K0, G = self.stiffness_basis(R)
         return K0 + np.einsum("i,ijk->jk", T, G)
 

@@ -2,7 +2,7 @@
 
 The diagnosis and the testbed evaluate the moment balance of many rows at once, for many
 parameter vectors, so it does not go through CasADi row by row. Conventions
-are those of SPEC.md and :mod:`csjm_opt.model.casadi_model`: cable ``i`` runs from
+are those of docs/conventions.md and :mod:`csjm_opt.model.casadi_model`: cable ``i`` runs from
 the platform hole ``a_i`` (in {A}) to the base hole ``b_i`` (in {B}); in {A}
 its unit vector is ``u_i = (R^T b_i - a_i) / c_i``; ``J`` has rows
 ``a_i x u_i`` (38), and ``J^T T`` is the cables' moment on the platform.

@@ -81,7 +81,7 @@ class Model:
         return tau.ravel() if R.ndim == 2 else tau.T
 
     def stiffness(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
-        """K (SPEC.md load convention, N m/rad) for given tensions: (3, 3) or (n, 3, 3)."""
+        """K (load convention of docs/conventions.md, N m/rad) for given tensions: (3, 3) or (n, 3, 3)."""
         (K,) = self._call("stiffness", R, T, consts=(self._k, self._A, self._B))
         return K if R.ndim == 2 else _unstack_h(K, R.shape[0])
 

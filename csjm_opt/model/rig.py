@@ -1,7 +1,7 @@
 """The rig: hole geometry, cable stiffness, tension bounds and platform mass.
 
 A :class:`Rig` is immutable; arrays are read-only copies. It reads and writes
-the TOML format of SPEC.md::
+the TOML format of docs/conventions.md::
 
     [geometry]
     platform_holes = [[x, y, z], ...]   # six rows, A_i in {A}, m
@@ -58,7 +58,7 @@ def _frozen(value: Any) -> np.ndarray:
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Rig:
-    """A cable-driven spherical joint module (units SI, frames per SPEC.md)."""
+    """A cable-driven spherical joint module (units SI, frames per docs/conventions.md)."""
 
     platform_holes_A_m: np.ndarray      # (6, 3) A_i in {A}
     base_holes_B_m: np.ndarray          # (6, 3) B_i in {B}
@@ -96,7 +96,7 @@ class Rig:
 
     # ------------------------------------------------------------ conversion
     def as_dict(self) -> dict[str, dict[str, Any]]:
-        """Nested dict in the TOML layout of SPEC.md (plain Python numbers)."""
+        """Nested dict in the TOML layout of docs/conventions.md (plain Python numbers)."""
         tolist = lambda a: np.asarray(a, dtype=float).tolist()  # noqa: E731
         return {
             "geometry": {"platform_holes": tolist(self.platform_holes_A_m),
@@ -118,7 +118,7 @@ class Rig:
 
     @classmethod
     def from_toml(cls, path: str | Path) -> "Rig":
-        """Read a rig file (SPEC.md format)."""
+        """Read a rig file (format in docs/conventions.md)."""
         path = Path(path)
         text = read_text(path, lambda msg: RigFileError(msg, str(path)), "rig file")
         try:
@@ -162,7 +162,7 @@ def _format_toml(data: dict[str, dict[str, Any]]) -> str:
     units = {"platform_holes": "m, A_i in {A}", "base_holes": "m, B_i in {B}",
              "stiffness": "N/m, cable with drive", "t_min": "N", "t_max": "N", "mass": "kg",
              "com": "m, in {A}", "gravity": "m/s^2, in {B}"}
-    lines = ["# csjm_opt rig file (SI units; frames per SPEC.md)"]
+    lines = ["# csjm_opt rig file (SI units; frames per docs/conventions.md)"]
     for section, table in data.items():
         lines.append(f"\n[{section}]")
         for key, value in table.items():

@@ -13,7 +13,7 @@ moment fixed in {A} and ``tau_points`` comes from dead-weight forces fixed in
 
 (``H`` are Levi-Civita energy Hessians; the weight is one of the point
 forces; ``H_cable - 1/2 hat(tau_cable)`` is :attr:`Equilibrium.K`, the cable
-stiffness of SPEC.md), damped by a cap on the step length and a backtracking
+stiffness of docs/conventions.md), damped by a cap on the step length and a backtracking
 line search on the residual. If Newton from ``R_init`` stalls, the external
 load is applied in increments (load continuation), each step warm-started
 from the last. Every result carries its residual: a result is returned only
@@ -61,13 +61,13 @@ class Equilibrium:
     tau_ext_A_Nm: np.ndarray        # (3,) external moment fixed in {A}
     tau_cable_A_Nm: np.ndarray      # (3,) J^T T
     tau_points_A_Nm: np.ndarray     # (3,) weight plus dead-weight forces
-    K: np.ndarray                   # (3, 3) cable stiffness (SPEC.md convention) at R
+    K: np.ndarray                   # (3, 3) cable stiffness (convention of docs/conventions.md) at R
     K_tangent: np.ndarray           # (3, 3) tangent stiffness of the whole loaded system
     iterations: int
 
     @property
     def tensions(self) -> np.ndarray:
-        """Alias of ``tensions_N`` (SPEC.md name)."""
+        """Alias of ``tensions_N`` (docs/conventions.md name)."""
         return self.tensions_N
 
     @property

@@ -1,4 +1,4 @@
-"""Validated top-level functions of SPEC.md that are not planners."""
+"""Validated top-level functions of docs/conventions.md that are not planners."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from .._validate import as_array, as_rotation, as_rotations
 def stiffness(rig: Rig, R: np.ndarray, tensions_N: np.ndarray, model: Model | None = None) -> np.ndarray:
     """K (3, 3) in N m/rad at ``R`` for cable tensions ``tensions_N`` (6,).
 
-    SPEC.md load convention: ``K = dtau_load/dzeta - 1/2 hat(tau_load)``, the
+    load convention of docs/conventions.md: ``K = dtau_load/dzeta - 1/2 hat(tau_load)``, the
     Levi-Civita Hessian of the cable energy; symmetric, positive definite at a
     stable pose. Equals minus the paper's (45) with corrected (31).
     """

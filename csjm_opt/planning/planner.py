@@ -56,7 +56,7 @@ class TensionPlan:
 
     @property
     def tensions(self) -> np.ndarray:
-        """Alias of ``tensions_N`` (SPEC.md name)."""
+        """Alias of ``tensions_N`` (docs/conventions.md name)."""
         return self.tensions_N
 
     @property

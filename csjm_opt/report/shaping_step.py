@@ -22,7 +22,7 @@ from ..model.rig import Rig
 from ..shaping.shaper import shape_stiffness, stiffness_basis
 from .._validate import as_rotation
 
-#: Table 3's original pose R0 with ERRATA item 3 applied (element (3,2) = -0.300).
+#: Table 3's original pose R0 with erratum 3 applied (element (3,2) = -0.300).
 PAPER_R0 = np.array([[0.992, -0.060, -0.111], [0.090, 0.952, 0.292], [0.088, -0.300, 0.950]])
 #: A moderate external moment for the demo (N m, in {A}).
 DEMO_TAU_EXT = np.array([0.2, -0.5, 0.1])

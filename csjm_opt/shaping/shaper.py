@@ -1,6 +1,6 @@
 """Stiffness shaping: tensions that hold a load and make K as close as possible to a target.
 
-For fixed cable stiffness ``k`` the stiffness of SPEC.md is affine in the
+For fixed cable stiffness ``k`` the stiffness of docs/conventions.md is affine in the
 tensions (:mod:`csjm_opt.model.cable_terms`)::
 
     K(T) = K0 + sum_i t_i G_i,     K0 = J^T diag(k) J,   G_i = Hess(c_i)
@@ -87,7 +87,7 @@ class ShapingResult:
 
     @property
     def tensions(self) -> np.ndarray:
-        """Alias of ``tensions_N`` (SPEC.md name)."""
+        """Alias of ``tensions_N`` (docs/conventions.md name)."""
         return self.tensions_N
 
     @property

@@ -10,7 +10,7 @@ from .link_compliance import LinkCompliance
 from .mass_com import MassCom
 from .sensor_bias import SensorBias
 
-#: SPEC.md vocabulary (besides ``none``) -> effect class, in report order.
+#: docs/conventions.md vocabulary (besides ``none``) -> effect class, in report order.
 EFFECTS: dict[str, type[Effect]] = {
     "hole_offsets": HoleOffsets,
     "friction": Friction,
