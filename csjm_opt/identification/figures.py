@@ -39,7 +39,13 @@ class ConvergenceCurve:
 
 def convergence_curve(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model, n_min: int = 5,
                       **options) -> ConvergenceCurve:
-    """Identify K from rows ``[0, n)`` for ``n = n_min .. len(R)``."""
+    """Identify K from rows ``[0, n)`` for ``n = n_min .. len(R)``.
+
+    Short prefixes are imprecise by nature: unless ``allow_ill_conditioned``
+    is given, they are identified with ``allow_ill_conditioned=True`` (only
+    rank-deficient prefixes are left out, as NaN).
+    """
+    options.setdefault("allow_ill_conditioned", True)
     ns, dp, da, ds, sd = [], [], [], [], []
     for n in range(max(2, n_min), len(R) + 1):
         ns.append(n)
