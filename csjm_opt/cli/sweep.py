@@ -58,6 +58,9 @@ def run(args: argparse.Namespace) -> int:
           f"{result.designs_per_second:.1f} designs/s"
           + ("" if result.complete else f"; {len(spec.designs()) - len(result.records)} designs left, "
              "run again to continue"), file=sys.stderr if args.json == "-" else sys.stdout)
+    if result.duplicates:
+        print(f"note: {result.duplicates} repeated lines in {args.out} ignored (first record of each design kept)",
+              file=sys.stderr)
     if best is not None and args.json != "-":
         print(f"largest workspace: {best['workspace_fraction']:.3f} at {best['params']}")
     if args.json:
