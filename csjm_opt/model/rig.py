@@ -28,6 +28,7 @@ import numpy as np
 from . import hexagon
 from ..errors import RigFileError
 from .._fileio import atomic_write_text, read_text
+from .._limits import LIMITS, MIN_HOLE_RADIUS_M, MIN_HOLE_SPACING_M
 
 #: Shared cable-plus-drive stiffness of the built-in paper rig (N/m). The paper
 #: gives none. K is affine in k for fixed tensions, so k was chosen by least
@@ -42,6 +43,11 @@ PAPER_T_MAX_N = 150.0
 PAPER_MASS_KG = 0.4913          # G = 4.82 N (Section IV-A) at g = 9.81
 PAPER_COM_A_M = (0.0, 0.0, 0.081)
 STANDARD_GRAVITY_B = (0.0, 0.0, -9.81)
+
+#: Bound (csjm_opt._limits.LIMITS key) of each rig entry.
+_QUANTITY = {"platform_holes": "position_m", "base_holes": "position_m", "stiffness": "cable_stiffness_N_per_m",
+             "t_min": "tension_N", "t_max": "tension_N", "mass": "mass_kg", "com": "position_m",
+             "gravity": "gravity_m_per_s2"}
 
 _SCHEMA: dict[str, dict[str, tuple[int, ...]]] = {
     "geometry": {"platform_holes": (6, 3), "base_holes": (6, 3)},
@@ -198,6 +204,9 @@ def _check(data: Any, path: str | None) -> None:
             value = table[key]
             if isinstance(value, bool) or _has_non_number(value):
                 raise RigFileError(f"expected numbers, got {value!r:.60}", path, dotted)
+            if _has_huge_int(value):
+                raise RigFileError(f"integer too large (expected {LIMITS[_QUANTITY[key]].describe()})",
+                                   path, dotted)
             arr = np.asarray(value, dtype=float) if _rectangular(value) else None
             if arr is None or arr.shape != shape:
                 got = "ragged rows" if arr is None else f"shape {arr.shape}"
@@ -216,6 +225,14 @@ def _check(data: Any, path: str | None) -> None:
                            path, "cables.t_max")
     if float(p["mass"]) < 0:
         raise RigFileError(f"mass must be >= 0, got {p['mass']}", path, "platform.mass")
+    for section, keys in _SCHEMA.items():
+        for key in keys:
+            arr, lim = np.asarray(data[section][key], dtype=float), LIMITS[_QUANTITY[key]]
+            ok = lim.contains(arr)
+            if not ok.all():
+                bad = float(arr.ravel()[int(np.argmin(ok.ravel()))])
+                raise RigFileError(f"{bad:.6g} outside {lim.describe()} ({lim.why.split(';')[0]})",
+                                   path, f"{section}.{key}")
     A, B = np.asarray(g["platform_holes"], float), np.asarray(g["base_holes"], float)
     gaps = np.linalg.norm(B - A, axis=1)  # cable length at R = I
     if np.any(gaps < 1e-6):
@@ -223,14 +240,29 @@ def _check(data: Any, path: str | None) -> None:
         raise RigFileError(f"platform hole {i + 1} coincides with base hole {i + 1} at R = I",
                            path, "geometry.base_holes")
     for name, P in (("platform_holes", A), ("base_holes", B)):
-        if np.any(np.linalg.norm(P, axis=1) < 1e-6):
-            raise RigFileError("a hole lies at the joint centre O", path, f"geometry.{name}")
+        r = np.linalg.norm(P, axis=1)
+        if np.any(r < MIN_HOLE_RADIUS_M):
+            i = int(np.argmin(r))
+            raise RigFileError(f"hole {i + 1} is {r[i] * 1e3:.3g} mm from the joint centre O (at least "
+                               f"{MIN_HOLE_RADIUS_M * 1e3:g} mm: a cable through O has no moment arm)",
+                               path, f"geometry.{name}")
+        d = np.linalg.norm(P[:, None, :] - P[None, :, :], axis=-1) + np.eye(6) * 1e9
+        if d.min() < MIN_HOLE_SPACING_M:
+            i, j = np.unravel_index(int(np.argmin(d)), d.shape)
+            raise RigFileError(f"holes {i + 1} and {j + 1} are {d[i, j] * 1e3:.3g} mm apart (at least "
+                               f"{MIN_HOLE_SPACING_M * 1e3:g} mm: duplicated row?)", path, f"geometry.{name}")
 
 
 def _has_non_number(value: Any) -> bool:
     if isinstance(value, list):
         return any(_has_non_number(v) for v in value)
     return isinstance(value, bool) or not isinstance(value, (int, float))
+
+
+def _has_huge_int(value: Any) -> bool:
+    if isinstance(value, list):
+        return any(_has_huge_int(v) for v in value)
+    return isinstance(value, int) and not isinstance(value, bool) and abs(value) > 2 ** 53
 
 
 def _rectangular(value: Any) -> bool:
