@@ -207,7 +207,7 @@ class AugmentedModel:
                                       state_prev=np.zeros((len(idx), 6)) if prev is None else state[prev],
                                       lengths_prev_m=np.full((len(idx), 6), np.nan) if prev is None else lengths[prev])
             R0 = R_init[idx] if prev is None else R_out[prev]
-            sol = kin.solve_poses(lambda R, sub=sub: self.balance(R, sub, theta), R0)
+            sol = kin.solve_poses(lambda R, sub=sub: self.balance(R, sub, theta), R0)  # type: ignore[misc]
             _, ev = self.evaluate(sol.R, sub, theta)
             R_out[idx], res[idx] = sol.R, sol.residual_Nm
             state[idx] = ev.state_out if ev.state_out is not None else 0.0

@@ -103,6 +103,7 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
                               x_scale=1.0, xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
         if sol is None or trial.cost < sol.cost:
             sol = trial
+    assert sol is not None
     x = sol.x
     Jfull = sol.jac
     Jd = Jfull[:3 * len(table)]

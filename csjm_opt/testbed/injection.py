@@ -29,7 +29,7 @@ drum_slip         cables slip on their drums above 55 % of the tension range,
 from __future__ import annotations
 
 import dataclasses
-from typing import Iterable
+from typing import Any, Iterable
 
 import numpy as np
 
@@ -51,7 +51,7 @@ def inject(plant: Plant, effect: str, severity: float, rng: np.random.Generator)
     if effect == "hole_offsets":
         rig = rig.replace(platform_holes_A_m=rig.platform_holes_A_m + rng.normal(0, 1e-3 * s, (6, 3)),
                           base_holes_B_m=rig.base_holes_B_m + rng.normal(0, 1e-3 * s, (6, 3)))
-        changes = {"rig": rig}
+        changes: dict[str, Any] = {"rig": rig}
     elif effect == "friction":
         changes = {"friction_mu_beta": 0.03 * s * rng.uniform(0.7, 1.3, 6)}
     elif effect == "cable_hardening":

@@ -1,4 +1,4 @@
-"""Simulate a measurement log (SPEC.md format) on a plant, with instrument noise."""
+"""Simulate a measurement log (format in docs/conventions.md) on a plant, with instrument noise."""
 
 from __future__ import annotations
 

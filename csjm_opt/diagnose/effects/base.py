@@ -11,7 +11,8 @@ through one or more hooks, each given the effect's own parameter slice ``p``:
 
 Every hook defaults to "no change", and every effect reduces to the nominal
 model when its strength parameters are zero (``x0`` starts there), so
-augmented models nest the nominal one (a nested F-test applies). ``scales`` are typical magnitudes (for the optimiser and for
+augmented models nest the nominal one (a nested F-test applies). ``scales`` are typical
+magnitudes (for the optimiser and for
 the weak ridge prior that keeps rank-deficient fits well posed).
 
 Plausibility: every effect declares prior ranges ``(lo, hi)`` for its
