@@ -36,7 +36,7 @@ import json
 import sys
 import time
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Callable, Iterator
 
 import numpy as np
 
@@ -179,8 +179,9 @@ def summarise(records: list[dict]) -> str:
               f"| pairs at 3x each, not separable: reported so (warning or one named) | all | "
               f"{_rate([r for r in pairs if not r['pair_separable']], lambda r: r['pair_separable'] is False)} |"]
     out = [r for r in records if r["kind"] == "outside"]
+    honest = lambda r: r["selected"] == "unexplained" or any("implausible" in w for w in r["warnings"])  # noqa: E731
     lines.append(f"| outside the vocabulary: `unexplained` or implausibility warning | >= 80 % | "
-                 f"{_rate(out, lambda r: r['selected'] == 'unexplained' or any('implausible' in w for w in r['warnings']))} |")
+                 f"{_rate(out, honest)} |")
     lines.append(f"| outside the vocabulary: a confident wrong name with the gap closed | never | "
                  f"{_rate(out, lambda r: r['selected'] not in ('none', 'unexplained') and not r['warnings'])} |")
     nm = [r for r in records if r["selected"] not in ("none", "unexplained")]
@@ -204,8 +205,7 @@ def summarise(records: list[dict]) -> str:
             cells.append(f"{len(ok)}/{len(rs)} ({fr:.2f})" if rs else "-")
         lines.append(f"| {eff} | " + " | ".join(cells) + " |")
     if pairs:
-        lines += ["", "Pairs at 3x each: | pair | separable | selected + secondary |", "", "| pair | separable | verdict |",
-                  "|---|---|---|"]
+        lines += ["", "Pairs at 3x each:", "", "| pair | separable | verdict |", "|---|---|---|"]
         for r in sorted(pairs, key=lambda r: r["id"]):
             lines.append(f"| {'+'.join(r['effects'])} | {r['pair_separable']} | {r['selected']} + {r['secondary']} |")
     secs = [r["seconds_diagnose"] for r in records]
