@@ -55,21 +55,20 @@ def jobs(n_rigs: int, none_per_rig: int, cycles: int, pair_rigs: int) -> list[di
                     "effects": list(effects), "multiple": mult, "rig": rig, "rep": rep, "cycles": cycles})
 
     for rig in range(n_rigs):
-        for rep in range(none_per_rig // 2):
+        for rep in range(none_per_rig):
             add("none", [], 0.0, rig, rep)
+    for rig in range(n_rigs):
         for e in EFFECT_NAMES:
             add("single", [e], 3.0, rig)
-    for rig in range(n_rigs):
         for e in OUTSIDE_NAMES:
             add("outside", [e], 3.0, rig)
-        for e in EFFECT_NAMES:
-            add("single", [e], 10.0, rig)
     for i, pair in enumerate(itertools.combinations(EFFECT_NAMES, 2)):
         for r in range(pair_rigs):
             add("pair", list(pair), 3.0, (i + r * 7) % n_rigs)
     for rig in range(n_rigs):
-        for rep in range(none_per_rig // 2, none_per_rig):
-            add("none", [], 0.0, rig, rep)
+        for e in EFFECT_NAMES:
+            add("single", [e], 10.0, rig)
+    for rig in range(n_rigs):
         for e in EFFECT_NAMES:
             add("single", [e], 1.5, rig)
             add("single", [e], 6.0, rig)
