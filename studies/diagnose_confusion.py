@@ -167,6 +167,9 @@ def summarise(records: list[dict]) -> str:
              f"{_rate(none, lambda r: r['selected'] not in ('none', 'unexplained'))} |",
              f"| effect-free logs: remaining-signature test significant | about alpha = 1 % | "
              f"{_rate(none, lambda r: (r['remaining_p'] or 1) < 0.01)} |"]
+    right = [r for r in records if r["kind"] == "single" and r["selected"] == r["effects"][0]]
+    lines.append(f"| correctly named single effects: remaining-signature test significant | about alpha = 1 % | "
+                 f"{_rate(right, lambda r: (r['remaining_p'] or 1) < 0.01)} |")
     for lo in (3.0, 1.5):
         s = [r for r in records if r["kind"] == "single" and r["multiple"] >= lo]
         lines.append(f"| single effects >= {lo:g}x floor named right | >= 95 % (at >= 3x) | "

@@ -220,6 +220,9 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
             if n != selected and paired_heldout_test(singles[n], singles[selected]) >= HELDOUT_ALPHA \
                     and (sep is None or not sep["separable"]):
                 confounded.append(n)
+    if confounded:
+        verdict["warnings"].append(f"{selected} is not separable on this log from {', '.join(confounded)} "
+                                   "(detected too, not significantly worse on held-out cycles)")
     steps = [{"model": "nominal_refit", "heldout_rms_rad": baseline.heldout_rms_rad}]
     if first is not None:
         steps.append({"model": first, "heldout_rms_rad": singles[first].heldout_rms_rad})
