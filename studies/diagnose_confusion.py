@@ -116,7 +116,7 @@ def run_one(job: dict) -> dict:
             "pair_separable": next((p["separable"] for p in j["pairs"] if set(p["effects"]) == set(job["effects"])),
                                    None) if job["kind"] == "pair" else None,
             "gap": j["gap"], "noise_floor_rad": j["noise_floor_rad"], "true_floor_rad": floor,
-            "warnings": j["verdict"]["warnings"], "selected_plausible": sel_cand["plausible"] if sel_cand else None,
+            "warnings": j["verdict"]["warnings"], "alternatives": j["verdict"].get("alternatives", []), "selected_plausible": sel_cand["plausible"] if sel_cand else None,
             "remaining_p": j["remaining_signature"]["p_value"], "gap_signature_p": j["gap_signature"]["p_value"],
             "detected": [c["effect"] for c in j["candidates"] if c.get("significant")],
             "seconds_diagnose": time.perf_counter() - t1, "seconds": time.perf_counter() - t0}
@@ -174,6 +174,9 @@ def summarise(records: list[dict]) -> str:
         s = [r for r in records if r["kind"] == "single" and r["multiple"] >= lo]
         lines.append(f"| single effects >= {lo:g}x floor named right | >= 95 % (at >= 3x) | "
                      f"{_rate(s, lambda r: r['selected'] == r['effects'][0])} |")
+    s3 = [r for r in records if r["kind"] == "single" and r["multiple"] >= 3.0]
+    lines.append(f"| single effects >= 3x floor: named right, or named as a non-separable alternative | - | "
+                 f"{_rate(s3, lambda r: r['effects'][0] in [r['selected'], *r.get('alternatives', [])])} |")
     pairs = [r for r in records if r["kind"] == "pair"]
     sep = [r for r in pairs if r["pair_separable"]]
     lines += [f"| pairs at 3x each, separable on the log: both named | >= 80 % | "

@@ -220,9 +220,12 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
             if n != selected and paired_heldout_test(singles[n], singles[selected]) >= HELDOUT_ALPHA \
                     and (sep is None or not sep["separable"]):
                 confounded.append(n)
-    if confounded:
-        verdict["warnings"].append(f"{selected} is not separable on this log from {', '.join(confounded)} "
-                                   "(detected too, not significantly worse on held-out cycles)")
+    alternatives = [n for n in detected if n != selected and selected in singles
+                    and any(set(p["effects"]) == {n, selected} and not p["separable"] for p in pairs)]
+    verdict["alternatives"] = alternatives
+    if alternatives:
+        verdict["warnings"].append(f"{selected} is not separable on this log from {', '.join(alternatives)} "
+                                   "(detected too; Fisher block correlation above the separability limit)")
     steps = [{"model": "nominal_refit", "heldout_rms_rad": baseline.heldout_rms_rad}]
     if first is not None:
         steps.append({"model": first, "heldout_rms_rad": singles[first].heldout_rms_rad})
