@@ -23,7 +23,7 @@ Compiled on first use and cached on disk (``cache=True``).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ..model._kernels import det3 as _det3
 from ..model._kernels import geometry_into, rotation_error, weight_moment_into  # noqa: F401 (re-exported)
@@ -137,6 +137,18 @@ def plan_batch(A, B, k, mr, g, Rs, taus, t_ref, lo, hi, max_iter, T, J_out, tau_
                 lower[:] = False
                 upper[:] = False
         _rest_lengths(k, c_out[m], T[m], l_out[m])
+
+
+@njit(cache=True, parallel=True)
+def plan_batch_par(A, B, k, mr, g, Rs, taus, t_ref, lo, hi, max_iter, T, J_out, tau_w_out, c_out, l_out,
+                   status, n_chunks):
+    """:func:`plan_batch` on ``n_chunks`` consecutive chunks in parallel (warm starts within a chunk)."""
+    n = Rs.shape[0]
+    for ch in prange(n_chunks):
+        s = ch * n // n_chunks
+        e = (ch + 1) * n // n_chunks
+        plan_batch(A, B, k, mr, g, Rs[s:e], taus[s:e], t_ref[s:e], lo, hi, max_iter, T[s:e], J_out[s:e],
+                   tau_w_out[s:e], c_out[s:e], l_out[s:e], status[s:e])
 
 
 @njit(cache=True)

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import warnings
 
+import numba
 import numpy as np
 import qpsolvers
 from scipy import sparse
@@ -33,7 +34,7 @@ from scipy.optimize import lsq_linear
 from . import _dense_qp as dense_qp
 from . import _kernels as kernels
 from ..errors import InfeasibleLoad, InvalidInput, SolverError
-from ..model.numeric import Model, model_for
+from ..model.numeric import Model, model_for, parallel_ok
 from ..model.rig import Rig
 from .._validate import as_array, as_rotation, as_rotations, as_vector3
 from .plans import TensionPlan, TensionPlanBatch
@@ -157,8 +158,12 @@ def plan_tensions_batch(rig: Rig, Rs: np.ndarray, taus_A_Nm: np.ndarray | None =
     T, J, tau_w = np.zeros((n, 6)), np.empty((n, 6, 3)), np.empty((n, 3))
     c, l = np.empty((n, 6)), np.empty((n, 6))
     status = np.full(n, kernels.NOT_CONVERGED, np.int64)
-    kernels.plan_batch(m.A, m.B, m.k, m.first_moment_A_kgm, m.g, Rs, taus, t_ref, rig.t_min_N,
-                       rig.t_max_N, 40 if solver in SOLVERS else 0, T, J, tau_w, c, l, status)
+    args = (m.A, m.B, m.k, m.first_moment_A_kgm, m.g, Rs, taus, t_ref, rig.t_min_N, rig.t_max_N,
+            40 if solver in SOLVERS else 0, T, J, tau_w, c, l, status)
+    if parallel_ok(n):  # consecutive chunks, one per thread, each warm-started along its poses
+        kernels.plan_batch_par(*args, numba.get_num_threads())
+    else:
+        kernels.plan_batch(*args)
     todo = np.flatnonzero(status != kernels.OK)
     for i in todo:
         try:
