@@ -185,6 +185,20 @@ def checked_stiffness_into(A, B, k, mr, g, R, T, t_lo, t_hi, tau_ext, check_eq, 
     return OK
 
 
+@njit(cache=True)
+def all_exact_rotations(Rs):
+    """True when every (3, 3) of ``Rs`` is finite with ``||R^T R - I|| <= 1e-12`` and det > 0."""
+    for n in range(Rs.shape[0]):
+        for i in range(3):
+            for j in range(3):
+                if not np.isfinite(Rs[n, i, j]):
+                    return False
+        err, det = rotation_error(Rs[n])
+        if err > 1e-12 or det <= 0.0:
+            return False
+    return True
+
+
 # ------------------------------------------------------------------ many poses
 @njit(cache=True)
 def geometry_many(A, B, Rs, c, J):

@@ -18,11 +18,13 @@ from __future__ import annotations
 import functools
 import threading
 import weakref
-from typing import Callable
+from collections.abc import Callable
+from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from .._validate import as_rotations
 from . import _kernels as kernels
 from .casadi_model import build_functions
 from .rig import Rig
@@ -58,6 +60,18 @@ def parallel_ok(n: int) -> bool:
     return n >= PARALLEL_MIN_POSES and threading.current_thread() is threading.main_thread()
 
 
+def as_rotations_fast(Rs: Any, name: str = "Rs") -> np.ndarray:
+    """:func:`csjm_opt._validate.as_rotations` with a compiled check for the common case.
+
+    A float64 stack of exact rotations (to 1e-12) is returned as is (no copy);
+    anything else goes through the validator (which explains or re-orthonormalises).
+    """
+    if isinstance(Rs, np.ndarray) and Rs.dtype == np.float64 and Rs.ndim == 3 and Rs.shape[1:] == (3, 3) \
+            and Rs.flags.c_contiguous and kernels.all_exact_rotations(Rs):
+        return Rs
+    return as_rotations(Rs, name)
+
+
 def _many(name: str, n: int):
     return getattr(kernels, name + "_par" if parallel_ok(n) else name)
 
@@ -80,6 +94,8 @@ class Model:
         self.k = _f64(rig.cable_stiffness_N_per_m).copy()
         self.first_moment_A_kgm = rig.platform_mass_kg * _f64(rig.com_A_m)
         self.g = _f64(rig.gravity_B_m_per_s2).copy()
+        self.t_mid = np.full(6, 0.5 * (rig.t_min_N + rig.t_max_N))
+        self.t_mid.setflags(write=False)
 
     @property
     def functions(self) -> dict[str, ca.Function]:
@@ -207,7 +223,7 @@ class Model:
         return [o.T if o.shape[1] == n else _unstack_h(o, n) for o in outs]
 
 
-_MODELS: "weakref.WeakKeyDictionary[Rig, Model]" = weakref.WeakKeyDictionary()
+_MODELS: weakref.WeakKeyDictionary[Rig, Model] = weakref.WeakKeyDictionary()
 
 
 def model_for(rig: Rig, model: Model | None = None) -> Model:
@@ -231,7 +247,7 @@ def _mapped(name: str, n: int, compiled: bool = False) -> Callable:
     return f.map(n, "serial")
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _jit(name: str) -> ca.Function:
     f = build_functions()[name]
     mx = f.mx_in()
