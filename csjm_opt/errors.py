@@ -112,13 +112,18 @@ class IllConditionedData(CsjmError):
     """Measured excitation does not determine the estimate.
 
     ``condition`` is the condition number (``inf`` when rank deficient),
-    ``rank`` the numerical rank of the excitation.
+    ``rank`` the numerical rank of the excitation; ``direction`` (when known)
+    the unit vector along which the excitation is weakest (for stiffness
+    identification: of the load moments, in {A}), i.e. the direction a new
+    experiment should load.
     """
 
-    def __init__(self, message: str, condition: float, rank: int | None = None):
+    def __init__(self, message: str, condition: float, rank: int | None = None,
+                 direction: Any = None):
         super().__init__(message)
         self.condition = float(condition)
         self.rank = rank
+        self.direction = None if direction is None else np.asarray(direction, dtype=float)
 
 
 class DesignError(InvalidInput):

@@ -19,7 +19,7 @@ is::
                 - 1/2 (u_i a_i^T + a_i u_i^T) + (u_i . a_i) I
 
 so the cable energy ``Phi = sum 1/2 k_i (c_i - l_i)^2`` has Hessian (the
-corrected (45), SPEC.md load convention)::
+corrected (45), docs/conventions.md load convention)::
 
     K = sum_{i taut} k_i j_i j_i^T + sum_i t_i Hess(c_i).
 
@@ -167,7 +167,7 @@ class CableTerms:
         return J, (J.T * self.k) @ J, self.length_hessians(c, U, J)
 
     def stiffness(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
-        """K (SPEC.md load convention) for tensions T at R (``t_i <= 0``: slack)."""
+        """K (docs/conventions.md load convention) for tensions T at R (``t_i <= 0``: slack)."""
         return stiffness(R, T, self.A, self.B, self.k)
 
     def rest_terms(self, R: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -2,7 +2,7 @@
 
 The diagnosis and the testbed evaluate the moment balance of many rows at once, for many
 parameter vectors, so it does not go through CasADi row by row. Conventions
-are those of SPEC.md and :mod:`csjm_opt.model.casadi_model`: cable ``i`` runs from
+are those of docs/conventions.md and :mod:`csjm_opt.model.casadi_model`: cable ``i`` runs from
 the platform hole ``a_i`` (in {A}) to the base hole ``b_i`` (in {B}); in {A}
 its unit vector is ``u_i = (R^T b_i - a_i) / c_i``; ``J`` has rows
 ``a_i x u_i`` (38), and ``J^T T`` is the cables' moment on the platform.
@@ -74,7 +74,7 @@ def solve_poses(g: Residual, R_init: np.ndarray, tol_Nm: float = 1e-10, max_iter
     g0 = g(R)
     norm = np.linalg.norm(g0, axis=1)
     it = 0
-    for it in range(1, max_iter + 1):
+    for it in range(1, max_iter + 1):  # noqa: B007 (the count is reported after the loop)
         active = norm > tol_Nm
         if not np.any(active):
             break

@@ -143,7 +143,7 @@ class Model:
         return np.einsum("...ij,...i->...j", J, T)
 
     def stiffness(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
-        """K (SPEC.md load convention, N m/rad): (3, 3) or (n, 3, 3); ``T_i <= 0`` is slack."""
+        """K (docs/conventions.md load convention, N m/rad): (3, 3) or (n, 3, 3); ``T_i <= 0`` is slack."""
         if R.ndim == 2:
             K = np.empty((3, 3))
             kernels.stiffness_into(self.A, self.B, self.k, R, _f64(T), K)

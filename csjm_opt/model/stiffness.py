@@ -1,6 +1,6 @@
 """Validated stiffness functions of the public API: K at one pose or many.
 
-K is the SPEC.md load-convention stiffness ``K = dtau_load/dzeta - 1/2
+K is the load-convention (docs/conventions.md) stiffness ``K = dtau_load/dzeta - 1/2
 hat(tau_load)``, the Levi-Civita Hessian of the cable energy
 ``sum 1/2 k_i (c_i - l_i)^2`` (minus the paper's (45) with corrected
 structure constants (31)), computed in closed form by the compiled kernels

@@ -146,7 +146,7 @@ def _primal_active_set(P, q, A, b, lo, hi, max_iter, tol) -> DenseQPResult:
             lower[j] = upper[j] = False
             continue
         alpha, block, at_upper = 1.0, -1, False
-        for i in np.flatnonzero(~(lower | upper)):
+        for i in map(int, np.flatnonzero(~(lower | upper))):
             if p[i] < 0 and (lo[i] - x[i]) / p[i] < alpha:
                 alpha, block, at_upper = (lo[i] - x[i]) / p[i], i, False
             elif p[i] > 0 and (hi[i] - x[i]) / p[i] < alpha:
