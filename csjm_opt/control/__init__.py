@@ -1,6 +1,6 @@
 """Closed-loop simulation: controllers, load profiles and plants."""
 
-from . import controllers, load_profiles
+from . import controllers, load_profiles, plants
 from .closed_loop import ClosedLoopLog, plot_closed_loop, simulate
 
-__all__ = ["ClosedLoopLog", "controllers", "load_profiles", "plot_closed_loop", "simulate"]
+__all__ = ["ClosedLoopLog", "controllers", "load_profiles", "plants", "plot_closed_loop", "simulate"]
