@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ... import so3
+from .._loop_kernels import log_so3
 from ...model.dynamics import Dynamics
 from ...model.rig import Rig
 from ._reference import reference_rates
@@ -47,11 +47,11 @@ class SO3FeedbackController(InverseDynamicsController):
         """``tau_fb`` (N m, {A}) for this observation; advances the integrator."""
         t, R = observation.time_s, observation.R
         R_ref, w_ref, _ = reference_rates(self._R_ref, t)
-        e = so3.log(R.T @ R_ref)
+        e = log_so3(np.ascontiguousarray(R.T @ R_ref))
         if observation.omega_A_rad_s is not None:
             w = np.asarray(observation.omega_A_rad_s, float)
         elif self._last is not None and t > self._last[0]:
-            w = so3.log(self._last[1].T @ R) / (t - self._last[0])
+            w = log_so3(np.ascontiguousarray(self._last[1].T @ R)) / (t - self._last[0])
         else:
             w = w_ref
         if self._last is not None and t > self._last[0]:
