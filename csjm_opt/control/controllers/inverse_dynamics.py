@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...model.dynamics import Dynamics, rig_dynamics
+from ...model.dynamics import Dynamics
 from ...model.rig import Rig
-from ._reference import MemoReference, reference_rates
+from ._reference import MemoReference
+from ._rigid_body import RigidBody
 from ._tensions import TensionQP
 from .base import Observation, PoseHoldingController, PoseReference
 
@@ -49,10 +50,7 @@ class InverseDynamicsController(PoseHoldingController):
                  lookahead_s: float = 1e-3, use_measured_load: bool = True, feedforward: bool = True,
                  t_ref_N: np.ndarray | None = None, integral_gain: float = 0.0):
         super().__init__(rig, MemoReference(R_ref) if callable(R_ref) else R_ref, integral_gain)
-        dyn = dynamics or rig_dynamics(rig)
-        self.I_O = dyn.inertia_about_O_A_kgm2(rig.platform_mass_kg, rig.com_A_m)
-        self._c_joint = dyn.joint_damping_Nms_per_rad
-        self._b_cable = np.asarray(dyn.cable_damping_Ns_per_m, float)
+        self.body = RigidBody(rig, dynamics)
         self.lookahead_s = float(lookahead_s)
         self.use_measured_load, self.feedforward = use_measured_load, feedforward
         self._qp = TensionQP(rig, t_ref_N)
@@ -63,12 +61,7 @@ class InverseDynamicsController(PoseHoldingController):
 
     def inverse_dynamics_moment(self, t_s: float) -> np.ndarray:
         """``tau_id = I_O omega_dot_ref + omega_ref x I_O omega_ref + D omega_ref`` at ``t_s`` (N m, {A})."""
-        R, w, dw = reference_rates(self._R_ref, t_s)
-        tau = self.I_O @ dw + np.cross(w, self.I_O @ w) + self._c_joint * w
-        if np.any(self._b_cable):
-            J = self._terms.geometry(R)[2]
-            tau += J.T @ (self._b_cable * (J @ w))
-        return tau
+        return self.body.reference_moment(self._R_ref, t_s)
 
     def commanded_pose(self, observation: Observation) -> np.ndarray:
         shifted = Observation(observation.time_s + self.lookahead_s, observation.R, observation.tau_ext_A_Nm,
