@@ -2,7 +2,8 @@
 
 Steps: plan tensions and compute K over a set of poses; shape the stiffness
 and run a short closed loop; simulate an experiment; identify K and verify it
-on held-out loads; diagnose a model-rig gap. Everything lands in one report
+on held-out loads; diagnose a model-rig gap; controllers with dynamics in a
+closed loop on MuJoCo. Everything lands in one report
 folder (figures, data, ``summary.json``, ``README.md``).
 """
 
@@ -98,11 +99,18 @@ def step_diagnose(ctx: DemoContext) -> dict:
     return run_demo(ctx.rig, ctx.out_dir / "diagnosis", ctx.rng)
 
 
+def step_mujoco(ctx: DemoContext) -> dict:
+    from .mujoco_step import step
+
+    return step(ctx)
+
+
 STEPS: list[tuple[str, Callable[[DemoContext], dict]]] = [
     ("plan tensions and stiffness", step_core),
     ("stiffness shaping and closed loop", step_shaping),
     ("simulate experiment, identify, verify", step_experiment_identify_verify),
     ("diagnose model-rig gap", step_diagnose),
+    ("dynamic closed loop on MuJoCo", step_mujoco),
 ]
 
 

@@ -110,7 +110,7 @@ def plot_errors(logs: dict, step_time_s: float, ax=None):
     ax.axvline(step_time_s, color="k", lw=0.8, ls="--")
     ax.set_xlabel("time (s)")
     ax.set_ylabel("pose error (mrad)")
-    ax.legend(fontsize=7, ncol=2)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return ax
 
 
@@ -161,3 +161,8 @@ def run_demo(rig: Rig, out_dir: Path, quick: bool = False) -> dict:
     ax.set_title("tilt-and-torsion tracking, unknown moment step (dashed line)")
     save(ax.figure, out_dir / "dynamic_controllers.png")
     return {"runs": rows, "stiffness_switch": stiffness_switch(rig), "figure": "mujoco/dynamic_controllers.png"}
+
+
+def step(ctx) -> dict:
+    """``csjm demo`` step (a :class:`~csjm_opt.report.demo.DemoContext` in, a dict of numbers out)."""
+    return run_demo(ctx.rig, ctx.out_dir / "mujoco", ctx.quick)
