@@ -26,8 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from pathlib import Path
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
@@ -37,9 +36,12 @@ from .plants import Plant, QuasiStaticPlant
 from ..errors import CsjmError, InvalidInput
 from ..measurement.instruments import InstrumentNoise
 from .load_profiles import LoadProfile
-from .._plotting import save
 from ..model.rig import Rig
 from ..model.statics import PointForce
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -190,18 +192,30 @@ def _at_time(exc: CsjmError, t_s: float) -> CsjmError:
     return exc
 
 
-def plot_closed_loop(log: ClosedLoopLog, out_dir: str | Path, prefix: str = "closed_loop",
-                     t_min_N: float | None = None, t_max_N: float | None = None) -> list[Path]:
-    """Figures: pose error, load and tensions (``<prefix>.png``); achieved vs target K (``<prefix>_K.png``)."""
-    import matplotlib
+def plot_closed_loop(log: ClosedLoopLog, t_min_N: float | None = None, t_max_N: float | None = None, *,
+                     fig: Figure | None = None) -> tuple[Axes, Axes, Axes]:
+    """Pose error, external moment and tensions against time, one panel each.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Parameters
+    ----------
+    log : ClosedLoopLog
+        From :func:`simulate`.
+    t_min_N, t_max_N : float, optional
+        Tension bounds (N) drawn as dotted lines.
+    fig : matplotlib.figure.Figure, optional
+        Empty figure to draw the three panels in; a new one is made when omitted.
 
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    Returns
+    -------
+    tuple of matplotlib.axes.Axes
+        The pose-error, moment and tension axes (shared time axis).
+    """
+    if fig is None:
+        import matplotlib.pyplot as plt
+
+        fig = plt.figure(figsize=(8, 7.5), layout="constrained")
+    axes = fig.subplots(3, 1, sharex=True)
     t = log.t_s
-    fig, axes = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True)
     axes[0].semilogy(t, np.maximum(1e3 * log.pose_error_rad, 1e-10), color="C3")
     axes[0].set_ylabel("pose error (mrad, floor 1e-10)")
     axes[1].plot(t, log.tau_ext_A_Nm, label=[r"$\tau_x$", r"$\tau_y$", r"$\tau_z$"])
@@ -213,11 +227,30 @@ def plot_closed_loop(log: ClosedLoopLog, out_dir: str | Path, prefix: str = "clo
             axes[2].axhline(bound, color="k", ls=":", lw=0.8)
     axes[2].set_ylabel("tensions (N)")
     axes[2].set_xlabel("time (s)")
-    fig.tight_layout()
-    paths = [save(fig, out_dir / f"{prefix}.png")]
-    plt.close(fig)
+    return axes[0], axes[1], axes[2]
 
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
+
+def plot_closed_loop_stiffness(log: ClosedLoopLog, *, fig: Figure | None = None) -> tuple[Axes, Axes]:
+    """Achieved against target stiffness: eigenvalues of K (left) and ``||K - K_target||_F`` (right).
+
+    Parameters
+    ----------
+    log : ClosedLoopLog
+        From :func:`simulate`; ``K_target`` is NaN where the controller sets none.
+    fig : matplotlib.figure.Figure, optional
+        Empty figure to draw the two panels in; a new one is made when omitted.
+
+    Returns
+    -------
+    tuple of matplotlib.axes.Axes
+        The eigenvalue axes and the error axes.
+    """
+    if fig is None:
+        import matplotlib.pyplot as plt
+
+        fig = plt.figure(figsize=(10, 3.8), layout="constrained")
+    axes = fig.subplots(1, 2)
+    t = log.t_s
     lam = np.linalg.eigvalsh(log.K)
     has_target = np.all(np.isfinite(log.K_target.reshape(len(t), 9)), axis=1)
     lam_t = np.full_like(lam, np.nan)
@@ -233,7 +266,4 @@ def plot_closed_loop(log: ClosedLoopLog, out_dir: str | Path, prefix: str = "clo
     axes[1].plot(t, log.stiffness_error, color="C3")
     axes[1].set_ylabel(r"$||K - K_{target}||_F$ (N m/rad)")
     axes[1].set_xlabel("time (s)")
-    fig.tight_layout()
-    paths.append(save(fig, out_dir / f"{prefix}_K.png"))
-    return paths
-
+    return axes[0], axes[1]

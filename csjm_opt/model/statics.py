@@ -13,7 +13,7 @@ moment fixed in {A} and ``tau_points`` comes from dead-weight forces fixed in
 
 (``H`` are Levi-Civita energy Hessians; the weight is one of the point
 forces; ``H_cable - 1/2 hat(tau_cable)`` is :attr:`Equilibrium.K`, the cable
-stiffness of SPEC.md), damped by a cap on the step length and a backtracking
+stiffness of docs/conventions.md), damped by a cap on the step length and a backtracking
 line search on the residual. If Newton from ``R_init`` stalls, the external
 load is applied in increments (load continuation), each step warm-started
 from the last. If that fails too, or ends on an unstable equilibrium (a
@@ -40,6 +40,7 @@ import functools
 from typing import Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import so3
 from .cable_terms import CableTerms, point_force_terms
@@ -64,13 +65,13 @@ class Equilibrium:
     tau_ext_A_Nm: np.ndarray        # (3,) external moment fixed in {A}
     tau_cable_A_Nm: np.ndarray      # (3,) J^T T
     tau_points_A_Nm: np.ndarray     # (3,) weight plus dead-weight forces
-    K: np.ndarray                   # (3, 3) cable stiffness (SPEC.md convention) at R
+    K: np.ndarray                   # (3, 3) cable stiffness (convention of docs/conventions.md) at R
     K_tangent: np.ndarray           # (3, 3) tangent stiffness of the whole loaded system
     iterations: int
 
     @property
     def tensions(self) -> np.ndarray:
-        """Alias of ``tensions_N`` (SPEC.md name)."""
+        """Alias of ``tensions_N`` (docs/conventions.md name)."""
         return self.tensions_N
 
     @property
@@ -211,7 +212,7 @@ def _stable(K_t: np.ndarray) -> bool:
     return bool(tr > 0 and det > 0 and tr * m2 > det)
 
 
-def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray = (0.0, 0.0, 0.0),
+def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: npt.ArrayLike = (0.0, 0.0, 0.0),
                       point_forces: Sequence[PointForce] = (), R_init: np.ndarray | None = None,
                       include_weight: bool = True, model: Model | None = None, tol_Nm: float = 1e-11,
                       max_iter: int = 100, max_step_rad: float = 0.25, allow_slack: bool = True,

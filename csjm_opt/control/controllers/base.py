@@ -1,6 +1,6 @@
 """Controller interface: observation in, command out.
 
-Conventions (SPEC.md): ``R`` is the orientation of {A} in {B}; moments are
+Conventions (docs/conventions.md): ``R`` is the orientation of {A} in {B}; moments are
 in {A} about O; ``tau_ext`` excludes the platform's own weight; SI units.
 """
 
