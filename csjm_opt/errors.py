@@ -143,3 +143,16 @@ class DesignError(InvalidInput):
 
 class UsageError(InvalidInput):
     """Bad command-line usage (unknown option, missing argument, bad value)."""
+
+
+class InconsistentTensions(InvalidInput):
+    """Tensions given to the stiffness are outside ``[t_min, t_max]`` or out of equilibrium.
+
+    ``reason`` is ``"bounds"`` or ``"equilibrium"``; ``value`` the bound
+    violation (N) or the equilibrium residual ``||J^T T + tau_load||`` (N m).
+    """
+
+    def __init__(self, message: str, reason: str, value: float):
+        super().__init__(message, "tensions")
+        self.reason = reason
+        self.value = float(value)

@@ -16,7 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("preprocess", help="raw tracker/F/T CSV -> measurement log",
                        description="Turn a raw instrument CSV (tracker base points, platform poses "
                        "in the tracker frame, F/T readings in the sensor frame; format in "
-                       "csjm_opt/preprocess.py and the README) into the measurement log of SPEC.md: "
+                       "csjm_opt/preprocess.py and the README) into the measurement log of docs/conventions.md: "
                        "least-squares base frame fit, pose in {B} (53)-(54), wrench moved to {A} "
                        "about O (55), weight handled explicitly (56).")
     p.add_argument("raw", metavar="RAW.csv", help="raw instrument CSV")
@@ -35,7 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "K_L = -1/2 hat(tau_load) (errata 1-2), an affine least-squares estimate with "
                        "confidence intervals, a symmetric-constrained estimate K_sym, and the "
                        "condition number of the excitation.")
-    p.add_argument("data", metavar="DATA.csv", help="measurement log (SPEC.md format)")
+    p.add_argument("data", metavar="DATA.csv", help="measurement log (format in docs/conventions.md)")
     p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
     p.add_argument("--cycle", type=int_in(-MAX_EXACT_INT, MAX_EXACT_INT), default=None, help="only this cycle id")
     p.add_argument("--order", type=int, choices=(1, 2, 3), default=1,
@@ -90,6 +90,7 @@ def run_identify(args: argparse.Namespace) -> int:
 
     from ..identification.identify import MAX_CONDITION, identify_cycles, identify_log
     from ..identification.stiffness_fits import n_parameters
+    from .._plotting import save
     from ..identification.figures import convergence_curve, plot_convergence
     from ..measurement.instruments import InstrumentNoise
     from ..measurement.logfile import MeasurementLog
@@ -118,12 +119,13 @@ def run_identify(args: argparse.Namespace) -> int:
     figures = []
     if args.figures:
         for e in estimates:
+            assert e.cycle is not None  # identify_log fills it
             rows = log.cycle_rows(e.cycle)
             curve = convergence_curve(so3.exp(log.rotvec_rad[rows]), log.tau_ext_A_Nm[rows], model,
                                       n_min=n_parameters(args.order) + 1,
                                       **options | {"bootstrap": 0, "allow_ill_conditioned": True})
-            figures.append(str(plot_convergence(curve, Path(args.figures) / f"convergence_cycle{e.cycle}.png",
-                                                f"Cycle {e.cycle}: det K against measurements")))
+            ax = plot_convergence(curve, title=f"Cycle {e.cycle}: det K against measurements")
+            figures.append(str(save(ax.figure, Path(args.figures) / f"convergence_cycle{e.cycle}.png")))
     out = {"source": str(args.data), "cycles": [e.as_dict() for e in estimates], "skipped": skipped,
            "figures": figures}
     if args.fit_parameters != "none":

@@ -20,7 +20,7 @@ from ._options import check_outputs, check_rotvec, finite_float, quantity
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("shape", help="shape the stiffness K toward a target at a pose",
                        description="Choose the six cable tensions (t_min <= t <= t_max) that hold the pose "
-                       "under the load and bring the stiffness K (N m/rad, SPEC.md convention) closest to "
+                       "under the load and bring the stiffness K (N m/rad, docs/conventions.md) closest to "
                        "a target: weighted Frobenius (default), principal ('eigen') or directional objective. "
                        "Reports the achieved K, the residual, whether the target is reached and the active "
                        "bounds; --reachable adds the reachable range of each eigenvalue of K.")

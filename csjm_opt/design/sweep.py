@@ -68,7 +68,7 @@ class SweepResult:
         return self.computed / self.seconds if self.computed and self.seconds > 0 else 0.0
 
     def as_json(self) -> dict[str, Any]:
-        """The ``csjm sweep --json`` document (SPEC.md keys plus more)."""
+        """The ``csjm sweep --json`` document (docs/conventions.md keys plus more)."""
         designs = []
         for r in self.records:
             designs.append({"params": r["params"], "status": r["status"],
@@ -143,7 +143,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
                 computed += 1
                 bar.update(1)
                 if stop_after is not None and computed >= stop_after:
-                    stream.close()
+                    getattr(stream, "close", lambda: None)()
                     break
         finally:
             bar.close()

@@ -5,7 +5,7 @@ For one load cycle (rows in time order, the first row is the reference)::
     dzeta_i = log(R_ref^T R_i)                        body frame, (46)
     tau_load_i = tau_ext_i + tau_weight(R_i)          total load (55)-(56), in {A}
     K_D ~ dtau_load / dzeta                           (48a), estimated by (49)
-    K = K_D + K_L,  K_L = -1/2 hat(tau_load_ref)      (47), corrected (ERRATA 1-2)
+    K = K_D + K_L,  K_L = -1/2 hat(tau_load_ref)      (47), corrected (errata 1-2)
 
 Three estimates are returned together in :class:`StiffnessEstimate`:
 
@@ -144,7 +144,10 @@ class StiffnessEstimate:
 
     def covers(self, K_true: np.ndarray, which: str = "K") -> np.ndarray:
         """(3, 3) mask: does the interval of ``which`` (K, K_sym, bootstrap) contain ``K_true``?"""
-        lo, hi = {"K": self.K_ci, "K_sym": self.K_sym_ci, "bootstrap": self.bootstrap_K_ci}[which]
+        interval = {"K": self.K_ci, "K_sym": self.K_sym_ci, "bootstrap": self.bootstrap_K_ci}[which]
+        if interval is None:
+            raise InvalidInput("no bootstrap interval: identify with bootstrap > 0", "which")
+        lo, hi = interval
         return (lo <= K_true) & (K_true <= hi)
 
     def is_well_conditioned(self, max_condition: float = MAX_CONDITION) -> bool:
@@ -354,7 +357,7 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
         cov_K=fit["cov_K"], cov_K_sym=sym["cov_K"], ci_level=ci_level, ci_quantile=q,
         condition=cond, singular_values_rad=s,
         residual_rms_Nm=float(np.sqrt(np.mean(np.sum(fit["resid"] ** 2, axis=1)))),
-        chi2_per_dof=chi2, bootstrap_K_ci=boot, design_condition=fit["design_condition"],
+        chi2_per_dof=chi2, bootstrap_K_ci=boot, design_condition=float(fit["design_condition"]),
         weakest_load_direction_A=u, ill_conditioned=ill)
 
 

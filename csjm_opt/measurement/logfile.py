@@ -1,4 +1,4 @@
-"""Measurement logs: the CSV format of SPEC.md, read strictly and written atomically.
+"""Measurement logs: the CSV format of docs/conventions.md, read strictly and written atomically.
 
 One row per static equilibrium, in time order. Header (exactly these columns
 first, extra columns allowed after them)::
@@ -104,7 +104,7 @@ class MeasurementLog:
         try:
             header = [h.strip() for h in next(reader)]
         except StopIteration:
-            raise DataFileError("empty file: expected a header " + ",".join(COLUMNS), source, 1)
+            raise DataFileError("empty file: expected a header " + ",".join(COLUMNS), source, 1) from None
         if tuple(header[:len(COLUMNS)]) != COLUMNS:
             missing = [c for c in COLUMNS if c not in header]
             detail = f"missing {missing}" if missing else f"got {header[:len(COLUMNS)]}"

@@ -1,4 +1,4 @@
-"""Raw instrument data -> measurement log (Section III-B, (51)-(56), ERRATA 6).
+"""Raw instrument data -> measurement log (Section III-B, (51)-(56), erratum 6).
 
 Raw CSV format (one file, UTF-8, comma separated, SI units: m, rad, N, N m)
 ---------------------------------------------------------------------------
@@ -27,14 +27,14 @@ Each row is one record; the cells a record does not use must be empty.
 Processing
 ----------
 1. ``{B}`` in ``{L}`` by a least-squares rigid fit of all base points
-   (Kabsch/Umeyama without scale, ERRATA 6) instead of the 4x4 inverse of (52).
+   (Kabsch/Umeyama without scale, erratum 6) instead of the 4x4 inverse of (52).
 2. ``{A}`` in ``{B}``: ``T_BA = T_LB^-1 T_LA`` (53); the origins must coincide
    (54): ``||p_BA|| <= origin_tol_m`` or a :class:`DataFileError` names the line.
 3. Wrench moved to {A} about O (55): with ``(R_AS, p_AS)`` the pose of {S}
    in {A}, ``f_A = R_AS f_S`` and ``tau_A = R_AS tau_S + p_AS x f_A``
    (``= Ad^T_{T_SA} W_S`` in (f, tau) order).
 4. Weight (56): ``tau_G = r_G x (R_BA^T m g_B)`` in {A} is written to extra
-   columns ``tauw_x..z``; the log's ``tau_*`` exclude it (SPEC.md). If the
+   columns ``tauw_x..z``; the log's ``tau_*`` exclude it (docs/conventions.md). If the
    F/T moment includes the platform weight (``ft_includes_weight``), it is
    subtracted.
 """
@@ -113,7 +113,7 @@ def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int,
     try:
         header = [h.strip() for h in next(reader)]
     except StopIteration:
-        raise DataFileError("empty file: expected the raw header " + ",".join(RAW_COLUMNS), source, 1)
+        raise DataFileError("empty file: expected the raw header " + ",".join(RAW_COLUMNS), source, 1) from None
     unknown = [h for h in header if h not in RAW_COLUMNS and h != "note"]
     missing = [c for c in RAW_COLUMNS if c not in header]
     if unknown or missing or len(set(header)) != len(header):
