@@ -15,7 +15,7 @@ import sys
 from ..errors import CsjmError, UsageError
 
 #: Modules that register subcommands, in help order.
-COMMAND_MODULES = ("core", "demo", "shape", "identify", "diagnose", "sweep")
+COMMAND_MODULES = ("core", "demo", "shape", "identify", "diagnose", "sweep", "report")
 
 
 class _Parser(argparse.ArgumentParser):
