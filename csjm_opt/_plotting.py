@@ -1,7 +1,8 @@
 """Figures of the core quantities: tension bars and stiffness ellipsoids.
 
-Matplotlib with the Agg backend, selected inside each function (never at
-import); every figure is written to a file atomically and closed.
+The backend is chosen by the caller (the CLI selects Agg in
+:func:`csjm_opt.cli.app.main`); every figure is written to a file atomically
+by :func:`save` and closed.
 """
 
 from __future__ import annotations
@@ -14,10 +15,7 @@ import numpy as np
 
 
 def figure():
-    """A new (figure, pyplot) pair on the Agg backend."""
-    import matplotlib
-
-    matplotlib.use("Agg")
+    """``matplotlib.pyplot`` (imported on first use; the backend is the caller's choice)."""
     import matplotlib.pyplot as plt
 
     return plt

@@ -1,6 +1,6 @@
 """SO(3) helpers: hat, vee, exp, log, on numpy arrays and CasADi symbols.
 
-Conventions (SPEC.md): ``R`` is the orientation of {A} in {B}; body-frame
+Conventions (docs/conventions.md): ``R`` is the orientation of {A} in {B}; body-frame
 canonical coordinates ``zeta`` with ``R = R_ref @ exp(hat(zeta))``, paper (1)-(3).
 Numpy versions broadcast over leading axes: ``exp`` takes (..., 3) and returns
 (..., 3, 3). Small-angle branches keep everything finite at zero, and ``log``
@@ -17,9 +17,14 @@ import numpy as np
 _SMALL = 1e-6
 
 
+def _symbolic(x: Any) -> bool:
+    """True for CasADi SX/MX/DM (a plain bool: static types stay ``Any``)."""
+    return isinstance(x, (ca.SX, ca.MX, ca.DM))
+
+
 def hat(w: Any) -> Any:
     """Skew matrix of (2): ``hat(w) @ v == cross(w, v)``."""
-    if isinstance(w, (ca.SX, ca.MX, ca.DM)):
+    if _symbolic(w):
         return ca.vertcat(ca.horzcat(0, -w[2], w[1]),
                           ca.horzcat(w[2], 0, -w[0]),
                           ca.horzcat(-w[1], w[0], 0))
@@ -33,7 +38,7 @@ def hat(w: Any) -> Any:
 
 def vee(W: Any) -> Any:
     """Inverse of :func:`hat` (uses the antisymmetric part)."""
-    if isinstance(W, (ca.SX, ca.MX, ca.DM)):
+    if _symbolic(W):
         return 0.5 * ca.vertcat(W[2, 1] - W[1, 2], W[0, 2] - W[2, 0], W[1, 0] - W[0, 1])
     W = np.asarray(W, dtype=float)
     return 0.5 * np.stack([W[..., 2, 1] - W[..., 1, 2],
@@ -43,7 +48,7 @@ def vee(W: Any) -> Any:
 
 def exp(w: Any) -> Any:
     """Rodrigues' formula, ``exp(hat(w))``, with a Taylor branch near zero."""
-    if isinstance(w, (ca.SX, ca.MX, ca.DM)):
+    if _symbolic(w):
         th2 = ca.dot(w, w)
         th = ca.sqrt(th2 + 1e-300)
         a = ca.if_else(th2 < _SMALL**2, 1 - th2 / 6, ca.sin(th) / th)
@@ -63,7 +68,7 @@ def exp(w: Any) -> Any:
 
 def log(R: Any) -> Any:
     """Rotation vector ``w`` with ``exp(w) == R``, ``|w| <= pi``; batched over (..., 3, 3)."""
-    if isinstance(R, (ca.SX, ca.MX, ca.DM)):
+    if _symbolic(R):
         return _log_casadi(R)
     R = np.asarray(R, dtype=float)
     cos = np.clip((np.trace(R, axis1=-2, axis2=-1) - 1) / 2, -1.0, 1.0)

@@ -25,7 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from csjm_opt import so3
-from csjm_opt.control.closed_loop import plot_closed_loop, simulate
+from csjm_opt._plotting import save
+from csjm_opt.control.closed_loop import plot_closed_loop, plot_closed_loop_stiffness, simulate
 from csjm_opt.control.controllers import StiffnessShapingController
 from csjm_opt.report.shaping_step import DEMO_TAU_EXT, PAPER_R0, soft_stiff_targets
 from csjm_opt._fileio import atomic_write_json
@@ -64,10 +65,11 @@ def main(argv: list[str] | None = None) -> int:
     noise = InstrumentNoise.none() if args.no_noise else InstrumentNoise.paper()
     ctrl = StiffnessShapingController(rig, R, target, integral_gain=0.0)
     log = simulate(rig, ctrl, load, args.duration, args.dt, noise=noise, rng=np.random.default_rng(1))
-    figs = plot_closed_loop(log, out, prefix="soft_stiff_switch", t_min_N=rig.t_min_N, t_max_N=rig.t_max_N)
+    figs = [save(plot_closed_loop(log, rig.t_min_N, rig.t_max_N)[0].figure, out / "soft_stiff_switch.png"),
+            save(plot_closed_loop_stiffness(log)[0].figure, out / "soft_stiff_switch_K.png")]
     rs = reachable_set(rig, R, DEMO_TAU_EXT, n_samples=1500)
-    figs.append(plot_reachable_set(rs, out / "reachable_set.png", rig.t_min_N, rig.t_max_N,
-                                   {"soft target": K_soft, "stiff target": K_stiff}))
+    ax_eig, _ = plot_reachable_set(rs, rig.t_min_N, rig.t_max_N, {"soft target": K_soft, "stiff target": K_stiff})
+    figs.append(save(ax_eig.figure, out / "reachable_set.png"))
 
     # per-phase deflection of the pose about x (the disturbance axis) and achieved K_xx
     zeta = so3.log(np.swapaxes(log.R_ref, 1, 2) @ log.R)

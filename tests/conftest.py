@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import matplotlib
 import numpy as np
 import pytest
+
+matplotlib.use("Agg")   # the tests write figures to files only (the library never picks a backend)
 
 import csjm_opt as co
 

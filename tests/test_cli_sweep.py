@@ -1,4 +1,4 @@
-"""``csjm sweep``: SPEC.md command line and JSON, resumption, errors (exit 2, one line)."""
+"""``csjm sweep``: docs/conventions.md command line and JSON, resumption, errors (exit 2, one line)."""
 
 from __future__ import annotations
 

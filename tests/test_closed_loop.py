@@ -7,7 +7,8 @@ import pytest
 
 import csjm_opt as co
 from csjm_opt import so3
-from csjm_opt.control.closed_loop import plot_closed_loop, simulate
+from csjm_opt._plotting import save
+from csjm_opt.control.closed_loop import plot_closed_loop, plot_closed_loop_stiffness, simulate
 from csjm_opt.control.controllers import (Command, Controller, Observation, StiffnessShapingController,
                                   TensionPlanningController)
 from csjm_opt.measurement.instruments import InstrumentNoise
@@ -127,7 +128,10 @@ def test_custom_controller_and_figures(rig, model, tmp_path):
     log = simulate(rig, FixedRestLengths(rig, l), Ramp(0.0, 0.01, [0.2, 0, 0]), 0.01)
     assert log.R.shape == (11, 3, 3) and log.tensions_N.shape == (11, 6)
     assert log.pose_error_rad[-1] > 1e-3                     # open loop yields under the ramp
-    paths = plot_closed_loop(log, tmp_path, t_min_N=rig.t_min_N, t_max_N=rig.t_max_N)
+    axes = plot_closed_loop(log, rig.t_min_N, rig.t_max_N)
+    np.testing.assert_allclose(axes[2].get_lines()[0].get_ydata(), log.tensions_N[:, 0])
+    paths = [save(axes[0].figure, tmp_path / "closed_loop.png"),
+             save(plot_closed_loop_stiffness(log)[0].figure, tmp_path / "closed_loop_K.png")]
     assert all(p.exists() and p.stat().st_size > 5000 for p in paths)
     summary = log.summary()
     assert summary["steps"] == 10 and summary["median_step_time_s"] > 0

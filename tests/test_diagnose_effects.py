@@ -52,7 +52,8 @@ def test_effects_nest_the_nominal_model(rig, clean_nominal, name):
 
 @pytest.mark.parametrize("name,truth", [("sensor_bias", lambda p: p.sensor_bias_A_Nm),
                                         ("cable_hardening", lambda p: [p.hardening_per_m]),
-                                        ("link_compliance", lambda p: p.link_compliance_rad_per_Nm[np.triu_indices(3)])])
+                                        ("link_compliance",
+                                         lambda p: p.link_compliance_rad_per_Nm[np.triu_indices(3)])])
 def test_fit_recovers_injected_parameters_from_clean_data(rig, name, truth):
     rng = np.random.default_rng(11)
     plant = make_plant(rig, name, 1.5, rng)
@@ -67,7 +68,8 @@ def test_mass_com_identifies_the_first_mass_moment(rig):
     plant = make_plant(rig, "mass_com", 1.5, rng)
     log = simulate_experiment(rig, 5, rng, effect=plant, noise=InstrumentNoise.none())
     f = fit_model(AugmentedModel(rig, [make_effect("mass_com", rig)]), compute_residuals(rig, log))
-    true_dmr = plant.rig.platform_mass_kg * np.asarray(plant.rig.com_A_m) - rig.platform_mass_kg * np.asarray(rig.com_A_m)
+    true_dmr = (plant.rig.platform_mass_kg * np.asarray(plant.rig.com_A_m)
+                - rig.platform_mass_kg * np.asarray(rig.com_A_m))
     np.testing.assert_allclose(f.theta[2:], true_dmr, atol=2e-5)
 
 

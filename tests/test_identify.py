@@ -3,6 +3,8 @@
 import json
 
 import numpy as np
+
+from csjm_opt._plotting import save
 import pytest
 
 from csjm_opt import so3
@@ -54,7 +56,7 @@ def test_noise_free_recovery_1e_6(small_cycle, model):
 
 
 def test_load_and_cable_views_agree(small_cycle, model):
-    """ERRATA 2: identified K_D = dtau_load/dzeta = -d(J^T T)/dzeta at fixed rest lengths."""
+    """Erratum 2: identified K_D = dtau_load/dzeta = -d(J^T T)/dzeta at fixed rest lengths."""
     R, tau, l, ref = small_cycle
     e = identify_stiffness(R, tau, model, order=2)
     h, D = 1e-6, np.zeros((3, 3))
@@ -146,8 +148,9 @@ def test_convergence_curve_converges(big_log, model, tmp_path):
     det_true = np.linalg.det(ref.K)
     assert abs(curve.det_K[-1] - det_true) < 3 * curve.det_K_std[-1] + 0.05 * det_true
     assert curve.det_K_std[-1] < curve.det_K_std[np.isfinite(curve.det_K_std)][0]
-    path = plot_convergence(curve, tmp_path / "fig5.png")
-    assert path.stat().st_size > 1000
+    ax = plot_convergence(curve)
+    np.testing.assert_array_equal(ax.get_lines()[0].get_xdata(), curve.n)
+    assert save(ax.figure, tmp_path / "fig5.png").stat().st_size > 1000
 
 
 def test_bootstrap_interval_contains_estimate(big_log, model):

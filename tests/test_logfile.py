@@ -1,4 +1,4 @@
-"""Measurement log CSV (SPEC.md): strict reading, clear errors naming the line, atomic writing."""
+"""Measurement log CSV (docs/conventions.md): strict reading, clear errors naming the line, atomic writing."""
 
 import numpy as np
 import pytest

@@ -46,7 +46,7 @@ def test_cable_moment_is_minus_energy_gradient(rig, model):
     for R, T in _random_loaded_poses(rig, model, 5, seed=2):
         l = _cable_lengths(rig, R) - T / rig.cable_stiffness_N_per_m
         grad = fd_gradient(lambda z: cable_energy(rig, R @ rodrigues(z), l))
-        assert np.allclose(model.cable_moment(R, T), -grad, atol=1e-6)  # ERRATA 2: tau = -dPhi
+        assert np.allclose(model.cable_moment(R, T), -grad, atol=1e-6)  # erratum 2: tau = -dPhi
 
 
 def test_stiffness_is_levi_civita_hessian_of_cable_energy(rig, model):
@@ -82,7 +82,7 @@ def test_slack_cable_contributes_nothing(rig, model):
 
 
 def test_printed_structure_constants_give_asymmetric_stiffness(rig, model):
-    """ERRATA 1: with gamma = +-2 as printed in (31), (45) is not symmetric at a loaded pose."""
+    """Erratum 1: with gamma = +-2 as printed in (31), (45) is not symmetric at a loaded pose."""
     (R, T), = _random_loaded_poses(rig, model, 1, seed=5)
     args = (R, T, rig.cable_stiffness_N_per_m, rig.platform_holes_A_m.T, rig.base_holes_B_m.T)
     K_printed = np.array(model.functions["stiffness_paper_as_printed"](*args))

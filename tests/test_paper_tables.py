@@ -36,13 +36,13 @@ def test_table4_column_C_reproduced_from_K_D_and_corrected_R0():
     for i in range(5):
         R = pd.R0_CORRECTED @ so3.exp(np.linalg.solve(pd.TABLE3_K_D, pd.TABLE4_DTAU_A_NM[i]))
         assert np.max(np.abs(R - pd.TABLE4_R_EST[i])) < 2e-3
-    # the text's K^-1 does not reproduce it (ERRATA 4: errors 0.013-0.020)
+    # the text's K^-1 does not reproduce it (erratum 4: errors 0.013-0.020)
     assert np.all(t4["col_C_max_entry_error_K_printed"] > 0.01)
 
 
 def test_E_theta_per_65_from_columns_B_and_C():
     e = table4()["E_theta_from_B_C"]
-    # ERRATA 5 values, computed from the printed matrices
+    # erratum 5 values, computed from the printed matrices
     np.testing.assert_allclose(e, [0.054, 0.052, 0.039, 0.040, 0.046], atol=1.5e-3)
     # and they disagree with the printed column D in 4 of 5 cases
     assert np.sum(np.abs(e - pd.TABLE4_E_THETA_RAD) > 5e-3) == 4

@@ -3,7 +3,6 @@
 import numpy as np
 import pytest
 
-from csjm_opt import so3
 from csjm_opt.errors import IllConditionedData
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.measurement.logfile import MeasurementLog

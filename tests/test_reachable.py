@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from csjm_opt._plotting import save
+
 from csjm_opt import so3
 from csjm_opt.design import shaping_range
 from csjm_opt.shaping.reachable import (directional_range, directional_stiffness_range, feasible_vertices,
@@ -91,7 +93,10 @@ def test_eigenvalue_ranges_bound_samples(rig, model):
 
 def test_figure_written(rig, tmp_path):
     rs = reachable_set(rig, R_POSE, TAU, n_samples=100)
-    path = plot_reachable_set(rs, tmp_path / "reach.png", rig.t_min_N, rig.t_max_N,
-                              {"target": np.diag([20.0, 25.0, 30.0])}, n_directions=24)
+    ax_eig, ax_dir = plot_reachable_set(rs, rig.t_min_N, rig.t_max_N,
+                                        {"target": np.diag([20.0, 25.0, 30.0])}, n_directions=24)
+    assert ax_eig.figure is ax_dir.figure and ax_dir.name == "polar"
+    assert [t.get_text() for t in ax_eig.get_legend().get_texts()] == ["target"]
+    path = save(ax_eig.figure, tmp_path / "reach.png")
     assert path.exists() and path.stat().st_size > 10_000
     assert not list(tmp_path.glob("*.tmp.*"))

@@ -1,5 +1,6 @@
 """Rig: paper geometry, TOML round trip, and one clear error per bad input."""
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -49,7 +50,7 @@ def test_toml_round_trip_and_no_clobber(tmp_path, rig):
 
 
 def test_rig_is_immutable(rig):
-    with pytest.raises(Exception):
+    with pytest.raises(dataclasses.FrozenInstanceError):
         rig.t_min_N = 1.0
     with pytest.raises(ValueError):
         rig.platform_holes_A_m[0, 0] = 1.0

@@ -38,8 +38,9 @@ def feasible_tensions(rig, model, R, tau, move):
     return plan.tensions_N + s * step
 
 
-def slsqp_shaping(rig, model, R, tau, K_target, W=np.ones((3, 3))):
+def slsqp_shaping(rig, model, R, tau, K_target, W=None):
     """Independent solver: SLSQP on sum W (K(T) - K_target)^2 with K from the CasADi model."""
+    W = np.ones((3, 3)) if W is None else W
     J = model.jacobian(R)
     tau_load = tau + model.weight_moment(R)
     basis_T = np.eye(6)

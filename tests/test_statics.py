@@ -1,7 +1,7 @@
 """Forward statics (csjm_opt/statics.py) and its closed-form terms (csjm_opt/cable_terms.py).
 
 Checked against the CasADi model, an energy written from scratch in
-conftest.py, finite differences of solved equilibria, and the SPEC.md law
+conftest.py, finite differences of solved equilibria, and the docs/conventions.md law
 ``dtau_load = (K + 1/2 hat(tau_load)) dzeta`` for a moment load.
 """
 

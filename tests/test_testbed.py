@@ -21,8 +21,9 @@ def test_kinematics_match_the_casadi_model(rig, model):
     lengths, J = kin.cable_terms(R, np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m))
     np.testing.assert_allclose(lengths, model.cable_lengths(R), atol=1e-14)
     np.testing.assert_allclose(J, model.jacobian(R), atol=1e-14)
-    np.testing.assert_allclose(kin.weight_moment(R, rig.platform_mass_kg * np.asarray(rig.com_A_m),
-                                                 np.asarray(rig.gravity_B_m_per_s2)), model.weight_moment(R), atol=1e-14)
+    m_r_A = rig.platform_mass_kg * np.asarray(rig.com_A_m)
+    np.testing.assert_allclose(kin.weight_moment(R, m_r_A, np.asarray(rig.gravity_B_m_per_s2)),
+                               model.weight_moment(R), atol=1e-14)
 
 
 def test_up_down_cycle_order():

@@ -1,6 +1,8 @@
 """Verification (61)-(65) on simulator data: K_D is the right first-order predictor, K is not."""
 
 import numpy as np
+
+from csjm_opt._plotting import save
 import pytest
 
 from csjm_opt import so3
@@ -73,6 +75,8 @@ def test_verify_log_on_held_out_rows(rig, model, tmp_path):
     assert v.rms_rad < 1e-4 and v_ext.rms_rad < 1e-4
     assert v_K.rms_rad > 3 * v.rms_rad
     assert "rms" in v.table() and len(v.as_dict()["cases"]) == len(held)
-    assert plot_verification([v, v_K], tmp_path / "v.png").stat().st_size > 1000
+    ax = plot_verification([v, v_K])
+    assert len(ax.patches) == 2 * len(held)                  # one bar per case and series
+    assert save(ax.figure, tmp_path / "v.png").stat().st_size > 1000
     with pytest.raises(InvalidInput):
         verify_log(ests, held, model, use="K_L")

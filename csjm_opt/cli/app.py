@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from typing import NoReturn
 
 from ..errors import CsjmError, UsageError
 
@@ -19,7 +20,7 @@ COMMAND_MODULES = ("core", "demo", "shape", "identify", "diagnose", "sweep", "re
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one line, exit 2 (argparse prints usage too)
+    def error(self, message: str) -> NoReturn:  # one line, exit 2 (argparse prints usage too)
         raise UsageError(f"{self.prog}: {message}")
 
 
@@ -35,6 +36,15 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run ``csjm`` with ``argv`` (default ``sys.argv[1:]``); return the exit status.
+
+    The command line writes figures to files only, so it selects matplotlib's
+    non-interactive Agg backend here, before any command runs (library code
+    never chooses a backend).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
     try:
         args = build_parser().parse_args(argv)
         return int(args.func(args) or 0)

@@ -1,7 +1,7 @@
 """``csjm diagnose DATA.csv --rig RIG [--test TEST.csv] --json OUT [--report DIR]``.
 
 Where the nominal model and the rig disagree, which unmodelled effect explains
-it, and how much of the gap it closes on held-out cycles (SPEC.md keys and
+it, and how much of the gap it closes on held-out cycles (docs/conventions.md keys and
 vocabulary; see :mod:`csjm_opt.diagnose.selection` for the decision rule).
 """
 
@@ -13,18 +13,19 @@ from pathlib import Path
 
 from ..diagnose import EFFECTS
 from ..errors import InvalidInput
-from .._fileio import atomic_write_json, refuse_input_overwrite
+from .._fileio import atomic_write_json
+from ._options import check_outputs
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import load_rig
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("diagnose", help="which unmodelled effect explains the model-rig gap",
-                       description="Compare a measurement log (SPEC.md CSV) with the nominal model of the "
+                       description="Compare a measurement log (CSV, docs/conventions.md) with the nominal model of the "
                        "rig: residuals and where they lie, every candidate effect (" + ", ".join(EFFECTS)
                        + ") fitted jointly with the nominal stiffness scale and pretension and scored on "
                        "held-out cycles, the selected effect (or none) and the gap it closes.")
-    p.add_argument("data", metavar="DATA.csv", help="measurement log (SPEC.md format)")
+    p.add_argument("data", metavar="DATA.csv", help="measurement log (format in docs/conventions.md)")
     p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
     p.add_argument("--test", metavar="TEST.csv", default=None,
                    help="held-out log (default: grouped cross-validation by cycle)")
@@ -41,8 +42,7 @@ def run(args: argparse.Namespace) -> int:
     from ..diagnose.report import write_report
 
     inputs = [args.data, args.test, args.rig]
-    if args.json:
-        refuse_input_overwrite(args.json, *inputs)
+    check_outputs(inputs, {"--json": args.json}, {"--report": args.report})
     if args.report:
         report = Path(args.report)
         for item in inputs:

@@ -49,7 +49,7 @@ class Step(LoadProfile):
 
     t0_s: float
     after_A_Nm: np.ndarray
-    before_A_Nm: np.ndarray = (0.0, 0.0, 0.0)
+    before_A_Nm: np.ndarray = (0.0, 0.0, 0.0)  # type: ignore[assignment]  # array in __post_init__
 
     def __post_init__(self):
         object.__setattr__(self, "after_A_Nm", _vec(self.after_A_Nm))
@@ -66,7 +66,7 @@ class Ramp(LoadProfile):
     t0_s: float
     t1_s: float
     end_A_Nm: np.ndarray
-    start_A_Nm: np.ndarray = (0.0, 0.0, 0.0)
+    start_A_Nm: np.ndarray = (0.0, 0.0, 0.0)  # type: ignore[assignment]  # array in __post_init__
 
     def __post_init__(self):
         if not self.t1_s > self.t0_s:

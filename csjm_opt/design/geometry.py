@@ -144,11 +144,11 @@ def check_holes(platform_A_m: np.ndarray, base_B_m: np.ndarray,
     clearance = cable_clearance_m(platform_A_m, base_B_m)
     lengths = np.linalg.norm(base_B_m - platform_A_m, axis=1)
     if np.min(lengths) < limits.min_hole_spacing_m:
-        i = int(np.argmin(lengths))
-        raise DesignError(f"cable {i + 1} has length {lengths[i]:.3g} m at the home pose", "holes")
+        k = int(np.argmin(lengths))
+        raise DesignError(f"cable {k + 1} has length {lengths[k]:.3g} m at the home pose", "holes")
     if np.min(clearance) < limits.min_cable_clearance_m:
-        i = int(np.argmin(clearance))
-        raise DesignError(f"cable {i + 1} passes {clearance[i] * 1e3:.3g} mm from the joint centre O "
+        k = int(np.argmin(clearance))
+        raise DesignError(f"cable {k + 1} passes {clearance[k] * 1e3:.3g} mm from the joint centre O "
                           f"at the home pose (minimum {limits.min_cable_clearance_m * 1e3:g} mm)", "holes")
 
 

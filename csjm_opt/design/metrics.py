@@ -12,7 +12,7 @@ Definitions (all over the orientations of an :class:`OrientationSampling`):
   (any azimuth, any sampled torsion) is feasible; ``max_tilt_deg`` when all are.
   The infeasible samples of smallest tilt are refined by bisection along
   their tilt ray (azimuth, torsion fixed) to the feasibility boundary.
-* Stiffness at a feasible pose is K (SPEC.md load convention) with the
+* Stiffness at a feasible pose is K (load convention of docs/conventions.md) with the
   planner's tensions (closest to mid-range, :func:`csjm_opt.planning.planner`'s QP,
   solved by the batched exact active-set method) for the *stiffness load*,
   the first load of the set. ``min_stiffness_Nm_per_rad`` is the smallest

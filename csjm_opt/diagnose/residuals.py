@@ -17,6 +17,7 @@ Everything here uses only the log's inputs and the rig file.
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import numpy as np
 
@@ -79,8 +80,9 @@ class ResidualTable:
     def take(self, idx: np.ndarray) -> "ResidualTable":
         idx = np.asarray(idx)
         fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
-        out = {k: (v.take(idx) if isinstance(v, Rows) else v if isinstance(v, InstrumentNoise) else v[idx])
-               for k, v in fields.items()}
+        out: dict[str, Any] = {
+            k: (v.take(idx) if isinstance(v, Rows) else v if isinstance(v, InstrumentNoise) else v[idx])
+            for k, v in fields.items()}
         return ResidualTable(**out)
 
 

@@ -9,14 +9,16 @@ delta method) against N.
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..errors import IllConditionedData
 from .identify import identify_stiffness
 from ..model.numeric import Model
-from .._plotting import save
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -38,31 +40,77 @@ class ConvergenceCurve:
 
 
 def convergence_curve(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model, n_min: int = 5,
-                      **options) -> ConvergenceCurve:
-    """Identify K from rows ``[0, n)`` for ``n = n_min .. len(R)``."""
-    ns, dp, da, ds, sd = [], [], [], [], []
+                      **options: Any) -> ConvergenceCurve:
+    """Identify K from the rows ``[0, n)`` for ``n = n_min .. len(R)``.
+
+    Parameters
+    ----------
+    R : ndarray, shape (n, 3, 3)
+        Measured orientations of {A} in {B}, one cycle in time order; row 0 is the reference.
+    tau_ext_A_Nm : ndarray, shape (n, 3)
+        Measured external moments in {A} (N m), platform weight excluded.
+    model : Model
+        Numeric model of the rig (supplies the weight moment).
+    n_min : int, optional
+        Smallest number of rows tried (at least 2).
+    **options
+        Passed to :func:`~csjm_opt.identification.identify_stiffness` (``order``, ``bootstrap``, ...).
+
+    Returns
+    -------
+    ConvergenceCurve
+        det K per ``n``; NaN where the first ``n`` rows do not determine K.
+
+    Notes
+    -----
+    Short prefixes are imprecise by nature: unless ``allow_ill_conditioned``
+    is given, they are identified with ``allow_ill_conditioned=True`` (only
+    rank-deficient prefixes are left out, as NaN).
+    """
+    options.setdefault("allow_ill_conditioned", True)
+    ns: list[float] = []
+    dp: list[float] = []
+    da: list[float] = []
+    ds: list[float] = []
+    sd: list[float] = []
     for n in range(max(2, n_min), len(R) + 1):
         ns.append(n)
         try:
             e = identify_stiffness(R[:n], tau_ext_A_Nm[:n], model, **options)
         except IllConditionedData:
-            dp.append(np.nan), da.append(np.nan), ds.append(np.nan), sd.append(np.nan)
+            for series in (dp, da, ds, sd):
+                series.append(np.nan)
             continue
-        det = np.linalg.det(e.K)
+        det = float(np.linalg.det(e.K))
         grad = (det * np.linalg.inv(e.K).T).ravel()   # d det / dK
-        dp.append(np.linalg.det(e.K_paper)), da.append(det), ds.append(np.linalg.det(e.K_sym))
+        dp.append(float(np.linalg.det(e.K_paper)))
+        da.append(det)
+        ds.append(float(np.linalg.det(e.K_sym)))
         sd.append(float(np.sqrt(max(grad @ e.cov_K @ grad, 0.0))))
     return ConvergenceCurve(*(np.asarray(x, float) for x in (ns, dp, da, ds, sd)))
 
 
-def plot_convergence(curve: ConvergenceCurve, path: str | Path, title: str = "") -> Path:
-    """Figure 5: det K against the number of measurements, saved as PNG."""
-    import matplotlib
+def plot_convergence(curve: ConvergenceCurve, *, title: str = "", ax: Axes | None = None) -> Axes:
+    """Figure 5 of the paper: det K against the number of measurements.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Parameters
+    ----------
+    curve : ConvergenceCurve
+        From :func:`convergence_curve`.
+    title : str, optional
+        Axes title (a default names Figure 5).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure is made when omitted.
 
-    fig, ax = plt.subplots(figsize=(6, 3.6))
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on (save with ``ax.figure.savefig(path)``).
+    """
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots(figsize=(6, 3.6), layout="constrained")
     ax.fill_between(curve.n, curve.det_K - 2 * curve.det_K_std, curve.det_K + 2 * curve.det_K_std,
                     color="C0", alpha=0.2, label="affine, +-2 sd")
     ax.plot(curve.n, curve.det_K, "C0-", label="affine LS")
@@ -72,5 +120,4 @@ def plot_convergence(curve: ConvergenceCurve, path: str | Path, title: str = "")
     ax.set_ylabel(r"det $K$ ((N m/rad)$^3$)")
     ax.set_title(title or "Convergence of the identified stiffness (Figure 5)")
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    return save(fig, path)
+    return ax

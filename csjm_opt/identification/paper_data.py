@@ -1,7 +1,7 @@
 """The paper's printed numbers (Tables 1-4), exactly as printed, and the errata-corrected R0.
 
 Nothing here is computed: these are the figures of the paper, to be checked
-(:mod:`csjm_opt.identification.paper_tables`), never trusted. See ``../shared/paper/ERRATA.md``.
+(:mod:`csjm_opt.identification.paper_tables`), never trusted. The errata are listed in docs/conventions.md.
 Arrays are read-only.
 """
 
@@ -28,7 +28,7 @@ TABLE2_FT_U95_FRACTION = _ro([0.0125, 0.0100, 0.0075, 0.0125, 0.0150, 0.0125])
 GRAVITY_N = 4.82
 R_G_A_M = _ro([0.0, 0.0, 0.081])
 
-#: Table 3, original pose R0 as printed: element (3, 2) is +0.300 (ERRATA 3), not a rotation.
+#: Table 3, original pose R0 as printed: element (3, 2) is +0.300 (erratum 3), not a rotation.
 R0_PRINTED = _ro([[0.992, -0.060, -0.111],
                   [0.090, 0.952, 0.292],
                   [0.088, 0.300, 0.950]])
@@ -41,7 +41,7 @@ TAU0_A_NM = _ro([-0.06, -3.08, 1.07])
 TABLE3_K_D = _ro([[29.39, 0.75, 1.67],
                   [-2.53, 29.96, -1.07],
                   [-4.49, -1.42, 6.99]])
-#: Printed K_L = -hat(tau0) (structure constants +-2, ERRATA 1); the corrected one is -1/2 hat(tau0).
+#: Printed K_L = -hat(tau0) (structure constants +-2, erratum 1); the corrected one is -1/2 hat(tau0).
 TABLE3_K_L = _ro([[0.0, 1.07, 3.08],
                   [-1.067, 0.0, -0.06],
                   [-3.08, 0.06, 0.0]])

@@ -1,11 +1,11 @@
 """Reproduce the paper's Tables 3 and 4 from its printed numbers, and check them.
 
 * Table 3: ``K_L`` printed is ``-hat(tau0)`` (structure constants +-2); the
-  corrected one is ``-1/2 hat(tau0)`` (ERRATA 1), and the corrected ``K`` is
+  corrected one is ``-1/2 hat(tau0)`` (erratum 1), and the corrected ``K`` is
   markedly closer to symmetric.
 * Table 4: column C is ``R0 exp(hat(K_D^-1 dtau))`` with the *corrected* R0
-  (ERRATA 3-4); the text's ``K^-1`` does not reproduce it. Column D is
-  recomputed per (63)-(65) from columns B and C (ERRATA 5).
+  (errata 3-4); the text's ``K^-1`` does not reproduce it. Column D is
+  recomputed per (63)-(65) from columns B and C (erratum 5).
 * The printed R0 is not a rotation; it is rejected with the measured error.
 """
 
@@ -23,7 +23,7 @@ from .verify import estimation_error, predict_pose
 
 
 def check_printed_R0() -> np.ndarray:
-    """Validate Table 3's R0 exactly as printed: raises :class:`NotARotation` (ERRATA 3)."""
+    """Validate Table 3's R0 exactly as printed: raises :class:`NotARotation` (erratum 3)."""
     return as_rotation(pd.R0_PRINTED, "R0 (Table 3, as printed)")
 
 
@@ -81,7 +81,7 @@ def table4(R0: np.ndarray = pd.R0_CORRECTED) -> dict[str, Any]:
 
 
 def paper_report() -> dict[str, Any]:
-    """The JSON-able report of ``csjm paper`` (keys per SPEC.md plus details)."""
+    """The JSON-able report of ``csjm paper`` (keys per docs/conventions.md plus details)."""
     t3, t4 = table3(), table4()
     try:
         check_printed_R0()
@@ -91,21 +91,21 @@ def paper_report() -> dict[str, Any]:
     R0 = as_rotation(pd.R0_CORRECTED)
     e3 = t4["E_theta_from_B_C"]
     errata = [
-        "ERRATA 1-2: K_L printed = -hat(tau0) (max deviation "
+        "Errata 1-2: K_L printed = -hat(tau0) (max deviation "
         f"{t3['K_L_printed_vs_minus_hat_tau0']:.3g}); corrected K_L = -1/2 hat(tau0); "
         f"||K-K^T||/||K|| printed {t3['symmetry_error_printed']:.3f} -> corrected "
         f"{t3['symmetry_error_corrected']:.3f}.",
-        f"ERRATA 3: Table 3 R0 as printed rejected: {r0_msg}; element (3,2) must be -0.300 "
+        f"Erratum 3: Table 3 R0 as printed rejected: {r0_msg}; element (3,2) must be -0.300 "
         f"(corrected R0: ||R^T R - I|| = {np.linalg.norm(pd.R0_CORRECTED.T @ pd.R0_CORRECTED - np.eye(3)):.2g}).",
-        "ERRATA 4: Table 4 column C = R0 exp(hat(K_D^-1 dtau)): max entry error "
+        "Erratum 4: Table 4 column C = R0 exp(hat(K_D^-1 dtau)): max entry error "
         f"{t4['col_C_max_entry_error_K_D'].max():.2g}; with the text's K^-1 (printed K) "
         f"{t4['col_C_max_entry_error_K_printed'].min():.3f}-{t4['col_C_max_entry_error_K_printed'].max():.3f}.",
-        "ERRATA 5: Table 4 column D does not follow from columns B and C by (63)-(65): recomputed "
+        "Erratum 5: Table 4 column D does not follow from columns B and C by (63)-(65): recomputed "
         + ", ".join(f"{x:.3f}" for x in e3) + " rad; printed "
         + ", ".join(f"{x:.3f}" for x in pd.TABLE4_E_THETA_RAD) + " rad.",
     ]
     errata.append(
-        "Observation (not in ERRATA): the antisymmetric part of the printed K_D is "
+        "Observation (not among the errata): the antisymmetric part of the printed K_D is "
         f"{t3['antisym_K_D_over_hat_tau0']:.2f} hat(tau0); the theory (K_D - K_D^T = hat(tau_load)) "
         "expects +0.50 hat(tau0) if tau0 is the total load, so no K_L = -1/2 hat(tau) makes the printed "
         f"K symmetric (K_D + hat(tau0) would: asymmetry {t3['symmetry_error_K_D_plus_hat_tau0']:.3f}). "

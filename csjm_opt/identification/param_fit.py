@@ -6,7 +6,7 @@ commanded ``l + dl`` (a pretension offset: ``dT = -k dl``). They are fitted by
 nonlinear least squares on the equilibrium (moment) residuals at the measured
 poses, which is fast and needs no forward statics::
 
-    r_i = J(R_i)^T T_i + tau_load_i,   T_i = k (c(R_i) - l_i - dl)   (38), SPEC.md
+    r_i = J(R_i)^T T_i + tau_load_i,   T_i = k (c(R_i) - l_i - dl)   (38), docs/conventions.md
 
 weighted by the F/T uncertainty when an instrument model is given. The
 covariance of the parameters is ``s^2 (A^T A)^-1`` from the Jacobian ``A`` at

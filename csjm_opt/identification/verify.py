@@ -10,7 +10,7 @@ predictor for a measured increment of the moment's components. ``K = K_D -
 1/2 hat(tau_load)`` is the covariant (energy-Hessian) stiffness; it differs
 from ``K_D`` by the connection term and using it in (61), as the paper's text
 says, is off by ``1/2 hat(tau_load)``. The paper's Table 4 column C was in
-fact computed with ``K_D`` (ERRATA 4). Both are offered (``use="K_D"``, the
+fact computed with ``K_D`` (erratum 4). Both are offered (``use="K_D"``, the
 default, or ``use="K"``).
 
 The load increment is either given as a total-load increment (the paper's
@@ -21,8 +21,7 @@ change at the (unknown) new pose is then found by a fixed-point iteration.
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
@@ -31,8 +30,10 @@ from ..errors import InvalidInput
 from .identify import StiffnessEstimate
 from ..measurement.logfile import MeasurementLog
 from ..model.numeric import Model
-from .._plotting import save
 from .._validate import as_array, as_rotation, as_rotations
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 
 def predict_pose(R0: np.ndarray, K: np.ndarray, dtau_A_Nm: np.ndarray) -> np.ndarray:
@@ -151,14 +152,28 @@ def verify_log(estimates: Sequence[StiffnessEstimate], log: MeasurementLog, mode
     return Verification(use, dtau, R, R_est, labels)
 
 
-def plot_verification(results: Sequence[Verification], path: str | Path, title: str = "") -> Path:
-    """Bar chart of E_theta per held-out case, one series per verification (e.g. K_D and K)."""
-    import matplotlib
+def plot_verification(results: Sequence[Verification], *, title: str = "",
+                      ax: Axes | None = None) -> Axes:
+    """Bar chart of E_theta per held-out case, one series per verification (e.g. K_D and K).
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Parameters
+    ----------
+    results : sequence of Verification
+        From :func:`verify_increments` or :func:`verify_log`, all over the same cases.
+    title : str, optional
+        Axes title (a default names (63)-(65)).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure is made when omitted.
 
-    fig, ax = plt.subplots(figsize=(7, 3.5))
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots(figsize=(7, 3.5), layout="constrained")
     width = 0.8 / max(1, len(results))
     for k, res in enumerate(results):
         x = np.arange(len(res.E_theta_rad)) + k * width
@@ -167,5 +182,4 @@ def plot_verification(results: Sequence[Verification], path: str | Path, title: 
     ax.set_ylabel(r"$E_\theta$ (rad)")
     ax.set_title(title or "Verification of the identified stiffness (63)-(65)")
     ax.legend()
-    fig.tight_layout()
-    return save(fig, path)
+    return ax

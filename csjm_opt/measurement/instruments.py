@@ -31,7 +31,8 @@ class InstrumentNoise:
     @classmethod
     def paper(cls, tracker_distance_m: float = 3.0, target_arm_m: float = 0.1) -> "InstrumentNoise":
         """Noise of the paper's instruments (tracker ``distance`` away, targets ``arm`` apart)."""
-        tau = tuple(FT_U95_FRACTION[a] * FT_FULL_SCALE[a] / 1.96 for a in ("tx", "ty", "tz"))
+        tx, ty, tz = (FT_U95_FRACTION[a] * FT_FULL_SCALE[a] / 1.96 for a in ("tx", "ty", "tz"))
+        tau = (tx, ty, tz)
         point_sigma = (TRACKER_U0_M + TRACKER_U_PER_M * tracker_distance_m) / 2
         return cls(tau, float(np.sqrt(2) * point_sigma / target_arm_m))
 

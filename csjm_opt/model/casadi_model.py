@@ -12,10 +12,10 @@ Inputs (shapes):
     l  (6, 1)  rest lengths (cable plus drive), m
     k  (6, 1)  cable-plus-drive stiffness, N/m
 
-Conventions (SPEC.md, ERRATA.md items 1-2):
+Conventions (docs/conventions.md, errata 1-2):
     * ``J`` (6, 3) has rows ``a_i x (R^T u_i)`` in {A}, (38); ``dc = -J dzeta`` (40).
     * ``J^T T`` is the cables' moment on the platform in {A}, ``= -dPhi``.
-    * ``stiffness`` is the load-convention K of SPEC.md,
+    * ``stiffness`` is the load-convention K of docs/conventions.md,
       ``K = J^T Kdiag J - D + 1/2 hat(J^T T)`` with ``D = d(J^T T)/dzeta`` at
       fixed T: the Levi-Civita Hessian of ``Phi = sum 1/2 k (c - l)^2``.
     * ``stiffness_paper`` is (45) with the corrected structure constants (31),
@@ -58,7 +58,7 @@ def _stiffness_parts(R: ca.SX, T: ca.SX, k: ca.SX, A: ca.SX, B: ca.SX) -> dict[s
     return {"J": J, "lengths": lengths, "tau": tau, "D": D, "JtKJ": JtKJ}
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def build_functions() -> dict[str, ca.Function]:
     """All model functions, built once per process (on first use, not at import)."""
     R = ca.SX.sym("R", 3, 3)
@@ -74,7 +74,7 @@ def build_functions() -> dict[str, ca.Function]:
     C, lengths, J = _cable_terms(R, A, B)
     parts = _stiffness_parts(R, T, k, A, B)
     K = parts["JtKJ"] - parts["D"] + 0.5 * so3.hat(parts["tau"])
-    K = 0.5 * (K + K.T)  # exact in exact arithmetic (ERRATA 1); removes round-off
+    K = 0.5 * (K + K.T)  # exact in exact arithmetic (erratum 1); removes round-off
     K45 = parts["D"] - parts["JtKJ"] - 0.5 * so3.hat(parts["tau"])
     K45_printed = parts["D"] - parts["JtKJ"] - so3.hat(parts["tau"])
 

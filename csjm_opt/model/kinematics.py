@@ -2,7 +2,7 @@
 
 The diagnosis and the testbed evaluate the moment balance of many rows at once, for many
 parameter vectors, so it does not go through CasADi row by row. Conventions
-are those of SPEC.md and :mod:`csjm_opt.model.casadi_model`: cable ``i`` runs from
+are those of docs/conventions.md and :mod:`csjm_opt.model.casadi_model`: cable ``i`` runs from
 the platform hole ``a_i`` (in {A}) to the base hole ``b_i`` (in {B}); in {A}
 its unit vector is ``u_i = (R^T b_i - a_i) / c_i``; ``J`` has rows
 ``a_i x u_i`` (38), and ``J^T T`` is the cables' moment on the platform.
@@ -21,6 +21,7 @@ from typing import Callable
 import numpy as np
 
 from .. import so3
+from . import cable_terms as _reference
 
 Residual = Callable[[np.ndarray], np.ndarray]   # (n, 3, 3) -> (n, 3)
 
@@ -29,19 +30,18 @@ def cable_terms(R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> tuple[np.nda
     """Cable lengths (n, 6) and Jacobian J (n, 6, 3) for poses R (n, 3, 3).
 
     ``A_m``, ``B_m`` are (6, 3) or per-row (n, 6, 3) hole positions in {A}, {B}.
+    The physics is :func:`csjm_opt.model.cable_terms.geometry` (the numpy reference).
     """
-    b_A = B_m @ R                                   # rows (R^T b_i)^T, (n, 6, 3)
-    v = b_A - A_m                                   # cable vectors in {A}
-    lengths = np.linalg.norm(v, axis=-1)
-    u = v / lengths[..., None]
-    a = np.broadcast_to(A_m, v.shape)
-    return lengths, np.cross(a, u)
+    c, _, J = _reference.geometry(R, A_m, B_m)
+    return c, J
 
 
 def weight_moment(R: np.ndarray, first_moment_A_kgm: np.ndarray, gravity_B: np.ndarray) -> np.ndarray:
-    """Moment of the weight about O in {A}: ``(m r) x (R^T g)`` (N m), (n, 3)."""
-    g_A = np.einsum("nji,j->ni", R, gravity_B)
-    return np.cross(first_moment_A_kgm, g_A)
+    """Moment of the weight about O in {A}: ``(m r) x (R^T g)`` (N m), (n, 3).
+
+    See :func:`csjm_opt.model.cable_terms.weight_moment` (the numpy reference).
+    """
+    return _reference.weight_moment(R, first_moment_A_kgm, gravity_B)
 
 
 def tangent(g: Residual, R: np.ndarray, g0: np.ndarray | None = None, h: float = 1e-7) -> np.ndarray:
@@ -74,7 +74,7 @@ def solve_poses(g: Residual, R_init: np.ndarray, tol_Nm: float = 1e-10, max_iter
     g0 = g(R)
     norm = np.linalg.norm(g0, axis=1)
     it = 0
-    for it in range(1, max_iter + 1):
+    for it in range(1, max_iter + 1):  # noqa: B007 (the count is reported after the loop)
         active = norm > tol_Nm
         if not np.any(active):
             break

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..errors import CsjmError
 from .._fileio import atomic_write_json, atomic_write_text
+from .._plotting import save
 from ..identification.identify import identify_stiffness
 from ..identification.figures import convergence_curve, plot_convergence
 from ..measurement.logfile import MeasurementLog
@@ -96,16 +97,16 @@ def run_demo(rig: Rig, log: MeasurementLog, out_dir: Path, test_log: Measurement
         if len(figures) < MAX_FIGURE_CYCLES:
             curve = convergence_curve(train.R[rows], train.tau_ext_A_Nm[rows], model,
                                       n_min=n_parameters(order) + 1, order=order)
-            plot_convergence(curve, out_dir / f"identify_convergence_cycle{c}.png",
-                             f"Cycle {c}: det K against measurements")
+            ax = plot_convergence(curve, title=f"Cycle {c}: det K against measurements")
+            save(ax.figure, out_dir / f"identify_convergence_cycle{c}.png")
             figures.append(f"identify_convergence_cycle{c}.png")
     summary: dict[str, Any] = {"cycles": cycles, "skipped_cycles": skipped, "n_train_rows": len(train),
                                "n_test_rows": len(test), "figures": figures}
     if estimates and len(test):
         v_kd = verify_log(estimates, test, model, use="K_D")
         v_k = verify_log(estimates, test, model, use="K")
-        plot_verification([v_kd, v_k], out_dir / "identify_verification.png",
-                          "Held-out verification (61)-(65): K_D vs K")
+        ax = plot_verification([v_kd, v_k], title="Held-out verification (61)-(65): K_D vs K")
+        save(ax.figure, out_dir / "identify_verification.png")
         figures.append("identify_verification.png")
         atomic_write_text(out_dir / "identify_verification.txt",
                           "Predicted with K_D (right to first order)\n" + v_kd.table()

@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import so3
-from ..control.closed_loop import plot_closed_loop, simulate
+from .._plotting import save
+from ..control.closed_loop import plot_closed_loop, plot_closed_loop_stiffness, simulate
 from ..control.controllers import StiffnessShapingController
 from .._fileio import atomic_write_json
 from ..control.load_profiles import Constant, Sinusoid, Step
@@ -90,8 +91,9 @@ def run_demo(rig: Rig, out_dir: Path, R: np.ndarray | None = None, tau_ext: np.n
     unreach = shape_stiffness(rig, R, tau, iso, model=model)
 
     # 2. reachable set figure, with the two shaped results marked
-    fig_reach = plot_reachable_set(rs, out_dir / "reachable_set.png", rig.t_min_N, rig.t_max_N,
-                                   {"shaped (reachable target)": reach.K, "shaped (isotropic target)": unreach.K})
+    ax_eig, _ = plot_reachable_set(rs, rig.t_min_N, rig.t_max_N, {"shaped (reachable target)": reach.K,
+                                                                   "shaped (isotropic target)": unreach.K})
+    fig_reach = save(ax_eig.figure, out_dir / "reachable_set.png")
 
     # 3. closed loop: hold R, step + sinusoidal disturbance about x, soft/stiff (about x) switching at half time
     half = duration_s / 2
@@ -99,7 +101,8 @@ def run_demo(rig: Rig, out_dir: Path, R: np.ndarray | None = None, tau_ext: np.n
     load = Constant(tau) + Step(0.2 * duration_s, [STEP_NM, 0.0, 0.0]) + Sinusoid([SINE_NM, 0.0, 0.0], SINE_HZ)
     ctrl = StiffnessShapingController(rig, R, target)
     log = simulate(rig, ctrl, load, duration_s, dt_s)
-    figs = plot_closed_loop(log, out_dir, prefix="closed_loop", t_min_N=rig.t_min_N, t_max_N=rig.t_max_N)
+    figs = [save(plot_closed_loop(log, rig.t_min_N, rig.t_max_N)[0].figure, out_dir / "closed_loop.png"),
+            save(plot_closed_loop_stiffness(log)[0].figure, out_dir / "closed_loop_K.png")]
     summ = log.summary()
 
     summary = {

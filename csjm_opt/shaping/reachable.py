@@ -28,18 +28,21 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
-from .._plotting import save
 from scipy.optimize import linprog
 
 from ..errors import InfeasibleLoad, InvalidInput, SolverError
-from .._plotting import save
 from ..model.rig import Rig
 from .shaper import StiffnessBasis, stiffness_basis
 from .._validate import as_array, as_rotation, as_vector3
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -154,7 +157,7 @@ def _cutting_plane(basis: StiffnessBasis, tau_load: np.ndarray, t_min: float, t_
     return sign * best, bound - best, iterates
 
 
-def reachable_set(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray = (0.0, 0.0, 0.0), n_samples: int = 2000,
+def reachable_set(rig: Rig, R: np.ndarray, tau_ext_A_Nm: npt.ArrayLike = (0.0, 0.0, 0.0), n_samples: int = 2000,
                   rng: np.random.Generator | None = None, tol: float = 1e-6,
                   max_cuts: int = 200) -> ReachableSet:
     """Eigenvalue and trace ranges of K over all feasible tensions at ``R`` under ``tau_ext``."""
@@ -186,16 +189,33 @@ def reachable_set(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray = (0.0, 0.0,
     return ReachableSet(ranges, method, float(max(gap1, gap3)), trace_range, V, lams[nv:], basis, tau_load)
 
 
-def plot_reachable_set(rs: ReachableSet, path: str | Path, t_min_N: float, t_max_N: float,
-                       K_marks: dict[str, np.ndarray] | None = None, n_directions: int = 72) -> Path:
-    """Figure: eigenvalue ranges (left), directional stiffness range in the {A} x-y plane (right)."""
-    import matplotlib
+def plot_reachable_set(rs: ReachableSet, t_min_N: float, t_max_N: float,
+                       K_marks: dict[str, np.ndarray] | None = None, n_directions: int = 72, *,
+                       fig: Figure | None = None) -> tuple[Axes, Axes]:
+    """Eigenvalue ranges (left) and directional stiffness range in the {A} x-y plane (right, polar).
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Parameters
+    ----------
+    rs : ReachableSet
+        From :func:`reachable_set`.
+    t_min_N, t_max_N : float
+        Tension bounds (N) of the rig, for the directional ranges.
+    K_marks : dict of str to ndarray (3, 3), optional
+        Stiffness matrices (N m/rad) to mark, by label (e.g. shaped results).
+    n_directions : int, optional
+        Number of directions in the x-y plane for the polar plot.
+    fig : matplotlib.figure.Figure, optional
+        Empty figure to draw the two panels in; a new one is made when omitted.
 
-    path = Path(path)
-    fig = plt.figure(figsize=(12, 4.4))
+    Returns
+    -------
+    tuple of matplotlib.axes.Axes
+        The eigenvalue axes and the polar axes.
+    """
+    if fig is None:
+        import matplotlib.pyplot as plt
+
+        fig = plt.figure(figsize=(12, 4.4), layout="constrained")
     ax = fig.add_subplot(1, 2, 1)
     for i in range(3):
         lo, hi = rs.eigen_ranges[i]
@@ -214,7 +234,7 @@ def plot_reachable_set(rs: ReachableSet, path: str | Path, t_min_N: float, t_max
     ax.set_title("reachable eigenvalues of K")
     if K_marks:
         ax.legend(fontsize=7, loc="lower right")
-    ax2 = fig.add_subplot(1, 2, 2, projection="polar")
+    ax2: Any = fig.add_subplot(1, 2, 2, projection="polar")
     phi = np.linspace(0, 2 * np.pi, n_directions + 1)
     dirs = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=1)
     rng_ = directional_range(rs.basis, rs.tau_load_A_Nm, dirs[:-1], t_min_N, t_max_N)
@@ -227,6 +247,5 @@ def plot_reachable_set(rs: ReachableSet, path: str | Path, t_min_N: float, t_max
     ax2.set_rmin(0.0)
     ax2.set_title(r"$u^T K u$ for $u$ in the {A} x-y plane (N m/rad)", fontsize=9)
     ax2.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.08, 1.0))
-    fig.tight_layout()
-    return save(fig, path)
+    return ax, ax2
 

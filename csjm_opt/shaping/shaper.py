@@ -1,6 +1,6 @@
 """Stiffness shaping: tensions that hold a load and make K as close as possible to a target.
 
-For fixed cable stiffness ``k`` the stiffness of SPEC.md is affine in the
+For fixed cable stiffness ``k`` the stiffness of docs/conventions.md is affine in the
 tensions (:mod:`csjm_opt.model.cable_terms`)::
 
     K(T) = K0 + sum_i t_i G_i,     K0 = J^T diag(k) J,   G_i = Hess(c_i)
@@ -34,6 +34,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import warnings
+from typing import Any
 
 import numpy as np
 import qpsolvers
@@ -86,7 +87,7 @@ class ShapingResult:
 
     @property
     def tensions(self) -> np.ndarray:
-        """Alias of ``tensions_N`` (SPEC.md name)."""
+        """Alias of ``tensions_N`` (docs/conventions.md name)."""
         return self.tensions_N
 
     @property
@@ -264,7 +265,8 @@ def shape_stiffness(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray, K_target:
     T, basis, res = shaper.solve(R, tau_ext, obj, x0)
     P, q, A, b = qp_matrices(basis, tau_ext, obj, rig.t_mid_N, regularization)
     Kt = as_array(K_target, (3, 3), "K_target")
-    result = ShapingResult(T, model.stiffness(R, T), 0.5 * (Kt + Kt.T), obj, R, tau_ext, model.weight_moment(R), model.jacobian(R), rig.t_min_N,
+    result = ShapingResult(T, model.stiffness(R, T), 0.5 * (Kt + Kt.T), obj, R, tau_ext,
+                           model.weight_moment(R), model.jacobian(R), rig.t_min_N,
                            rig.t_max_N, solver, exact_tol, res.kkt_error(P, q, A, b, shaper._lo, shaper._hi))
     if not result.is_valid():
         raise SolverError(f"shaped tensions fail their check: equilibrium residual "
@@ -277,6 +279,7 @@ def _solve_qpsolvers(problem: qpsolvers.Problem, solver: str) -> np.ndarray | No
     if solver not in qpsolvers.available_solvers:
         raise InvalidInput(f"unknown QP solver {solver!r}; installed: "
                            f"{', '.join(qpsolvers.available_solvers)} (or 'active_set')", "solver")
+    opts: dict[str, Any]
     opts = {"eps_abs": 1e-10, "eps_rel": 1e-10, "verbose": False, "max_iter": 20000} if solver == "osqp" else {}
     try:
         with warnings.catch_warnings():  # solver chatter (status warnings) is reported by our own checks

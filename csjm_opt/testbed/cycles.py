@@ -66,7 +66,8 @@ def design_cycles(rig: Rig, n_cycles: int, rng: np.random.Generator, steps: int 
 
 def _draw(rig, model, rng, alphas, max_tilt, max_twist, preload, load) -> CycleDesign | None:
     tilt, az = rng.uniform(0.05, max_tilt), rng.uniform(0, 2 * np.pi)
-    R_ref = so3.exp(tilt * np.array([np.cos(az), np.sin(az), 0.0])) @ so3.exp([0, 0, rng.uniform(-max_twist, max_twist)])
+    R_ref = (so3.exp(tilt * np.array([np.cos(az), np.sin(az), 0.0]))
+             @ so3.exp([0, 0, rng.uniform(-max_twist, max_twist)]))
     tau0 = _random_unit(rng) * rng.uniform(*preload)
     dtau = _random_unit(rng) * rng.uniform(*load)
     try:

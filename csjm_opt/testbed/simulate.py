@@ -1,4 +1,4 @@
-"""Simulate a measurement log (SPEC.md format) on a plant, with instrument noise."""
+"""Simulate a measurement log (format in docs/conventions.md) on a plant, with instrument noise."""
 
 from __future__ import annotations
 
@@ -37,5 +37,5 @@ def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
     R_true = plant.respond(l, tau, cycle, R_init)
     n = len(cycle)
     tau_meas = plant.measured_moment(tau) + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)
-    R_meas = R_true @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
+    R_meas = plant.measured_pose(R_true) @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
     return MeasurementLog.from_arrays(cycle, l, tau_meas, R_meas)
