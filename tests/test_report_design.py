@@ -11,6 +11,7 @@ from csjm_opt.cli import main
 from csjm_opt.model import hexagon
 from csjm_opt.report.design import pareto_layers, pareto_mask
 
+from report_figures import problems, record_figures
 from report_html import mismatches, parse, unresolved
 
 
@@ -55,7 +56,10 @@ def results(tmp_path):
 
 def test_report_of_results(results, tmp_path, capsys):
     out = tmp_path / "rep"
-    assert main(["report", str(results), "--out", str(out), "--top", "4"]) == 0
+    with record_figures() as figures:
+        assert main(["report", str(results), "--out", str(out), "--top", "4"]) == 0
+    assert set(figures) == {"pareto", "geometry"}
+    assert [p for name, d in figures.items() for p in problems(name, d)] == []
     assert "index.html" in capsys.readouterr().out
     page = parse(out / "index.html")
     data = json.loads((out / page.data_json).read_text())

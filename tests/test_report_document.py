@@ -87,3 +87,23 @@ def parse_text(tmp_path, html):
     path = tmp_path / "page.html"
     path.write_text(html)
     return parse(path)
+
+
+def test_the_figure_check_finds_what_a_figure_lacks():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from report_figures import describe, problems
+
+    fig, ax = plt.subplots()
+    ax.plot([1, 2], [3, 4], label="a")
+    ax.legend(loc="upper left")
+    ax.set_xlabel("time")
+    found = problems("f", describe(fig))
+    assert any("no title" in p for p in found) and any("no unit" in p for p in found)
+    assert any("no ylabel" in p for p in found) and any("legend" in p for p in found)
+    ax.set(title="T", xlabel="time (s)", ylabel="angle (rad)")
+    ax.legend(loc="best")
+    assert problems("f", describe(fig)) == []
+    plt.close(fig)

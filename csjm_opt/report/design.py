@@ -272,11 +272,12 @@ def document(s: dict[str, Any], geometry: bool) -> Document:
             status = "warn"
     else:
         text += "The paper's design is not among the results (give --sweep SWEEP.toml to evaluate and mark it)."
-    cols = [Column("design", fmt="int"), Column("Pareto layer", fmt="int")] + [Column(*_unit(n)[:2], scale=_unit(n)[2]) for n in names] + [
+    cols = [Column("design", fmt="int"), Column("Pareto layer", fmt="int")]
+    cols += [Column(*_unit(n)[:2], scale=_unit(n)[2]) for n in names] + [
         Column("workspace fraction", fmt="fix3"), Column("min stiffness", "N m/rad"), Column("tilt cone", "deg"),
         Column("median min stiffness", "N m/rad")]
     keys = (X_KEY, Y_KEY, "tilt_cone_deg", "median_min_stiffness_Nm_per_rad")
-    rows = [[k + 1, Cell(d["pareto_layer"], src=("best", k, "pareto_layer"))]
+    rows: list[list[Any]] = [[k + 1, Cell(d["pareto_layer"], src=("best", k, "pareto_layer"))]
             + [Cell(d["params"].get(n), src=("best", k, "params", n)) for n in names]
             + [Cell(d[key], src=("best", k, key)) for key in keys] for k, d in enumerate(best)]
     if paper is not None:

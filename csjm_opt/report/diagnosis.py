@@ -109,7 +109,8 @@ def document(j: dict[str, Any], data_name: str, alpha: float = 0.01) -> Document
     sig_ = j.get("significance", {})
     top.add(Paragraph(f"Held-out rows: {j.get('heldout', '')}. Decision rule: {sig_.get('test', '')}; family-wise "
                       f"alpha {sig(sig_.get('alpha', alpha), 2)}. Refitting the nominal model alone (nominal_refit) "
-                      f"closes {format_number(g.get('fraction_explained_by_nominal_refit'), 'fix0', 100)}% of the gap."))
+                      f"closes {format_number(g.get('fraction_explained_by_nominal_refit'), 'fix0', 100)}% "
+                      "of the gap."))
     sections = [top, _candidates(j)]
     sel = next((c for c in j["candidates"] if c["effect"] == j["selected"] and not c.get("error")), None)
     if sel is not None:
@@ -168,7 +169,9 @@ def _candidates(j: dict) -> Section:
             rows.append([name, c["error"]] + [None] * (width - 2))
             continue
         held, ftest = _tests(c)
-        num = lambda key: Cell(c.get(key), src=("candidates", i, key)) if key and key in c else None  # noqa: E731
+        def num(key: str | None, c: dict = c, i: int = i) -> Cell | None:
+            return Cell(c.get(key), src=("candidates", i, key)) if key and key in c else None
+
         row = [name, num("heldout_rms_rad"), num("train_rms_rad")] + ([num("improvement_rad")] if improve else [])
         row += [num(held), num(ftest), num("bic"), bool(c.get("significant"))]
         row += [_plausible_text(c)] if plaus else []
@@ -227,7 +230,8 @@ def _parameters(c: dict, index: int) -> Section:
     if drows:
         sec.add(Table([Column("derived quantity"), Column("value"), Column("unit")], drows))
     if c.get("identifiable") is False:
-        sec.verdict = (f"The augmented fit is ill-conditioned (condition {sig(c.get('condition'))}, rank {c.get('rank')} "
+        sec.verdict = (f"The augmented fit is ill-conditioned (condition {sig(c.get('condition'))}, "
+                       f"rank {c.get('rank')} "
                        f"of {c.get('n_params')}): some parameter combinations are not determined by these data.")
         sec.status = "warn"
     else:
