@@ -8,7 +8,7 @@ compiled primal-dual active set method (:mod:`csjm_opt.planning._kernels`), with
 through qpsolvers as the fallback; any qpsolvers backend can be chosen, and
 its answer is then polished to round-off by the same active set method. (The
 default is not OSQP because qpsolvers' set-up alone costs ~0.5 ms a pose,
-several times scipy SLSQP; see README.) The QP::
+several times scipy SLSQP; see docs/guide/planning.md.) The QP::
 
     minimise    1/2 ||T - T_ref||^2
     subject to  J^T T + tau_load = 0,   tau_load = tau_ext + tau_weight  (in {A})
