@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from . import hexagon
-from ..errors import RigFileError
+from ..errors import InvalidInput, RigFileError
 from .._fileio import atomic_write_text, read_text
 
 #: Shared cable-plus-drive stiffness of the built-in paper rig (N/m). The paper
@@ -91,7 +91,27 @@ class Rig:
         return np.full(6, 0.5 * (self.t_min_N + self.t_max_N))
 
     def replace(self, **changes: Any) -> "Rig":
-        """A copy with some fields changed (validated again)."""
+        """A copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields, e.g. ``cable_stiffness_N_per_m=[6000.0] * 6``.
+
+        Returns
+        -------
+        Rig
+            The changed copy; this rig is unchanged.
+
+        Raises
+        ------
+        InvalidInput
+            If a name is not a field of :class:`Rig` or a value is invalid.
+        """
+        unknown = sorted(set(changes) - {f.name for f in dataclasses.fields(self)})
+        if unknown:
+            raise InvalidInput(f"Rig has no field {', '.join(unknown)}; fields: "
+                               + ", ".join(f.name for f in dataclasses.fields(self)), unknown[0])
         return dataclasses.replace(self, **changes)
 
     # ------------------------------------------------------------ conversion
