@@ -271,6 +271,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--scheduler", default=None, help="Dask scheduler address (as csjm sweep --scheduler)")
     ap.add_argument("--dask", action="store_true", help="a local Dask cluster instead of a process pool")
     ap.add_argument("--limit", type=int, default=None, help="stop after this many new logs")
+    ap.add_argument("--kinds", nargs="+", default=["none", "single", "pair", "outside"],
+                    help="kinds of log to run (several runs may append to the same OUT.jsonl)")
     ap.add_argument("--out", default="studies/diagnose_confusion")
     ap.add_argument("--summarise", action="store_true", help="only summarise OUT.jsonl")
     ap.add_argument("--no-progress", action="store_true")
@@ -284,7 +286,8 @@ def main(argv: list[str] | None = None) -> int:
                 rec = json.loads(line)
                 done[rec["id"]] = rec
     if not args.summarise:
-        todo = [j for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs) if j["id"] not in done]
+        todo = [j for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs)
+                if j["id"] not in done and j["kind"] in args.kinds]
         todo = todo[:args.limit] if args.limit else todo
         bar = tqdm(total=len(todo), file=sys.stderr, desc="confusion study", disable=args.no_progress or None)
         with path.open("a") as fh:
