@@ -78,7 +78,16 @@ def jobs(n_rigs: int, none_per_rig: int, cycles: int, pair_rigs: int) -> list[di
 
 
 def run_one(job: dict) -> dict:
-    """Simulate one log on its random rig and diagnose it (a worker's task)."""
+    """Simulate one log on its random rig and diagnose it (a worker's task); failures are recorded."""
+    from csjm_opt.errors import CsjmError
+
+    try:
+        return _run_one(job)
+    except CsjmError as exc:
+        return {**job, "error": f"{type(exc).__name__}: {exc}"}
+
+
+def _run_one(job: dict) -> dict:
     from csjm_opt.diagnose import diagnose
     from csjm_opt.diagnose.augmented import AugmentedModel
     from csjm_opt.diagnose.fit import fit_model
@@ -116,7 +125,8 @@ def run_one(job: dict) -> dict:
             "pair_separable": next((p["separable"] for p in j["pairs"] if set(p["effects"]) == set(job["effects"])),
                                    None) if job["kind"] == "pair" else None,
             "gap": j["gap"], "noise_floor_rad": j["noise_floor_rad"], "true_floor_rad": floor,
-            "warnings": j["verdict"]["warnings"], "alternatives": j["verdict"].get("alternatives", []), "selected_plausible": sel_cand["plausible"] if sel_cand else None,
+            "warnings": j["verdict"]["warnings"], "alternatives": j["verdict"].get("alternatives", []),
+            "selected_plausible": sel_cand["plausible"] if sel_cand else None,
             "remaining_p": j["remaining_signature"]["p_value"], "gap_signature_p": j["gap_signature"]["p_value"],
             "detected": [c["effect"] for c in j["candidates"] if c.get("significant")],
             "seconds_diagnose": time.perf_counter() - t1, "seconds": time.perf_counter() - t0}
@@ -297,7 +307,11 @@ def main(argv: list[str] | None = None) -> int:
                 done[rec["id"]] = rec
                 bar.update(1)
         bar.close()
-    records = list(done.values())
+    failed = [r for r in done.values() if "error" in r]
+    records = [r for r in done.values() if "error" not in r]
+    if failed:
+        print(f"{len(failed)} logs failed (recorded in {path}): " + "; ".join(r["error"] for r in failed[:3]),
+              file=sys.stderr)
     if not records:
         return 0
     text = summarise(records)

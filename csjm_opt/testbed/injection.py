@@ -9,7 +9,7 @@ friction          mu_beta_i = 0.03 * severity * U(0.7, 1.3), rho = 0.1
 cable_hardening   h = 15 /m * severity
 link_compliance   C = 0.004 rad/(N m) * severity * SPD with eigenvalues U(0.5, 1.5)
 sensor_bias       |b| = 0.12 N m * severity, random direction
-mass_com          mass * (1 +- 0.2 severity), com + 15 mm * severity random direction
+mass_com          mass * (1 + 0.2 severity)^(+-1), com + 15 mm * severity random direction
 tracker_          tracker frame rotated by 2.5 mrad * severity about a random
 registration      axis (``marker=True`` in :func:`inject`: also the markers)
 stiffness_scale   every stiffness times exp(+-0.03 severity)
@@ -62,7 +62,7 @@ def inject(plant: Plant, effect: str, severity: float, rng: np.random.Generator)
     elif effect == "sensor_bias":
         changes = {"sensor_bias_A_Nm": 0.12 * s * _unit(rng)}
     elif effect == "mass_com":
-        rig = rig.replace(platform_mass_kg=rig.platform_mass_kg * (1 + 0.2 * s * rng.choice([-1.0, 1.0])),
+        rig = rig.replace(platform_mass_kg=rig.platform_mass_kg * (1 + 0.2 * s) ** rng.choice([-1.0, 1.0]),
                           com_A_m=np.asarray(rig.com_A_m) + 15e-3 * s * _unit(rng))
         changes = {"rig": rig}
     elif effect == "tracker_registration":
