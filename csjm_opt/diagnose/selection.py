@@ -34,6 +34,12 @@ Rule (constants below; ``m`` candidates tried):
    ``IMPROVE_MULT`` floors, but no plausible single or pair closes the gap;
    ``none`` otherwise. Pairs whose parameter blocks are not separable on this
    log (:mod:`.pairs`) are reported as such.
+6. *Masked pairs*: when no single effect is detected but the null's residual
+   holds significant structure of at least ``IMPROVE_MULT`` floors, two
+   effects may hide each other: the single with the lowest held-out error is
+   paired with each other effect, and a pair is named when it beats the
+   null model at ``ALPHA`` over the number of possible pairs (Bonferroni),
+   is plausible and closes the gap.
 """
 
 from __future__ import annotations
@@ -200,12 +206,21 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
         tests[n]["closes_gap"] = ctx.closes(sc)
         tests[n]["residual_signature_p"] = ctx.signature(sc)["p_value"]
 
-    pairs, pair_scores = _pairs(ctx, rig, names, singles, first, secondary, ranges, tick)
+    gap_sig = ctx.signature(baseline)
+    gap_there = bool(gap_sig["significant"]) and systematic(baseline.heldout_rms_rad, floor0) >= IMPROVE_MULT * floor0
+    masked = first is None and gap_there and len(singles) > 1     # two effects may hide each other: rule 6
+    seed = min(singles, key=lambda n: singles[n].heldout_mse) if masked else first
+    if seed is None:
+        pair_base, level = baseline, 1.0
+    elif masked:
+        pair_base, level = baseline, ALPHA / max(m * (m - 1) // 2, 1)
+    else:
+        pair_base, level = singles[seed], ALPHA / max(m - 1, 1)
+    pairs, pair_scores = _pairs(ctx, rig, names, singles, seed, secondary, ranges, tick, pair_base, level)
     if bar:
         bar.close()
-    gap_sig = ctx.signature(baseline)
-    selected, second, final, verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_sig,
-                                                floor0)
+    selected, second, final, verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_there,
+                                                seed)
     scale = ctx.scale(final)
     floor = scale * ctx.instrument
     estimates = {"within_cycle_rad": ctx.local, "within_cycle_dof": ctx.local_dof,
@@ -244,8 +259,9 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     return d
 
 
-def _pairs(ctx: _Context, rig: Rig, names, singles, first, secondary, ranges, tick) -> tuple[list, dict]:
-    """Every pair's separability; the first effect + each other one fitted and tested."""
+def _pairs(ctx: _Context, rig: Rig, names, singles, first, secondary, ranges, tick, base: CandidateScore,
+           level: float) -> tuple[list, dict]:
+    """Every pair's separability; the first effect + each other one fitted and tested against ``base``."""
     pairs: list[dict] = []
     scores: dict[str, CandidateScore] = {}
     if not secondary:
@@ -256,9 +272,7 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, first, secondary, ranges, ti
     if first is None:
         tick(max(len(names) - 1, 0))
         return pairs, scores
-    base = singles[first]
     rest = [n for n in singles if n != first]
-    level = ALPHA / max(len(rest), 1)
     for name in rest:
         entry = next(p for p in pairs if set(p["effects"]) == {first, name})
         try:
@@ -277,11 +291,27 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, first, secondary, ranges, ti
     return pairs, scores
 
 
-def _verdict(ctx: _Context, baseline, singles, tests, first, pairs, pair_scores, gap_sig, floor0):
-    """``(selected, secondary, final score, verdict dict)`` by rule 5 of the module doc."""
+def _verdict(ctx: _Context, baseline, singles, tests, first, pairs, pair_scores, gap_there, seed):
+    """``(selected, secondary, final score, verdict dict)`` by rules 5 and 6 of the module doc."""
     warnings: list[str] = []
     none2 = {"effect": "none"}
-    gap_there = bool(gap_sig["significant"]) and systematic(baseline.heldout_rms_rad, floor0) >= IMPROVE_MULT * floor0
+    if first is None and seed is not None:         # masked pair (rule 6)
+        ok = [p for p in pairs if p.get("fitted") and p["significant"] and p["plausible"] and p["closes_gap"]]
+        if ok:
+            best = min(ok, key=lambda p: p["bic"])
+            name = best["effects"][1]
+            if not best["separable"]:
+                warnings.append(f"{seed} and {name} are not separable on this log "
+                                f"(Fisher block correlation {best['max_correlation']:.3f})")
+            sc = pair_scores[name]
+            second = {"effect": name, "heldout_rms_rad": sc.heldout_rms_rad,
+                      "params": {k: v for k, v in sc.fit.params().items() if k not in singles[seed].fit.params()},
+                      "fraction_explained": ctx.fraction(sc), "p_value": best["p_value_vs_first"],
+                      **{k: best[k] for k in ("improvement_rad", "separable", "max_correlation", "plausible",
+                                              "implausible_params")}}
+            return seed, second, sc, {"selected": seed, "warnings": warnings,
+                                      "reason": f"neither alone, but {seed} and {name} together close the gap "
+                                                "on held-out cycles (each hides the other)"}
     if first is None:
         if gap_there:
             return "unexplained", none2, baseline, {
