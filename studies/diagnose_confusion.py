@@ -237,6 +237,8 @@ def figure(records: list[dict], path: Path) -> None:
     from csjm_opt.diagnose import VOCABULARY
 
     keys = sorted({"+".join(r["effects"]) or "none" for r in records if r["kind"] in ("none", "single", "outside")})
+    if not keys:
+        return
     M = np.array([[sum(1 for r in records if r["kind"] != "pair" and ("+".join(r["effects"]) or "none") == k
                        and r["selected"] == v) for v in VOCABULARY] for k in keys], float)
     M /= np.maximum(M.sum(axis=1, keepdims=True), 1)
