@@ -127,6 +127,7 @@ def _run_one(job: dict) -> dict:
             "gap": j["gap"], "noise_floor_rad": j["noise_floor_rad"], "true_floor_rad": floor,
             "warnings": j["verdict"]["warnings"], "alternatives": j["verdict"].get("alternatives", []),
             "selected_plausible": sel_cand["plausible"] if sel_cand else None,
+            "true_plausible": all(c.get("plausible", False) for c in j["candidates"] if c["effect"] in job["effects"]),
             "remaining_p": j["remaining_signature"]["p_value"], "gap_signature_p": j["gap_signature"]["p_value"],
             "detected": [c["effect"] for c in j["candidates"] if c.get("significant")],
             "seconds_diagnose": time.perf_counter() - t1, "seconds": time.perf_counter() - t0}
@@ -177,6 +178,12 @@ def summarise(records: list[dict]) -> str:
              f"{_rate(none, lambda r: r['selected'] not in ('none', 'unexplained'))} |",
              f"| effect-free logs: remaining-signature test significant | about alpha = 1 % | "
              f"{_rate(none, lambda r: (r['remaining_p'] or 1) < 0.01)} |"]
+    inr = [r for r in records if r["kind"] == "single" and r["multiple"] >= 3.0 and r.get("true_plausible")]
+    lines.append(f"| single effects >= 3x floor whose true fit is within the prior ranges: named right | >= 95 % | "
+                 f"{_rate(inr, lambda r: r['selected'] == r['effects'][0])} |")
+    inr = [r for r in inr if r["effects"][0] != "hole_offsets"]
+    lines.append(f"| the same without hole_offsets | >= 95 % | "
+                 f"{_rate(inr, lambda r: r['selected'] == r['effects'][0])} |")
     right = [r for r in records if r["kind"] == "single" and r["selected"] == r["effects"][0]]
     lines.append(f"| correctly named single effects: remaining-signature test significant | about alpha = 1 % | "
                  f"{_rate(right, lambda r: (r['remaining_p'] or 1) < 0.01)} |")
@@ -283,6 +290,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--scheduler", default=None, help="Dask scheduler address (as csjm sweep --scheduler)")
     ap.add_argument("--dask", action="store_true", help="a local Dask cluster instead of a process pool")
     ap.add_argument("--limit", type=int, default=None, help="stop after this many new logs")
+    ap.add_argument("--multiples", nargs="+", type=float, default=None, help="only these severities")
     ap.add_argument("--kinds", nargs="+", default=["none", "single", "pair", "outside"],
                     help="kinds of log to run (several runs may append to the same OUT.jsonl)")
     ap.add_argument("--out", default="studies/diagnose_confusion")
@@ -299,7 +307,8 @@ def main(argv: list[str] | None = None) -> int:
                 done[rec["id"]] = rec
     if not args.summarise:
         todo = [j for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs)
-                if j["id"] not in done and j["kind"] in args.kinds]
+                if j["id"] not in done and j["kind"] in args.kinds
+                and (args.multiples is None or j["multiple"] in args.multiples)]
         todo = todo[:args.limit] if args.limit else todo
         bar = tqdm(total=len(todo), file=sys.stderr, desc="confusion study", disable=args.no_progress or None)
         with path.open("a") as fh:
