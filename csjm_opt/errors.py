@@ -112,13 +112,18 @@ class IllConditionedData(CsjmError):
     """Measured excitation does not determine the estimate.
 
     ``condition`` is the condition number (``inf`` when rank deficient),
-    ``rank`` the numerical rank of the excitation.
+    ``rank`` the numerical rank of the excitation; ``direction`` (when known)
+    the unit vector along which the excitation is weakest (for stiffness
+    identification: of the load moments, in {A}), i.e. the direction a new
+    experiment should load.
     """
 
-    def __init__(self, message: str, condition: float, rank: int | None = None):
+    def __init__(self, message: str, condition: float, rank: int | None = None,
+                 direction: Any = None):
         super().__init__(message)
         self.condition = float(condition)
         self.rank = rank
+        self.direction = None if direction is None else np.asarray(direction, dtype=float)
 
 
 class DesignError(InvalidInput):
@@ -138,3 +143,16 @@ class DesignError(InvalidInput):
 
 class UsageError(InvalidInput):
     """Bad command-line usage (unknown option, missing argument, bad value)."""
+
+
+class InconsistentTensions(InvalidInput):
+    """Tensions given to the stiffness are outside ``[t_min, t_max]`` or out of equilibrium.
+
+    ``reason`` is ``"bounds"`` or ``"equilibrium"``; ``value`` the bound
+    violation (N) or the equilibrium residual ``||J^T T + tau_load||`` (N m).
+    """
+
+    def __init__(self, message: str, reason: str, value: float):
+        super().__init__(message, "tensions")
+        self.reason = reason
+        self.value = float(value)

@@ -8,15 +8,23 @@ from csjm_opt.planning import _active_set as active_set
 from csjm_opt.planning import _kernels as kernels
 
 
-def test_kernel_jacobian_and_weight_match_casadi_model(rig, model):
-    Rs = so3.random_rotations(20, np.random.default_rng(3), max_angle=0.6)
+def test_planner_kernel_matches_casadi_model(rig, model):
+    """plan_one's J, weight moment, cable and rest lengths against the CasADi model."""
+    rng = np.random.default_rng(3)
+    Rs = so3.random_rotations(20, rng, max_angle=0.6)
     for R in Rs:
-        J = np.empty((6, 3))
-        kernels.jacobian_into(rig.platform_holes_A_m, rig.base_holes_B_m, R, J)
-        assert np.allclose(J, model.jacobian(R), atol=1e-14)
-        w = np.empty(3)
-        kernels.weight_moment_into(rig.platform_mass_kg, rig.com_A_m, rig.gravity_B_m_per_s2, R, w)
-        assert np.allclose(w, model.weight_moment(R), atol=1e-14)
+        tau = rng.normal(size=3) * 0.3
+        T, J, w, c, l = np.empty(6), np.empty((6, 3)), np.empty(3), np.empty(6), np.empty(6)
+        kernels.plan_one(model.A, model.B, model.k, model.first_moment_A_kgm, model.g, R, tau, rig.t_mid_N,
+                         rig.t_min_N, rig.t_max_N, 40, T, J, w, c, l)
+        (J_ref,) = model.casadi("jacobian", R)
+        (c_ref,) = model.casadi("cable_lengths", R)
+        tau_w_ref, _ = model.point_force_moment(R, rig.weight_B_N, rig.com_A_m)
+        np.testing.assert_allclose(J, J_ref, atol=1e-14)
+        np.testing.assert_allclose(c, c_ref, atol=1e-15)
+        np.testing.assert_allclose(w, tau_w_ref, atol=1e-14)
+        (T_back,) = model.casadi("tensions_from_rest", R, l)
+        np.testing.assert_allclose(T_back, T, atol=1e-9)   # t = k (c - l) reproduces the plan
 
 
 def test_rotation_error_kernel():

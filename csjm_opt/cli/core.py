@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 import numpy as np
 
@@ -13,23 +14,26 @@ from ..model.numeric import Model
 from ..planning.planner import TensionPlan, plan_tensions
 from ..model.rig import load_rig
 from .._validate import as_vector3
+from ._options import check_outputs, check_rotvec, quantity, rotvec_component
 
 
 def add_rig_pose_load(p: argparse.ArgumentParser) -> None:
     """``--rig``, ``--rotvec`` and ``--tau``: shared by commands that take a rig, a pose and a load."""
     p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
-    p.add_argument("--rotvec", nargs=3, type=float, required=True, metavar=("RX", "RY", "RZ"),
+    p.add_argument("--rotvec", nargs=3, type=rotvec_component, required=True, metavar=("RX", "RY", "RZ"),
                    help="orientation of {A} in {B} as a rotation vector (rad)")
-    p.add_argument("--tau", nargs=3, type=float, default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
+    p.add_argument("--tau", nargs=3, type=quantity("moment_Nm"), default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
                    help="external moment about O in {A} (N m), platform weight excluded")
 
 
 def add_pose_arguments(p: argparse.ArgumentParser) -> None:
     """Arguments of ``plan`` and ``stiffness``: rig, pose, load, reference tension, solver, JSON."""
     add_rig_pose_load(p)
-    p.add_argument("--t-ref", type=float, default=None,
+    p.add_argument("--t-ref", type=quantity("tension_N"), default=None,
                    help="reference tension of the objective (N; default mid-range)")
-    p.add_argument("--solver", default="osqp", help="qpsolvers backend or 'active_set' (default osqp)")
+    p.add_argument("--solver", default="active_set",
+                   help="'active_set' (default: exact, compiled) or a qpsolvers backend such as osqp or "
+                   "clarabel (answer polished exactly and checked)")
     p.add_argument("--json", metavar="PATH", help="write machine-readable output ('-' = stdout)")
 
 
@@ -47,9 +51,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _plan(args: argparse.Namespace) -> tuple[TensionPlan, Model, np.ndarray, np.ndarray]:
+    check_outputs([args.rig], {"--json": args.json})
     rig = load_rig(args.rig)
     model = Model(rig)
-    rotvec = as_vector3(args.rotvec, "--rotvec")
+    rotvec = as_vector3(check_rotvec(args.rotvec), "--rotvec")
     tau = as_vector3(args.tau, "--tau")
     plan = plan_tensions(rig, so3.exp(rotvec), tau, t_ref_N=args.t_ref, solver=args.solver, model=model)
     return plan, model, rotvec, tau
@@ -83,11 +88,12 @@ def run_plan(args: argparse.Namespace) -> int:
 
 def run_stiffness(args: argparse.Namespace) -> int:
     plan, model, rotvec, tau = _plan(args)
-    K = stiffness(model.rig, plan.R, plan.tensions_N, model=model)
+    K = stiffness(model.rig, plan.R, plan.tensions_N, model=model, tau_ext_A_Nm=tau)
     eig = np.linalg.eigvalsh(K)
+    stable = bool(eig[0] > 0)
     if args.json:
         out = _plan_json(plan, rotvec, tau)
-        out.update({"K": K.tolist(), "eigenvalues_Nm_per_rad": eig.tolist()})
+        out.update({"K": K.tolist(), "eigenvalues_Nm_per_rad": eig.tolist(), "stable": stable})
         atomic_write_json(args.json, out)
     if args.json != "-":
         _print_plan(plan)
@@ -95,5 +101,8 @@ def run_stiffness(args: argparse.Namespace) -> int:
         for row in K:
             print("  " + "  ".join(f"{x:10.4f}" for x in row))
         print(f"eigenvalues: {np.round(eig, 4).tolist()}"
-              + ("" if eig[0] > 0 else "  (not positive definite: unstable pose)"))
+              + ("" if stable else "  (not positive definite: unstable pose)"))
+    if not stable:
+        print(f"csjm: warning: K is not positive definite (smallest eigenvalue {eig[0]:.4g} N m/rad): "
+              "the pose is unstable under this load", file=sys.stderr)
     return 0

@@ -11,10 +11,13 @@ from .._fileio import atomic_write_json
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("demo", help="run the main job on the paper rig and write a report folder",
                        description="Plan tensions, compute and shape stiffness, simulate an "
-                       "experiment, identify K, verify, diagnose; writes a report folder with figures.")
+                       "experiment, identify K, verify, diagnose; writes a report folder: index.html (open it "
+                       "in a browser), README.md (the same in Markdown), figures, summary.json, and the "
+                       "sub-reports experiment/index.html and diagnosis/index.html.")
     p.add_argument("--out", default="csjm_report", help="report folder (default: ./csjm_report)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the simulated experiment")
-    p.add_argument("--quick", action="store_true", help="smaller experiment (for smoke tests)")
+    p.add_argument("--quick", action="store_true",
+                   help="every step shortened (smaller experiments, no second-effect search): ~10-20 s")
     p.add_argument("--json", metavar="PATH", help="write the summary as JSON ('-' = stdout)")
     p.set_defaults(func=run)
 
@@ -26,7 +29,8 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         atomic_write_json(args.json, summary)
     if args.json != "-":
-        print(f"report written to {args.out}/README.md ({len(summary)} steps)")
+        print(f"report written to {args.out}/index.html (also README.md; numbers in summary.json), "
+              f"{len(summary)} steps")
         for name, result in summary.items():
             print(f"  {name}: {result.get('seconds', '?')} s")
     return 0

@@ -13,7 +13,8 @@ from pathlib import Path
 
 from ..diagnose import EFFECTS
 from ..errors import InvalidInput
-from .._fileio import atomic_write_json, refuse_input_overwrite
+from .._fileio import atomic_write_json
+from ._options import check_outputs
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import load_rig
 
@@ -41,8 +42,7 @@ def run(args: argparse.Namespace) -> int:
     from ..diagnose.report import write_report
 
     inputs = [args.data, args.test, args.rig]
-    if args.json:
-        refuse_input_overwrite(args.json, *inputs)
+    check_outputs(inputs, {"--json": args.json}, {"--report": args.report})
     if args.report:
         report = Path(args.report)
         for item in inputs:

@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import argparse
+import sys
 from pathlib import Path
 
-from ..errors import InvalidInput
-from .._fileio import atomic_write_json, refuse_input_overwrite
+from .._fileio import atomic_write_json
+from .._limits import MAX_BOOTSTRAP, MAX_EXACT_INT
 from ..model.rig import load_rig
+from ._options import check_outputs, float_in, int_in
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -21,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
     p.add_argument("-o", "--output", required=True, metavar="LOG.csv", help="measurement log to write")
     p.add_argument("--force", action="store_true", help="replace an existing output file")
-    p.add_argument("--origin-tol", type=float, default=None, metavar="M",
+    p.add_argument("--origin-tol", type=float_in(0, 1, low_open=True, unit="m"), default=None, metavar="M",
                    help="largest accepted distance between the origins of {A} and {B} (m, default 2e-3)")
     p.add_argument("--ft-includes-weight", action="store_true",
                    help="the F/T moment includes the platform weight: subtract it (56)")
@@ -35,19 +39,25 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "condition number of the excitation.")
     p.add_argument("data", metavar="DATA.csv", help="measurement log (format in docs/conventions.md)")
     p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
-    p.add_argument("--cycle", type=int, default=None, help="only this cycle id")
+    p.add_argument("--cycle", type=int_in(-MAX_EXACT_INT, MAX_EXACT_INT), default=None, help="only this cycle id")
     p.add_argument("--order", type=int, choices=(1, 2, 3), default=1,
                    help="1: linear fit (paper); 2, 3: add terms up to that degree in dzeta "
                    "(less finite-displacement bias; needs 11 / 21 rows)")
     p.add_argument("--noise", choices=("none", "paper"), default="none",
                    help="'paper': weight and correct with the instrument uncertainties of Tables 1-2")
-    p.add_argument("--ci-level", type=float, default=0.95, help="confidence level (default 0.95)")
-    p.add_argument("--bootstrap", type=int, default=0, metavar="N", help="pairs-bootstrap resamples")
-    p.add_argument("--max-condition", type=float, default=None,
+    p.add_argument("--ci-level", type=float_in(0, 1, low_open=True, high_open=True), default=0.95,
+                   help="confidence level (default 0.95)")
+    p.add_argument("--bootstrap", type=int_in(0, MAX_BOOTSTRAP), default=0, metavar="N",
+                   help=f"pairs-bootstrap resamples per cycle (0 to {MAX_BOOTSTRAP})")
+    p.add_argument("--max-condition", type=float_in(1, 1e12), default=None,
                    help="largest accepted condition number of the excitation (default 100)")
     p.add_argument("--fit-parameters", choices=("none", "shared", "per-cable"), default="none",
                    help="also fit the cable stiffness (shared or per cable) and rest-length offsets "
                    "over the whole log, with standard deviations")
+    p.add_argument("--allow-ill-conditioned", action="store_true",
+                   help="return estimates that the excitation does not determine to 20 %% (CI half-width "
+                   "over ||K||) anyway, marked ill_conditioned; by default such cycles are refused")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.add_argument("--json", metavar="PATH", help="write machine-readable output ('-' = stdout)")
     p.add_argument("--figures", metavar="DIR", help="write the Figure 5 convergence curve per cycle")
     p.set_defaults(func=run_identify)
@@ -63,9 +73,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run_preprocess(args: argparse.Namespace) -> int:
     from ..measurement.preprocess import DEFAULT_ORIGIN_TOL_M, preprocess_file
 
-    refuse_input_overwrite(args.output, args.raw, args.rig)
-    if args.json:
-        refuse_input_overwrite(args.json, args.raw, args.rig, args.output)
+    check_outputs([args.raw, args.rig], {"-o/--output": args.output, "--json": args.json},
+                  overwrite={"-o/--output": args.force})
     rig = load_rig(args.rig)
     tol = DEFAULT_ORIGIN_TOL_M if args.origin_tol is None else args.origin_tol
     log, info = preprocess_file(args.raw, rig, origin_tol_m=tol, ft_includes_weight=args.ft_includes_weight)
@@ -89,32 +98,39 @@ def run_identify(args: argparse.Namespace) -> int:
     from ..measurement.instruments import InstrumentNoise
     from ..measurement.logfile import MeasurementLog
     from ..model.numeric import Model
+    from .. import so3
 
-    for out in (args.json, args.figures):
-        if out:
-            refuse_input_overwrite(out, args.data, args.rig)
-    if not 0 < args.ci_level < 1:
-        raise InvalidInput(f"--ci-level: expected a number in (0, 1), got {args.ci_level}", "--ci-level")
+    check_outputs([args.data, args.rig], {"--json": args.json}, {"--figures": args.figures})
     rig = load_rig(args.rig)
     log = MeasurementLog.from_csv(args.data)
     model = Model(rig)
     noise = InstrumentNoise.paper() if args.noise == "paper" else None
     options = dict(order=args.order, noise=noise, ci_level=args.ci_level, bootstrap=args.bootstrap,
-                   max_condition=args.max_condition or MAX_CONDITION)
-    if args.cycle is None:  # cycles that cannot determine K are reported, not fatal
-        estimates, skipped = identify_cycles(log, rig, model, **options)
+                   max_condition=args.max_condition or MAX_CONDITION,
+                   allow_ill_conditioned=args.allow_ill_conditioned)
+    progress = None
+    if not args.no_progress:
+        from functools import partial
+
+        from tqdm import tqdm
+
+        progress = partial(tqdm, file=sys.stderr, disable=None, leave=False, desc="cycles", unit="cycle")
+    if args.cycle is None:  # cycles that cannot determine K are reported, not fatal (unless all are)
+        estimates, skipped = identify_cycles(log, rig, model, progress=progress, **options)
     else:
-        estimates, skipped = identify_log(log, rig, args.cycle, model, **options), []
+        estimates, skipped = identify_log(log, rig, args.cycle, model, progress=progress, **options), []
     figures = []
     if args.figures:
         for e in estimates:
             assert e.cycle is not None  # identify_log fills it
             rows = log.cycle_rows(e.cycle)
-            curve = convergence_curve(log.R[rows], log.tau_ext_A_Nm[rows], model,
-                                      n_min=n_parameters(args.order) + 1, **options | {"bootstrap": 0})
+            curve = convergence_curve(so3.exp(log.rotvec_rad[rows]), log.tau_ext_A_Nm[rows], model,
+                                      n_min=n_parameters(args.order) + 1,
+                                      **options | {"bootstrap": 0, "allow_ill_conditioned": True})
             ax = plot_convergence(curve, title=f"Cycle {e.cycle}: det K against measurements")
             figures.append(str(save(ax.figure, Path(args.figures) / f"convergence_cycle{e.cycle}.png")))
-    out = {"source": str(args.data), "cycles": [e.as_dict() for e in estimates], "skipped": skipped,
+    out: dict[str, Any] = {"source": str(args.data), "cycles": [e.as_dict() for e in estimates],
+                           "skipped": skipped,
            "figures": figures}
     if args.fit_parameters != "none":
         from ..identification.param_fit import fit_parameters
@@ -127,7 +143,8 @@ def run_identify(args: argparse.Namespace) -> int:
         np.set_printoptions(precision=3, suppress=True)
         for e in estimates:
             print(f"cycle {e.cycle}: {e.n_rows} rows, condition {e.condition:.3g}, symmetry error "
-                  f"{e.symmetry_error:.3g}, residual rms {e.residual_rms_Nm:.3g} N m")
+                  f"{e.symmetry_error:.3g}, residual rms {e.residual_rms_Nm:.3g} N m"
+                  + ("  ILL-CONDITIONED (returned on request)" if e.ill_conditioned else ""))
             print(f"  K (N m/rad) =\n{e.K}\n  +- ({int(e.ci_level * 100)} %)\n{e.ci_quantile * e.K_std}")
             print(f"  K_sym =\n{e.K_sym}")
             for problem in e.problems():
@@ -144,6 +161,7 @@ def run_identify(args: argparse.Namespace) -> int:
 def run_paper(args: argparse.Namespace) -> int:
     from ..identification.paper_tables import format_report, paper_report
 
+    check_outputs([], {"--json": args.json})
     report = paper_report()
     if args.json:
         atomic_write_json(args.json, report)

@@ -14,6 +14,7 @@ from ..model.numeric import Model
 from ..model.rig import load_rig
 from ..shaping.shaper import OBJECTIVES, shape_stiffness
 from .._validate import as_vector3
+from ._options import check_outputs, check_rotvec, finite_float, quantity
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -24,12 +25,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "Reports the achieved K, the residual, whether the target is reached and the active "
                        "bounds; --reachable adds the reachable range of each eigenvalue of K.")
     add_rig_pose_load(p)
-    p.add_argument("--target", nargs=9, type=float, required=True, metavar="K",
+    p.add_argument("--target", nargs=9, type=quantity("stiffness_Nm_per_rad"), required=True, metavar="K",
                    help="target K row by row: K11 K12 K13 K21 ... K33 (N m/rad; symmetrised)")
-    p.add_argument("--weights", nargs="+", type=float, default=None, metavar="W",
+    p.add_argument("--weights", nargs="+", type=quantity("weight"), default=None, metavar="W",
                    help="frobenius: 9 elementwise weights; eigen: 3; directional: one per direction")
     p.add_argument("--objective", choices=OBJECTIVES, default="frobenius")
-    p.add_argument("--direction", nargs=3, type=float, action="append", metavar=("UX", "UY", "UZ"),
+    p.add_argument("--direction", nargs=3, type=finite_float, action="append", metavar=("UX", "UY", "UZ"),
                    help="a direction in {A} for --objective directional (repeatable)")
     p.add_argument("--solver", default="osqp", help="qpsolvers backend or 'active_set' (default osqp)")
     p.add_argument("--reachable", action="store_true", help="also compute the reachable eigenvalue ranges")
@@ -38,8 +39,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_outputs([args.rig], {"--json": args.json})
+    for d in args.direction or ():
+        if not 1e-9 < float(np.linalg.norm(d)) < 1e9:
+            raise InvalidInput(f"--direction: expected a non-zero direction of moderate length, got {d}",
+                               "--direction")
     rig = load_rig(args.rig)
-    rotvec = as_vector3(args.rotvec, "--rotvec")
+    rotvec = as_vector3(check_rotvec(args.rotvec), "--rotvec")
     tau = as_vector3(args.tau, "--tau")
     K_target = np.array(args.target, float).reshape(3, 3)
     weights = None

@@ -8,7 +8,13 @@ import sys
 from ..design.sweep import run_sweep
 from ..design.sweep_file import SweepSpec
 from ..errors import DesignError
-from .._fileio import atomic_write_json, refuse_input_overwrite
+from .._fileio import atomic_write_json
+from ..design.sweep_file import MAX_DESIGNS
+from ._options import check_outputs, int_in
+
+
+#: Most local worker processes (more than any workstation has cores).
+MAX_WORKERS = 256
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -21,14 +27,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("sweep", metavar="SWEEP.toml", help="sweep description")
     p.add_argument("--out", required=True, metavar="RESULTS",
                    help="result file (JSON Lines; created, or resumed when it exists)")
-    p.add_argument("--workers", type=int, default=2,
+    p.add_argument("--workers", type=int_in(1, MAX_WORKERS), default=2,
                    help="local worker processes (default 2; 1 = run in this process); "
                    "with --dask, the size of the local cluster")
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,
                    help="run on the Dask distributed scheduler at ADDRESS (e.g. tcp://host:8786)")
     p.add_argument("--dask", action="store_true",
                    help="run on Dask; without --scheduler, start a local Dask cluster")
-    p.add_argument("--limit", type=int, default=None, metavar="N",
+    p.add_argument("--limit", type=int_in(1, MAX_DESIGNS), default=None, metavar="N",
                    help="stop after computing N designs (run again to continue)")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.add_argument("--json", metavar="PATH", help="write the designs and speed as JSON ('-' = stdout)")
@@ -36,10 +42,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_outputs([args.sweep], {"--out": args.out})
+    check_outputs([args.sweep, args.out], {"--json": args.json})
     spec = SweepSpec.from_toml(args.sweep)
-    refuse_input_overwrite(args.out, args.sweep)
-    if args.json:
-        refuse_input_overwrite(args.json, args.sweep, args.out)
     if args.workers < 1:
         raise DesignError(f"expected an integer >= 1, got {args.workers}", "--workers")
     if args.limit is not None and args.limit < 1:
@@ -53,6 +58,9 @@ def run(args: argparse.Namespace) -> int:
           f"{result.designs_per_second:.1f} designs/s"
           + ("" if result.complete else f"; {len(spec.designs()) - len(result.records)} designs left, "
              "run again to continue"), file=sys.stderr if args.json == "-" else sys.stdout)
+    if result.duplicates:
+        print(f"note: {result.duplicates} repeated lines in {args.out} ignored (first record of each design kept)",
+              file=sys.stderr)
     if best is not None and args.json != "-":
         print(f"largest workspace: {best['workspace_fraction']:.3f} at {best['params']}")
     if args.json:

@@ -1,8 +1,10 @@
 """Compiled (numba) kernels for the shaping loop: forward statics Newton and the shaping QP.
 
-Same mathematics as the numpy reference :mod:`csjm_opt.model.cable_terms` (closed-form
-cable terms), :mod:`csjm_opt.model.statics` (damped Newton on SO(3)) and
-:mod:`csjm_opt.planning._dense_qp` (primal-dual active set); ``tests/test_loop_kernels.py``
+The cable geometry and stiffness come from the model layer's kernels
+(:mod:`csjm_opt.model._kernels`, tested against the numpy reference
+:mod:`csjm_opt.model.cable_terms`); the dense active-set QP is
+:func:`csjm_opt.planning._kernels.pdas`. Newton follows :mod:`csjm_opt.model.statics`
+(damped Newton on SO(3)); ``tests/test_loop_kernels.py``
 checks them against those and the CasADi model. Compiled on first use and
 cached on disk (``cache=True``), like :mod:`csjm_opt.planning._kernels`.
 """
@@ -11,6 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+
+from ..model._kernels import geometry_into, stiffness_from_geometry_into
+from ..planning._kernels import pdas  # noqa: F401 (the shared dense active-set QP, re-exported)
 
 
 @njit(cache=True)
@@ -33,31 +38,24 @@ def exp_so3(w):
 
 @njit(cache=True)
 def geometry(A, B, R):
-    """Cable lengths c (6,), unit vectors U in {A} (6, 3), J (6, 3)."""
-    C = B @ R - A
-    c = np.sqrt((C * C).sum(axis=1))
-    U = C / c.reshape(6, 1)
+    """Cable lengths c (6,), unit vectors U in {A} (6, 3), J (6, 3) (model-layer kernel)."""
+    c = np.empty(6)
+    U = np.empty((6, 3))
     J = np.empty((6, 3))
-    for i in range(6):
-        J[i, 0] = A[i, 1] * U[i, 2] - A[i, 2] * U[i, 1]
-        J[i, 1] = A[i, 2] * U[i, 0] - A[i, 0] * U[i, 2]
-        J[i, 2] = A[i, 0] * U[i, 1] - A[i, 1] * U[i, 0]
+    geometry_into(A, B, R, c, U, J)
     return c, U, J
 
 
 @njit(cache=True)
 def length_hessians(A, c, U, J):
-    """Hess(c_i) (6, 3, 3), see :mod:`csjm_opt.model.cable_terms`."""
+    """Hess(c_i) (6, 3, 3): K of cable i alone at unit tension and zero stiffness."""
     G = np.empty((6, 3, 3))
+    e = np.zeros(6)
+    zero_k = np.zeros(6)
     for i in range(6):
-        a2 = A[i, 0] * A[i, 0] + A[i, 1] * A[i, 1] + A[i, 2] * A[i, 2]
-        ua = U[i, 0] * A[i, 0] + U[i, 1] * A[i, 1] + U[i, 2] * A[i, 2]
-        for p in range(3):
-            for q in range(3):
-                v = (-A[i, p] * A[i, q] - J[i, p] * J[i, q]) / c[i] - 0.5 * (U[i, p] * A[i, q] + A[i, p] * U[i, q])
-                if p == q:
-                    v += a2 / c[i] + ua
-                G[i, p, q] = v
+        e[i] = 1.0
+        stiffness_from_geometry_into(A, zero_k, c, U, J, e, G[i])
+        e[i] = 0.0
     return G
 
 
@@ -145,74 +143,3 @@ def shaping_qp(G, K0, L, s, w, J, tau_load, t_mid, rho_rel):
     P = 2.0 * (H + rho * np.eye(6))
     q = -2.0 * (MW @ d + rho * t_mid)
     return P, q, J.T.copy(), -tau_load
-
-
-@njit(cache=True)
-def pdas(P, q, A, b, lo, hi, lower, upper, max_iter, tol):
-    """Primal-dual active set of :func:`csjm_opt.planning._dense_qp.solve` (no primal fallback here).
-
-    Returns ``(x, nu, z, lower, upper, iterations, status)``; status 0 settled,
-    1 singular KKT, 2 not settled (callers fall back to :mod:`csjm_opt.planning._dense_qp`).
-    """
-    n = q.size
-    m = A.shape[0]
-    scale_x = max(1.0, np.abs(hi).max())
-    x = np.zeros(n)
-    nu = np.zeros(m)
-    z = np.zeros(n)
-    for it in range(1, max_iter + 1):
-        nf = 0
-        for i in range(n):
-            if not (lower[i] or upper[i]):
-                nf += 1
-        if nf < m:
-            return x, nu, z, lower, upper, it, 1
-        F = np.empty(nf, np.int64)
-        j = 0
-        for i in range(n):
-            x[i] = lo[i] if lower[i] else (hi[i] if upper[i] else 0.0)
-            if not (lower[i] or upper[i]):
-                F[j] = i
-                j += 1
-        Kk = np.zeros((nf + m, nf + m))
-        rhs = np.zeros(nf + m)
-        Px = P @ x
-        Ax = A @ x
-        for a in range(nf):
-            for c in range(nf):
-                Kk[a, c] = P[F[a], F[c]]
-            for c in range(m):
-                Kk[a, nf + c] = A[c, F[a]]
-                Kk[nf + c, a] = A[c, F[a]]
-            rhs[a] = -q[F[a]] - Px[F[a]]
-        for c in range(m):
-            rhs[nf + c] = b[c] - Ax[c]
-        if abs(np.linalg.det(Kk)) < 1e-300:
-            return x, nu, z, lower, upper, it, 1
-        sol = np.linalg.solve(Kk, rhs)
-        for a in range(nf):
-            x[F[a]] = sol[a]
-        nu = sol[nf:].copy()
-        z = P @ x + q + A.T @ nu
-        changed = False
-        for i in range(n):
-            if lower[i]:
-                if z[i] <= 0:
-                    lower[i] = False
-                    changed = True
-            elif upper[i]:
-                if z[i] >= 0:
-                    upper[i] = False
-                    changed = True
-            elif x[i] < lo[i] - tol * scale_x:
-                lower[i] = True
-                changed = True
-            elif x[i] > hi[i] + tol * scale_x:
-                upper[i] = True
-                changed = True
-        if not changed:
-            for i in range(n):
-                if not (lower[i] or upper[i]):
-                    z[i] = 0.0
-            return x, nu, z, lower, upper, it, 0
-    return x, nu, z, lower, upper, max_iter, 2

@@ -1,18 +1,20 @@
-"""Controller-in-the-loop simulation of a CSJM under a load profile (quasi-static).
+"""Controller-in-the-loop simulation of a CSJM under a load profile.
 
 Each step ``k`` (time ``t_k = k dt``):
 
-1. **read**: the measured pose and external moment, the true ones plus
-   optional :class:`~csjm_opt.measurement.instruments.InstrumentNoise` (pose noise as
-   ``R exp(hat(n))``, ``n ~ N(0, sigma^2 I)``; moment noise per axis). The
-   measured moment includes the moments of the plant's dead-weight point
-   forces (an F/T sensor under the platform sees them), not its own weight;
+1. **read**: the measured pose, angular velocity and external moment, the true
+   ones plus optional :class:`~csjm_opt.measurement.instruments.InstrumentNoise`
+   (pose noise as ``R exp(hat(n))``, ``n ~ N(0, sigma^2 I)``; moment noise per
+   axis). The measured moment includes the moments of the plant's dead-weight
+   point forces (an F/T sensor under the platform sees them), not its own weight;
 2. **control**: ``command = controller(observation)``;
-3. **command**: the drives take the command's rest lengths;
-4. **simulate**: the plant (``plant_rig``, the controller's rig by default)
-   settles at the equilibrium for those rest lengths under the load at
-   ``t_{k+1}`` (:class:`~csjm_opt.model.statics.EquilibriumSolver`, warm-started
-   from the previous pose; dynamics are not modelled).
+3. **command**: the drives take the command's rest lengths (or tensions);
+4. **simulate**: the plant advances to ``t_{k+1}`` (:mod:`csjm_opt.control.plants`):
+   by default the quasi-static :class:`~csjm_opt.control.plants.QuasiStaticPlant`
+   (``plant_rig``, the controller's rig by default, settles at the equilibrium
+   for those rest lengths under the load at ``t_{k+1}``; no dynamics), or any
+   plant passed as ``plant``, e.g. :class:`~csjm_opt.control.plants.MujocoPlant`
+   (inertia, damping, winch limits).
 
 The :class:`ClosedLoopLog` holds the time series (true and measured pose,
 pose error to the controller's reference, commanded and actual tensions,
@@ -29,13 +31,13 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 
 from .. import so3
-from ..model.cable_terms import point_force_terms
 from .controllers.base import Controller, Observation
+from .plants import Plant, QuasiStaticPlant
 from ..errors import CsjmError, InvalidInput
 from ..measurement.instruments import InstrumentNoise
 from .load_profiles import LoadProfile
 from ..model.rig import Rig
-from ..model.statics import EquilibriumSolver, PointForce
+from ..model.statics import PointForce
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -57,6 +59,7 @@ class ClosedLoopLog:
     K_target: np.ndarray         # (n, 3, 3) target (nan when the controller sets none)
     step_time_s: np.ndarray      # (n,) wall time of read + control + command + simulate (nan at 0)
     step_cpu_s: np.ndarray       # (n,) the same as thread CPU time (excludes preemption by other processes)
+    omega_A_rad_s: np.ndarray | None = None   # (n, 3) true angular velocity in {A} (zero when quasi-static)
 
     @property
     def pose_error_rad(self) -> np.ndarray:
@@ -84,10 +87,44 @@ def simulate(rig: Rig, controller: Controller, load: LoadProfile, duration_s: fl
              R_init: np.ndarray | None = None, noise: InstrumentNoise | None = None,
              rng: np.random.Generator | None = None, plant_rig: Rig | None = None,
              point_forces: Sequence[PointForce] = (), reset: bool = True,
-             progress: bool | None = None) -> ClosedLoopLog:
+             progress: bool | None = None, plant: Plant | None = None,
+             omega_init_A_rad_s: np.ndarray | None = None) -> ClosedLoopLog:
     """Run ``controller`` on the simulated rig for ``duration_s`` with step ``dt_s`` (see module doc).
 
-    ``progress``: tqdm bar on stderr (default: only for runs over 20000 steps on a terminal).
+    Parameters
+    ----------
+    rig : Rig
+        The controller's rig (and the default plant's).
+    controller : Controller
+    load : callable
+        Load profile ``t -> (3,)`` N m, fixed in {A} (or in the frame ``plant.load_fixed_in``).
+    duration_s, dt_s : float
+        Run length and control period (s).
+    R_init : (3, 3) array, optional
+        Initial pose (default: the controller's reference at 0).
+    noise, rng
+        Instrument noise and its random generator.
+    plant_rig, point_forces
+        Rig and dead weights of the default quasi-static plant (not with ``plant``).
+    reset : bool
+        Reset the controller first.
+    progress : bool, optional
+        tqdm bar on stderr (default: only for runs over 20000 steps on a terminal).
+    plant : Plant, optional
+        The simulated rig (default :class:`~csjm_opt.control.plants.QuasiStaticPlant`).
+    omega_init_A_rad_s : (3,) array, optional
+        Initial angular velocity in {A} (plants with inertia only).
+
+    Returns
+    -------
+    ClosedLoopLog
+
+    Raises
+    ------
+    InvalidInput
+        Non-positive durations, or ``point_forces``/``plant_rig`` together with ``plant``.
+    CsjmError
+        From the controller or the plant, with the simulation time prefixed.
     """
     import sys
 
@@ -96,30 +133,31 @@ def simulate(rig: Rig, controller: Controller, load: LoadProfile, duration_s: fl
     if not (dt_s > 0 and duration_s > 0):
         raise InvalidInput(f"expected duration_s > 0 and dt_s > 0, got {duration_s}, {dt_s}", "dt_s")
     n = int(round(duration_s / dt_s))
-    plant = plant_rig or rig
+    if plant is None:
+        plant = QuasiStaticPlant(plant_rig or rig, point_forces=list(point_forces))
+    elif len(point_forces) or plant_rig is not None:
+        raise InvalidInput("point_forces and plant_rig configure the default plant; not with plant=",
+                           "plant")
     noise = noise or InstrumentNoise.none()
     rng = rng or np.random.default_rng(0)
     sigma_tau = np.asarray(noise.tau_sigma_Nm, float)
-    F = np.array([f for f, _ in point_forces], float).reshape(-1, 3)
-    P = np.array([p for _, p in point_forces], float).reshape(-1, 3)
-    solver = EquilibriumSolver(plant, point_forces=list(point_forces))
     if reset:
         controller.reset()
     R = np.array(controller.reference(0.0) if R_init is None else R_init, float)
+    state = plant.reset(R, omega_init_A_rad_s, load)
 
     t = np.arange(n + 1) * dt_s
     out = {name: np.full((n + 1,) + shape, np.nan) for name, shape in
            [("R", (3, 3)), ("R_meas", (3, 3)), ("R_ref", (3, 3)), ("tau", (3,)), ("T_cmd", (6,)),
-            ("T", (6,)), ("K", (3, 3)), ("K_target", (3, 3)), ("dt", ()), ("cpu", ())]}
-    out["R"][0], out["tau"][0], out["R_ref"][0] = R, load(0.0), controller.reference(0.0)
-    tau_next = load(0.0)
+            ("T", (6,)), ("K", (3, 3)), ("K_target", (3, 3)), ("dt", ()), ("cpu", ()), ("omega", (3,))]}
+    out["R"][0], out["tau"][0], out["R_ref"][0] = R, state.tau_ext_A_Nm, controller.reference(0.0)
+    out["omega"][0] = state.omega_A_rad_s
     if progress is None:
         progress = n > 20000 and sys.stderr.isatty()
     for k in tqdm(range(n), desc="closed loop", unit="step", disable=not progress, file=sys.stderr):
         t0, c0 = time.perf_counter(), time.thread_time()
         # 1. read
-        tau_true = tau_next
-        tau_meas = tau_true + (point_force_terms(R, F, P)[0] if len(F) else 0.0)
+        tau_meas = plant.measured_load_A(R, state.tau_ext_A_Nm)
         R_meas = R
         if noise.angle_sigma_rad > 0:
             R_meas = R @ so3.exp(noise.angle_sigma_rad * rng.standard_normal(3))
@@ -127,25 +165,25 @@ def simulate(rig: Rig, controller: Controller, load: LoadProfile, duration_s: fl
             tau_meas = tau_meas + sigma_tau * rng.standard_normal(3)
         # 2. control, 3. command
         try:
-            cmd = controller(Observation(float(t[k]), R_meas, tau_meas))
+            cmd = controller(Observation(float(t[k]), R_meas, tau_meas, state.omega_A_rad_s.copy()))
             # 4. simulate
-            tau_next = load(t[k + 1])
-            eq = solver.solve(cmd.rest_lengths_m, tau_next, R)
+            state = plant.step(cmd, load, float(t[k]), float(t[k + 1]))
         except CsjmError as exc:
             _at_time(exc, float(t[k]))
             raise
-        R = eq.R
+        R = state.R
         out["dt"][k + 1] = time.perf_counter() - t0
         out["cpu"][k + 1] = time.thread_time() - c0
-        out["R"][k + 1], out["R_meas"][k], out["tau"][k + 1] = R, R_meas, tau_next
+        out["R"][k + 1], out["R_meas"][k], out["tau"][k + 1] = R, R_meas, state.tau_ext_A_Nm
+        out["omega"][k + 1] = state.omega_A_rad_s
         out["R_ref"][k + 1] = controller.reference(float(t[k + 1]))
-        out["T_cmd"][k + 1], out["T"][k + 1], out["K"][k + 1] = cmd.tensions_N, eq.tensions_N, eq.K
+        out["T_cmd"][k + 1], out["T"][k + 1], out["K"][k + 1] = cmd.tensions_N, state.tensions_N, state.K
         if cmd.K_target is not None:
             out["K_target"][k + 1] = cmd.K_target
     out["R_meas"][n] = R
     out["T"][0], out["K"][0] = out["T"][min(1, n)], out["K"][min(1, n)]
     return ClosedLoopLog(t, out["R"], out["R_meas"], out["R_ref"], out["tau"], out["T_cmd"], out["T"],
-                         out["K"], out["K_target"], out["dt"], out["cpu"])
+                         out["K"], out["K_target"], out["dt"], out["cpu"], out["omega"])
 
 
 def _at_time(exc: CsjmError, t_s: float) -> CsjmError:

@@ -8,13 +8,22 @@ line is kept. A line in the middle that is not valid JSON means the file was
 edited or is not a result file: an error names the line. An exclusive lock
 (``fcntl.flock``) keeps two runs from appending to the same file at once.
 Records carry the digest of the evaluation settings; a file holding another
-sweep's settings is refused rather than mixed.
+sweep's settings is refused rather than mixed. Lines repeating a design id
+(a file concatenated or edited by hand) are counted in ``duplicates`` and
+ignored: the first record of each id is kept.
+
+The lock is taken with ``flock``, which the kernel drops when the holding
+process dies, so a sweep killed by any signal leaves no stale lock. Worker
+processes close their inherited copy of the descriptor and die with their
+parent (:mod:`csjm_opt.design.sweep`); while one is still exiting, opening
+retries for up to :data:`LOCK_WAIT_S` seconds before reporting the holders.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import time
 from pathlib import Path
 from typing import Any
 
@@ -25,9 +34,15 @@ try:  # POSIX only; elsewhere the lock is skipped
 except ImportError:  # pragma: no cover
     fcntl = None  # type: ignore[assignment]
 
+#: How long opening a locked result file waits for the holder to exit (s).
+LOCK_WAIT_S = 5.0
+
 
 def read_records(path: str | Path) -> tuple[list[dict[str, Any]], int]:
-    """Complete records of a result file and the byte length they occupy (partial tail excluded)."""
+    """Complete records of a result file and the byte length they occupy (partial tail excluded).
+
+    Every complete line is returned, duplicates included (see :func:`unique_records`).
+    """
     path = Path(path)
     try:
         data = path.read_bytes()
@@ -42,13 +57,53 @@ def read_records(path: str | Path) -> tuple[list[dict[str, Any]], int]:
             continue
         try:
             record = json.loads(line)
-        except json.JSONDecodeError as exc:
-            raise DesignError(f"line {number} is not a JSON record ({exc.msg}); not a csjm sweep "
+        except ValueError as exc:  # JSONDecodeError, or bytes that are not UTF-8
+            msg = exc.msg if isinstance(exc, json.JSONDecodeError) else "not UTF-8"
+            raise DesignError(f"line {number} is not a JSON record ({msg}); not a csjm sweep "
                               "result file, or edited by hand", "--out", str(path)) from exc
         if not isinstance(record, dict) or "id" not in record:
             raise DesignError(f"line {number} is not a design record", "--out", str(path))
         records.append(record)
     return records, end
+
+
+def unique_records(records: list[dict[str, Any]]) -> tuple[dict[str, dict[str, Any]], int]:
+    """Records by design id (first occurrence kept) and the number of repeated lines dropped."""
+    out: dict[str, dict[str, Any]] = {}
+    for r in records:
+        out.setdefault(r["id"], r)
+    return out, len(records) - len(out)
+
+
+def lock_holders(fd: int) -> list[int]:
+    """Process ids holding a lock on the file of ``fd`` (from ``/proc/locks``; empty if unknown)."""
+    try:
+        st = os.fstat(fd)
+        text = Path("/proc/locks").read_text()
+    except OSError:
+        return []
+    key = f"{os.major(st.st_dev):02x}:{os.minor(st.st_dev):02x}:{st.st_ino}"
+    pids = []
+    for line in text.splitlines():
+        parts = line.split()
+        if len(parts) > 5 and parts[5] == key and parts[4].isdigit():
+            pids.append(int(parts[4]))
+    return sorted(set(pids))
+
+
+def _lock(fd: int, path: Path) -> None:
+    deadline = time.monotonic() + LOCK_WAIT_S
+    while True:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return
+        except BlockingIOError as exc:
+            if time.monotonic() >= deadline:
+                pids = lock_holders(fd)
+                who = f" (pid {', '.join(map(str, pids))})" if pids else ""
+                raise DesignError(f"results file is in use by another running sweep{who}", "--out",
+                                  str(path)) from exc
+            time.sleep(0.05)
 
 
 class ResultStore:
@@ -58,16 +113,14 @@ class ResultStore:
         self.path = Path(path)
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            if self.path.exists() and not self.path.is_file():
+                raise DesignError("results path exists and is not a regular file", "--out", str(self.path))
+            self._fd = os.open(self.path, os.O_RDWR | os.O_CREAT | getattr(os, "O_NONBLOCK", 0), 0o644)
         except OSError as exc:
             raise DesignError(f"cannot open results file: {exc.strerror}", "--out", str(self.path)) from exc
         try:
             if fcntl is not None:
-                try:
-                    fcntl.flock(self._fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                except BlockingIOError as exc:
-                    raise DesignError("results file is in use by another running sweep", "--out",
-                                      str(self.path)) from exc
+                _lock(self._fd, self.path)
             records, end = read_records(self.path)
             if os.fstat(self._fd).st_size != end:  # cut a partial last line (interrupted write)
                 os.ftruncate(self._fd, end)
@@ -77,7 +130,7 @@ class ResultStore:
                 raise DesignError("results file holds designs evaluated with other settings "
                                   "(sampling, loads, base design or metrics differ); give a new --out",
                                   "--out", str(self.path))
-            self.records: dict[str, dict[str, Any]] = {r["id"]: r for r in records}
+            self.records, self.duplicates = unique_records(records)
             os.lseek(self._fd, 0, os.SEEK_END)
         except BaseException:
             os.close(self._fd)
@@ -92,6 +145,11 @@ class ResultStore:
             view = view[written:]
         os.fsync(self._fd)
         self.records[record["id"]] = record
+
+    @property
+    def fileno(self) -> int:
+        """The locked descriptor (worker processes close their inherited copy)."""
+        return self._fd
 
     def close(self) -> None:
         if self._fd >= 0:

@@ -15,17 +15,27 @@ finished design as it arrives, and shows a progress bar. Designs run on
 A design is identified by a hash of the evaluation settings and its
 parameters, so a resumed run (or a larger grid over the same settings)
 skips every design already in the file.
+
+Local worker processes die with the sweep, whatever signal ends it (SIGKILL
+included): each asks the kernel for SIGKILL when its parent dies
+(``prctl(PR_SET_PDEATHSIG)`` on Linux) and also watches its parent pid, and
+each closes its inherited copy of the locked result file, so a killed sweep
+leaves no process behind and no lock held: running the same command again
+resumes it.
 """
 
 from __future__ import annotations
 
 import concurrent.futures
 import concurrent.futures.process
+import ctypes
 import dataclasses
 import hashlib
 import json
+import os
 import signal
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -50,6 +60,7 @@ class SweepResult:
     skipped: int             # designs found in the result file
     seconds: float           # wall time of this run
     complete: bool           # False when stopped early (stop_after)
+    duplicates: int = 0      # repeated lines in the result file (ignored)
 
     @property
     def designs_per_second(self) -> float:
@@ -125,7 +136,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
             elif workers == 1 or len(todo) <= 1:
                 stream = ((i, evaluate_design(p, settings)) for i, p in todo)
             else:
-                stream = _run_processes(todo, settings, workers)
+                stream = _run_processes(todo, settings, workers, store.fileno)
             for i, record in stream:
                 record.update(id=ids[i], index=i, settings=digest)
                 store.append(record)
@@ -138,12 +149,14 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
             bar.close()
         records = [{**store.records[d], "params": p} for d, p in zip(ids, designs) if d in store.records]
     return SweepResult(records=records, computed=computed, skipped=skipped,
-                       seconds=time.perf_counter() - start, complete=len(records) == len(designs))
+                       seconds=time.perf_counter() - start, complete=len(records) == len(designs),
+                       duplicates=store.duplicates)
 
 
 def _run_processes(todo: list[tuple[int, dict]], settings: EvaluationSettings,
-                   workers: int) -> Iterator[tuple[int, dict[str, Any]]]:
-    pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint)
+                   workers: int, lock_fd: int = -1) -> Iterator[tuple[int, dict[str, Any]]]:
+    pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers, initializer=_worker_init,
+                                                  initargs=(os.getpid(), lock_fd))
     try:
         futures = {pool.submit(evaluate_design, p, settings): i for i, p in todo}
         for future in concurrent.futures.as_completed(futures):
@@ -155,9 +168,37 @@ def _run_processes(todo: list[tuple[int, dict]], settings: EvaluationSettings,
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _ignore_sigint() -> None:
-    """Workers leave Ctrl-C to the parent, which stops the pool and keeps the file whole."""
+_PR_SET_PDEATHSIG = 1
+
+
+def _worker_init(parent_pid: int, lock_fd: int = -1) -> None:
+    """Set up a worker: leave Ctrl-C to the parent, drop the inherited lock, die with the parent.
+
+    The parent stops the pool on Ctrl-C and keeps the file whole. If the
+    parent dies any other way, the kernel kills the worker (Linux
+    ``PR_SET_PDEATHSIG``); a thread watching the parent pid does the same
+    elsewhere (and covers a parent that died before the ``prctl``).
+    """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if lock_fd >= 0:
+        try:
+            os.close(lock_fd)  # a forked copy of the locked descriptor: the lock stays with the parent
+        except OSError:
+            pass
+    if sys.platform.startswith("linux"):
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):  # pragma: no cover - no libc prctl
+            pass
+    if os.getppid() != parent_pid:
+        os._exit(1)
+    threading.Thread(target=_watch_parent, args=(parent_pid,), name="csjm-parent-watch", daemon=True).start()
+
+
+def _watch_parent(parent_pid: int, interval_s: float = 0.5) -> None:
+    while os.getppid() == parent_pid:
+        time.sleep(interval_s)
+    os._exit(1)
 
 
 def _run_dask(todo: list[tuple[int, dict]], settings: EvaluationSettings, scheduler: str | None,

@@ -32,6 +32,11 @@ Format (every section optional except ``[parameters]``; units in key names)::
     min_cable_clearance_m = 0.005
 
 Errors name the file and the dotted key (:class:`~csjm_opt.errors.DesignError`).
+Sizes are bounded before anything is allocated: at most :data:`MAX_DESIGNS`
+designs (grid product or ``sweep.designs``), :data:`MAX_ORIENTATIONS`
+orientations and :data:`MAX_SHAPING_POSES` shaping poses per design,
+:data:`MAX_LOADS` load rows; numbers are finite and within ``+-MAX_VALUE``,
+moments within the bound of :mod:`csjm_opt._limits`.
 """
 
 from __future__ import annotations
@@ -50,11 +55,24 @@ from scipy.stats import qmc
 
 from ..errors import DesignError
 from .._fileio import read_text
+from .._limits import LIMITS
 from .geometry import PARAMETERS, SCALAR_PARAMETERS, GeometryLimits, design_rig
 from .metrics import LoadSet, MetricOptions
 from .sampling import OrientationSampling
 
 METHODS = ("grid", "random", "lhs")
+#: Most designs in one sweep (a 1e6-design sweep takes days on a workstation).
+MAX_DESIGNS = 1_000_000
+#: Most orientations sampled per design (the metrics hold a few arrays of this length per load).
+MAX_ORIENTATIONS = 100_000
+#: Most shaping poses per design (each solves a QP family).
+MAX_SHAPING_POSES = 10_000
+#: Most rows of ``loads.tau_ext``.
+MAX_LOADS = 100
+#: Largest magnitude of any number in a sweep file (parameters are m, deg, N, N/m, kg).
+MAX_VALUE = 1e9
+#: Largest seed (numpy's generators take any integer; this keeps it a 63-bit integer).
+MAX_SEED = 2 ** 63 - 1
 _SECTIONS = {
     "sweep": {"method", "designs", "seed"},
     "base": set(PARAMETERS),
@@ -155,28 +173,35 @@ class SweepSpec:
         method = sweep.get("method", "grid")
         if method not in METHODS:
             raise fail(f"expected one of {METHODS}, got {method!r}", "sweep.method")
-        seed = _int(sweep.get("seed", 0), "sweep.seed", fail, minimum=0)
+        seed = _int(sweep.get("seed", 0), "sweep.seed", fail, minimum=0, maximum=MAX_SEED)
         n = 0
         if method != "grid":
             if "designs" not in sweep:
                 raise fail(f"missing key (required for method = {method!r})", "sweep.designs")
-            n = _int(sweep["designs"], "sweep.designs", fail, minimum=1)
+            n = _int(sweep["designs"], "sweep.designs", fail, minimum=1, maximum=MAX_DESIGNS)
         elif "designs" in sweep:
             raise fail("only for method = 'random' or 'lhs' (a grid has one design per combination)",
                        "sweep.designs")
         params = data.get("parameters")
         if not params:
             raise fail("missing or empty: give at least one swept parameter", "parameters")
+        if not isinstance(params, dict):
+            raise fail("expected a table of parameter tables", "parameters")
+        if method == "grid":
+            sizes = [_axis_size(name, spec, fail) for name, spec in params.items()]
+            if math.prod(sizes) > MAX_DESIGNS:
+                raise fail(f"grid has {math.prod(sizes):.3g} designs, more than MAX_DESIGNS = {MAX_DESIGNS:,}",
+                           "parameters")
         axes = tuple(_axis(name, spec, method, fail) for name, spec in params.items())
         base = dict(data.get("base", {}))
+        for key, value in base.items():
+            _check_base_value(value, f"base.{key}", fail)
         for name in params:
             if name in base:
                 raise fail("parameter is both fixed in [base] and swept", f"base.{name}")
         settings = _settings(data, base, fail)
         spec = cls(method=method, axes=axes, settings=settings, designs_requested=n, seed=seed, path=path)
         _check_typical_design(spec, fail)
-        if method == "grid" and math.prod(len(a.values) for a in axes) > 1_000_000:
-            raise fail("grid has more than 1,000,000 designs", "parameters")
         return spec
 
 
@@ -189,7 +214,8 @@ def _settings(data: dict[str, Any], base: dict[str, Any], fail: Any) -> Evaluati
             if not isinstance(value, str):
                 raise fail(f"expected a string, got {value!r}", "sampling.method")
         elif key in ("orientations", "seed", "shaping_poses"):
-            _int(value, f"{section}.{key}", fail, minimum=0)
+            top = {"orientations": MAX_ORIENTATIONS, "seed": MAX_SEED, "shaping_poses": MAX_SHAPING_POSES}[key]
+            _int(value, f"{section}.{key}", fail, minimum=1 if key == "orientations" else 0, maximum=top)
         else:
             _float(value, f"{section}.{key}", fail)
     try:
@@ -198,8 +224,19 @@ def _settings(data: dict[str, Any], base: dict[str, Any], fail: Any) -> Evaluati
                                        seed=s.get("seed", 0), method=s.get("method", "halton"))
     except DesignError as exc:
         raise fail(str(exc).split("] ", 1)[-1], f"sampling.{exc.key}") from exc
+    tau_ext = data.get("loads", {}).get("tau_ext", [[0.0, 0.0, 0.0]])
+    if isinstance(tau_ext, list) and len(tau_ext) > MAX_LOADS:
+        raise fail(f"{len(tau_ext)} load rows, more than MAX_LOADS = {MAX_LOADS}", "loads.tau_ext")
+    _check_base_value(tau_ext, "loads.tau_ext", fail)
+    moment = LIMITS["moment_Nm"]
     try:
-        loads = LoadSet(np.asarray(data.get("loads", {}).get("tau_ext", [[0.0, 0.0, 0.0]]), dtype=float))
+        arr = np.asarray(tau_ext, dtype=float)
+    except (ValueError, TypeError) as exc:
+        raise fail(f"expected rows of three numbers: {exc}", "loads.tau_ext") from exc
+    if arr.size and not moment.contains(arr).all():
+        raise fail(f"moments must lie in {moment.describe()}", "loads.tau_ext")
+    try:
+        loads = LoadSet(arr)
     except (ValueError, TypeError) as exc:
         raise fail(f"expected rows of three numbers: {exc}", "loads.tau_ext") from exc
     except DesignError as exc:
@@ -264,7 +301,7 @@ def _axis(name: str, spec: Any, method: str, fail: Any) -> ParameterAxis:
     if method == "grid":
         if "num" not in spec:
             raise fail("missing key (grid over min..max needs num)", f"{key}.num")
-        num = _int(spec["num"], f"{key}.num", fail, minimum=1)
+        num = _int(spec["num"], f"{key}.num", fail, minimum=1, maximum=MAX_DESIGNS)
         grid = np.geomspace(low, high, num) if log else np.linspace(low, high, num)
         return ParameterAxis(name, tuple(float(v) for v in grid))
     if "num" in spec:
@@ -272,13 +309,45 @@ def _axis(name: str, spec: Any, method: str, fail: Any) -> ParameterAxis:
     return ParameterAxis(name, (), low, high, log)
 
 
+def _axis_size(name: str, spec: Any, fail: Any) -> int:
+    """Number of grid values of one axis, read before any array is built."""
+    key = f"parameters.{name}"
+    if not isinstance(spec, dict):
+        raise fail("expected a table: {values = [...]} or {min = .., max = ..}", key)
+    if isinstance(spec.get("values"), list):
+        return max(1, len(spec["values"]))
+    if "num" in spec:
+        return _int(spec["num"], f"{key}.num", fail, minimum=1, maximum=MAX_DESIGNS)
+    return 1
+
+
+def _check_base_value(value: Any, key: str, fail: Any) -> None:
+    """A number, or nested lists of numbers (hole rows), finite and within ``+-MAX_VALUE``."""
+    if isinstance(value, list):
+        if len(value) > 1000:
+            raise fail(f"expected a short list, got {len(value)} entries", key)
+        for v in value:
+            _check_base_value(v, key, fail)
+    elif not isinstance(value, str):
+        _float(value, key, fail)
+
+
 def _float(value: Any, key: str, fail: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise fail(f"expected a finite number, got {value!r:.40}", key)
+    if isinstance(value, int) and abs(value) > MAX_VALUE:
+        raise fail(f"expected a number within +-{MAX_VALUE:g}, got an integer of {len(str(abs(value)))} digits", key)
+    if not math.isfinite(value):
+        raise fail(f"expected a finite number, got {value!r:.40}", key)
+    if abs(value) > MAX_VALUE:
+        raise fail(f"expected a number within +-{MAX_VALUE:g}, got {value:.6g}", key)
     return float(value)
 
 
-def _int(value: Any, key: str, fail: Any, minimum: int) -> int:
+def _int(value: Any, key: str, fail: Any, minimum: int, maximum: int = MAX_DESIGNS) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
         raise fail(f"expected an integer >= {minimum}, got {value!r:.40}", key)
+    if value > maximum:
+        shown = f"{value:.3g}" if value < 10 ** 30 else f"an integer of {len(str(value))} digits"
+        raise fail(f"expected an integer <= {maximum:,}, got {shown}", key)
     return value

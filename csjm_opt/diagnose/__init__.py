@@ -6,9 +6,10 @@ Entry point: :func:`csjm_opt.diagnose.selection.diagnose` (``csjm diagnose``).
 from __future__ import annotations
 
 from .effects import EFFECTS, Effect, make_effect
-from .selection import ALPHA, Diagnosis, diagnose
+from .result import Diagnosis
+from .selection import ALPHA, diagnose
 
-#: The docs/conventions.md vocabulary of ``effect`` / ``selected``.
-VOCABULARY = ("none",) + tuple(EFFECTS)
+#: The words ``selected`` can take.
+VOCABULARY = ("none",) + tuple(EFFECTS) + ("unexplained",)
 
 __all__ = ["ALPHA", "EFFECTS", "VOCABULARY", "Diagnosis", "Effect", "diagnose", "make_effect"]

@@ -5,13 +5,15 @@ of the measured body) the balance residual in N m is::
 
     g = J(R_c)^T T(e) + E (tau_ext + tau_w(R_m)),   e = c(R_c) - (l + dl)
 
-with ``tau_ext = tau_meas`` and ``tau_w = (m r) x (R_m^T g_B)`` nominally,
-``R_c = R_m`` and ``E = I`` unless an effect says otherwise (see
-:mod:`csjm_opt.diagnose.effects.base`), and ``T = s k e`` for taut cables.
-The nuisance parameters shared by every model (the nominal fit, so that the
-baseline absorbs what it should) are ``log_k_scale`` (a common cable
-stiffness scale ``s = exp(.)``) and ``dl_common_m`` (a common rest-length
-offset: pretension error). Parameter vector: nuisance, then each effect's.
+with ``tau_ext = tau_meas`` and ``tau_w = (m r) x (R_b^T g_B)`` nominally,
+``R_b = R_c = R_m`` (true body pose, cable platform pose) and ``E = I``
+unless an effect says otherwise (see :mod:`csjm_opt.diagnose.effects.base`),
+and ``T = k e`` for taut cables. The one nuisance parameter shared by every
+model (the null model ``nominal_refit`` has only it) is ``dl_common_m``, a
+common rest-length offset (pretension error: drives are zeroed to within a
+fraction of a mm, always). A common stiffness error is the named effect
+``stiffness_scale``, not a nuisance. Parameter vector: nuisance, then each
+effect's.
 ``g(R) = 0`` defines the model's predicted pose (:func:`predict_poses`).
 """
 
@@ -27,8 +29,9 @@ from ..model.rig import Rig
 from ..model import kinematics as kin
 from .effects import Effect
 
-NUISANCE_NAMES = ("log_k_scale", "dl_common_m")
-NUISANCE_SCALES = np.array([0.05, 2e-4])
+NUISANCE_NAMES = ("dl_common_m",)
+NUISANCE_SCALES = np.array([2e-4])
+N_NUISANCE = len(NUISANCE_NAMES)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -80,6 +83,7 @@ class Evaluation:
     link_rotation: np.ndarray
     rows: Rows
     cable_stiffness_N_per_m: np.ndarray
+    R_body: np.ndarray | None = None          # true pose of the measured body (adjust_frame)
     tau_weight_A_Nm: np.ndarray | None = None
     lengths_m: np.ndarray | None = None       # cable lengths at R_cable (set before adjust_tension)
     state_out: np.ndarray | None = None       # path state after this row (path-dependent effects)
@@ -117,22 +121,22 @@ class AugmentedModel:
 
     @property
     def lower_bounds(self) -> np.ndarray:
-        return np.concatenate([np.full(2, -np.inf)] + [e.lower_bounds for e in self.effects])
+        return np.concatenate([np.full(N_NUISANCE, -np.inf)] + [e.lower_bounds for e in self.effects])
 
     @property
     def upper_bounds(self) -> np.ndarray:
-        return np.concatenate([np.full(2, np.inf)] + [e.upper_bounds for e in self.effects])
+        return np.concatenate([np.full(N_NUISANCE, np.inf)] + [e.upper_bounds for e in self.effects])
 
     @property
     def prior_sd(self) -> np.ndarray:
         """Ridge prior sd per parameter (inf = no prior)."""
-        parts = [np.full(2, np.inf)]
+        parts = [np.full(N_NUISANCE, np.inf)]
         for e in self.effects:
             parts.append(np.full(e.n_params, np.inf) if e.prior_sd is None else e.prior_sd)
         return np.concatenate(parts)
 
     def x0(self) -> np.ndarray:
-        return np.concatenate([np.zeros(2)] + [e.x0() for e in self.effects])
+        return np.concatenate([np.zeros(N_NUISANCE)] + [e.x0() for e in self.effects])
 
     def starts(self) -> list[np.ndarray]:
         """Starting parameter vectors: the nominal model, then each effect's extra starts."""
@@ -160,19 +164,23 @@ class AugmentedModel:
         theta = np.asarray(theta, float)
         n = len(rows)
         eye = np.broadcast_to(np.eye(3), (n, 3, 3))
-        ev = Evaluation(self._A, self._B, self._mr, rows.tau_meas_A_Nm, R_m, eye, rows, self._k)
+        ev = Evaluation(self._A, self._B, self._mr, rows.tau_meas_A_Nm, R_m, eye, rows, self._k, R_m)
         params = self.effect_params(theta)
         for e, p in zip(self.effects, params):
             e.adjust_load(ev, p)
-        ev.tau_weight_A_Nm = kin.weight_moment(R_m, ev.first_moment_A_kgm, self._g)
+        for e, p in zip(self.effects, params):
+            e.adjust_frame(ev, p)
+        assert ev.R_body is not None   # set by adjust_frame
+        ev.R_cable = ev.R_body
+        ev.tau_weight_A_Nm = kin.weight_moment(ev.R_body, ev.first_moment_A_kgm, self._g)
         for e, p in zip(self.effects, params):
             e.adjust_pose(ev, p)
         for e, p in zip(self.effects, params):
             e.adjust_geometry(ev, p)
         lengths, J = kin.cable_terms(ev.R_cable, ev.A_m, ev.B_m)
         ev.lengths_m = lengths
-        stretch = lengths - (rows.rest_lengths_m + theta[1])
-        T = np.exp(theta[0]) * self._k * np.maximum(stretch, 0.0)
+        stretch = lengths - (rows.rest_lengths_m + theta[0])
+        T = self._k * np.maximum(stretch, 0.0)
         for e, p in zip(self.effects, params):
             T = e.adjust_tension(ev, stretch, T, p)
         tau_load = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm

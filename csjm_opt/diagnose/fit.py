@@ -20,7 +20,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..model import kinematics as kin
-from .augmented import AugmentedModel
+from .augmented import N_NUISANCE, AugmentedModel
 from .residuals import ResidualTable
 
 #: Condition number (parameters in units of their scale) above which a fit is reported ill-conditioned.
@@ -61,12 +61,12 @@ class FitResult:
 
     def params(self, effect_only: bool = True) -> dict[str, float]:
         names = self.model.param_names
-        start = 2 if effect_only else 0
+        start = N_NUISANCE if effect_only else 0
         return {n: float(v) for n, v in zip(names[start:], self.theta[start:])}
 
     def param_sd(self, effect_only: bool = True) -> dict[str, float]:
         names = self.model.param_names
-        start = 2 if effect_only else 0
+        start = N_NUISANCE if effect_only else 0
         return {n: float(v) for n, v in zip(names[start:], self.stderr[start:])}
 
 
@@ -75,7 +75,7 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     scales = model.scales
     prior = model.prior_sd
     has_prior = np.isfinite(prior)
-    rows, R_meas, W = table.rows, table.R_meas, table.whiten
+    W = table.whiten
 
     def data_res(x: np.ndarray) -> np.ndarray:
         return np.einsum("nij,nj->ni", W, linearised_zeta(model, table, x * scales)).ravel()
@@ -87,21 +87,7 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
         return r
 
     def jac(x: np.ndarray) -> np.ndarray:
-        """Gauss-Newton Jacobian: ``W G^-1 dg/dx`` (the ``dG/dx G^-1 g`` term vanishes at a perfect fit)."""
-        theta = x * scales
-
-        def g(R: np.ndarray, th: np.ndarray = theta) -> np.ndarray:
-            return model.balance(R, rows, th)
-
-        g0 = g(R_meas)
-        Ginv = _safe_inv(kin.tangent(g, R_meas, g0, h=1e-6))
-        WGinv = W @ Ginv
-        Jd = np.empty((g0.size, len(x)))
-        for j in range(len(x)):
-            step = 1e-6 * max(1.0, abs(x[j]))
-            th = theta.copy()
-            th[j] += step * scales[j]
-            Jd[:, j] = np.einsum("nij,nj->ni", WGinv, (g(R_meas, th) - g0) / step).ravel()
+        Jd = data_jacobian(model, table, x * scales)
         if has_prior.any():
             P = np.zeros((int(has_prior.sum()), len(x)))
             P[np.arange(P.shape[0]), np.flatnonzero(has_prior)] = scales[has_prior] / prior[has_prior]
@@ -139,6 +125,31 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     theta = x * scales
     zeta = linearised_zeta(model, table, theta)
     return FitResult(model, theta, cov, rss, N, p_eff, rank, cond, zeta)
+
+
+def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray) -> np.ndarray:
+    """Gauss-Newton Jacobian ``W G^-1 dg/dx`` (3 n, p) in units of the parameters' scales.
+
+    (The ``dG/dx G^-1 g`` term vanishes at a perfect fit.) Its Gram matrix is the
+    Fisher information of the scaled parameters under whitened noise."""
+    scales = model.scales
+    rows, R_meas = table.rows, table.R_meas
+    x = np.asarray(theta, float) / scales
+
+    th_fixed = np.asarray(theta, float)
+
+    def g(R: np.ndarray, th: np.ndarray = th_fixed) -> np.ndarray:
+        return model.balance(R, rows, th)
+
+    g0 = g(R_meas)
+    WGinv = table.whiten @ _safe_inv(kin.tangent(g, R_meas, g0, h=1e-6))
+    Jd = np.empty((g0.size, len(x)))
+    for j in range(len(x)):
+        step = 1e-6 * max(1.0, abs(x[j]))
+        th = np.array(theta, float)
+        th[j] += step * scales[j]
+        Jd[:, j] = np.einsum("nij,nj->ni", WGinv, (g(R_meas, th) - g0) / step).ravel()
+    return Jd
 
 
 def linearised_zeta(model: AugmentedModel, table: ResidualTable, theta: np.ndarray) -> np.ndarray:

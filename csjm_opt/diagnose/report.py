@@ -1,8 +1,9 @@
-"""``--report DIR``: a Markdown report with figures of a diagnosis.
+"""``--report DIR``: the diagnosis as a report (``index.html`` + ``index.md``) with figures.
 
 Figures (PNG, matplotlib Agg, written atomically): residual maps over the
 pose (before/after), hysteresis loops of a few cycles, the candidates'
-held-out errors against the noise floor, and per-axis before/after.
+held-out errors against the noise floor, and per-axis before/after. The page
+itself is built from ``diagnosis.json`` by :mod:`csjm_opt.report.diagnosis`.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _plotting as plots
-from .._fileio import atomic_write_json, atomic_write_text
+from .._fileio import atomic_write_json
 from .selection import ALPHA, Diagnosis
 
 
@@ -32,6 +33,7 @@ def residual_map(d: Diagnosis, path: Path) -> Path:
         ax.set_aspect("equal")
     axes[0].set_ylabel("tilt sin(azimuth) (rad)")
     fig.colorbar(sc, ax=axes, label="||log(R_pred^T R_meas)|| (mrad)")
+    fig.suptitle("Held-out residual over the pose (colour: size of the residual)")
     return plots.save(fig, path)
 
 
@@ -54,9 +56,9 @@ def hysteresis_loops(d: Diagnosis, path: Path, n_cycles: int = 4) -> Path:
         ax.plot(s, 1e3 * zb @ v, "o-", label="nominal")
         ax.plot(s, 1e3 * after[idx] @ v, "s--", label=d.selected)
         ax.set_title(f"cycle {c}")
-        ax.set_xlabel("load along cycle (N m)")
+        ax.set_xlabel("load along the cycle's main direction (N m)")
     axes[0][0].set_ylabel("residual along its main axis (mrad)")
-    axes[0][0].legend(fontsize=8)
+    axes[0][0].legend(fontsize=8, loc="best")
     fig.suptitle("hysteresis: loading and unloading branches (arrows of time follow the markers)")
     return plots.save(fig, path)
 
@@ -71,7 +73,8 @@ def candidate_errors(d: Diagnosis, path: Path) -> Path:
     ax.axhline(1e3 * d.noise_floor_rad, color="k", ls=":", label=f"noise floor {1e3 * d.noise_floor_rad:.2f} mrad")
     ax.set_xticks(range(len(names)), names, rotation=30, ha="right")
     ax.set_ylabel("held-out RMS (mrad)")
-    ax.legend()
+    ax.set_title("Held-out error of each candidate model (green: selected)")
+    ax.legend(loc="best")
     return plots.save(fig, path)
 
 
@@ -84,94 +87,39 @@ def before_after(d: Diagnosis, path: Path) -> Path:
     axes[0].bar(np.arange(3) + w / 2, 1e3 * np.sqrt(np.mean(za ** 2, axis=0)), w, label="after")
     axes[0].set_xticks(range(3), ["x", "y", "z"])
     axes[0].set_ylabel("RMS residual per axis of {A} (mrad)")
-    axes[0].legend()
+    axes[0].set_xlabel("axis of {A}")
+    axes[0].set_title("per axis")
+    axes[0].legend(loc="best")
     bins = np.linspace(0, 1e3 * max(np.linalg.norm(zb, axis=1).max(), 1e-6), 30)
     axes[1].hist(1e3 * np.linalg.norm(zb, axis=1), bins, alpha=0.6, label="before")
     axes[1].hist(1e3 * np.linalg.norm(za, axis=1), bins, alpha=0.6, label="after")
     axes[1].set_xlabel("||residual|| (mrad)")
-    axes[1].legend()
+    axes[1].set_ylabel("held-out rows")
+    axes[1].set_title("distribution")
+    axes[1].legend(loc="best")
+    fig.suptitle(f"Held-out residual before (nominal model) and after ({d.selected})")
     return plots.save(fig, path)
 
 
-def _fmt(x: float | None, scale: float = 1e3) -> str:
-    return f"{scale * x:.3f}" if x is not None and np.isfinite(x) else "n/a"
-
-
-def _g(x: float | None, spec: str = ".3g") -> str:
-    return format(x, spec) if x is not None and np.isfinite(x) else "n/a"
-
-
-def markdown(d: Diagnosis, j: dict, data_name: str) -> str:
-    g = j["gap"]
-    out = [f"# Sim-to-real gap diagnosis: {data_name}", "",
-           f"**Selected effect: `{j['selected']}`**"
-           + (f" (confounded with: {', '.join(j['confounded_with'])})" if j["confounded_with"] else ""), "",
-           f"- held-out rows: {j['heldout']} ({j['rows']['test'] or j['rows']['train']} rows)",
-           f"- gap before (nominal model, rig file): {_fmt(g['before_rad'])} mrad; after: {_fmt(g['after_rad'])} mrad",
-           f"- noise floor: {_fmt(j['noise_floor_rad'])} mrad; systematic gap {_fmt(g['systematic_before_rad'])} "
-           f"-> {_fmt(g['systematic_after_rad'])} mrad; fraction explained {_g(g['fraction_explained'], '.2f')} "
-           f"(of which a recalibration of stiffness/pretension alone gives "
-           f"{_g(g['fraction_explained_by_nominal_refit'], '.2f')})",
-           f"- decision rule: {j['significance']['test']}; family-wise alpha = {ALPHA} "
-           f"({j['significance']['per_candidate_alpha']:.4f} per candidate), held-out alpha = "
-           f"{j['significance']['heldout_alpha']}",
-           f"- second effect on top of the selected one: `{j['secondary']['effect']}`",
-           f"- remaining signature after the selected model: "
-           f"{'yes' if j['remaining_signature'].get('significant') else 'no'} "
-           f"(p = {_g(j['remaining_signature'].get('p_value'))})", "",
-           "## Candidates", "",
-           "| effect | held-out RMS (mrad) | train RMS (mrad) | BIC | F-test p | held-out p | significant "
-           "| rank / params | condition | fraction explained |", "|---|---|---|---|---|---|---|---|---|---|",
-           f"| nominal (rig file) | {_fmt(j['baseline']['heldout_rms_rad'])} | {_fmt(j['baseline']['train_rms_rad'])} "
-           "| | | | | 0 | | 0 |",
-           f"| nominal_refit | {_fmt(j['nominal_refit']['heldout_rms_rad'])} | "
-           f"{_fmt(j['nominal_refit']['train_rms_rad'])} | {_g(j['nominal_refit']['bic'], '.1f')} | | | | 2 | | "
-           f"{_g(g['fraction_explained_by_nominal_refit'], '.2f')} |"]
-    for c in j["candidates"]:
-        if c.get("error"):
-            out.append(f"| {c['effect']} | {c['error']} | | | | | no | | | |")
-            continue
-        out.append(f"| {c['effect']} | {_fmt(c['heldout_rms_rad'])} | {_fmt(c['train_rms_rad'])} "
-                   f"| {_g(c['bic'], '.1f')} "
-                   f"| {_g(c['p_value'], '.2g')} | {_g(c['heldout_p_value'], '.2g')} "
-                   f"| {'yes' if c['significant'] else 'no'} "
-                   f"| {c['rank']} / {c['n_params']} | {_g(c['condition'])} | {_g(c['fraction_explained'], '.2f')} |")
-    sel = next((c for c in j["candidates"] if c["effect"] == j["selected"]), None)
-    if sel is not None:
-        out += ["", f"## Fitted parameters of `{sel['effect']}` (+- 1 standard error)", "",
-                "| parameter | value | sd |", "|---|---|---|"]
-        out += [f"| {k} | {_g(v, '.4g')} | {_g(sel['param_sd'][k], '.2g')} |" for k, v in sel["params"].items()]
-        out += [f"| {k} (nuisance) | {_g(v, '.4g')} | |" for k, v in sel["nuisance"].items()]
-        if sel["derived"]:
-            out += ["", "Derived: `" + str(sel["derived"]) + "`"]
-        if not sel["identifiable"]:
-            out += ["", f"Note: the augmented fit is ill-conditioned (condition {_g(sel['condition'])}, rank "
-                        f"{sel['rank']} of {sel['n_params']}); some parameter combinations are not determined "
-                        "by these data (hole_offsets: a weak prior keeps them near zero)."]
-    loc = j["localisation"]
-    out += ["", "## Where the gap lies (held-out rows)", "",
-            "| breakdown | group | rows | before (mrad) | after (mrad) |",
-            "|---|---|---|---|---|"]
-    for key in ("by_tilt", "by_azimuth", "by_load_magnitude", "by_load_direction", "by_branch"):
-        for grp in loc[key]:
-            out.append(f"| {key[3:]} | {grp['group']} | {grp['rows']} | {_fmt(grp['rms_before_rad'])} | "
-                       f"{_fmt(grp['rms_after_rad'])} |")
-    for a, v in loc["by_axis"].items():
-        out.append(f"| axis | {a} | | {_fmt(v['rms_before_rad'])} | {_fmt(v['rms_after_rad'])} |")
-    hb, ha = loc["hysteresis_before"], loc["hysteresis_after"]
-    if hb.get("pairs"):
-        out += ["", f"Hysteresis (loading minus unloading at matched loads, {hb['pairs']} pairs): "
-                    f"{_fmt(hb['rms_up_minus_down_rad'])} mrad before (noise alone: "
-                    f"{_fmt(hb['expected_from_noise_rad'])}; p = {_g(hb['p_value'], '.2g')}), "
-                    f"{_fmt(ha['rms_up_minus_down_rad'])} mrad after."]
-    out += ["", "## Figures", "", "![residual map](residual_map.png)", "", "![hysteresis](hysteresis.png)", "",
-            "![candidates](candidates.png)", "", "![before/after](before_after.png)", "",
-            "Full numbers: `diagnosis.json`."]
-    return "\n".join(out) + "\n"
-
-
 def write_report(d: Diagnosis, out_dir: str | Path, data_name: str = "log") -> Path:
-    """Write ``index.md``, ``diagnosis.json`` and four figures into ``out_dir``; returns index.md."""
+    """Write ``index.html``, ``index.md``, ``diagnosis.json`` and four figures into ``out_dir``.
+
+    Parameters
+    ----------
+    d : Diagnosis
+    out_dir : str or Path
+        Report folder (created).
+    data_name : str
+        How the page names the measurement log.
+
+    Returns
+    -------
+    Path
+        ``index.md`` (the HTML page is beside it).
+    """
+    from ..report.diagnosis import document
+    from ..report.render import write_document
+
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     j = d.as_json()
@@ -180,4 +128,5 @@ def write_report(d: Diagnosis, out_dir: str | Path, data_name: str = "log") -> P
     candidate_errors(d, out_dir / "candidates.png")
     before_after(d, out_dir / "before_after.png")
     atomic_write_json(out_dir / "diagnosis.json", j)
-    return atomic_write_text(out_dir / "index.md", markdown(d, j, data_name))
+    write_document(document(j, data_name, alpha=ALPHA), out_dir)
+    return out_dir / "index.md"

@@ -60,7 +60,14 @@ def convergence_curve(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model, n_m
     -------
     ConvergenceCurve
         det K per ``n``; NaN where the first ``n`` rows do not determine K.
+
+    Notes
+    -----
+    Short prefixes are imprecise by nature: unless ``allow_ill_conditioned``
+    is given, they are identified with ``allow_ill_conditioned=True`` (only
+    rank-deficient prefixes are left out, as NaN).
     """
+    options.setdefault("allow_ill_conditioned", True)
     ns: list[float] = []
     dp: list[float] = []
     da: list[float] = []

@@ -26,6 +26,17 @@ Three estimates are returned together in :class:`StiffnessEstimate`:
 
 Confidence intervals are analytic (Student t on the residual covariance, or
 normal on the instrument covariance) and optionally a pairs bootstrap.
+
+Refusal rule (what cannot be identified is not returned): a cycle is refused
+with :class:`~csjm_opt.errors.IllConditionedData` when its displacements do
+not span three directions (rank < 3 or condition > ``max_condition``), or when
+the estimate is not determined to :data:`MAX_RELATIVE_HALF_WIDTH`: the largest
+confidence half-width of any entry of K, relative to ``||K||_2`` (the largest
+singular value of K), exceeds 0.2. The error carries ``direction``, the
+weakest direction of the centred load moments in {A} (smallest right singular
+vector): loads with a moment component along it supply what is missing.
+``allow_ill_conditioned=True`` returns the estimate anyway (rank 3 needed),
+marked ``ill_conditioned``.
 """
 
 from __future__ import annotations
@@ -49,6 +60,7 @@ from .stiffness_fits import (
     paper_estimate,
     symmetric_fit,
 )
+from .._limits import MAX_BOOTSTRAP
 from .._validate import as_array, as_rotations
 
 #: Default largest accepted condition number of the (centred) excitation. A
@@ -57,6 +69,8 @@ from .._validate import as_array, as_rotations
 MAX_CONDITION = 100.0
 #: Smallest singular value of the excitation, in units of the orientation noise, to call it determined.
 NOISE_FLOOR_FACTOR = 3.0
+#: Stated precision: largest accepted confidence half-width of an entry of K relative to ||K||_2.
+MAX_RELATIVE_HALF_WIDTH = 0.2
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -84,6 +98,14 @@ class StiffnessEstimate:
     chi2_per_dof: float             # residuals against the instrument model (nan without one)
     bootstrap_K_ci: np.ndarray | None = None  # (2, 3, 3) percentile interval of K, or None
     design_condition: float = float("nan")  # condition of the column-scaled design (with higher terms)
+    weakest_load_direction_A: np.ndarray = dataclasses.field(default_factory=lambda: np.full(3, np.nan))
+    ill_conditioned: bool = False   # returned although refused by the rule (allow_ill_conditioned=True)
+
+    @property
+    def relative_half_width(self) -> float:
+        """Largest CI half-width of an entry of K over ``||K||_2`` (the precision rule's measure)."""
+        scale = float(np.linalg.norm(self.K, 2))
+        return float(np.max(self.ci_quantile * self.K_std) / scale) if scale > 0 else float("inf")
 
     # ----------------------------------------------------------- self-checks
     @property
@@ -135,6 +157,10 @@ class StiffnessEstimate:
                  max_chi2: float = 2.0) -> list[str]:
         """What the estimate itself says is doubtful (empty list: nothing)."""
         out = []
+        if self.ill_conditioned or self.relative_half_width > MAX_RELATIVE_HALF_WIDTH:
+            out.append(f"ill-conditioned: K determined only to {self.relative_half_width:.0%} of ||K|| "
+                       f"(rule: {MAX_RELATIVE_HALF_WIDTH:.0%}); weakest load direction "
+                       f"{np.round(self.weakest_load_direction_A, 3).tolist()} in {{A}}")
         if not self.is_well_conditioned(max_condition):
             out.append(f"excitation condition {self.condition:.3g} > {max_condition:g}")
         z = np.max(np.abs(self.symmetry_z))
@@ -162,6 +188,8 @@ class StiffnessEstimate:
              "symmetry_error": self.symmetry_error, "symmetry_z": self.symmetry_z,
              "tau_load_ref_A_Nm": self.tau_load_ref_A_Nm, "rotvec_ref": so3.log(self.R_ref),
              "residual_rms_Nm": self.residual_rms_Nm,
+             "relative_half_width": self.relative_half_width, "ill_conditioned": self.ill_conditioned,
+             "weakest_load_direction_A": self.weakest_load_direction_A,
              "chi2_per_dof": None if not np.isfinite(self.chi2_per_dof) else self.chi2_per_dof,
              "det_K": float(np.linalg.det(self.K)), "eig_K_sym": np.linalg.eigvalsh(self.K_sym),
              "problems": self.problems()}
@@ -200,16 +228,71 @@ def _check_rows(n: int, p: int) -> None:
 
 
 # --------------------------------------------------------------- estimators
+def weakest_load_direction(tau_load_A_Nm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit direction in {A} along which the centred load moments vary least, and their singular values (N m).
+
+    The sign is fixed so that the largest component is positive.
+    """
+    T = tau_load_A_Nm - tau_load_A_Nm.mean(axis=0)
+    _, s, Vt = np.linalg.svd(T, full_matrices=True)
+    u = Vt[-1]
+    u = u if u[np.argmax(np.abs(u))] >= 0 else -u
+    return u, np.concatenate([s, np.zeros(3 - len(s))])[:3]
+
+
+def _missing(u: np.ndarray) -> str:
+    v = np.round(u, 2) + 0.0
+    return (f"the load moments barely vary along [{v[0]:.2f}, {v[1]:.2f}, {v[2]:.2f}] in {{A}}; add loads "
+            "with a moment component along that direction (or pass allow_ill_conditioned / "
+            "--allow-ill-conditioned)")
+
+
 def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | None = None,
                        tau_weight_A_Nm: np.ndarray | None = None, *, noise: InstrumentNoise | None = None,
                        order: int = 1, ci_level: float = 0.95, bootstrap: int = 0,
                        rng: np.random.Generator | None = None, max_condition: float = MAX_CONDITION,
-                       cycle: int | None = None) -> StiffnessEstimate:
+                       cycle: int | None = None, allow_ill_conditioned: bool = False) -> StiffnessEstimate:
     """Identify K at ``R[0]`` from one cycle's orientations (n, 3, 3) and external moments (n, 3).
 
-    The platform's weight moment is ``tau_weight_A_Nm`` (n, 3) if given, else
-    ``model.weight_moment(R)`` at each measured pose; pass neither for a
-    weightless platform only by giving zeros explicitly.
+    Parameters
+    ----------
+    R : array (n, 3, 3)
+        Measured orientations of {A} in {B}; row 0 is the reference.
+    tau_ext_A_Nm : array (n, 3)
+        External moments about O in {A} (N m), platform weight excluded.
+    model : Model, optional
+        Gives the weight moment at each measured pose when ``tau_weight_A_Nm`` is not given.
+    tau_weight_A_Nm : array (n, 3), optional
+        Weight moments (zeros for a weightless platform).
+    noise : InstrumentNoise, optional
+        Instrument model: errors-in-variables correction and normal intervals.
+    order : {1, 2, 3}
+        Degree of the fit in dzeta.
+    ci_level : float
+        Confidence level in (0, 1).
+    bootstrap : int
+        Pairs-bootstrap resamples, 0 to :data:`~csjm_opt._limits.MAX_BOOTSTRAP`.
+    rng : numpy.random.Generator, optional
+        Bootstrap generator.
+    max_condition : float
+        Largest accepted condition number of the displacements (>= 1; ``inf``: no limit).
+    cycle : int, optional
+        Cycle id stored in the result.
+    allow_ill_conditioned : bool
+        Return an estimate that fails the precision rule (or the condition
+        limit) anyway, marked ``ill_conditioned``; rank-deficient data still raise.
+
+    Returns
+    -------
+    StiffnessEstimate
+
+    Raises
+    ------
+    InvalidInput
+        Bad shapes, values or options.
+    IllConditionedData
+        The cycle does not determine K (module docstring: rank, condition,
+        relative precision); ``direction`` is the weakest load direction in {A}.
     """
     R = as_rotations(R, "R")
     n = R.shape[0]
@@ -220,11 +303,27 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
         tau_weight_A_Nm = model.weight_moment(R)
     if order not in (1, 2, 3):
         raise InvalidInput(f"order: expected 1, 2 or 3, got {order!r}", "order")
+    if isinstance(bootstrap, bool) or not isinstance(bootstrap, (int, np.integer)) \
+            or not 0 <= bootstrap <= MAX_BOOTSTRAP:
+        raise InvalidInput(f"bootstrap: expected an integer in [0, {MAX_BOOTSTRAP}], got {bootstrap!r}", "bootstrap")
+    if not (isinstance(ci_level, (int, float)) and 0 < ci_level < 1):
+        raise InvalidInput(f"ci_level: expected a number in (0, 1), got {ci_level!r}", "ci_level")
+    if not (isinstance(max_condition, (int, float)) and 1 <= max_condition):
+        raise InvalidInput(f"max_condition: expected a number >= 1 (inf: no limit), got {max_condition!r}",
+                           "max_condition")
     tau_load = tau_ext + as_array(tau_weight_A_Nm, (n, 3), "tau_weight")
     dzeta = so3.log(np.swapaxes(R[0], -1, -2)[None] @ R)
     p = n_parameters(order)
     _check_rows(n, p)
-    cond, s = excitation(dzeta, noise, max_condition)
+    u, _ = weakest_load_direction(tau_load)
+    ill = False
+    try:
+        cond, s = excitation(dzeta, noise, max_condition)
+    except IllConditionedData as exc:
+        if not allow_ill_conditioned or exc.rank is None or exc.rank < 3:
+            raise IllConditionedData(f"{exc}; {_missing(u)}", exc.condition, exc.rank, u) from exc
+        cond, ill = exc.condition, True
+        s = np.linalg.svd(dzeta - dzeta.mean(axis=0), compute_uv=False)[:3]
 
     K_D_paper = paper_estimate(dzeta, tau_load)
     fit = affine_fit(dzeta, tau_load, order, noise)
@@ -237,10 +336,20 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
     else:
         q = float(stats.t.ppf(0.5 + ci_level / 2, n - p))
         chi2 = float("nan")
+    half = q * np.sqrt(np.maximum(np.diag(fit["cov_K"]), 0.0))
+    scale = float(np.linalg.norm(fit["K"], 2))
+    rel = float(half.max() / scale) if scale > 0 else float("inf")
+    if not rel <= MAX_RELATIVE_HALF_WIDTH:
+        if not allow_ill_conditioned:
+            raise IllConditionedData(
+                f"K is not determined to {MAX_RELATIVE_HALF_WIDTH:.0%}: {int(round(ci_level * 100))} % "
+                f"half-widths up to {half.max():.3g} N m/rad against ||K|| = {scale:.3g} N m/rad "
+                f"({rel:.0%}); {_missing(u)}", cond, 3, u)
+        ill = True
     boot = None
     if bootstrap:
         boot = bootstrap_interval(dzeta, tau_load, order, noise, bootstrap, ci_level,
-                          rng or np.random.default_rng(0))
+                                  rng or np.random.default_rng(0))
     return StiffnessEstimate(
         cycle=cycle, n_rows=n, order=order, R_ref=R[0], tau_load_ref_A_Nm=fit["c"],
         K_D=fit["K_D"], K_L=-0.5 * so3.hat(fit["c"]), K=fit["K"], K_sym=sym["K"],
@@ -248,43 +357,93 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
         cov_K=fit["cov_K"], cov_K_sym=sym["cov_K"], ci_level=ci_level, ci_quantile=q,
         condition=cond, singular_values_rad=s,
         residual_rms_Nm=float(np.sqrt(np.mean(np.sum(fit["resid"] ** 2, axis=1)))),
-        chi2_per_dof=chi2, bootstrap_K_ci=boot, design_condition=float(fit["design_condition"]))
+        chi2_per_dof=chi2, bootstrap_K_ci=boot, design_condition=float(fit["design_condition"]),
+        weakest_load_direction_A=u, ill_conditioned=ill)
 
 
 # ---------------------------------------------------------------- whole logs
 def identify_log(log: MeasurementLog, rig: Rig, cycle: int | None = None, model: Model | None = None,
-                 **options: Any) -> list[StiffnessEstimate]:
-    """One :class:`StiffnessEstimate` per cycle of ``log`` (or only ``cycle``)."""
+                 progress: Any = None, **options: Any) -> list[StiffnessEstimate]:
+    """One :class:`StiffnessEstimate` per cycle of ``log`` (or only ``cycle``).
+
+    Parameters
+    ----------
+    log : MeasurementLog
+    rig : Rig
+    cycle : int, optional
+        Only this cycle.
+    model : Model, optional
+        Reused numeric model of ``rig``.
+    progress : callable, optional
+        Wraps the iterable of cycles (e.g. ``functools.partial(tqdm, ...)``).
+    **options
+        Passed to :func:`identify_stiffness`.
+
+    Returns
+    -------
+    list of StiffnessEstimate
+
+    Raises
+    ------
+    IllConditionedData
+        For the first cycle that cannot be identified (message starts with its id).
+    """
     model = model or Model(rig)
     cycles = log.cycle_ids if cycle is None else [cycle]
     out = []
-    for c in cycles:
-        rows = log.cycle_rows(c)
-        R = log.R[rows]
+    for c, rows in _cycle_rows(log, cycles, progress):
         try:
-            out.append(identify_stiffness(R, log.tau_ext_A_Nm[rows], model, cycle=c, **options))
+            out.append(_identify_rows(log, rows, model, c, options))
         except IllConditionedData as exc:
-            raise IllConditionedData(f"cycle {c}: {exc}", exc.condition, exc.rank) from exc
+            raise IllConditionedData(f"cycle {c}: {exc}", exc.condition, exc.rank, exc.direction) from exc
     return out
 
 
-def identify_cycles(log: MeasurementLog, rig: Rig, model: Model | None = None,
+def identify_cycles(log: MeasurementLog, rig: Rig, model: Model | None = None, progress: Any = None,
                     **options: Any) -> tuple[list[StiffnessEstimate], list[dict[str, Any]]]:
     """Every cycle that can be identified, and the others with the reason.
 
     A log may mix identification cycles with cycles that load along one
     direction (hysteresis or diagnosis cycles), which cannot determine K; those
-    are returned as ``{"cycle", "reason", "condition"}`` instead of stopping the
-    whole log. Raises the first :class:`IllConditionedData` when no cycle works.
+    are returned as ``{"cycle", "reason", "condition", "weakest_load_direction_A"}``
+    instead of stopping the whole log. Time is linear in the log length
+    (orientations are computed once per cycle's rows).
+
+    Raises
+    ------
+    IllConditionedData
+        The first cycle's error, when no cycle can be identified.
     """
     model = model or Model(rig)
     estimates, skipped, first_error = [], [], None
-    for c in log.cycle_ids:
+    for c, rows in _cycle_rows(log, log.cycle_ids, progress):
         try:
-            estimates.extend(identify_log(log, rig, c, model, **options))
+            estimates.append(_identify_rows(log, rows, model, c, options))
         except IllConditionedData as exc:
-            first_error = first_error or exc
-            skipped.append({"cycle": c, "reason": str(exc), "condition": exc.condition})
+            err = IllConditionedData(f"cycle {c}: {exc}", exc.condition, exc.rank, exc.direction)
+            first_error = first_error or err
+            skipped.append({"cycle": c, "reason": str(exc), "condition": exc.condition,
+                            "weakest_load_direction_A": None if exc.direction is None else exc.direction.tolist()})
     if not estimates and first_error is not None:
         raise first_error
     return estimates, skipped
+
+
+def _cycle_rows(log: MeasurementLog, cycles: list[int], progress: Any) -> Any:
+    """(cycle id, row indices) pairs; rows found once for the whole log (no per-cycle scan)."""
+    cyc = np.asarray(log.cycle)
+    starts = np.flatnonzero(np.r_[True, cyc[1:] != cyc[:-1]])
+    ends = np.r_[starts[1:], len(cyc)]
+    where = {int(cyc[a]): np.arange(a, b) for a, b in zip(starts, ends)}
+    pairs = []
+    for c in cycles:
+        if c not in where:
+            log.cycle_rows(c)  # raises DataFileError naming the cycles
+        pairs.append((c, where[c]))
+    return progress(pairs) if progress is not None else pairs
+
+
+def _identify_rows(log: MeasurementLog, rows: np.ndarray, model: Model, cycle: int,
+                   options: dict[str, Any]) -> StiffnessEstimate:
+    R = so3.exp(log.rotvec_rad[rows])
+    return identify_stiffness(R, log.tau_ext_A_Nm[rows], model, cycle=cycle, **options)

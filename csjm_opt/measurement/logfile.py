@@ -9,7 +9,9 @@ first, extra columns allowed after them)::
 (N m, platform weight excluded); ``r*`` the measured orientation of {A} in {B}
 as a rotation vector (rad). Rows of one ``cycle`` are consecutive. Malformed
 input raises :class:`DataFileError` naming the file and line; nothing is
-silently dropped.
+silently dropped. Every number is checked against the bounds of
+:mod:`csjm_opt._limits` (ids integers below 2^53, rest lengths in (0, 10] m,
+moments within 1e4 N m, rotation vectors of norm <= pi).
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import numpy as np
 from .. import so3
 from ..errors import DataFileError, InvalidInput
 from .._fileio import atomic_write_text, read_text
+from .._limits import LIMITS, MAX_EXACT_INT, ROTVEC_MAX_NORM_RAD
 
 COLUMNS = ("sample", "cycle", "l1", "l2", "l3", "l4", "l5", "l6",
            "tau_x", "tau_y", "tau_z", "rx", "ry", "rz")
@@ -126,8 +129,13 @@ class MeasurementLog:
             raise InvalidInput(f"R_or_rotvec: expected (n, 3, 3) or (n, 3), got {X.shape}", "R_or_rotvec")
         rotvec = so3.log(X) if X.ndim == 3 else X
         n = rotvec.shape[0]
-        sample = np.arange(n) if sample is None else _rows(sample, (n,), "sample").astype(int)
-        log = cls(sample, _rows(cycle, (n,), "cycle").astype(int), _rows(rest_lengths_m, (n, 6), "rest_lengths_m"),
+        sample = np.arange(n) if sample is None else _rows(sample, (n,), "sample")
+        cycle = _rows(cycle, (n,), "cycle")
+        if np.any(np.abs(sample) > MAX_EXACT_INT):
+            raise DataFileError("sample id outside +-(2^53 - 1)", None, None, "sample")
+        if np.any(np.abs(cycle) > MAX_EXACT_INT):
+            raise DataFileError("cycle id outside +-(2^53 - 1)", None, None, "cycle")
+        log = cls(sample.astype(int), cycle.astype(int), _rows(rest_lengths_m, (n, 6), "rest_lengths_m"),
                   _rows(tau_ext_A_Nm, (n, 3), "tau_ext_A_Nm"), rotvec,
                   {k: _rows(v, (n,), k, float_=False) for k, v in (extra or {}).items()})
         _check_rows(log, None, lines=np.arange(2, n + 2))
@@ -208,35 +216,78 @@ def _rows(value, shape: tuple[int, ...] | None, name: str, float_: bool = True) 
 
 
 def parse_number(cell: str, column: str, source: str | None, line: int, integer: bool = False) -> float | int:
-    """A finite number (an ``int`` if ``integer``) from a CSV cell, or a :class:`DataFileError`."""
+    """A finite number (an ``int`` if ``integer``) from a CSV cell, or a :class:`DataFileError`.
+
+    Integers (ids) must be whole and within ``+-(2^53 - 1)`` (exact in float64
+    and int64); range checks of other quantities are left to the caller.
+    """
     try:
         x = float(cell)
     except ValueError:
-        raise DataFileError(f"not a number: {cell!r}", source, line, column) from None
+        raise DataFileError(f"not a number: {cell[:40]!r}", source, line, column) from None
     if not np.isfinite(x):
-        raise DataFileError(f"not finite: {cell!r}", source, line, column)
+        raise DataFileError(f"not finite: {cell[:40]!r}", source, line, column)
     if integer:
         if x != int(x):
-            raise DataFileError(f"expected an integer, got {cell!r}", source, line, column)
+            raise DataFileError(f"expected an integer, got {cell[:40]!r}", source, line, column)
+        if abs(x) > MAX_EXACT_INT:
+            raise DataFileError(f"id {cell[:40]!r} outside +-(2^53 - 1)", source, line, column)
         return int(x)
     return x
 
 
+#: Columns of the log checked against each bound of :data:`csjm_opt._limits.LIMITS`.
+_COLUMN_LIMITS = (("rest_lengths_m", "rest_length_m", ("l1", "l2", "l3", "l4", "l5", "l6")),
+                  ("tau_ext_A_Nm", "moment_Nm", ("tau_x", "tau_y", "tau_z")))
+
+
+def _check_bounds(log: MeasurementLog, source: str | None, lines: np.ndarray) -> None:
+    for ids, name in ((log.sample, "sample"), (log.cycle, "cycle")):
+        bad = np.abs(np.asarray(ids, dtype=float)) > MAX_EXACT_INT
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise DataFileError("id outside +-(2^53 - 1)", source, int(lines[i]), name)
+    for attr, quantity, columns in _COLUMN_LIMITS:
+        lim = LIMITS[quantity]
+        ok = lim.contains(getattr(log, attr))
+        if not ok.all():
+            i, j = map(int, np.unravel_index(int(np.argmin(ok.ravel())), ok.shape))
+            value = float(getattr(log, attr)[i, j])
+            raise DataFileError(f"{value:.6g} outside {lim.describe()} ({lim.why.split(';')[0]})",
+                                source, int(lines[i]), columns[j])
+    rv = log.rotvec_rad
+    norm = np.sqrt(np.sum(rv * rv, axis=1))
+    bad = ~(norm <= ROTVEC_MAX_NORM_RAD)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise DataFileError(f"rotation vector of norm {norm[i]:.6g} rad; expected a principal rotation "
+                            "vector (norm <= pi; degrees written as radians?)", source, int(lines[i]), "rx..rz")
+
+
 def _check_rows(log: MeasurementLog, source: str | None, lines: np.ndarray) -> None:
-    seen: dict[int, int] = {}
-    for i, s in enumerate(log.sample):
-        if int(s) in seen:
-            raise DataFileError(f"duplicate sample id {int(s)} (first on line {seen[int(s)]})",
-                                source, int(lines[i]), "sample")
-        seen[int(s)] = int(lines[i])
-    closed: set[int] = set()
-    for i in range(1, len(log)):
-        prev, cur = int(log.cycle[i - 1]), int(log.cycle[i])
-        if cur != prev:
-            closed.add(prev)
-            if cur in closed:
-                raise DataFileError(f"rows of cycle {cur} are not consecutive", source,
-                                    int(lines[i]), "cycle")
+    if not (np.all(np.isfinite(log.rest_lengths_m)) and np.all(np.isfinite(log.tau_ext_A_Nm))
+            and np.all(np.isfinite(log.rotvec_rad))):
+        i = int(np.argmin(np.all(np.isfinite(np.hstack([log.rest_lengths_m, log.tau_ext_A_Nm, log.rotvec_rad])),
+                                 axis=1)))
+        raise DataFileError("not a finite number", source, int(lines[i]))
+    _check_bounds(log, source, lines)
+    sample = np.asarray(log.sample)
+    order = np.argsort(sample, kind="stable")
+    dup = np.flatnonzero(sample[order][1:] == sample[order][:-1])
+    if dup.size:  # report the earliest second occurrence
+        second = order[dup + 1]
+        i = int(second.min())
+        first = int(order[dup[np.argmin(second)]])
+        raise DataFileError(f"duplicate sample id {int(sample[i])} (first on line {int(lines[first])})",
+                            source, int(lines[i]), "sample")
+    cycle = np.asarray(log.cycle)
+    starts = np.flatnonzero(np.r_[True, cycle[1:] != cycle[:-1]])   # first row of each run
+    run_ids = cycle[starts]
+    order = np.argsort(run_ids, kind="stable")
+    rep = np.flatnonzero(run_ids[order][1:] == run_ids[order][:-1])
+    if rep.size:
+        i = int(starts[order[rep + 1]].min())
+        raise DataFileError(f"rows of cycle {int(cycle[i])} are not consecutive", source, int(lines[i]), "cycle")
     if np.any(log.rest_lengths_m <= 0):
         i = int(np.argmax(np.any(log.rest_lengths_m <= 0, axis=1)))
         raise DataFileError("rest lengths must be positive", source, int(lines[i]), "l1..l6")

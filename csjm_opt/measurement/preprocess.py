@@ -49,7 +49,9 @@ from typing import Any
 import numpy as np
 
 from .. import so3
-from ..errors import DataFileError, IllConditionedData
+from ..errors import DataFileError, IllConditionedData, InvalidInput
+from .._fileio import read_text
+from .._limits import LIMITS, ROTVEC_MAX_NORM_RAD
 from .logfile import MeasurementLog, parse_number
 from ..model.rig import Rig
 
@@ -65,6 +67,11 @@ _REQUIRED = {
 }
 _OPTIONAL = {"sample": _POSE}
 DEFAULT_ORIGIN_TOL_M = 2e-3
+#: Largest accepted ``origin_tol_m`` (m): beyond it (54) checks nothing on a bench-top rig.
+MAX_ORIGIN_TOL_M = 1.0
+_QUANTITY = {**{c: "position_m" for c in ("x", "y", "z", "px", "py", "pz")},
+             **{c: "force_N" for c in ("fx", "fy", "fz")}, **{c: "moment_Nm" for c in ("mx", "my", "mz")},
+             **{f"l{i}": "rest_length_m" for i in range(1, 7)}}
 
 
 def fit_rigid_transform(P_src: np.ndarray, P_dst: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
@@ -137,6 +144,15 @@ def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int,
                 continue
             values[col] = cell if col == "name" else parse_number(cell, col, source, line,
                                                                      integer=col in ("sample", "cycle"))
+            lim = LIMITS.get(_QUANTITY.get(col, ""))
+            if lim is not None and not lim.contains(np.array(values[col])):
+                raise DataFileError(f"{values[col]:.6g} outside {lim.describe()} ({lim.why.split(';')[0]})",
+                                    source, line, col)
+        if "rx" in values and "ry" in values and "rz" in values:
+            norm = float(np.linalg.norm([values["rx"], values["ry"], values["rz"]]))
+            if not norm <= ROTVEC_MAX_NORM_RAD:
+                raise DataFileError(f"rotation vector of norm {norm:.6g} rad; expected a principal rotation "
+                                    "vector (norm <= pi; degrees written as radians?)", source, line, "rx..rz")
         if kind == "sample":
             given = [c for c in _POSE if c in values]
             if given and len(given) != 6:
@@ -148,7 +164,19 @@ def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int,
 
 def preprocess_text(text: str, rig: Rig, source: str | None = None, origin_tol_m: float = DEFAULT_ORIGIN_TOL_M,
                     ft_includes_weight: bool = False) -> tuple[MeasurementLog, dict[str, Any]]:
-    """Raw CSV text -> (MeasurementLog, summary dict)."""
+    """Raw CSV text -> (MeasurementLog, summary dict).
+
+    Raises
+    ------
+    DataFileError
+        A malformed raw file (naming the line) or a pose violating (54).
+    InvalidInput
+        ``origin_tol_m`` not a number in (0, :data:`MAX_ORIGIN_TOL_M`].
+    """
+    if isinstance(origin_tol_m, bool) or not isinstance(origin_tol_m, (int, float)) \
+            or not 0 < origin_tol_m <= MAX_ORIGIN_TOL_M:
+        raise InvalidInput(f"origin_tol_m: expected a number in (0, {MAX_ORIGIN_TOL_M:g}] m, got {origin_tol_m!r}",
+                           "origin_tol_m")
     rec = parse_raw(text, source)
     base = rec["base_point"]
     if len(base) < 3:
@@ -234,8 +262,5 @@ def _platform_pose_L(v: dict, pts: list, source: str | None, line: int) -> tuple
 def preprocess_file(path: str | Path, rig: Rig, **options: Any) -> tuple[MeasurementLog, dict[str, Any]]:
     """Read a raw CSV file and preprocess it (see :func:`preprocess_text`)."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise DataFileError(f"cannot read: {exc.strerror}", str(path)) from exc
+    text = read_text(path, lambda msg: DataFileError(msg, str(path)), "raw file")
     return preprocess_text(text, rig, str(path), **options)

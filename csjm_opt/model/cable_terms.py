@@ -1,23 +1,35 @@
-"""Closed-form cable terms in numpy, for the inner loops (statics, shaping).
+"""The batched numpy reference of the cable physics: geometry, J (38), weight moment, K.
 
-The CasADi model (:mod:`csjm_opt.model.casadi_model`) is the reference; these are
-the same quantities in closed form, about 3x cheaper per call from Python,
-used where one evaluation runs thousands of times (forward statics, the
-closed-loop simulation, stiffness shaping). ``tests/test_statics.py`` checks
-them against the CasADi model and against finite differences.
+This is the one place the closed-form physics is written in numpy. The
+compiled fast paths (:mod:`csjm_opt.model._kernels`, numba) compute the same
+quantities and are tested against these functions and against the CasADi
+model (:mod:`csjm_opt.model.casadi_model`, the symbolic reference and the
+code-generation path); ``tests/test_cable_terms.py`` and
+``tests/test_stiffness_kernel.py`` do it, together with a finite-difference
+Hessian of the cable energy.
 
+Every function takes one pose ``R`` (3, 3) or a stack (..., 3, 3); hole
+arrays ``A`` (6, 3) in {A} and ``B`` (6, 3) in {B}, or per-pose (..., 6, 3).
 With ``c_i = |b_i - R a_i|``, ``u_i = R^T (b_i - R a_i) / c_i`` (in {A}) and
-``j_i = a_i x u_i`` (row i of J, (38)), the Levi-Civita (geodesic) Hessian of
-a cable length in body coordinates ``R exp(hat(zeta))`` is::
+``j_i = a_i x u_i`` (row i of J, (38); ``dc = -J dzeta``), the Levi-Civita
+(geodesic) Hessian of a cable length in body coordinates ``R exp(hat(zeta))``
+is::
 
     Hess(c_i) = (|a_i|^2 I - a_i a_i^T - j_i j_i^T) / c_i
                 - 1/2 (u_i a_i^T + a_i u_i^T) + (u_i . a_i) I
 
-so the cable energy ``Phi = sum 1/2 k_i (c_i - l_i)^2`` has Hessian
-``K = sum_i k_i j_i j_i^T + sum_i t_i Hess(c_i)``: the docs/conventions.md stiffness,
-affine in the tensions ``t_i`` for fixed ``k`` (slack cables: ``k_i -> 0``).
-A force ``f`` fixed in {B} at platform point ``r`` (in {A}) has moment
-``r x R^T f`` and energy Hessian ``(f_A . r) I - 1/2 (f_A r^T + r f_A^T)``.
+so the cable energy ``Phi = sum 1/2 k_i (c_i - l_i)^2`` has Hessian (the
+corrected (45), docs/conventions.md load convention)::
+
+    K = sum_{i taut} k_i j_i j_i^T + sum_i t_i Hess(c_i).
+
+A **slack** cable (``t_i <= 0`` when tensions are given, ``c_i <= l_i`` when
+rest lengths are given) stores no energy nearby and contributes nothing to
+K, neither ``k_i j_i j_i^T`` nor the tension term.
+
+A force ``f`` fixed in {B} at platform point ``r`` (in {A}), such as the
+weight ``m g`` at the centre of mass, has moment ``r x R^T f`` and energy
+Hessian ``(f_A . r) I - 1/2 (f_A r^T + r f_A^T)``.
 """
 
 from __future__ import annotations
@@ -26,63 +38,93 @@ import numpy as np
 
 _EYE = np.eye(3)
 
+__all__ = ["CableTerms", "cable_lengths", "geometry", "length_hessians", "point_force_terms",
+           "stiffness", "stiffness_from_rest", "weight_moment"]
+
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise cross product of (n, 3) arrays (cheaper than np.cross for small n)."""
-    a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
-    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
-    return np.stack((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=1)
+    """Cross product along the last axis (cheaper than np.cross for small arrays)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=-1)
 
 
-class CableTerms:
-    """Geometry of one rig as arrays: ``A`` (6, 3) in {A}, ``B`` (6, 3) in {B}, ``k`` (6,)."""
+def geometry(R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Cable lengths ``c`` (..., 6), unit vectors ``u`` in {A} (..., 6, 3) and J (..., 6, 3).
 
-    def __init__(self, platform_holes_A_m: np.ndarray, base_holes_B_m: np.ndarray,
-                 cable_stiffness_N_per_m: np.ndarray):
-        self.A = np.array(platform_holes_A_m, float)
-        self.B = np.array(base_holes_B_m, float)
-        self.k = np.array(cable_stiffness_N_per_m, float)
-        self._aa = np.einsum("ij,ik->ijk", self.A, self.A)              # a a^T
-        self._a2 = np.einsum("ij,ij->i", self.A, self.A)                # |a|^2
+    Parameters
+    ----------
+    R : (..., 3, 3) orientation of {A} in {B}.
+    A_m, B_m : (6, 3) or (..., 6, 3) platform holes in {A}, base holes in {B} (m).
+    """
+    v = np.asarray(B_m) @ R - A_m                       # rows R^T b_i - a_i: cable vectors in {A}
+    c = np.sqrt(np.einsum("...ij,...ij->...i", v, v))
+    U = v / c[..., None]
+    return c, U, _cross(np.broadcast_to(A_m, U.shape), U)
 
-    @classmethod
-    def from_rig(cls, rig) -> "CableTerms":
-        return cls(rig.platform_holes_A_m, rig.base_holes_B_m, rig.cable_stiffness_N_per_m)
 
-    def geometry(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Cable lengths ``c`` (6,), unit vectors ``u`` in {A} (6, 3) and J (6, 3)."""
-        C_A = self.B @ R - self.A                                       # rows R^T b_i - a_i
-        c = np.sqrt(np.einsum("ij,ij->i", C_A, C_A))
-        U = C_A / c[:, None]
-        return c, U, _cross(self.A, U)
+def cable_lengths(R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> np.ndarray:
+    """Cable lengths ``|b_i - R a_i|`` (..., 6), m."""
+    return geometry(R, A_m, B_m)[0]
 
-    def length_hessians(self, c: np.ndarray, U: np.ndarray, J: np.ndarray) -> np.ndarray:
-        """``Hess(c_i)`` (6, 3, 3), the stiffness basis ``G_i = dK/dt_i``."""
-        jj = np.einsum("ij,ik->ijk", J, J)
-        ua = np.einsum("ij,ik->ijk", U, self.A)
-        ua_dot = np.einsum("ij,ij->i", U, self.A)
-        return ((self._a2[:, None, None] * _EYE - self._aa - jj) / c[:, None, None]
-                - 0.5 * (ua + ua.transpose(0, 2, 1)) + ua_dot[:, None, None] * _EYE)
 
-    def stiffness_basis(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(J, K0, G)`` with ``K(T) = K0 + sum_i T_i G_i``; K0 = J^T diag(k) J."""
-        c, U, J = self.geometry(R)
-        return J, (J.T * self.k) @ J, self.length_hessians(c, U, J)
+def length_hessians(A_m: np.ndarray, c: np.ndarray, U: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """``Hess(c_i)`` (..., 6, 3, 3): the stiffness basis ``dK/dt_i`` (module docstring)."""
+    A = np.broadcast_to(A_m, U.shape)
+    aa = A[..., :, None] * A[..., None, :]
+    jj = J[..., :, None] * J[..., None, :]
+    ua = U[..., :, None] * A[..., None, :]
+    a2 = np.einsum("...ij,...ij->...i", A, A)
+    ua_dot = np.einsum("...ij,...ij->...i", U, A)
+    return ((a2[..., None, None] * _EYE - aa - jj) / c[..., None, None]
+            - 0.5 * (ua + np.swapaxes(ua, -1, -2)) + ua_dot[..., None, None] * _EYE)
 
-    def stiffness(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
-        """K (load convention of docs/conventions.md) for tensions T at R (all cables taut, stiffness k)."""
-        J, K0, G = self.stiffness_basis(R)
-        return K0 + np.einsum("i,ijk->jk", T, G)
 
-    def rest_terms(self, R: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """For rest lengths ``l``: tensions T (0 when slack), cable moment J^T T, K (slack k -> 0)."""
-        c, U, J = self.geometry(R)
-        stretch = c - l
-        taut = stretch > 0
-        k_eff = np.where(taut, self.k, 0.0)
-        T = np.where(taut, self.k * stretch, 0.0)
-        K = (J.T * k_eff) @ J + np.einsum("i,ijk->jk", T, self.length_hessians(c, U, J))
-        return T, J.T @ T, K
+def _stiffness_from(A_m, k, c, U, J, T) -> np.ndarray:
+    taut = T > 0
+    k_eff = np.where(taut, k, 0.0)
+    t_eff = np.where(taut, T, 0.0)
+    K0 = np.einsum("...i,...ij,...ik->...jk", k_eff, J, J)
+    return K0 + np.einsum("...i,...ijk->...jk", t_eff, length_hessians(A_m, c, U, J))
+
+
+def stiffness(R: np.ndarray, tensions_N: np.ndarray, A_m: np.ndarray, B_m: np.ndarray,
+              k_N_per_m: np.ndarray) -> np.ndarray:
+    """K (..., 3, 3), N m/rad, for tensions (..., 6); cables with ``t_i <= 0`` are slack.
+
+    Parameters
+    ----------
+    R : (..., 3, 3) poses.
+    tensions_N : (..., 6) cable tensions.
+    A_m, B_m : hole arrays (see :func:`geometry`).
+    k_N_per_m : (6,) cable-plus-drive stiffness.
+
+    Returns
+    -------
+    K : (..., 3, 3), symmetric, the Levi-Civita Hessian of the cable energy.
+    """
+    c, U, J = geometry(R, A_m, B_m)
+    return _stiffness_from(A_m, np.asarray(k_N_per_m, float), c, U, J, np.asarray(tensions_N, float))
+
+
+def stiffness_from_rest(R: np.ndarray, rest_lengths_m: np.ndarray, A_m: np.ndarray, B_m: np.ndarray,
+                        k_N_per_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """K, tensions ``t = k (c - l)`` (0 when ``c <= l``) and the cables' moment ``J^T t``.
+
+    Returns
+    -------
+    K : (..., 3, 3); tensions : (..., 6); tau_cables_A_Nm : (..., 3).
+    """
+    c, U, J = geometry(R, A_m, B_m)
+    k = np.asarray(k_N_per_m, float)
+    T = np.maximum(k * (c - rest_lengths_m), 0.0)
+    return _stiffness_from(A_m, k, c, U, J, T), T, np.einsum("...ij,...i->...j", J, T)
+
+
+def weight_moment(R: np.ndarray, first_moment_A_kgm: np.ndarray, gravity_B: np.ndarray) -> np.ndarray:
+    """Moment of the weight about O in {A}: ``(m r) x (R^T g)`` (N m), (..., 3)."""
+    g_A = np.einsum("...ji,...j->...i", R, gravity_B)
+    return _cross(np.broadcast_to(first_moment_A_kgm, g_A.shape), g_A)
 
 
 def point_force_terms(R: np.ndarray, F_B: np.ndarray, P_A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -91,3 +133,44 @@ def point_force_terms(R: np.ndarray, F_B: np.ndarray, P_A: np.ndarray) -> tuple[
     tau = _cross(P_A, F_A).sum(axis=0)
     fr = F_A.T @ P_A                                                    # sum f r^T
     return tau, np.trace(fr) * _EYE - 0.5 * (fr + fr.T)
+
+
+class CableTerms:
+    """The reference functions bound to one rig: ``A`` (6, 3) in {A}, ``B`` (6, 3) in {B}, ``k`` (6,).
+
+    Kept for the statics and controller code that evaluates one pose at a
+    time; every method is a call of the module functions above.
+    """
+
+    def __init__(self, platform_holes_A_m: np.ndarray, base_holes_B_m: np.ndarray,
+                 cable_stiffness_N_per_m: np.ndarray):
+        self.A = np.array(platform_holes_A_m, float)
+        self.B = np.array(base_holes_B_m, float)
+        self.k = np.array(cable_stiffness_N_per_m, float)
+
+    @classmethod
+    def from_rig(cls, rig) -> "CableTerms":
+        """The terms of a :class:`~csjm_opt.model.rig.Rig`."""
+        return cls(rig.platform_holes_A_m, rig.base_holes_B_m, rig.cable_stiffness_N_per_m)
+
+    def geometry(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Cable lengths ``c`` (6,), unit vectors ``u`` in {A} (6, 3) and J (6, 3)."""
+        return geometry(R, self.A, self.B)
+
+    def length_hessians(self, c: np.ndarray, U: np.ndarray, J: np.ndarray) -> np.ndarray:
+        """``Hess(c_i)`` (6, 3, 3), the stiffness basis ``G_i = dK/dt_i``."""
+        return length_hessians(self.A, c, U, J)
+
+    def stiffness_basis(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(J, K0, G)`` with ``K(T) = K0 + sum_i T_i G_i`` (all taut); K0 = J^T diag(k) J."""
+        c, U, J = self.geometry(R)
+        return J, (J.T * self.k) @ J, self.length_hessians(c, U, J)
+
+    def stiffness(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
+        """K (docs/conventions.md load convention) for tensions T at R (``t_i <= 0``: slack)."""
+        return stiffness(R, T, self.A, self.B, self.k)
+
+    def rest_terms(self, R: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """For rest lengths ``l``: tensions T (0 when slack), cable moment J^T T, K (slack k -> 0)."""
+        K, T, tau = stiffness_from_rest(R, l, self.A, self.B, self.k)
+        return T, tau, K

@@ -21,6 +21,7 @@ from typing import Callable
 import numpy as np
 
 from .. import so3
+from . import cable_terms as _reference
 
 Residual = Callable[[np.ndarray], np.ndarray]   # (n, 3, 3) -> (n, 3)
 
@@ -29,19 +30,18 @@ def cable_terms(R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> tuple[np.nda
     """Cable lengths (n, 6) and Jacobian J (n, 6, 3) for poses R (n, 3, 3).
 
     ``A_m``, ``B_m`` are (6, 3) or per-row (n, 6, 3) hole positions in {A}, {B}.
+    The physics is :func:`csjm_opt.model.cable_terms.geometry` (the numpy reference).
     """
-    b_A = B_m @ R                                   # rows (R^T b_i)^T, (n, 6, 3)
-    v = b_A - A_m                                   # cable vectors in {A}
-    lengths = np.linalg.norm(v, axis=-1)
-    u = v / lengths[..., None]
-    a = np.broadcast_to(A_m, v.shape)
-    return lengths, np.cross(a, u)
+    c, _, J = _reference.geometry(R, A_m, B_m)
+    return c, J
 
 
 def weight_moment(R: np.ndarray, first_moment_A_kgm: np.ndarray, gravity_B: np.ndarray) -> np.ndarray:
-    """Moment of the weight about O in {A}: ``(m r) x (R^T g)`` (N m), (n, 3)."""
-    g_A = np.einsum("nji,j->ni", R, gravity_B)
-    return np.cross(first_moment_A_kgm, g_A)
+    """Moment of the weight about O in {A}: ``(m r) x (R^T g)`` (N m), (n, 3).
+
+    See :func:`csjm_opt.model.cable_terms.weight_moment` (the numpy reference).
+    """
+    return _reference.weight_moment(R, first_moment_A_kgm, gravity_B)
 
 
 def tangent(g: Residual, R: np.ndarray, g0: np.ndarray | None = None, h: float = 1e-7) -> np.ndarray:

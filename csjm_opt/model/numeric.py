@@ -1,20 +1,28 @@
-"""Numeric model of a rig: fast wrappers around the CasADi functions.
+"""Numeric model of a rig: the compiled kernels, with the CasADi model as reference.
 
-:class:`Model` binds a :class:`~csjm_opt.model.rig.Rig` to the named CasADi
-functions of :mod:`csjm_opt.model.casadi_model`. Every method takes one pose
-``R`` (3, 3) or a stack ``Rs`` (n, 3, 3); stacks are evaluated by a CasADi
-``map`` (one call for all poses). Inputs are trusted here; the public
+:class:`Model` binds a :class:`~csjm_opt.model.rig.Rig` to the compiled cable
+physics of :mod:`csjm_opt.model._kernels` (numba; same closed forms as the
+numpy reference :mod:`csjm_opt.model.cable_terms`). Every method takes one
+pose ``R`` (3, 3) or a stack ``Rs`` (n, 3, 3); stacks run in parallel.
+Inputs are trusted here (float64 rotations of the right shape); the public
 functions in :mod:`csjm_opt.model.stiffness` validate them.
+
+The named CasADi functions of :mod:`csjm_opt.model.casadi_model` stay
+available as :attr:`Model.functions` and through :meth:`Model.casadi`, the
+symbolic reference the kernels are tested against (evaluated by a CasADi
+``map`` for stacks; ``compiled=True`` JIT-compiles them to C first).
 """
 
 from __future__ import annotations
 
 import functools
+import weakref
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from . import _kernels as kernels
 from .casadi_model import build_functions
 from .rig import Rig
 
@@ -31,81 +39,120 @@ def _unstack_h(M: np.ndarray, n: int) -> np.ndarray:
     return M.reshape(r, n, -1).transpose(1, 0, 2)
 
 
-class Model:
-    """Cable geometry, Jacobian, moments and stiffness of one rig.
+def _f64(X: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(X, dtype=np.float64)
 
-    ``compiled=True`` evaluates stacks of poses with C code generated from the
-    CasADi functions and compiled by the system C compiler on first use
-    (about 2x faster than ``map`` for 10,000 poses, after a one-time compile of
-    ~1-2 s; see benchmarks/bench_model.py). Without a compiler it falls back to
-    the CasADi virtual machine.
+
+class Model:
+    """Cable geometry, Jacobian, moments and stiffness of one rig (compiled kernels).
+
+    Parameters
+    ----------
+    rig : the rig.
+    compiled : JIT-compile the CasADi reference functions to C for
+        :meth:`casadi` (needs a C compiler; falls back to the CasADi VM).
     """
 
     def __init__(self, rig: Rig, compiled: bool = False):
         self.rig = rig
         self.compiled = compiled
-        self._A = np.ascontiguousarray(rig.platform_holes_A_m.T)   # (3, 6)
-        self._B = np.ascontiguousarray(rig.base_holes_B_m.T)       # (3, 6)
-        self._k = np.asarray(rig.cable_stiffness_N_per_m, float).reshape(6, 1)
-        self.functions = build_functions()
+        self.A = _f64(rig.platform_holes_A_m).copy()
+        self.B = _f64(rig.base_holes_B_m).copy()
+        self.k = _f64(rig.cable_stiffness_N_per_m).copy()
+        self.first_moment_A_kgm = rig.platform_mass_kg * _f64(rig.com_A_m)
+        self.g = _f64(rig.gravity_B_m_per_s2).copy()
 
-    # ---------------------------------------------------------------- calls
-    def _call(self, name: str, R: np.ndarray, *per_pose: np.ndarray, consts: tuple = ()) -> list[np.ndarray]:
-        f = self.functions[name]
+    @property
+    def functions(self) -> dict[str, ca.Function]:
+        """The named CasADi functions (symbolic reference, code generation)."""
+        return build_functions()
+
+    # ------------------------------------------------------- single-pose fast path
+    def pose_terms(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Cable lengths (6,), J (6, 3) and weight moment (3,) at one pose, one kernel call.
+
+        The per-step call of a controller: no validation (``R`` must be a
+        float64 (3, 3) rotation).
+        """
+        c, J, tau_w = np.empty(6), np.empty((6, 3)), np.empty(3)
+        kernels.pose_terms_into(self.A, self.B, self.first_moment_A_kgm, self.g, R, c, J, tau_w)
+        return c, J, tau_w
+
+    # ----------------------------------------------------------------- kernels
+    def geometry(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Cable lengths (m) and J: ``(6,), (6, 3)`` or ``(n, 6), (n, 6, 3)``."""
         if R.ndim == 2:
-            args = [R] + [np.reshape(p, (-1, 1)) for p in per_pose] + list(consts)
-            return [np.array(o) for o in f.call(args)]
+            c, U, J = np.empty(6), np.empty((6, 3)), np.empty((6, 3))
+            kernels.geometry_into(self.A, self.B, R, c, U, J)
+            return c, J
         n = R.shape[0]
-        fm = _mapped(name, n, self.compiled)
-        args = [_stack_h(R)] + [np.asarray(p, float).T for p in per_pose] + list(consts)
-        return [np.array(o) for o in fm.call(args)]
+        c, J = np.empty((n, 6)), np.empty((n, 6, 3))
+        kernels.geometry_many(self.A, self.B, _f64(R), c, J)
+        return c, J
 
     def cable_vectors_B(self, R: np.ndarray) -> np.ndarray:
         """Cable vectors ``c_i = b_i - R a_i`` in {B}: (6, 3) or (n, 6, 3), m."""
-        (C,) = self._call("cable_vectors", R, consts=(self._A, self._B))
-        return C.T if R.ndim == 2 else _unstack_h(C, R.shape[0]).transpose(0, 2, 1)
+        return self.B - self.A @ np.swapaxes(R, -1, -2)
 
     def cable_lengths(self, R: np.ndarray) -> np.ndarray:
         """Cable lengths ``c_i`` (m): (6,) or (n, 6)."""
-        (c,) = self._call("cable_lengths", R, consts=(self._A, self._B))
-        return c.ravel() if R.ndim == 2 else c.T
+        return self.geometry(R)[0]
 
     def jacobian(self, R: np.ndarray) -> np.ndarray:
         """J of (38): (6, 3) or (n, 6, 3); rows ``a_i x (R^T u_i)`` in {A}."""
-        (J,) = self._call("jacobian", R, consts=(self._A, self._B))
-        return J if R.ndim == 2 else _unstack_h(J, R.shape[0])
+        return self.geometry(R)[1]
 
     def cable_moment(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
         """Cables' moment ``J^T T`` on the platform about O, in {A} (N m)."""
-        (tau,) = self._call("cable_moment", R, T, consts=(self._A, self._B))
-        return tau.ravel() if R.ndim == 2 else tau.T
+        J = self.jacobian(R)
+        return np.einsum("...ij,...i->...j", J, T)
 
     def stiffness(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
-        """K (load convention of docs/conventions.md, N m/rad) for given tensions: (3, 3) or (n, 3, 3)."""
-        (K,) = self._call("stiffness", R, T, consts=(self._k, self._A, self._B))
-        return K if R.ndim == 2 else _unstack_h(K, R.shape[0])
-
-    def stiffness_rest(self, R: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """K, tensions T, cable moment and cable energy for rest lengths ``l`` (m)."""
-        K, T, tau, energy = self._call("stiffness_rest", R, l, consts=(self._k, self._A, self._B))
+        """K (docs/conventions.md load convention, N m/rad): (3, 3) or (n, 3, 3); ``T_i <= 0`` is slack."""
         if R.ndim == 2:
-            return K, T.ravel(), tau.ravel(), energy.ravel()[0]
-        n = R.shape[0]
-        return _unstack_h(K, n), T.T, tau.T, energy.ravel()
+            K = np.empty((3, 3))
+            kernels.stiffness_into(self.A, self.B, self.k, R, _f64(T), K)
+            return K
+        K = np.empty((R.shape[0], 3, 3))
+        kernels.stiffness_many(self.A, self.B, self.k, _f64(R), _f64(T), K)
+        return K
+
+    def stiffness_rest(self, R: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any]:
+        """K, tensions T, cable moment and cable energy for rest lengths ``l`` (m)."""
+        if R.ndim == 2:
+            K, T, tau = np.empty((3, 3)), np.empty(6), np.empty(3)
+            kernels.rest_terms_into(self.A, self.B, self.k, R, _f64(l), K, T, tau)
+        else:
+            n = R.shape[0]
+            K, T, tau = np.empty((n, 3, 3)), np.empty((n, 6)), np.empty((n, 3))
+            kernels.rest_terms_many(self.A, self.B, self.k, _f64(R), _f64(l), K, T, tau)
+        energy = 0.5 * np.sum(T * T / self.k, axis=-1)       # 1/2 k s^2 = 1/2 t^2 / k
+        return K, T, tau, (float(energy) if R.ndim == 2 else energy)
 
     def tensions_from_rest(self, R: np.ndarray, l: np.ndarray) -> np.ndarray:
         """``t = k (c - l)`` for taut cables, 0 for slack ones (N)."""
-        (T,) = self._call("tensions_from_rest", R, l, consts=(self._k, self._A, self._B))
-        return T.ravel() if R.ndim == 2 else T.T
+        return np.maximum(self.k * (self.cable_lengths(R) - l), 0.0)
 
     def rest_lengths(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
         """Rest lengths that produce tensions ``T`` at ``R``: ``l = c - T / k`` (m)."""
-        return self.cable_lengths(R) - np.asarray(T) / self._k.ravel()
+        return self.cable_lengths(R) - np.asarray(T) / self.k
 
     def weight_moment(self, R: np.ndarray) -> np.ndarray:
-        """Moment of the platform's weight about O in {A} (N m)."""
-        return self.point_force_moment(R, self.rig.platform_mass_kg * self.rig.gravity_B_m_per_s2,
-                                       self.rig.com_A_m)[0]
+        """Moment of the platform's weight about O in {A} (N m): (3,) or (n, 3)."""
+        if R.ndim == 2:
+            out = np.empty(3)
+            kernels.weight_moment_into(self.first_moment_A_kgm, self.g, R, out)
+            return out
+        out = np.empty((R.shape[0], 3))
+        kernels.weight_moment_many(self.first_moment_A_kgm, self.g, _f64(R), out)
+        return out
+
+    def stiffness_basis(self, Rs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``K(T) = K0 + sum_i T_i G_i`` (all cables taut): K0 (n, 3, 3), G (n, 6, 3, 3)."""
+        n = Rs.shape[0]
+        K0, G = np.empty((n, 3, 3)), np.empty((n, 6, 3, 3))
+        kernels.stiffness_basis_many(self.A, self.B, self.k, _f64(Rs), K0, G)
+        return K0, G
 
     def point_force_moment(self, R: np.ndarray, force_B_N: np.ndarray,
                            point_A_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -118,6 +165,44 @@ class Model:
         n = R.shape[0]
         tau, H = _mapped("weight_moment", n).call([_stack_h(R), *consts])
         return np.array(tau).T, _unstack_h(np.array(H), n)
+
+    # ------------------------------------------------------- CasADi reference
+    def casadi(self, name: str, R: np.ndarray, *per_pose: np.ndarray) -> list[np.ndarray]:
+        """Evaluate the CasADi function ``name`` (e.g. ``"stiffness"``) at one pose or a stack.
+
+        Per-pose inputs (tensions, rest lengths) are (6,) or (n, 6); rig
+        constants are filled in. Outputs come back per pose, e.g. K (3, 3)
+        or (n, 3, 3), vectors (k,) or (n, k).
+        """
+        f = self.functions[name]
+        names = f.name_in()
+        consts = {"k": self.k.reshape(6, 1), "A": self.A.T, "B": self.B.T}
+        if R.ndim == 2:
+            args = [R] + [np.reshape(p, (-1, 1)) for p in per_pose] + [consts[s] for s in names[1 + len(per_pose):]]
+            return [_squeeze(np.array(o)) for o in f.call(args)]
+        n = R.shape[0]
+        fm = _mapped(name, n, self.compiled)
+        args = [_stack_h(R)] + [np.asarray(p, float).T for p in per_pose] \
+            + [consts[s] for s in names[1 + len(per_pose):]]
+        outs = [np.array(o) for o in fm.call(args)]
+        return [o.T if o.shape[1] == n else _unstack_h(o, n) for o in outs]
+
+
+_MODELS: "weakref.WeakKeyDictionary[Rig, Model]" = weakref.WeakKeyDictionary()
+
+
+def model_for(rig: Rig, model: Model | None = None) -> Model:
+    """``model`` if it belongs to ``rig``, else a cached :class:`Model` of ``rig`` (one per rig object)."""
+    if model is not None and model.rig is rig:
+        return model
+    cached = _MODELS.get(rig)
+    if cached is None:
+        cached = _MODELS[rig] = Model(rig)
+    return cached
+
+
+def _squeeze(M: np.ndarray) -> np.ndarray:
+    return M.ravel() if M.shape[1] == 1 else M
 
 
 @functools.lru_cache(maxsize=32)

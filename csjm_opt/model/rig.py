@@ -14,6 +14,10 @@ the TOML format of docs/conventions.md::
     mass = 0.4913                       # kg
     com = [0.0, 0.0, 0.081]             # m, in {A}
     gravity = [0.0, 0.0, -9.81]         # m/s^2, in {B}
+    [dynamics]                          # optional, see csjm_opt.model.dynamics
+    inertia = [Ixx, Iyy, Izz]           # kg m^2 about the COM in {A} (or 3x3)
+    joint_damping = 0.02                # N m s/rad
+    cable_damping = 0.0                 # N s/m
 """
 
 from __future__ import annotations
@@ -26,8 +30,10 @@ from typing import Any
 import numpy as np
 
 from . import hexagon
+from .dynamics import Dynamics
 from ..errors import InvalidInput, RigFileError
 from .._fileio import atomic_write_text, read_text
+from .._limits import LIMITS, MIN_HOLE_RADIUS_M, MIN_HOLE_SPACING_M
 
 #: Shared cable-plus-drive stiffness of the built-in paper rig (N/m). The paper
 #: gives none. K is affine in k for fixed tensions, so k was chosen by least
@@ -42,6 +48,11 @@ PAPER_T_MAX_N = 150.0
 PAPER_MASS_KG = 0.4913          # G = 4.82 N (Section IV-A) at g = 9.81
 PAPER_COM_A_M = (0.0, 0.0, 0.081)
 STANDARD_GRAVITY_B = (0.0, 0.0, -9.81)
+
+#: Bound (csjm_opt._limits.LIMITS key) of each rig entry.
+_QUANTITY = {"platform_holes": "position_m", "base_holes": "position_m", "stiffness": "cable_stiffness_N_per_m",
+             "t_min": "tension_N", "t_max": "tension_N", "mass": "mass_kg", "com": "position_m",
+             "gravity": "gravity_m_per_s2"}
 
 _SCHEMA: dict[str, dict[str, tuple[int, ...]]] = {
     "geometry": {"platform_holes": (6, 3), "base_holes": (6, 3)},
@@ -68,10 +79,16 @@ class Rig:
     platform_mass_kg: float = PAPER_MASS_KG
     com_A_m: np.ndarray = dataclasses.field(default_factory=lambda: _frozen(PAPER_COM_A_M))
     gravity_B_m_per_s2: np.ndarray = dataclasses.field(default_factory=lambda: _frozen(STANDARD_GRAVITY_B))
+    #: Inertia and damping for dynamic simulation; ``None``: the documented defaults
+    #: (:func:`csjm_opt.model.dynamics.rig_dynamics`).
+    dynamics: Dynamics | None = None
 
     def __post_init__(self) -> None:
         data = self.as_dict()
+        data.pop("dynamics", None)
         _check(data, path=None)
+        if self.dynamics is not None and not isinstance(self.dynamics, Dynamics):
+            raise RigFileError(f"expected a Dynamics, got {type(self.dynamics).__name__}", None, "dynamics")
         for field in ("platform_holes_A_m", "base_holes_B_m", "cable_stiffness_N_per_m",
                       "com_A_m", "gravity_B_m_per_s2"):
             object.__setattr__(self, field, _frozen(getattr(self, field)))
@@ -118,7 +135,7 @@ class Rig:
     def as_dict(self) -> dict[str, dict[str, Any]]:
         """Nested dict in the TOML layout of docs/conventions.md (plain Python numbers)."""
         tolist = lambda a: np.asarray(a, dtype=float).tolist()  # noqa: E731
-        return {
+        data = {
             "geometry": {"platform_holes": tolist(self.platform_holes_A_m),
                          "base_holes": tolist(self.base_holes_B_m)},
             "cables": {"stiffness": tolist(self.cable_stiffness_N_per_m),
@@ -126,15 +143,25 @@ class Rig:
             "platform": {"mass": float(self.platform_mass_kg), "com": tolist(self.com_A_m),
                          "gravity": tolist(self.gravity_B_m_per_s2)},
         }
+        if self.dynamics is not None:
+            data["dynamics"] = self.dynamics.as_dict()
+        return data
 
     @classmethod
     def from_dict(cls, data: dict[str, Any], path: str | None = None) -> "Rig":
         """Build from the nested TOML layout; errors name the key (and file)."""
-        _check(data, path)
+        statics = {key: value for key, value in data.items() if key != "dynamics"} if isinstance(data, dict) else data
+        _check(statics, path)
         g, c, p = data["geometry"], data["cables"], data["platform"]
+        dynamics = None
+        if "dynamics" in data:
+            from .dynamics import default_dynamics
+
+            dynamics = Dynamics.from_dict(data["dynamics"], default_dynamics(p["mass"], g["platform_holes"]), path)
         return cls(platform_holes_A_m=g["platform_holes"], base_holes_B_m=g["base_holes"],
                    cable_stiffness_N_per_m=c["stiffness"], t_min_N=c["t_min"], t_max_N=c["t_max"],
-                   platform_mass_kg=p["mass"], com_A_m=p["com"], gravity_B_m_per_s2=p["gravity"])
+                   platform_mass_kg=p["mass"], com_A_m=p["com"], gravity_B_m_per_s2=p["gravity"],
+                   dynamics=dynamics)
 
     @classmethod
     def from_toml(cls, path: str | Path) -> "Rig":
@@ -181,7 +208,8 @@ def _format_toml(data: dict[str, dict[str, Any]]) -> str:
     """
     units = {"platform_holes": "m, A_i in {A}", "base_holes": "m, B_i in {B}",
              "stiffness": "N/m, cable with drive", "t_min": "N", "t_max": "N", "mass": "kg",
-             "com": "m, in {A}", "gravity": "m/s^2, in {B}"}
+             "com": "m, in {A}", "gravity": "m/s^2, in {B}", "inertia": "kg m^2 about the COM, in {A}",
+             "joint_damping": "N m s/rad", "cable_damping": "N s/m"}
     lines = ["# csjm_opt rig file (SI units; frames per docs/conventions.md)"]
     for section, table in data.items():
         lines.append(f"\n[{section}]")
@@ -202,7 +230,7 @@ def _check(data: Any, path: str | None) -> None:
         raise RigFileError(f"expected a table, got {type(data).__name__}", path)
     for section in data:
         if section not in _SCHEMA:
-            raise RigFileError(f"unknown section (expected one of {sorted(_SCHEMA)})", path, section)
+            raise RigFileError(f"unknown section (expected one of {sorted([*_SCHEMA, 'dynamics'])})", path, section)
     for section, keys in _SCHEMA.items():
         table = data.get(section)
         if not isinstance(table, dict):
@@ -218,6 +246,9 @@ def _check(data: Any, path: str | None) -> None:
             value = table[key]
             if isinstance(value, bool) or _has_non_number(value):
                 raise RigFileError(f"expected numbers, got {value!r:.60}", path, dotted)
+            if _has_huge_int(value):
+                raise RigFileError(f"integer too large (expected {LIMITS[_QUANTITY[key]].describe()})",
+                                   path, dotted)
             arr = np.asarray(value, dtype=float) if _rectangular(value) else None
             if arr is None or arr.shape != shape:
                 got = "ragged rows" if arr is None else f"shape {arr.shape}"
@@ -236,6 +267,14 @@ def _check(data: Any, path: str | None) -> None:
                            path, "cables.t_max")
     if float(p["mass"]) < 0:
         raise RigFileError(f"mass must be >= 0, got {p['mass']}", path, "platform.mass")
+    for section, keys in _SCHEMA.items():
+        for key in keys:
+            arr, lim = np.asarray(data[section][key], dtype=float), LIMITS[_QUANTITY[key]]
+            ok = lim.contains(arr)
+            if not ok.all():
+                bad = float(arr.ravel()[int(np.argmin(ok.ravel()))])
+                raise RigFileError(f"{bad:.6g} outside {lim.describe()} ({lim.why.split(';')[0]})",
+                                   path, f"{section}.{key}")
     A, B = np.asarray(g["platform_holes"], float), np.asarray(g["base_holes"], float)
     gaps = np.linalg.norm(B - A, axis=1)  # cable length at R = I
     if np.any(gaps < 1e-6):
@@ -243,14 +282,29 @@ def _check(data: Any, path: str | None) -> None:
         raise RigFileError(f"platform hole {i + 1} coincides with base hole {i + 1} at R = I",
                            path, "geometry.base_holes")
     for name, P in (("platform_holes", A), ("base_holes", B)):
-        if np.any(np.linalg.norm(P, axis=1) < 1e-6):
-            raise RigFileError("a hole lies at the joint centre O", path, f"geometry.{name}")
+        r = np.linalg.norm(P, axis=1)
+        if np.any(r < MIN_HOLE_RADIUS_M):
+            i = int(np.argmin(r))
+            raise RigFileError(f"hole {i + 1} is {r[i] * 1e3:.3g} mm from the joint centre O (at least "
+                               f"{MIN_HOLE_RADIUS_M * 1e3:g} mm: a cable through O has no moment arm)",
+                               path, f"geometry.{name}")
+        d = np.linalg.norm(P[:, None, :] - P[None, :, :], axis=-1) + np.eye(6) * 1e9
+        if d.min() < MIN_HOLE_SPACING_M:
+            i, j = map(int, np.unravel_index(int(np.argmin(d)), d.shape))
+            raise RigFileError(f"holes {i + 1} and {j + 1} are {d[i, j] * 1e3:.3g} mm apart (at least "
+                               f"{MIN_HOLE_SPACING_M * 1e3:g} mm: duplicated row?)", path, f"geometry.{name}")
 
 
 def _has_non_number(value: Any) -> bool:
     if isinstance(value, list):
         return any(_has_non_number(v) for v in value)
     return isinstance(value, bool) or not isinstance(value, (int, float))
+
+
+def _has_huge_int(value: Any) -> bool:
+    if isinstance(value, list):
+        return any(_has_huge_int(v) for v in value)
+    return isinstance(value, int) and not isinstance(value, bool) and abs(value) > 2 ** 53
 
 
 def _rectangular(value: Any) -> bool:

@@ -16,7 +16,11 @@ forces; ``H_cable - 1/2 hat(tau_cable)`` is :attr:`Equilibrium.K`, the cable
 stiffness of docs/conventions.md), damped by a cap on the step length and a backtracking
 line search on the residual. If Newton from ``R_init`` stalls, the external
 load is applied in increments (load continuation), each step warm-started
-from the last. Every result carries its residual: a result is returned only
+from the last. If that fails too, or ends on an unstable equilibrium (a
+saddle), an energy descent on SO(3) from ``R_init`` follows the overdamped
+motion of the platform to where it settles (:mod:`csjm_opt.model._descent`;
+slack cables carry nothing, the Hessian is checked at the answer), or finds
+that it falls over. Every result carries its residual: a result is returned only
 when ``||residual|| <= tol_Nm`` and the equilibrium is stable (all eigenvalues
 of ``K_t`` with positive real part); otherwise :class:`NoEquilibrium` says
 why (``"slack"``: too few taut cables to hold the load; ``"diverged"``: no
@@ -129,7 +133,8 @@ class EquilibriumSolver:
 
     def __init__(self, rig: Rig, point_forces: Sequence[PointForce] = (), include_weight: bool = True,
                  tol_Nm: float = 1e-11, max_iter: int = 100, max_step_rad: float = 0.25,
-                 allow_slack: bool = True, continuation_steps: int = 8, compiled: bool = True):
+                 allow_slack: bool = True, continuation_steps: int = 8, compiled: bool = True,
+                 globalise: bool = True):
         forces = list(point_forces)
         if include_weight and rig.platform_mass_kg > 0:
             forces.append((rig.weight_B_N, np.asarray(rig.com_A_m, float)))
@@ -137,7 +142,7 @@ class EquilibriumSolver:
         self._evaluate = _Evaluator(rig, forces)
         self.tol_Nm, self.max_iter, self.max_step_rad = tol_Nm, max_iter, max_step_rad
         self.allow_slack, self.continuation_steps = allow_slack, continuation_steps
-        self.compiled = compiled
+        self.compiled, self.globalise = compiled, globalise
         terms = cable_terms_for(rig)
         self._kernel_args = (terms.A, terms.B, terms.k, self._evaluate._F, self._evaluate._P)
 
@@ -163,6 +168,19 @@ class EquilibriumSolver:
                 if not ok:
                     break
                 R = state[0]
+        if self.globalise and not (ok and _stable(state[1][2])):
+            # plain Newton failed or found a saddle: energy descent from the start (model/_descent.py)
+            from . import _descent
+
+            state, status = _descent.descend(self._evaluate, cable_terms_for(self.rig), self._evaluate._F,
+                                             self._evaluate._P, l, R_init, tau_ext, self.tol_Nm,
+                                             max_step_rad=self.max_step_rad)
+            ok = status in ("ok", "unstable")
+            if status == "fell":
+                R, (g, *_, T, _, _), it = state
+                raise NoEquilibrium(f"no equilibrium within {np.degrees(_descent.FALL_ANGLE_RAD):.0f} deg of the "
+                                    f"start: the platform falls over ({int(np.sum(T <= 0))} slack cables)",
+                                    "slack" if np.any(T <= 0) else "diverged", float(np.linalg.norm(g)))
         R, (g, K, K_t, T, tau_c, tau_p), it = state
         best = float(np.linalg.norm(g))
         n_slack = int(np.sum(T <= 0))
@@ -182,12 +200,16 @@ class EquilibriumSolver:
         return eq
 
 
+def _stable(K_t: np.ndarray) -> bool:
+    return bool(np.all(np.isfinite(K_t)) and np.all(np.linalg.eigvals(K_t).real > 0))
+
+
 def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: npt.ArrayLike = (0.0, 0.0, 0.0),
                       point_forces: Sequence[PointForce] = (), R_init: np.ndarray | None = None,
                       include_weight: bool = True, model: Model | None = None, tol_Nm: float = 1e-11,
                       max_iter: int = 100, max_step_rad: float = 0.25, allow_slack: bool = True,
                       continuation_steps: int = 8, verify_tol_Nm: float = 1e-9,
-                      compiled: bool = True) -> Equilibrium:
+                      compiled: bool = True, globalise: bool = True) -> Equilibrium:
     """Equilibrium of ``rig`` with rest lengths ``l`` (m) under the given loads.
 
     ``tau_ext_A_Nm`` is a moment fixed in {A}; ``point_forces`` are
@@ -196,7 +218,12 @@ def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: npt.Ar
     the starting orientation (identity by default; pass the previous pose to
     warm-start). With ``allow_slack=False`` an equilibrium with a slack cable
     raises :class:`NoEquilibrium` (``reason="slack"``). ``continuation_steps``
-    load increments are tried when plain Newton fails (0 disables). The result
+    load increments are tried when plain Newton fails (0 disables); if that
+    fails too or ends on an unstable equilibrium, ``globalise=True`` runs the
+    energy descent of :mod:`csjm_opt.model._descent` from ``R_init`` (it
+    finds the stable equilibrium a heavily damped platform settles in, and
+    raises ``NoEquilibrium`` when the platform falls over, i.e. leaves the
+    90 degree ball around ``R_init``). The result
     is verified with the CasADi model (``model``): its residual
     ``||J^T T + tau_load||`` must be below ``verify_tol_Nm``.
     """
@@ -208,7 +235,7 @@ def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: npt.Ar
     R0 = np.eye(3) if R_init is None else as_rotation(R_init, "R_init")
     forces = [(as_vector3(f, "force_B"), as_vector3(p, "point_A")) for f, p in point_forces]
     solver = EquilibriumSolver(rig, forces, include_weight, tol_Nm, max_iter, max_step_rad,
-                               allow_slack, continuation_steps, compiled)
+                               allow_slack, continuation_steps, compiled, globalise)
     eq = solver.solve(l, tau_ext, R0)
     # independent check with the CasADi model
     T = model.tensions_from_rest(eq.R, l)

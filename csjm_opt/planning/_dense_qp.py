@@ -12,7 +12,8 @@ of an iterative solver such as OSQP). Two methods:
 
 1. Primal-dual active set (Hintermueller, Ito & Kunisch 2002), warm-started
    from a guessed active set (the previous solution along a trajectory):
-   usually one or two KKT solves. It can cycle for a general ``P``, so
+   usually one or two KKT solves, compiled (:func:`csjm_opt.planning._kernels.pdas`).
+   It can cycle for a general ``P``, so
 2. if it does not settle in a few iterations, the primal active-set method
    (Nocedal & Wright, Numerical Optimization, Alg. 16.3) from a feasible
    point, which terminates finitely.
@@ -27,6 +28,7 @@ import dataclasses
 import numpy as np
 from scipy.optimize import linprog
 
+from . import _kernels as kernels
 from ._active_set import solve as _project_box_eq
 
 
@@ -65,24 +67,18 @@ def solve(P: np.ndarray, q: np.ndarray, A: np.ndarray, b: np.ndarray, lo: np.nda
           max_pdas: int = 8, max_primal: int = 60, tol: float = 1e-10) -> DenseQPResult:
     """Solve the QP exactly; ``lower0``/``upper0`` (n,) bool warm-start the active set."""
     n = q.size
-    lower = np.zeros(n, bool) if lower0 is None else lower0.copy()
-    upper = np.zeros(n, bool) if upper0 is None else upper0 & ~lower
+    lower = np.zeros(n, bool) if lower0 is None else np.array(lower0, bool)
+    upper = np.zeros(n, bool) if upper0 is None else np.array(upper0, bool) & ~lower
     scale_x = max(1.0, float(np.max(np.abs(hi))))
     scale_g = max(1.0, float(np.abs(P).max()) * scale_x, float(np.abs(q).max()))
-    for it in range(1, max_pdas + 1):
-        sol = _kkt(P, q, A, b, lo, hi, lower, upper)
-        if sol is None:
-            break
-        x, nu, z = sol
-        new_lower = (lower & (z > 0)) | (~lower & ~upper & (x < lo - tol * scale_x))
-        new_upper = (upper & (z < 0)) | (~lower & ~upper & (x > hi + tol * scale_x))
-        new_upper &= ~new_lower
-        if np.array_equal(new_lower, lower) and np.array_equal(new_upper, upper):
-            res = DenseQPResult(x, nu, np.where(lower | upper, z, 0.0), lower, upper, it, "pdas", True)
-            if res.kkt_error(P, q, A, b, lo, hi) <= 1e-8 * scale_g:
-                return res
-            break
-        lower, upper = new_lower, new_upper
+    x, nu, z, lower, upper, it, status = kernels.pdas(
+        np.ascontiguousarray(P, float), np.ascontiguousarray(q, float), np.ascontiguousarray(A, float),
+        np.ascontiguousarray(b, float), np.ascontiguousarray(lo, float), np.ascontiguousarray(hi, float),
+        lower, upper, max_pdas, tol)
+    if status == 0:
+        res = DenseQPResult(x, nu, np.where(lower | upper, z, 0.0), lower.copy(), upper.copy(), it, "pdas", True)
+        if res.kkt_error(P, q, A, b, lo, hi) <= 1e-8 * scale_g:
+            return res
     return _primal_active_set(P, q, A, b, lo, hi, max_primal, tol)
 
 

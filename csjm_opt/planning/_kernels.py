@@ -1,11 +1,21 @@
-"""Compiled (numba) kernels for the planner's hot path.
+"""Compiled (numba) active-set QP kernels of the planner, one pose or many.
 
-The CasADi functions of :mod:`csjm_opt.model.casadi_model` are the reference model;
-calling them from Python costs about 30 us per call, which is the whole budget
-of planning one pose. These kernels compute the same J (38) and weight moment
-in compiled loops and solve the tension QP exactly by the primal-dual active
-set method (see :mod:`csjm_opt.planning._active_set` for the method), one pose or many
-poses in a row with each pose warm-started from the previous one's active set.
+The physics (cable geometry, J (38), weight moment) comes from the model
+layer's kernels (:mod:`csjm_opt.model._kernels`); this module holds the
+solvers:
+
+* :func:`solve_one`: the tension QP ``min 1/2||t - t_ref||^2, J^T t = b,
+  lo <= t <= hi`` by the primal-dual active set method (see
+  :mod:`csjm_opt.planning._active_set`), specialised to the identity Hessian
+  and three equality rows (3x3 Cramer solves, no allocation);
+* :func:`plan_one` / :func:`plan_batch`: geometry + weight + QP + rest lengths
+  for one pose, or for many in order, each warm-started from the previous
+  pose's active set;
+* :func:`pdas`: the same method for a general dense QP (symmetric positive
+  definite ``P``), used by stiffness shaping (:mod:`csjm_opt.planning._dense_qp`
+  adds a finite primal active-set fallback). It is not used for the tension QP:
+  the specialised solver is ~4x faster there (benchmarks/bench_planner.py).
+
 ``tests/test_kernels.py`` checks them against the CasADi model and SLSQP.
 Compiled on first use and cached on disk (``cache=True``).
 """
@@ -15,55 +25,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..model._kernels import det3 as _det3
+from ..model._kernels import geometry_into, rotation_error, weight_moment_into  # noqa: F401 (re-exported)
+
 #: Status codes of :func:`solve_one`.
 OK, SINGULAR, NOT_CONVERGED = 0, 1, 2
-
-
-@njit(cache=True)
-def _det3(M):
-    return (M[0, 0] * (M[1, 1] * M[2, 2] - M[1, 2] * M[2, 1])
-            - M[0, 1] * (M[1, 0] * M[2, 2] - M[1, 2] * M[2, 0])
-            + M[0, 2] * (M[1, 0] * M[2, 1] - M[1, 1] * M[2, 0]))
-
-
-@njit(cache=True, fastmath=False)
-def rotation_error(R):
-    """(||R^T R - I||_F, det R) without allocating."""
-    err = 0.0
-    for i in range(3):
-        for j in range(3):
-            s = R[0, i] * R[0, j] + R[1, i] * R[1, j] + R[2, i] * R[2, j]
-            if i == j:
-                s -= 1.0
-            err += s * s
-    return np.sqrt(err), _det3(R)
-
-
-@njit(cache=True)
-def jacobian_into(A, B, R, J):
-    """J (6, 3) of (38): rows ``a_i x (R^T u_i)``; A, B are (6, 3) hole arrays."""
-    for i in range(6):
-        c0 = B[i, 0] - (R[0, 0] * A[i, 0] + R[0, 1] * A[i, 1] + R[0, 2] * A[i, 2])
-        c1 = B[i, 1] - (R[1, 0] * A[i, 0] + R[1, 1] * A[i, 1] + R[1, 2] * A[i, 2])
-        c2 = B[i, 2] - (R[2, 0] * A[i, 0] + R[2, 1] * A[i, 1] + R[2, 2] * A[i, 2])
-        inv = 1.0 / np.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
-        v0 = (R[0, 0] * c0 + R[1, 0] * c1 + R[2, 0] * c2) * inv   # R^T u_i
-        v1 = (R[0, 1] * c0 + R[1, 1] * c1 + R[2, 1] * c2) * inv
-        v2 = (R[0, 2] * c0 + R[1, 2] * c1 + R[2, 2] * c2) * inv
-        J[i, 0] = A[i, 1] * v2 - A[i, 2] * v1
-        J[i, 1] = A[i, 2] * v0 - A[i, 0] * v2
-        J[i, 2] = A[i, 0] * v1 - A[i, 1] * v0
-
-
-@njit(cache=True)
-def weight_moment_into(m, r, g, R, out):
-    """``m r x (R^T g)``: moment of a force m g (in {B}) at r (in {A}), in {A}."""
-    g0 = R[0, 0] * g[0] + R[1, 0] * g[1] + R[2, 0] * g[2]
-    g1 = R[0, 1] * g[0] + R[1, 1] * g[1] + R[2, 1] * g[2]
-    g2 = R[0, 2] * g[0] + R[1, 2] * g[1] + R[2, 2] * g[2]
-    out[0] = m * (r[1] * g2 - r[2] * g1)
-    out[1] = m * (r[2] * g0 - r[0] * g2)
-    out[2] = m * (r[0] * g1 - r[1] * g0)
 
 
 @njit(cache=True)
@@ -128,25 +94,49 @@ def solve_one(J, b, t_ref, lo, hi, lower, upper, t, max_iter):
 
 
 @njit(cache=True)
-def plan_batch(A, B, m, r, g, Rs, taus, t_ref, lo, hi, max_iter, T, J_out, tau_w_out, status):
+def _rest_lengths(k, c, T, l):
+    for i in range(6):
+        l[i] = c[i] - T[i] / k[i]
+
+
+@njit(cache=True)
+def plan_one(A, B, k, mr, g, R, tau_ext, t_ref, lo, hi, max_iter, T, J, tau_w, c, l):
+    """Plan one pose cold: J, weight moment, the QP, cable and rest lengths. Returns a status."""
+    U = np.empty((6, 3))
+    geometry_into(A, B, R, c, U, J)
+    weight_moment_into(mr, g, R, tau_w)
+    b = np.empty(3)
+    for p in range(3):
+        b[p] = -(tau_ext[p] + tau_w[p])
+    lower = np.zeros(6, dtype=np.bool_)
+    upper = np.zeros(6, dtype=np.bool_)
+    status = solve_one(J, b, t_ref, lo, hi, lower, upper, T, max_iter)
+    _rest_lengths(k, c, T, l)
+    return status
+
+
+@njit(cache=True)
+def plan_batch(A, B, k, mr, g, Rs, taus, t_ref, lo, hi, max_iter, T, J_out, tau_w_out, c_out, l_out, status):
     """Plan ``n`` poses in order, each warm-started from the previous active set."""
     n = Rs.shape[0]
     lower = np.zeros(6, dtype=np.bool_)
     upper = np.zeros(6, dtype=np.bool_)
     b = np.empty(3)
-    for k in range(n):
-        jacobian_into(A, B, Rs[k], J_out[k])
-        weight_moment_into(m, r, g, Rs[k], tau_w_out[k])
+    U = np.empty((6, 3))
+    for m in range(n):
+        geometry_into(A, B, Rs[m], c_out[m], U, J_out[m])
+        weight_moment_into(mr, g, Rs[m], tau_w_out[m])
         for p in range(3):
-            b[p] = -(taus[k, p] + tau_w_out[k, p])
-        status[k] = solve_one(J_out[k], b, t_ref[k], lo, hi, lower, upper, T[k], max_iter)
-        if status[k] != OK:  # cold restart once before giving up on this pose
+            b[p] = -(taus[m, p] + tau_w_out[m, p])
+        status[m] = solve_one(J_out[m], b, t_ref[m], lo, hi, lower, upper, T[m], max_iter)
+        if status[m] != OK:  # cold restart once before giving up on this pose
             lower[:] = False
             upper[:] = False
-            status[k] = solve_one(J_out[k], b, t_ref[k], lo, hi, lower, upper, T[k], max_iter)
-            if status[k] != OK:
+            status[m] = solve_one(J_out[m], b, t_ref[m], lo, hi, lower, upper, T[m], max_iter)
+            if status[m] != OK:
                 lower[:] = False
                 upper[:] = False
+        _rest_lengths(k, c_out[m], T[m], l_out[m])
 
 
 @njit(cache=True)
@@ -154,3 +144,74 @@ def solve_rows(J, b, t_ref, lo, hi, lower, upper, max_iter, T, status):
     """:func:`solve_one` for each row independently (sets updated in place)."""
     for k in range(J.shape[0]):
         status[k] = solve_one(J[k], b[k], t_ref[k], lo, hi, lower[k], upper[k], T[k], max_iter)
+
+
+@njit(cache=True)
+def pdas(P, q, A, b, lo, hi, lower, upper, max_iter, tol):
+    """Primal-dual active set for a dense QP ``min 1/2 x^T P x + q^T x, A x = b, lo <= x <= hi``.
+
+    Returns ``(x, nu, z, lower, upper, iterations, status)``; status 0 settled,
+    1 singular KKT, 2 not settled (callers fall back to :mod:`csjm_opt.planning._dense_qp`).
+    """
+    n = q.size
+    m = A.shape[0]
+    scale_x = max(1.0, np.abs(hi).max())
+    x = np.zeros(n)
+    nu = np.zeros(m)
+    z = np.zeros(n)
+    for it in range(1, max_iter + 1):
+        nf = 0
+        for i in range(n):
+            if not (lower[i] or upper[i]):
+                nf += 1
+        if nf < m:
+            return x, nu, z, lower, upper, it, 1
+        F = np.empty(nf, np.int64)
+        j = 0
+        for i in range(n):
+            x[i] = lo[i] if lower[i] else (hi[i] if upper[i] else 0.0)
+            if not (lower[i] or upper[i]):
+                F[j] = i
+                j += 1
+        Kk = np.zeros((nf + m, nf + m))
+        rhs = np.zeros(nf + m)
+        Px = P @ x
+        Ax = A @ x
+        for a in range(nf):
+            for c in range(nf):
+                Kk[a, c] = P[F[a], F[c]]
+            for c in range(m):
+                Kk[a, nf + c] = A[c, F[a]]
+                Kk[nf + c, a] = A[c, F[a]]
+            rhs[a] = -q[F[a]] - Px[F[a]]
+        for c in range(m):
+            rhs[nf + c] = b[c] - Ax[c]
+        if abs(np.linalg.det(Kk)) < 1e-300:
+            return x, nu, z, lower, upper, it, 1
+        sol = np.linalg.solve(Kk, rhs)
+        for a in range(nf):
+            x[F[a]] = sol[a]
+        nu = sol[nf:].copy()
+        z = P @ x + q + A.T @ nu
+        changed = False
+        for i in range(n):
+            if lower[i]:
+                if z[i] <= 0:
+                    lower[i] = False
+                    changed = True
+            elif upper[i]:
+                if z[i] >= 0:
+                    upper[i] = False
+                    changed = True
+            elif x[i] < lo[i] - tol * scale_x:
+                lower[i] = True
+                changed = True
+            elif x[i] > hi[i] + tol * scale_x:
+                upper[i] = True
+                changed = True
+        if not changed:
+            for i in range(n):
+                if not (lower[i] or upper[i]):
+                    z[i] = 0.0
+            return x, nu, z, lower, upper, it, 0
+    return x, nu, z, lower, upper, max_iter, 2

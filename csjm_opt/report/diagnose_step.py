@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from typing import Any
+
+import inspect
 import time
 from pathlib import Path
 
@@ -11,27 +14,89 @@ from ..diagnose import diagnose
 from ..diagnose.report import write_report
 from ..model.rig import Rig
 from ..testbed import simulate_experiment
+from ._step import DemoContext, StepOutput
+from .document import Cell, Column, Figure, Link, Links, Section, Table, format_number, quantity_table, sig
 
+NAME = "diagnose model-rig gap"
 #: The effect the demo injects (friction: the paper's first suspect, Section IV-D).
 DEMO_EFFECT = "friction"
 
 
 def run_demo(rig: Rig, out_dir: Path, rng: np.random.Generator, effect: str = DEMO_EFFECT,
-             severity: float = 1.0, n_cycles: int = 12) -> dict:
+             severity: float = 1.0, n_cycles: int = 12, secondary: bool = True) -> dict:
     """Simulate a log with ``effect`` injected, diagnose it, write the report into ``out_dir``.
 
-    Returns a JSON-able summary (true and selected effect, gap, report paths).
+    Parameters
+    ----------
+    rig : Rig
+    out_dir : Path
+        Folder of the diagnosis report (``index.html``, ``index.md``, figures, ``diagnosis.json``, ``log.csv``).
+    rng : numpy.random.Generator
+    effect : str
+        Effect injected into the simulated rig.
+    severity : float
+        Its size relative to the testbed's typical value.
+    n_cycles : int
+        Cycles of the simulated log.
+    secondary : bool
+        Also search for a second effect on top of the selected one (the costly part).
+
+    Returns
+    -------
+    dict
+        JSON-able summary (true and selected effect, gap, report paths relative to ``out_dir``).
     """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     log = simulate_experiment(rig, n_cycles, rng, effect=effect, severity=severity)
     log.to_csv(out_dir / "log.csv", overwrite=True)
-    d = diagnose(rig, log)
+    options: dict[str, Any] = {"secondary": secondary} if "secondary" in inspect.signature(diagnose).parameters else {}
+    d = diagnose(rig, log, **options)
     write_report(d, out_dir, "log.csv (simulated, effect injected: " + effect + ")")
     j = d.as_json()
     return {"injected": effect, "severity": severity, "selected": j["selected"],
             "correct": j["selected"] == effect, "confounded_with": j["confounded_with"],
             "gap": j["gap"], "noise_floor_rad": j["noise_floor_rad"], "rows": len(log),
             "candidates": {c["effect"]: c["heldout_rms_rad"] for c in j["candidates"]},
-            "report": "index.md", "log": "log.csv", "seconds": time.perf_counter() - t0}
+            "report": "index.md", "report_html": "index.html", "log": "log.csv", "n_cycles": n_cycles,
+            "secondary_search": bool(options.get("secondary", True)),
+            "secondary": (j.get("secondary") or {}).get("effect", "none"),
+            "seconds": time.perf_counter() - t0}
+
+
+def step(ctx: DemoContext) -> StepOutput:
+    """The demo step: 6 cycles and no second-effect search when quick, 12 cycles and the search otherwise."""
+    summary = run_demo(ctx.rig, ctx.out_dir / "diagnosis", ctx.rng, n_cycles=6 if ctx.quick else 12,
+                       secondary=not ctx.quick)
+    return StepOutput(summary, section(summary).rebase("diagnosis"))
+
+
+def section(s: dict) -> Section:
+    """The report section of :func:`run_demo`'s summary (paths relative to its folder)."""
+    g = s["gap"]
+    verdict = (f"Injected `{s['injected']}` (severity {sig(s['severity'])}) into a simulated log of "
+               f"{s.get('n_cycles', '?')} cycles ({s['rows']} rows); the diagnosis selected `{s['selected']}`: "
+               + ("correct, as expected" if s["correct"] else "NOT the injected effect")
+               + (f" (confounded with {', '.join(s['confounded_with'])})" if s["confounded_with"] else "")
+               + f". Held-out gap {sig(g['before_rad'], 3, 1e3)} -> {sig(g['after_rad'], 3, 1e3)} mrad RMS "
+               f"(noise floor {sig(s['noise_floor_rad'], 3, 1e3)} mrad), "
+               f"{format_number(g['fraction_explained'], 'fix0', 100)}% of the systematic gap closed.")
+    facts = quantity_table([
+        ("gap before (nominal model)", Cell(g["before_rad"], scale=1e3, src=("gap", "before_rad")), "mrad", ""),
+        ("gap after (selected model)", Cell(g["after_rad"], scale=1e3, src=("gap", "after_rad")), "mrad",
+         "near the noise floor"),
+        ("noise floor", Cell(s["noise_floor_rad"], scale=1e3, src=("noise_floor_rad",)), "mrad", ""),
+        ("share of the systematic gap closed", Cell(g["fraction_explained"], "fix1", 100.0,
+                                                    ("gap", "fraction_explained")), "%", "close to 100"),
+    ], expectation=True)
+    cands = Table([Column("candidate effect"), Column("held-out RMS", "mrad", scale=1e3)],
+                  [[name + (" (selected)" if name == s["selected"] else ""), Cell(v, src=("candidates", name))]
+                   for name, v in s["candidates"].items()], "Held-out error of each candidate model")
+    blocks: list[Any] = [facts, cands,
+              Figure("candidates.png", "Held-out error of every candidate against the noise floor."),
+              Links([Link(s.get("report_html", "index.html"), "diagnosis report",
+                          "verdict, figures, fitted parameters with units, where the gap lies"),
+                     Link(s["log"], "log.csv", "the simulated measurement log")])]
+    return Section("Sim-to-real diagnosis", verdict, "ok" if s["correct"] and not s["confounded_with"] else "warn",
+                   blocks)

@@ -66,7 +66,7 @@ def simulate_identification_experiment(
     R_true = plant.respond(l, tau, cycle, R_init)
     n = len(cycle)
     tau_meas = plant.measured_moment(tau) + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)
-    R_meas = R_true @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
+    R_meas = plant.measured_pose(R_true) @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
     return MeasurementLog.from_arrays(cycle, l, tau_meas, R_meas)
 
 

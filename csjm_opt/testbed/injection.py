@@ -10,6 +10,19 @@ cable_hardening   h = 15 /m * severity
 link_compliance   C = 0.004 rad/(N m) * severity * SPD with eigenvalues U(0.5, 1.5)
 sensor_bias       |b| = 0.12 N m * severity, random direction
 mass_com          mass * (1 +- 0.2 severity), com + 15 mm * severity random direction
+tracker_          tracker frame rotated by 2.5 mrad * severity about a random
+registration      axis (``marker=True`` in :func:`inject`: also the markers)
+stiffness_scale   every stiffness times exp(+-0.03 severity)
+================  ===========================================================
+
+Outside the diagnosis's vocabulary (:data:`~csjm_opt.testbed.plant.OUTSIDE_NAMES`):
+
+================  ===========================================================
+eyelet_radius     guide eyelets of radius 3 mm * severity
+sensor_drift      F/T offset drifting by 0.5 mN m per row * severity, random
+                  direction (0.1 N m over a 200-row log)
+drum_slip         cables slip on their drums above 55 % of the tension range,
+                  by 20 um per N over the threshold * severity
 ================  ===========================================================
 """
 
@@ -21,8 +34,9 @@ from typing import Any, Iterable
 import numpy as np
 
 from .. import so3
+from ..errors import InvalidInput
 from ..model.rig import Rig
-from .plant import EFFECT_NAMES, Plant
+from .plant import EFFECT_NAMES, OUTSIDE_NAMES, Plant
 
 
 def _unit(rng: np.random.Generator) -> np.ndarray:
@@ -51,8 +65,20 @@ def inject(plant: Plant, effect: str, severity: float, rng: np.random.Generator)
         rig = rig.replace(platform_mass_kg=rig.platform_mass_kg * (1 + 0.2 * s * rng.choice([-1.0, 1.0])),
                           com_A_m=np.asarray(rig.com_A_m) + 15e-3 * s * _unit(rng))
         changes = {"rig": rig}
+    elif effect == "tracker_registration":
+        changes = {"tracker_rotation_B": so3.exp(2.5e-3 * s * _unit(rng))}
+    elif effect == "stiffness_scale":
+        factor = np.exp(0.03 * s * rng.choice([-1.0, 1.0]))
+        changes = {"rig": rig.replace(cable_stiffness_N_per_m=factor * np.asarray(rig.cable_stiffness_N_per_m))}
+    elif effect == "eyelet_radius":
+        changes = {"eyelet_radius_m": 3e-3 * s}
+    elif effect == "sensor_drift":
+        changes = {"sensor_drift_A_Nm_per_row": 5e-4 * s * _unit(rng)}
+    elif effect == "drum_slip":
+        changes = {"drum_slip_threshold_N": rig.t_min_N + 0.55 * (rig.t_max_N - rig.t_min_N),
+                   "drum_slip_compliance_m_per_N": 2e-5 * s}
     else:
-        raise ValueError(f"unknown effect {effect!r}; expected one of {EFFECT_NAMES}")
+        raise InvalidInput(f"unknown effect {effect!r}; expected one of {EFFECT_NAMES + OUTSIDE_NAMES}", "effect")
     return dataclasses.replace(plant, effects=plant.effects + (effect,), **changes)
 
 

@@ -14,7 +14,22 @@ Physics (independent of the diagnosis's fitting models where it can be):
   ``friction_start`` says otherwise;
 * link compliance: the loaded, tracked body is joined to the cable platform
   by a symmetric compliance ``C``, ``R_meas = R_cable exp(hat(C tau_m))``;
-* sensor bias: the F/T reading is offset by a constant ``b`` in {A}.
+* sensor bias: the F/T reading is offset by a constant ``b`` in {A};
+* tracker registration: the tracker reports ``Q_B R Q_A`` (its frame rotated
+  against {B}, the markers against {A});
+* a common stiffness error: a :class:`Rig` with scaled stiffnesses.
+
+Effects outside the diagnosis's vocabulary (to test that it says so):
+
+* finite eyelet radius: each base guide is a ring of radius ``r`` in the base
+  plane; the cable leaves it at the rim, on the side towards the platform
+  hole, so the effective base hole moves with the cable's direction;
+* thermal drift of the F/T sensor: the moment offset grows linearly with the
+  row index (time) over the log, ``b(t) = drift * t``;
+* drum slip: a cable slips on its drum when its tension exceeds a threshold
+  ``T_s``, lengthening its rest length by ``(T - T_s) c_slip`` for the rest
+  of the cycle (irreversible, accumulated row after row; the drives re-home
+  between cycles).
 """
 
 from __future__ import annotations
@@ -24,6 +39,7 @@ import dataclasses
 import numpy as np
 
 from .. import so3
+from ..errors import NoEquilibrium
 from ..model import kinematics as kin
 from ..model.rig import Rig
 
@@ -40,7 +56,10 @@ def _smooth_clip(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, w: float) -> np.
     return lo + _softplus(x - lo, w) - _softplus(x - hi, w)
 
 
-EFFECT_NAMES = ("hole_offsets", "friction", "cable_hardening", "link_compliance", "sensor_bias", "mass_com")
+EFFECT_NAMES = ("hole_offsets", "friction", "cable_hardening", "link_compliance", "sensor_bias", "mass_com",
+                "tracker_registration", "stiffness_scale")
+#: Effects the testbed simulates that the diagnosis has no model for.
+OUTSIDE_NAMES = ("eyelet_radius", "sensor_drift", "drum_slip")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -54,6 +73,12 @@ class Plant:
     friction_start: float = 0.0                # band position at a cycle's first row (0 settled, -1 pulled in)
     link_compliance_rad_per_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((3, 3)))
     sensor_bias_A_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+    tracker_rotation_B: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))   # Q_B
+    marker_rotation_A: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))    # Q_A
+    eyelet_radius_m: float = 0.0
+    sensor_drift_A_Nm_per_row: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+    drum_slip_threshold_N: float = np.inf
+    drum_slip_compliance_m_per_N: float = 0.0
     effects: tuple[str, ...] = ()
 
     @classmethod
@@ -76,10 +101,14 @@ class Plant:
         u_state = np.full((len(starts), 6), np.nan)           # stuck platform-side lengths
         tau_prev = np.array(tau_ext_A_Nm[starts], float)
         path = bool(np.any(self.friction_mu_beta > 0))
+        slip = np.zeros((len(starts), 6))           # drum slip so far in each cycle
+        slipping = np.isfinite(self.drum_slip_threshold_N) and self.drum_slip_compliance_m_per_N > 0
         for j in range(int((ends - starts).max())):
             live = np.flatnonzero(starts + j < ends)
             idx = starts[live] + j
             l, tau = rest_lengths_m[idx], tau_ext_A_Nm[idx]
+            if slipping:
+                l = l + slip[live]
             # path-dependent plants are loaded quasi-statically: the load moves
             # from the previous row's to this row's in small steps
             substeps = 8 if (path and j > 0) else 1
@@ -93,18 +122,43 @@ class Plant:
                 sol = kin.solve_poses(g, R, tol_Nm=1e-10)
                 if not np.all(sol.converged(1e-7)):
                     bad = idx[~sol.converged(1e-7)]
-                    raise RuntimeError(f"plant has no equilibrium for rows {bad.tolist()}")
+                    raise NoEquilibrium(f"plant has no equilibrium for rows {bad.tolist()}", "diverged",
+                                        float(sol.residual_Nm.max()))
                 R = sol.R
                 _, u = self._balance(R, l, tau_q, u)
             u_state[live] = u
+            if slipping:       # after this row's equilibrium, over-tensioned cables slip
+                k = np.asarray(self.rig.cable_stiffness_N_per_m)
+                over = np.maximum(k * (self._lengths(R) - l) - self.drum_slip_threshold_N, 0.0)
+                slip[live] += over * self.drum_slip_compliance_m_per_N
             R_prev[live] = R
             tau_prev[live] = tau
             R_out[idx] = R
         return R_out
 
     def measured_moment(self, tau_ext_A_Nm: np.ndarray) -> np.ndarray:
-        """What a bias-free-but-for-``b`` F/T sensor reads (N m)."""
-        return tau_ext_A_Nm + self.sensor_bias_A_Nm
+        """What the F/T sensor reads without noise (N m): bias plus drift over the rows (time order)."""
+        t = np.arange(len(tau_ext_A_Nm))[:, None]
+        return tau_ext_A_Nm + self.sensor_bias_A_Nm + t * np.asarray(self.sensor_drift_A_Nm_per_row)
+
+    def measured_pose(self, R_true: np.ndarray) -> np.ndarray:
+        """What the tracker reports without noise: ``Q_B R Q_A``."""
+        return self.tracker_rotation_B @ R_true @ self.marker_rotation_A
+
+    def _base_holes(self, R_c: np.ndarray) -> np.ndarray:
+        """Effective base holes (n, 6, 3) or (6, 3): on the eyelet's rim, towards the platform hole."""
+        B = np.asarray(self.rig.base_holes_B_m)
+        if self.eyelet_radius_m <= 0:
+            return B
+        a_B = np.einsum("nij,kj->nki", R_c, np.asarray(self.rig.platform_holes_A_m))    # R a_i
+        d = a_B - B
+        d[..., 2] = 0.0
+        return B + self.eyelet_radius_m * d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+    def _lengths(self, R_m: np.ndarray) -> np.ndarray:
+        """Cable lengths at measured-body poses (the link's twist neglected; used for drum slip)."""
+        c, _ = kin.cable_terms(R_m, np.asarray(self.rig.platform_holes_A_m), self._base_holes(R_m))
+        return c
 
     def _balance(self, R_m, l, tau_ext, u):
         rig = self.rig
@@ -112,7 +166,7 @@ class Plant:
         tau_m = tau_ext + kin.weight_moment(R_m, mr, np.asarray(rig.gravity_B_m_per_s2))
         E = so3.exp(tau_m @ self.link_compliance_rad_per_Nm)     # C symmetric
         R_c = R_m @ np.swapaxes(E, 1, 2)
-        c, J = kin.cable_terms(R_c, np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m))
+        c, J = kin.cable_terms(R_c, np.asarray(rig.platform_holes_A_m), self._base_holes(R_c))
         k = np.asarray(rig.cable_stiffness_N_per_m)
         e = c - l
         T_p = np.maximum(self._friction(c, l, e, k, u), 0.0)

@@ -22,7 +22,7 @@ def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
     """A log of ``n_cycles`` load cycles (``2 * steps + 1`` rows each) on ``rig``.
 
     ``effect``: ``None``/``"none"`` (nominal plant), an effect name from the
-    SPEC vocabulary, several names, or a ready :class:`Plant`. Rest lengths are
+    documented vocabulary, several names, or a ready :class:`Plant`. Rest lengths are
     commanded with the *nominal* rig (as an experimenter would); the plant
     responds; the F/T reading (plus any bias) and the tracked pose get the
     instrument noise (``InstrumentNoise.paper()`` by default).
@@ -37,5 +37,5 @@ def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
     R_true = plant.respond(l, tau, cycle, R_init)
     n = len(cycle)
     tau_meas = plant.measured_moment(tau) + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)
-    R_meas = R_true @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
+    R_meas = plant.measured_pose(R_true) @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
     return MeasurementLog.from_arrays(cycle, l, tau_meas, R_meas)

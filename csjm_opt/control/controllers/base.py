@@ -28,6 +28,7 @@ class Observation:
     time_s: float
     R: np.ndarray                # (3, 3) measured orientation of {A} in {B}
     tau_ext_A_Nm: np.ndarray     # (3,) measured external moment in {A} (weight excluded)
+    omega_A_rad_s: np.ndarray | None = None   # (3,) angular velocity in {A}, when measured
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

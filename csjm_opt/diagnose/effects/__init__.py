@@ -1,7 +1,10 @@
-"""Unmodelled effects, one class per file; :data:`EFFECTS` maps SPEC names to classes."""
+"""Unmodelled effects, one class per file; :data:`EFFECTS` maps vocabulary names to classes."""
 
 from __future__ import annotations
 
+from typing import Mapping
+
+from ...errors import InvalidInput
 from .base import Effect
 from .cable_hardening import CableHardening
 from .friction import Friction
@@ -9,8 +12,10 @@ from .hole_offsets import HoleOffsets
 from .link_compliance import LinkCompliance
 from .mass_com import MassCom
 from .sensor_bias import SensorBias
+from .stiffness_scale import StiffnessScale
+from .tracker_registration import TrackerRegistration
 
-#: docs/conventions.md vocabulary (besides ``none``) -> effect class, in report order.
+#: Vocabulary of ``selected`` (besides ``none`` and ``unexplained``) -> effect class, in report order.
 EFFECTS: dict[str, type[Effect]] = {
     "hole_offsets": HoleOffsets,
     "friction": Friction,
@@ -18,16 +23,44 @@ EFFECTS: dict[str, type[Effect]] = {
     "link_compliance": LinkCompliance,
     "sensor_bias": SensorBias,
     "mass_com": MassCom,
+    "tracker_registration": TrackerRegistration,
+    "stiffness_scale": StiffnessScale,
 }
 
 
-def make_effect(name: str, rig=None) -> Effect:
-    """An effect instance by SPEC name (``rig`` supplies the nominal mass)."""
+def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] | None = None) -> Effect:
+    """An effect instance by vocabulary name.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`EFFECTS`.
+    rig : Rig, optional
+        Supplies the nominal mass (``mass_com``) and gravity (``tracker_registration``).
+    ranges : mapping, optional
+        Prior-range overrides, parameter name or fnmatch pattern -> ``(lo, hi)``.
+
+    Returns
+    -------
+    Effect
+
+    Raises
+    ------
+    InvalidInput
+        ``name`` is not in the vocabulary.
+    """
+    if name not in EFFECTS:
+        raise InvalidInput(f"unknown effect {name!r}; expected one of {', '.join(EFFECTS)}", "effect")
     cls = EFFECTS[name]
+    effect: Effect
     if cls is MassCom and rig is not None:
-        return MassCom(rig.platform_mass_kg)
-    return cls()
+        effect = MassCom(rig.platform_mass_kg)
+    elif cls is TrackerRegistration and rig is not None:
+        effect = TrackerRegistration(rig.gravity_B_m_per_s2)
+    else:
+        effect = cls()
+    return effect.with_ranges(ranges)
 
 
 __all__ = ["EFFECTS", "CableHardening", "Effect", "Friction", "HoleOffsets", "LinkCompliance",
-           "MassCom", "SensorBias", "make_effect"]
+           "MassCom", "SensorBias", "StiffnessScale", "TrackerRegistration", "make_effect"]

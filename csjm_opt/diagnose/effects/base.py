@@ -4,6 +4,7 @@ An effect augments the moment balance of :mod:`csjm_opt.diagnose.augmented`
 through one or more hooks, each given the effect's own parameter slice ``p``:
 
 ``adjust_load``      the external moment and the platform's first mass moment;
+``adjust_frame``     the true pose of the measured body from the tracked pose (registration);
 ``adjust_pose``      the pose of the cable-driven platform from the measured pose;
 ``adjust_geometry``  hole positions;
 ``adjust_tension``   the tension law ``T(e)`` of the cables (``e = c - l``).
@@ -13,12 +14,21 @@ model when its strength parameters are zero (``x0`` starts there), so
 augmented models nest the nominal one (a nested F-test applies). ``scales`` are typical
 magnitudes (for the optimiser and for
 the weak ridge prior that keeps rank-deficient fits well posed).
+
+Plausibility: every effect declares prior ranges ``(lo, hi)`` for its
+parameters (:meth:`Effect.default_ranges`, what a real rig of this kind can
+show: hole offsets of a few mm, a bias within the sensor's range, ...). A fit
+whose parameters leave them is reported as implausible
+(:meth:`Effect.implausible`). ``ranges`` given to the constructor override the
+defaults per rig: keys are parameter names or ``fnmatch`` patterns
+(``"dA*_m"``).
 """
 
 from __future__ import annotations
 
 import abc
-from typing import ClassVar
+import fnmatch
+from typing import ClassVar, Mapping
 
 import numpy as np
 
@@ -28,6 +38,34 @@ class Effect(abc.ABC):
 
     name: ClassVar[str]
     description: ClassVar[str]
+    path_dependent: ClassVar[bool] = False
+    #: per-rig overrides of the prior ranges (name or fnmatch pattern -> (lo, hi))
+    range_overrides: Mapping[str, tuple[float, float]] = {}
+
+    def with_ranges(self, overrides: Mapping[str, tuple[float, float]] | None) -> "Effect":
+        """This effect with prior ranges overridden (patterns matching none of its names are ignored)."""
+        if overrides:
+            self.range_overrides = {**self.range_overrides, **{k: (float(lo), float(hi))
+                                                             for k, (lo, hi) in overrides.items()}}
+        return self
+
+    def default_ranges(self) -> dict[str, tuple[float, float]]:
+        """Plausible ``(lo, hi)`` of each parameter on a real rig (SI units of the parameter)."""
+        return {n: (-np.inf, np.inf) for n in self.param_names}
+
+    def ranges(self) -> dict[str, tuple[float, float]]:
+        """Prior ranges after the per-rig overrides."""
+        out = self.default_ranges()
+        for pattern, rng in self.range_overrides.items():
+            for n in out:
+                if fnmatch.fnmatchcase(n, pattern):
+                    out[n] = rng
+        return out
+
+    def implausible(self, p: np.ndarray) -> list[str]:
+        """Names of the parameters outside their prior ranges."""
+        return [n for (n, (lo, hi)), v in zip(self.ranges().items(), np.asarray(p, float))
+                if not (lo <= v <= hi)]
 
     @property
     @abc.abstractmethod
@@ -67,6 +105,9 @@ class Effect(abc.ABC):
     # hooks (``ev`` is an :class:`~csjm_opt.diagnose.augmented.Evaluation`)
     def adjust_load(self, ev, p: np.ndarray) -> None:
         """Change ``ev.tau_ext_A_Nm`` (n, 3) or ``ev.first_moment_A_kgm`` (3,)."""
+
+    def adjust_frame(self, ev, p: np.ndarray) -> None:
+        """Change ``ev.R_body`` (n, 3, 3), the true pose of the measured body (before its weight is taken)."""
 
     def adjust_pose(self, ev, p: np.ndarray) -> None:
         """Change ``ev.R_cable`` (n, 3, 3) and ``ev.link_rotation`` (n, 3, 3)."""

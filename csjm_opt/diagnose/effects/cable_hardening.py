@@ -26,6 +26,10 @@ class CableHardening(Effect):
     def scales(self):
         return np.array([10.0])
 
+    def default_ranges(self):
+        """Up to 300 /m (stiffness x7 at 10 mm stretch); mild softening (-20 /m) allowed."""
+        return {"hardening_per_m": (-20.0, 300.0)}
+
     def adjust_tension(self, ev, stretch_m, T_N, p):
         return T_N * (1.0 + p[0] * np.maximum(stretch_m, 0.0))
 

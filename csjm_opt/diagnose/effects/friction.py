@@ -77,6 +77,11 @@ class Friction(Effect):
     def upper_bounds(self):
         return np.r_[np.full(7, np.inf), 1.0]
 
+    def default_ranges(self):
+        """Capstan factors up to 0.3 (35 % tension band: a badly worn guide), stick factor up to 2."""
+        return {**{f"mu_beta_{i + 1}": (0.0, 0.3) for i in range(6)},
+                "stick_travel_factor": (0.0, 2.0), "first_row_state": (-1.0, 1.0)}
+
     def x0(self) -> np.ndarray:
         return np.r_[np.zeros(6), 0.5, 0.0]
 

@@ -12,6 +12,9 @@ import numpy as np
 
 from .base import Effect
 
+#: Plausible hole position error per coordinate (m).
+RANGE_M = 4e-3
+
 
 class HoleOffsets(Effect):
     """Offsets of the six platform holes and six base holes (m)."""
@@ -33,6 +36,10 @@ class HoleOffsets(Effect):
     @property
     def prior_sd(self):
         return np.full(36, self.prior_sd_m)
+
+    def default_ranges(self):
+        """A few mm per coordinate: beyond that the rig was built to another drawing."""
+        return {n: (-RANGE_M, RANGE_M) for n in self.param_names}
 
     def adjust_geometry(self, ev, p):
         ev.A_m = ev.A_m + p[:18].reshape(6, 3)

@@ -44,6 +44,10 @@ class LinkCompliance(Effect):
         """A compliance has a non-negative diagonal (necessary for positive semi-definite)."""
         return np.where(_IU[0] == _IU[1], 0.0, -np.inf)
 
+    def default_ranges(self):
+        """Up to 0.05 rad/(N m) per entry (a link 20x softer than the cables is not a rigid link)."""
+        return {n: ((0.0 if i == j else -0.05), 0.05) for n, i, j in zip(self.param_names, *_IU)}
+
     def extra_starts(self):
         # the stiffness scale and C trade off (both soften the joint): also start from a soft link
         return [np.where(_IU[0] == _IU[1], 5e-3, 0.0)]

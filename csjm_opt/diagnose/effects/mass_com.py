@@ -31,6 +31,11 @@ class MassCom(Effect):
     def scales(self):
         return np.full(3, 2e-3)
 
+    def default_ranges(self):
+        """``|d(m r)| <= 0.1 kg x nominal mass`` per axis: a 10 cm centre-of-mass shift at nominal mass."""
+        lim = 0.1 * max(self.mass_kg, 0.05)
+        return {n: (-lim, lim) for n in self.param_names}
+
     def adjust_load(self, ev, p):
         ev.first_moment_A_kgm = ev.first_moment_A_kgm + p
 

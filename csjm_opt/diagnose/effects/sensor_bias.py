@@ -21,6 +21,10 @@ class SensorBias(Effect):
     def scales(self):
         return np.full(3, 0.05)
 
+    def default_ranges(self):
+        """Within 10 % of the F/T sensor's 5 N m moment range."""
+        return {n: (-0.5, 0.5) for n in self.param_names}
+
     def adjust_load(self, ev, p):
         ev.tau_ext_A_Nm = ev.tau_ext_A_Nm - p
 

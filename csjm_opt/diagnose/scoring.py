@@ -1,0 +1,126 @@
+"""Scoring one model: fit on the training rows, residuals on held-out cycles, paired tests.
+
+Held-out rows are ``TEST.csv`` when given, else grouped K-fold
+cross-validation by ``cycle`` (K = min(5, cycles), cycles dealt to folds in
+order of appearance; never random row splits). Fits use linearised,
+whitened pose residuals (:mod:`.fit`); held-out residuals use full forward
+statics of the fitted model on rows the fit did not see.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy import stats
+
+from ..errors import InvalidInput
+from ..model import kinematics as kin
+from .augmented import AugmentedModel
+from .fit import FitResult, fit_model
+from .residuals import ResidualTable, pose_noise_cov, pose_residuals, rms
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class CandidateScore:
+    """One model's fit on all training rows and its held-out residuals."""
+
+    name: str
+    fit: FitResult
+    heldout_zeta_rad: np.ndarray    # (n_heldout, 3)
+    heldout_cycle: np.ndarray       # (n_heldout,)
+    train_zeta_rad: np.ndarray      # forward-statics residuals on training rows (full fit)
+    failed_rows: int                # forward solves that did not converge
+    instrument_floor_rad: float     # instrument noise propagated through this model's own tangent
+    noise_ratio2: float             # whitened (own tangent) training residual variance, RSS / (N - p_eff)
+
+    @property
+    def heldout_rms_rad(self) -> float:
+        return rms(self.heldout_zeta_rad)
+
+    @property
+    def heldout_mse(self) -> float:
+        return float(np.mean(np.sum(self.heldout_zeta_rad ** 2, axis=1)))
+
+    @property
+    def train_rms_rad(self) -> float:
+        return rms(self.train_zeta_rad)
+
+    def cycle_mse(self) -> dict[int, float]:
+        """Held-out mean ``||zeta||^2`` of each cycle."""
+        sq = np.sum(self.heldout_zeta_rad ** 2, axis=1)
+        return {int(c): float(sq[self.heldout_cycle == c].mean()) for c in np.unique(self.heldout_cycle)}
+
+    def implausible(self) -> list[str]:
+        """Names of fitted effect parameters outside their prior ranges."""
+        m = self.fit.model
+        return [n for e, p in zip(m.effects, m.effect_params(self.fit.theta)) for n in e.implausible(p)]
+
+
+def folds_by_cycle(cycle: np.ndarray, k: int = 5) -> list[np.ndarray]:
+    """Held-out row sets: cycles (in order of appearance) dealt round-robin to ``k`` folds.
+
+    Raises
+    ------
+    InvalidInput
+        Fewer than two cycles.
+    """
+    ids = list(dict.fromkeys(int(c) for c in cycle))
+    if len(ids) < 2:
+        raise InvalidInput(f"held-out scoring needs at least 2 cycles (got {len(ids)}) or a --test file", "cycle")
+    k = min(k, len(ids))
+    return [np.flatnonzero(np.isin(cycle, ids[f::k])) for f in range(k)]
+
+
+def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | None,
+          folds: list[np.ndarray] | None) -> CandidateScore:
+    """Fit on all training rows; held-out residuals from ``test`` or the folds."""
+    full = fit_model(model, train)
+    sol = model.predict_poses(train.rows, full.theta, train.R_meas)
+    train_zeta = pose_residuals(sol.R, train.R_meas)
+    failed = int(np.sum(~sol.converged(1e-6)))
+    if test is not None:
+        ho = model.predict_poses(test.rows, full.theta, test.R_meas)
+        zeta, cyc = pose_residuals(ho.R, test.R_meas), test.cycle
+        failed += int(np.sum(~ho.converged(1e-6)))
+    else:
+        zeta, cyc = np.empty((len(train), 3)), train.cycle
+        for held in folds or []:
+            keep = np.setdiff1d(np.arange(len(train)), held)
+            f = fit_model(model, train.take(keep), theta0=full.theta)
+            part = train.take(held)
+            ho = model.predict_poses(part.rows, f.theta, part.R_meas)
+            zeta[held] = pose_residuals(ho.R, part.R_meas)
+            failed += int(np.sum(~ho.converged(1e-6)))
+
+    # the model's own noise propagation: a softer model turns the same moment noise into more pose noise
+    def g(R: np.ndarray) -> np.ndarray:
+        return model.balance(R, train.rows, full.theta)
+
+    cov = pose_noise_cov(kin.tangent(g, train.R_meas, h=1e-6), train.noise)
+    instrument = float(np.sqrt(np.mean(np.trace(cov, axis1=1, axis2=2))))
+    r = np.linalg.solve(np.linalg.cholesky(cov), train_zeta[..., None])[..., 0]
+    ratio2 = float(np.sum(r ** 2) / max(r.size - full.p_eff, 1.0))
+    return CandidateScore(model.name, full, zeta, cyc, train_zeta, failed, instrument, ratio2)
+
+
+def nested_f_test(base: FitResult, cand: FitResult) -> tuple[float, float]:
+    """``(F, p)`` of the candidate's extra parameters on the same training rows (linearised; informative only)."""
+    dp = max(cand.p_eff - base.p_eff, 1e-9)
+    dof = max(cand.n_obs - cand.p_eff, 1.0)
+    F = max(base.rss - cand.rss, 0.0) / dp / (cand.rss / dof)
+    return float(F), float(stats.f.sf(F, dp, dof))
+
+
+def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
+    """One-sided p-value that ``b``'s per-cycle held-out MSE is lower than ``a``'s (paired t over cycles)."""
+    ma, mb = a.cycle_mse(), b.cycle_mse()
+    d = np.array([ma[c] - mb[c] for c in ma])
+    if len(d) < 2 or np.allclose(d, d[0]):
+        return 0.0 if d.mean() > 0 else 1.0
+    return float(stats.ttest_1samp(d, 0.0, alternative="greater").pvalue)
+
+
+def improvement_rad(a: CandidateScore, b: CandidateScore) -> float:
+    """Systematic held-out improvement of ``b`` over ``a``: ``sqrt(max(MSE_a - MSE_b, 0))`` (rad)."""
+    return float(np.sqrt(max(a.heldout_mse - b.heldout_mse, 0.0)))

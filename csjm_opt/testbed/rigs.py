@@ -1,0 +1,121 @@
+"""Random rigs: the testbed's statistics over rigs unlike the paper's.
+
+:class:`RigRanges` states the ranges every quantity is drawn from (uniform
+unless said otherwise); :func:`random_rig` draws a rig and its instrument
+noise and *validates that the rig holds its experiment*: the nominal planner
+finds tensions at the reference poses and the nominal response of every
+load cycle keeps each cable taut and within its tension bounds (the check of
+:func:`csjm_opt.testbed.cycles.design_cycles`). Rigs that fail are redrawn.
+
+=======================  ==================================================
+platform holes           semi-regular hexagon, chords d12 in [5, 30] mm,
+                         d23 in [70, 120] mm, height OO_A in [50, 110] mm
+base holes               semi-regular hexagon, chords d12 in [90, 150] mm,
+                         d23 in [3, 30] mm, height -OO_B, OO_B in
+                         [50, 110] mm, turned by [-10, 10] deg
+cable stiffness          common k in [2000, 10000] N/m, each cable x
+                         U(0.9, 1.1)
+tension range            t_min in [3, 8] N, t_max in [100, 200] N
+mass, centre of mass     [0.25, 1.0] kg; com z in [30, 120] mm, x, y in
+                         [-10, 10] mm
+instrument noise         the paper's F/T and tracker sigmas, each times
+                         a factor in [0.6, 1.6] (drawn independently)
+=======================  ==================================================
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..errors import CsjmError
+from ..measurement.instruments import InstrumentNoise
+from ..model.hexagon import hexagon_holes
+from ..model.rig import Rig
+from .cycles import design_cycles
+
+Range = tuple[float, float]
+
+
+@dataclasses.dataclass(frozen=True)
+class RigRanges:
+    """Ranges of the random rigs (SI units; see the module table)."""
+
+    platform_d12_m: Range = (0.005, 0.030)
+    platform_d23_m: Range = (0.070, 0.120)
+    platform_height_m: Range = (0.050, 0.110)
+    base_d12_m: Range = (0.090, 0.150)
+    base_d23_m: Range = (0.003, 0.030)
+    base_depth_m: Range = (0.050, 0.110)
+    base_turn_deg: Range = (-10.0, 10.0)
+    stiffness_N_per_m: Range = (2000.0, 10000.0)
+    stiffness_spread: float = 0.1
+    t_min_N: Range = (3.0, 8.0)
+    t_max_N: Range = (100.0, 200.0)
+    mass_kg: Range = (0.25, 1.0)
+    com_z_m: Range = (0.030, 0.120)
+    com_xy_m: float = 0.010
+    noise_factor: Range = (0.6, 1.6)
+
+
+def _u(rng: np.random.Generator, r: Range) -> float:
+    return float(rng.uniform(*r))
+
+
+def draw_rig(rng: np.random.Generator, ranges: RigRanges = RigRanges()) -> Rig:
+    """One rig drawn from ``ranges`` (not yet validated)."""
+    platform = hexagon_holes(_u(rng, ranges.platform_d12_m), _u(rng, ranges.platform_d23_m),
+                             _u(rng, ranges.platform_height_m))
+    base = hexagon_holes(_u(rng, ranges.base_d12_m), _u(rng, ranges.base_d23_m), -_u(rng, ranges.base_depth_m),
+                         theta0_deg=_u(rng, ranges.base_turn_deg))
+    k = _u(rng, ranges.stiffness_N_per_m) * rng.uniform(1 - ranges.stiffness_spread, 1 + ranges.stiffness_spread, 6)
+    com = np.r_[rng.uniform(-ranges.com_xy_m, ranges.com_xy_m, 2), _u(rng, ranges.com_z_m)]
+    return Rig(platform_holes_A_m=platform, base_holes_B_m=base, cable_stiffness_N_per_m=k,
+               t_min_N=_u(rng, ranges.t_min_N), t_max_N=_u(rng, ranges.t_max_N),
+               platform_mass_kg=_u(rng, ranges.mass_kg), com_A_m=com)
+
+
+def draw_noise(rng: np.random.Generator, ranges: RigRanges = RigRanges()) -> InstrumentNoise:
+    """The paper's instrument noise with the F/T and tracker sigmas scaled independently."""
+    paper = InstrumentNoise.paper()
+    f_tau, f_angle = _u(rng, ranges.noise_factor), _u(rng, ranges.noise_factor)
+    tx, ty, tz = (f_tau * s for s in paper.tau_sigma_Nm)
+    return InstrumentNoise((tx, ty, tz), f_angle * paper.angle_sigma_rad)
+
+
+def holds_experiment(rig: Rig, rng: np.random.Generator, n_cycles: int = 4) -> bool:
+    """Whether the nominal rig can run ``n_cycles`` of the diagnosis experiment (see module doc)."""
+    try:
+        design_cycles(rig, n_cycles, rng, max_tries=20)
+    except CsjmError:
+        return False
+    return True
+
+
+def random_rig(rng: np.random.Generator, ranges: RigRanges = RigRanges(),
+               max_tries: int = 30) -> tuple[Rig, InstrumentNoise]:
+    """A validated random rig and its instrument noise.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    ranges : RigRanges, optional
+        Where each quantity is drawn from.
+    max_tries : int, optional
+        Rigs drawn before giving up.
+
+    Returns
+    -------
+    (Rig, InstrumentNoise)
+
+    Raises
+    ------
+    CsjmError
+        No rig drawn in ``max_tries`` holds its experiment.
+    """
+    for _ in range(max_tries):
+        rig = draw_rig(rng, ranges)
+        if holds_experiment(rig, rng):
+            return rig, draw_noise(rng, ranges)
+    raise CsjmError(f"no random rig in {max_tries} draws holds the experiment; widen RigRanges")

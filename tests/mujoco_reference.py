@@ -1,0 +1,81 @@
+"""MuJoCo as the independent reference for the statics and stiffness tests.
+
+The engine model comes from :func:`csjm_opt.model.mjcf.rig_to_mjcf`, which uses
+only the rig's geometry, stiffness, mass, COM and gravity (no statics). Poses
+are read with MuJoCo's own ``mju_quat2Mat``; tensions with MuJoCo's tendon
+lengths; forces are MuJoCo's ``qfrc_smooth`` (passive + actuator + applied
+minus bias, all in {A} for the ball joint).
+
+How statics are settled: a heavily damped simulation (ball-joint damping
+``SETTLE_DAMPING`` N m s/rad, RK4 at 2 ms) from the start pose for
+``SETTLE_S`` seconds; it has settled when ``|qvel|`` and ``|qfrc_smooth|``
+are at round-off level.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from csjm_opt.model.mjcf import rig_to_mjcf
+
+SETTLE_DAMPING = 0.25
+SETTLE_S = 6.0
+
+
+def build(rig, rest_lengths, R, tau_ext, damping=SETTLE_DAMPING, timestep=2e-3):
+    xml = rig_to_mjcf(rig, rest_lengths, R, tau_ext, joint_damping_Nms_per_rad=damping, timestep_s=timestep)
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d, 0)
+    mujoco.mj_forward(m, d)
+    return m, d
+
+
+def rotation(qpos: np.ndarray) -> np.ndarray:
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, np.asarray(qpos, float))
+    return R.reshape(3, 3)
+
+
+def tensions(rig, d, rest_lengths) -> np.ndarray:
+    return np.asarray(rig.cable_stiffness_N_per_m) * np.maximum(d.ten_length - rest_lengths, 0.0)
+
+
+def settle(rig, rest_lengths, R0, tau_ext, seconds=SETTLE_S, nudge=None):
+    """Settle from ``R0`` (optionally nudged by a body-frame rotation vector): (R, tensions, settled)."""
+    m, d = build(rig, rest_lengths, R0, tau_ext)
+    if nudge is not None:
+        mujoco.mj_integratePos(m, d.qpos, np.asarray(nudge, float), 1.0)
+    for _ in range(int(round(seconds / m.opt.timestep / 250))):
+        for _ in range(250):
+            mujoco.mj_step(m, d)
+        mujoco.mj_forward(m, d)
+        settled = bool(np.linalg.norm(d.qvel) < 1e-12 and np.abs(d.qfrc_smooth).max() < 1e-11)
+        if settled:
+            break
+    return rotation(d.qpos), tensions(rig, d, rest_lengths), settled
+
+
+def measured_stiffness(rig, rest_lengths, R, tau_ext, world_fixed=False, h=1e-6):
+    """``-dQ/dzeta`` by central differences of MuJoCo's generalised force at ``R exp(hat(zeta))``.
+
+    ``Q`` is the net moment on the platform in {A}. The external moment is
+    applied by the keyframe's load motors (fixed in {A}) or, with
+    ``world_fixed``, as ``xfrc_applied`` torque ``R tau_ext`` fixed in {B}.
+    """
+    m, d = build(rig, rest_lengths, R, tau_ext)
+    q0 = d.qpos.copy()
+    if world_fixed:
+        d.ctrl[:] = 0.0
+
+    def Q(z):
+        d.qpos[:] = q0
+        mujoco.mj_integratePos(m, d.qpos, z, 1.0)
+        d.qvel[:] = 0.0
+        if world_fixed:
+            d.xfrc_applied[1, 3:] = R @ tau_ext
+        mujoco.mj_forward(m, d)
+        return d.qfrc_smooth.copy()
+
+    return -np.column_stack([(Q(h * e) - Q(-h * e)) / (2 * h) for e in np.eye(3)]), Q(np.zeros(3))
