@@ -91,7 +91,40 @@ def _unpack(theta: np.ndarray, shared: bool, offsets: bool, k0: np.ndarray) -> t
 def fit_parameters(log: MeasurementLog, rig: Rig, *, shared_stiffness: bool = False,
                    rest_length_offsets: bool = True, noise: InstrumentNoise | None = None,
                    model: Model | None = None) -> ParameterFit:
-    """Fit cable stiffness (shared or per cable) and rest-length offsets to ``log``."""
+    """Fit the cable stiffness (shared or per cable) and rest-length offsets to a whole log.
+
+    Moment residuals at the measured poses, ``J(R_i)^T T_i + tau_load_i`` with
+    ``T_i = k (c(R_i) - l_i - dl)``, are minimised by least squares; standard deviations come
+    from the Jacobian.
+
+    Parameters
+    ----------
+    log : MeasurementLog
+        The measurements (all cycles).
+    rig : Rig
+        The nominal rig (geometry and starting values).
+    shared_stiffness : bool, optional
+        One stiffness for all six cables instead of one per cable.
+    rest_length_offsets : bool, optional
+        Also fit one rest-length offset per cable (m).
+    noise : InstrumentNoise, optional
+        Weights the residuals by the instrument uncertainties.
+    model : Model, optional
+        A numeric model of ``rig`` to reuse.
+
+    Returns
+    -------
+    ParameterFit
+        Fitted values with standard deviations; ``predict`` and ``pose_errors_rad`` give the poses
+        the fitted model predicts.
+
+    Raises
+    ------
+    IllConditionedData
+        If the log has too few rows for the parameters or does not determine them.
+    SolverError
+        If the least-squares solver fails.
+    """
     model = model or Model(rig)
     R = log.R
     n = len(log)
@@ -149,7 +182,27 @@ def fit_parameters(log: MeasurementLog, rig: Rig, *, shared_stiffness: bool = Fa
 
 
 def check_fit(fit: ParameterFit, log: MeasurementLog) -> dict[str, float]:
-    """Held-out check: rms and max of the predicted-vs-measured pose error (rad) on ``log``."""
+    """Held-out check of a parameter fit: predicted against measured poses on ``log``.
+
+    Parameters
+    ----------
+    fit : ParameterFit
+        From :func:`fit_parameters` (on other rows).
+    log : MeasurementLog
+        Held-out rows.
+
+    Returns
+    -------
+    dict
+        ``{"rms_rad": ..., "max_rad": ...}`` of the pose error by forward statics.
+
+    Raises
+    ------
+    InvalidInput
+        If ``log`` is empty.
+    NoEquilibrium
+        If the fitted model has no equilibrium for a row.
+    """
     if len(log) == 0:
         raise InvalidInput("empty held-out log", "log")
     e = fit.pose_errors_rad(log)

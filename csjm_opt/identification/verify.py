@@ -136,7 +136,23 @@ def predict_pose_external(R0: np.ndarray, K_D: np.ndarray, tau_load_ref_A_Nm: np
 
 
 def estimation_error(R_act: np.ndarray, R_est: np.ndarray) -> np.ndarray:
-    """(63)-(65): ``E_theta = ||log(R_act^-1 R_est)||`` (rad), batched."""
+    """Estimation error (63)-(65): ``E_theta = ||log(R_act^-1 R_est)||`` (rad), batched.
+
+    Parameters
+    ----------
+    R_act, R_est : array_like, shape (..., 3, 3)
+        Actual and estimated orientations.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Angles in ``[0, pi]`` (rad).
+
+    Raises
+    ------
+    InvalidInput
+        If the shapes are wrong or do not broadcast.
+    """
     return so3.angle_between(R_act, R_est)
 
 
@@ -181,7 +197,35 @@ class Verification:
 
 def verify_increments(R0: np.ndarray, K: np.ndarray, dtau_A_Nm: np.ndarray, R_act: np.ndarray,
                       use: str = "K_D", labels: Sequence[str] = ()) -> Verification:
-    """Table 4: predict each ``R_est`` from ``R0``, ``K`` and ``dtau``; compare with ``R_act``."""
+    """Table 4 of the paper: predict each pose from ``R0``, ``K`` and a load increment; compare.
+
+    Parameters
+    ----------
+    R0 : ndarray, shape (3, 3)
+        Reference orientation of {A} in {B}.
+    K : ndarray, shape (3, 3)
+        Stiffness used as predictor (N m/rad).
+    dtau_A_Nm : array_like, shape (n, 3)
+        Load increments in {A} (N m).
+    R_act : array_like, shape (n, 3, 3)
+        Actual (measured) orientations.
+    use : str, optional
+        Label of the predictor, reported in the result.
+    labels : sequence of str, optional
+        One label per case.
+
+    Returns
+    -------
+    Verification
+        Predicted poses and ``E_theta`` (rad) per case.
+
+    Raises
+    ------
+    NotARotation
+        If ``R0`` or a row of ``R_act`` is not a rotation.
+    InvalidInput
+        If the shapes disagree, a value is not finite, or ``K`` is singular.
+    """
     dtau = as_array(dtau_A_Nm, (None, 3), "dtau")
     R_act = as_rotations(R_act, "R_act")
     return Verification(use, dtau, R_act, predict_pose(R0, K, dtau), tuple(labels))
@@ -189,13 +233,35 @@ def verify_increments(R0: np.ndarray, K: np.ndarray, dtau_A_Nm: np.ndarray, R_ac
 
 def verify_log(estimates: Sequence[StiffnessEstimate], log: MeasurementLog, model: Model,
                use: str = "K_D", load: str = "total") -> Verification:
-    """Predict every row of ``log`` from the estimate of its cycle (same cycle id), else
-    from the estimate whose reference pose is nearest.
+    """Predict the pose of every row of ``log`` from an identified stiffness, (61)-(65).
 
-    ``load="total"``: increment of the total load measured at the actual pose
-    (the paper's Column A); ``load="external"``: only the external moment is
-    known and the weight moment is re-evaluated at the predicted pose (needs
-    ``use="K_D"``).
+    Each row is predicted from the estimate of its cycle (same cycle id), else from the estimate
+    whose reference pose is nearest.
+
+    Parameters
+    ----------
+    estimates : sequence of StiffnessEstimate
+        From :func:`~csjm_opt.identification.identify_log` (on training rows).
+    log : MeasurementLog
+        The rows to predict (held out from the identification).
+    model : Model
+        Numeric model of the rig (weight moment at the measured or predicted pose).
+    use : {"K_D", "K"}, optional
+        Which matrix predicts; ``K_D`` is right to first order (erratum 4).
+    load : {"total", "external"}, optional
+        ``"total"``: the increment of the total load at the actual pose (the paper's Column A);
+        ``"external"``: only the external moment is known and the weight moment is re-evaluated at
+        the predicted pose (needs ``use="K_D"``).
+
+    Returns
+    -------
+    Verification
+        Load increments, actual and predicted poses, ``E_theta`` per row, ``rms_rad``, ``max_rad``.
+
+    Raises
+    ------
+    InvalidInput
+        If ``use`` or ``load`` is unknown, there are no estimates, or a matrix is singular.
     """
     if use not in ("K_D", "K") or load not in ("total", "external"):
         raise InvalidInput(f"use must be K_D or K and load total or external, got {use!r}, {load!r}", "use")

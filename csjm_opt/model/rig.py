@@ -186,7 +186,25 @@ class Rig:
 
 
 def paper_rig(cable_stiffness_N_per_m: float = PAPER_CABLE_STIFFNESS_N_PER_M) -> Rig:
-    """The rig of the paper's Section IV-A (hole pairing as the paper labels it)."""
+    """The rig of the paper's Section IV-A (holes paired as the paper labels them).
+
+    Parameters
+    ----------
+    cable_stiffness_N_per_m : float, optional
+        Shared stiffness of each cable with its drive (N/m); the paper gives none, the default
+        4600 N/m is fitted to Table 3 (docs/guide/modelling.md).
+
+    Returns
+    -------
+    Rig
+        Semi-regular hexagons of Section IV-A, weight 4.82 N at (0, 0, 0.081) m, tensions in
+        [5, 150] N.
+
+    Raises
+    ------
+    RigFileError
+        If ``cable_stiffness_N_per_m`` is not positive and finite.
+    """
     platform, base = hexagon.paper_holes()
     return Rig(platform_holes_A_m=platform, base_holes_B_m=base,
                cable_stiffness_N_per_m=np.full(6, float(cable_stiffness_N_per_m)),
@@ -194,7 +212,24 @@ def paper_rig(cable_stiffness_N_per_m: float = PAPER_CABLE_STIFFNESS_N_PER_M) ->
 
 
 def load_rig(spec: str | Path | None) -> Rig:
-    """A rig from a path, or the built-in paper rig for ``None`` / ``"paper"``."""
+    """A rig from a TOML file, or the built-in paper rig.
+
+    Parameters
+    ----------
+    spec : str or Path or None
+        Path of a rig file (format in docs/conventions.md), or ``None`` / ``"paper"`` for
+        :func:`paper_rig`.
+
+    Returns
+    -------
+    Rig
+        The validated rig.
+
+    Raises
+    ------
+    RigFileError
+        If the file cannot be read or is malformed (naming the key).
+    """
     if spec is None or str(spec) == "paper":
         return paper_rig()
     return Rig.from_toml(spec)

@@ -117,7 +117,35 @@ def directional_range(basis: StiffnessBasis, tau_load: np.ndarray, directions: n
 
 def directional_stiffness_range(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray,
                                 directions: np.ndarray) -> np.ndarray:
-    """``[min, max]`` of ``u^T K u`` (N m/rad) over all feasible tensions at ``R``, per direction (n, 2)."""
+    """Exact range of the directional stiffness ``u^T K u`` over all tensions that hold the load.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig.
+    R : ndarray, shape (3, 3)
+        Orientation of {A} in {B}.
+    tau_ext_A_Nm : array_like, shape (3,)
+        External moment in {A} (N m), platform weight excluded.
+    directions : array_like, shape (n, 3)
+        Directions ``u`` in {A} (normalised here; must be non-zero).
+
+    Returns
+    -------
+    ndarray, shape (n, 2)
+        ``[min, max]`` of ``u^T K u`` (N m/rad) per direction, from two LPs each.
+
+    Raises
+    ------
+    NotARotation
+        If ``R`` is not a rotation.
+    InvalidInput
+        If a direction is zero or a shape is wrong.
+    InfeasibleLoad
+        If no tensions within the bounds hold the load.
+    SolverError
+        If an LP fails.
+    """
     R = as_rotation(R)
     tau_ext = as_vector3(tau_ext_A_Nm, "tau_ext")
     U = as_array(np.atleast_2d(directions), (None, 3), "directions")

@@ -163,7 +163,26 @@ def build_shaping_qp(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray, K_target
                      weights: np.ndarray | None = None, objective: str = "frobenius",
                      directions: np.ndarray | None = None,
                      regularization: float = REGULARIZATION) -> qpsolvers.Problem:
-    """The shaping QP at ``R`` under ``tau_ext`` as a :class:`qpsolvers.Problem` (solver-free)."""
+    """The shaping QP at ``R`` under ``tau_ext`` as a :class:`qpsolvers.Problem`, without solving it.
+
+    Parameters
+    ----------
+    rig, R, tau_ext_A_Nm, K_target, weights, objective, directions, regularization
+        As in :func:`shape_stiffness`.
+
+    Returns
+    -------
+    qpsolvers.Problem
+        ``min 1/2 T^T P T + q^T T`` subject to ``J^T T = -tau_load`` and
+        ``t_min <= T <= t_max``; inspect it or solve it with any qpsolvers backend.
+
+    Raises
+    ------
+    NotARotation
+        If ``R`` is not a rotation.
+    InvalidInput
+        If an argument has the wrong shape, is not finite, or names an unknown objective.
+    """
     R = as_rotation(R)
     tau_ext = as_vector3(tau_ext_A_Nm, "tau_ext")
     obj = make_objective(K_target, weights, objective, directions)
@@ -245,13 +264,51 @@ def shape_stiffness(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray, K_target:
                     directions: np.ndarray | None = None, solver: str = "osqp",
                     regularization: float = REGULARIZATION, exact_tol: float = 1e-6,
                     model: Model | None = None) -> ShapingResult:
-    """Tensions within bounds that hold ``tau_ext`` (N m, {A}) at ``R`` with K closest to ``K_target``.
+    """Tensions within the bounds that hold the load at ``R`` and bring K closest to ``K_target``.
 
-    ``solver``: a qpsolvers backend (``"osqp"``, ``"clarabel"``, ...) whose
-    answer is polished exactly by the active-set method, or ``"active_set"``
-    alone. The result reports the achieved K (CasADi model), the weighted
-    residual, whether the target was reached (``exact``: residual below
-    ``exact_tol`` N m/rad) and the active bounds.
+    Parameters
+    ----------
+    rig : Rig
+        The rig.
+    R : ndarray, shape (3, 3)
+        Orientation of {A} in {B}.
+    tau_ext_A_Nm : array_like, shape (3,)
+        External moment in {A} (N m), platform weight excluded.
+    K_target : array_like, shape (3, 3)
+        Target stiffness (N m/rad, load convention); symmetrised.
+    weights : array_like, optional
+        ``"frobenius"``: (3, 3) elementwise weights; ``"eigen"``: 3 weights of the principal
+        stiffnesses; ``"directional"``: one weight per direction.
+    objective : {"frobenius", "eigen", "directional"}, optional
+        What "closest" means (see :mod:`csjm_opt.shaping.objectives`).
+    directions : array_like, shape (m, 3), optional
+        Directions in {A} for ``objective="directional"``.
+    solver : str, optional
+        A qpsolvers backend (``"osqp"``, ``"clarabel"``, ...) whose answer is polished exactly by
+        the active-set method, or ``"active_set"`` alone.
+    regularization : float, optional
+        Weight of a small pull toward mid-range tensions (makes the QP strictly convex).
+    exact_tol : float, optional
+        Residual (N m/rad) below which the target counts as reached.
+    model : Model, optional
+        A numeric model of ``rig`` to reuse.
+
+    Returns
+    -------
+    ShapingResult
+        Tensions, achieved K (CasADi model), weighted residual, ``exact`` (target reached) and the
+        active bounds; the result checks its equilibrium and bounds (``is_valid()``).
+
+    Raises
+    ------
+    NotARotation
+        If ``R`` is not a rotation.
+    InvalidInput
+        If an argument has the wrong shape, is not finite, or names an unknown objective or solver.
+    InfeasibleLoad
+        If no tensions within the bounds hold the load.
+    SolverError
+        If the QP solver fails or its polished answer fails the checks.
     """
     model = model or Model(rig)
     R = as_rotation(R)
