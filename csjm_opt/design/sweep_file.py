@@ -146,6 +146,24 @@ class SweepSpec:
 
     @classmethod
     def from_toml(cls, path: str | Path) -> "SweepSpec":
+        """Read a sweep description (format in docs/guide/design.md).
+
+        Parameters
+        ----------
+        path : str or Path
+            The TOML file.
+
+        Returns
+        -------
+        SweepSpec
+            The validated sweep: method, base design, swept parameters, sampling, loads, metrics.
+
+        Raises
+        ------
+        DesignError
+            If the file cannot be read, is not TOML, or a section or key is unknown or invalid (naming
+            the key and file).
+        """
         path = Path(path)
         text = read_text(path, lambda msg: DesignError(msg, path=str(path)), "sweep file")
         try:
@@ -156,6 +174,25 @@ class SweepSpec:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any], path: str | None = None) -> "SweepSpec":
+        """Build a sweep from the nested TOML layout (see :meth:`from_toml`).
+
+        Parameters
+        ----------
+        data : dict
+            Sections ``sweep``, ``base``, ``parameters``, ``sampling``, ``loads``, ``metrics``.
+        path : str, optional
+            File the data came from, named in errors.
+
+        Returns
+        -------
+        SweepSpec
+            The validated sweep.
+
+        Raises
+        ------
+        DesignError
+            If a section or key is unknown or a value is invalid (naming the key).
+        """
         def fail(message: str, key: str) -> DesignError:
             return DesignError(message, key, path)
 

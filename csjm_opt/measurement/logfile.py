@@ -59,7 +59,23 @@ class MeasurementLog:
         return [int(self.cycle[i]) for i in sorted(first)]
 
     def cycle_rows(self, cycle: int) -> np.ndarray:
-        """Row indices of one cycle (time order)."""
+        """Row indices of one load cycle, in time order.
+
+        Parameters
+        ----------
+        cycle : int
+            A cycle id of this log.
+
+        Returns
+        -------
+        ndarray of int
+            Indices of the cycle's rows; the first is the cycle's reference.
+
+        Raises
+        ------
+        DataFileError
+            If the log has no such cycle.
+        """
         rows = np.flatnonzero(self.cycle == cycle)
         if rows.size == 0:
             raise DataFileError(f"no cycle {cycle} (cycles: {self.cycle_ids})", self.source)
@@ -143,13 +159,49 @@ class MeasurementLog:
 
     @classmethod
     def from_csv(cls, path: str | Path) -> "MeasurementLog":
-        """Read and validate a log file."""
+        """Read and validate a measurement log file (format in docs/conventions.md).
+
+        Parameters
+        ----------
+        path : str or Path
+            The CSV file (UTF-8, a byte-order mark is accepted).
+
+        Returns
+        -------
+        MeasurementLog
+            The log, rows in file order.
+
+        Raises
+        ------
+        DataFileError
+            If the file cannot be read, the header is wrong, or a row is malformed (missing,
+            non-numeric or non-finite value, duplicate sample id), naming the line.
+        """
         path = Path(path)
         text = read_text(path, lambda msg: DataFileError(msg, str(path)), "log file", encoding="utf-8-sig")
         return cls.from_text(text, str(path))
 
     @classmethod
     def from_text(cls, text: str, source: str | None = None) -> "MeasurementLog":
+        """Parse and validate the text of a measurement log (see :meth:`from_csv`).
+
+        Parameters
+        ----------
+        text : str
+            CSV text with the header of docs/conventions.md.
+        source : str, optional
+            Name of the source, used in error messages.
+
+        Returns
+        -------
+        MeasurementLog
+            The log.
+
+        Raises
+        ------
+        DataFileError
+            If the header is wrong or a row is malformed, naming the line.
+        """
         reader = csv.reader(io.StringIO(text))
         try:
             header = [h.strip() for h in next(reader)]
@@ -188,10 +240,35 @@ class MeasurementLog:
         return log
 
     def to_csv(self, path: str | Path, overwrite: bool = False) -> Path:
-        """Write atomically; an existing file is kept unless ``overwrite``."""
+        """Write the log as CSV, atomically.
+
+        Parameters
+        ----------
+        path : str or Path
+            Output file.
+        overwrite : bool, optional
+            Replace an existing file (by default an existing file is kept and an error raised).
+
+        Returns
+        -------
+        Path
+            The file written.
+
+        Raises
+        ------
+        InvalidInput
+            If the file exists and ``overwrite`` is false, or it cannot be written.
+        """
         return atomic_write_text(path, self.to_text(), overwrite=overwrite)
 
     def to_text(self) -> str:
+        """The log as CSV text (standard columns, then the extra ones).
+
+        Returns
+        -------
+        str
+            CSV text that :meth:`from_text` reads back to the same log.
+        """
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
         w.writerow(COLUMNS + tuple(self.extra))
