@@ -21,7 +21,7 @@ change at the (unknown) new pose is then found by a fixed-point iteration.
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -32,8 +32,6 @@ from ..measurement.logfile import MeasurementLog
 from ..model.numeric import Model
 from .._validate import as_array, as_rotation, as_rotations
 
-if TYPE_CHECKING:
-    from matplotlib.axes import Axes
 
 
 def predict_pose(R0: np.ndarray, K: np.ndarray, dtau_A_Nm: np.ndarray) -> np.ndarray:
@@ -285,36 +283,3 @@ def verify_log(estimates: Sequence[StiffnessEstimate], log: MeasurementLog, mode
             R_est[i] = predict_pose(e.R_ref, getattr(e, use), dtau[i])
     labels = tuple(f"{int(c)}/{int(s)}" for c, s in zip(log.cycle, log.sample))
     return Verification(use, dtau, R, R_est, labels)
-
-
-def plot_verification(results: Sequence[Verification], *, title: str = "",
-                      ax: Axes | None = None) -> Axes:
-    """Bar chart of E_theta per held-out case, one series per verification (e.g. K_D and K).
-
-    Parameters
-    ----------
-    results : sequence of Verification
-        From :func:`verify_increments` or :func:`verify_log`, all over the same cases.
-    title : str, optional
-        Axes title (a default names (63)-(65)).
-    ax : matplotlib.axes.Axes, optional
-        Axes to draw on; a new figure is made when omitted.
-
-    Returns
-    -------
-    matplotlib.axes.Axes
-        The axes drawn on.
-    """
-    if ax is None:
-        import matplotlib.pyplot as plt
-
-        _, ax = plt.subplots(figsize=(7, 3.5), layout="constrained")
-    width = 0.8 / max(1, len(results))
-    for k, res in enumerate(results):
-        x = np.arange(len(res.E_theta_rad)) + k * width
-        ax.bar(x, res.E_theta_rad, width, label=f"{res.use} (rms {res.rms_rad:.4f} rad)")
-    ax.set_xlabel("held-out case")
-    ax.set_ylabel(r"$E_\theta$ (rad)")
-    ax.set_title(title or "Verification of the identified stiffness (63)-(65)")
-    ax.legend()
-    return ax

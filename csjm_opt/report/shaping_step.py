@@ -17,7 +17,8 @@ from ..control.controllers import StiffnessShapingController
 from .._fileio import atomic_write_json
 from ..control.load_profiles import Constant, Sinusoid, Step
 from ..model.numeric import Model
-from ..shaping.reachable import _lp, plot_reachable_set, reachable_set
+from ..shaping.figures import plot_reachable_set
+from ..shaping.reachable import _lp, reachable_set
 from ..model.rig import Rig
 from ..shaping.shaper import shape_stiffness, stiffness_basis
 from .._validate import as_rotation
