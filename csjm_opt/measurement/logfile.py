@@ -333,7 +333,8 @@ def _check_bounds(log: MeasurementLog, source: str | None, lines: np.ndarray) ->
             raise DataFileError(f"{value:.6g} outside {lim.describe()} ({lim.why.split(';')[0]})",
                                 source, int(lines[i]), columns[j])
     rv = log.rotvec_rad
-    norm = np.sqrt(np.sum(rv * rv, axis=1))
+    with np.errstate(over="ignore", invalid="ignore"):
+        norm = np.sqrt(np.sum(rv * rv, axis=1))
     bad = ~(norm <= ROTVEC_MAX_NORM_RAD)
     if bad.any():
         i = int(np.argmax(bad))

@@ -81,10 +81,8 @@ def run_demo(rig: Rig, log: MeasurementLog, out_dir: Path, test_log: Measurement
         train, test = log.subset(train_rows), log.subset(test_rows)
     else:
         train, test = log, test_log
-    estimates: list = []
-    cycles: list = []
-    skipped: list = []
-    figures: list = []
+    estimates, cycles, skipped = [], [], []
+    figures: list[str] = []
     for c in train.cycle_ids:
         rows = train.cycle_rows(c)
         order = 2 if len(rows) >= ORDER2_MIN_ROWS else 1

@@ -8,7 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import numpy.typing as npt
+from numpy.typing import ArrayLike
 
 from .. import so3
 from .._plotting import save
@@ -31,7 +31,7 @@ PAPER_R0 = np.array([[0.992, -0.060, -0.111], [0.090, 0.952, 0.292], [0.088, -0.
 DEMO_TAU_EXT = np.array([0.2, -0.5, 0.1])
 
 
-def soft_stiff_targets(rig: Rig, R: np.ndarray, tau_ext: np.ndarray, direction: npt.ArrayLike = (1.0, 0.0, 0.0),
+def soft_stiff_targets(rig: Rig, R: np.ndarray, tau_ext: np.ndarray, direction: ArrayLike = (1.0, 0.0, 0.0),
                        margin: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
     """Two reachable targets (N m/rad) at ``R`` under ``tau_ext``: softest and stiffest along ``direction``.
 
@@ -100,8 +100,8 @@ def run_demo(rig: Rig, out_dir: Path, R: np.ndarray | None = None, tau_ext: np.n
     # 3. closed loop: hold R, step + sinusoidal disturbance about x, soft/stiff (about x) switching at half time
     half = duration_s / 2
     target = lambda t: K_soft if t < half else K_stiff                         # noqa: E731
-    load = (Constant(tau) + Step(0.2 * duration_s, np.array([STEP_NM, 0.0, 0.0]))
-            + Sinusoid(np.array([SINE_NM, 0.0, 0.0]), SINE_HZ))
+    load = Constant(tau) + Step(0.2 * duration_s, np.array([STEP_NM, 0.0, 0.0]))
+    load = load + Sinusoid(np.array([SINE_NM, 0.0, 0.0]), SINE_HZ)
     ctrl = StiffnessShapingController(rig, R, target)
     log = simulate(rig, ctrl, load, duration_s, dt_s)
     figs = [save(plot_closed_loop(log, rig.t_min_N, rig.t_max_N)[0].figure, out_dir / "closed_loop.png"),
@@ -159,8 +159,8 @@ def section(s: dict) -> Section:
     ranges = s["eigen_ranges_Nm_per_rad"]
     reach_ok = bool(s["reachable_target_exact"])
     iso_ok = not s["isotropic_target_exact"]
-    verdict = (f"At Table 3's pose under {sig(float(np.linalg.norm(s['tau_ext_Nm'])))} N m, "
-               "a target built from feasible "
+    verdict = (f"At Table 3's pose under {sig(float(np.linalg.norm(s['tau_ext_Nm'])))} N m, a target built from "
+               "feasible "
                f"tensions (K_xx = {sig(s['stiff_Kxx_Nm_per_rad'])} N m/rad) is met to "
                f"{sig(s['reachable_target_residual_Nm_per_rad'], 2)} N m/rad: "
                + ("exact, as expected for a reachable target. " if reach_ok else "NOT exact, unexpected. ")
