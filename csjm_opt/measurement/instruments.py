@@ -52,7 +52,26 @@ class InstrumentNoise:
 
     @classmethod
     def none(cls) -> "InstrumentNoise":
+        """No noise (for noise-free simulations).
+
+        Returns
+        -------
+        InstrumentNoise
+            Zero moment and orientation standard deviations.
+        """
         return cls((0.0, 0.0, 0.0), 0.0)
 
     def tracker_point_sigma_m(self, distance_m: float) -> float:
+        """Standard deviation of one tracked point at a distance: half the uncertainty ``U0 + U1 d`` of Table 1.
+
+        Parameters
+        ----------
+        distance_m : float
+            Distance from the tracker (m).
+
+        Returns
+        -------
+        float
+            Standard deviation (m).
+        """
         return (TRACKER_U0_M + TRACKER_U_PER_M * distance_m) / 2

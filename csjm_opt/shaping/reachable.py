@@ -55,7 +55,20 @@ class ReachableSet:
     tau_load_A_Nm: np.ndarray
 
     def directional_range(self, directions: np.ndarray, t_min_N: float, t_max_N: float) -> np.ndarray:
-        """``[min, max]`` of ``u^T K u`` for each direction (n, 3) -> (n, 2); exact LPs."""
+        """Exact range of ``u^T K u`` over the feasible tensions, per direction (two LPs each).
+
+        Parameters
+        ----------
+        directions : array_like, shape (n, 3)
+            Directions ``u`` in {A} (normalised; non-zero).
+        t_min_N, t_max_N : float
+            Tension bounds (N).
+
+        Returns
+        -------
+        ndarray, shape (n, 2)
+            ``[min, max]`` per direction (N m/rad).
+        """
         return directional_range(self.basis, self.tau_load_A_Nm, directions, t_min_N, t_max_N)
 
     def as_dict(self) -> dict:

@@ -64,6 +64,19 @@ class ShapingResult:
                 + [f"t{i + 1}=t_max" for i in np.flatnonzero(self.tensions_N >= self.t_max_N - tol)])
 
     def is_valid(self, eq_tol_Nm: float = 1e-8, bound_tol_N: float = 1e-9) -> bool:
+        """Whether the tensions hold the load and respect the bounds.
+
+        Parameters
+        ----------
+        eq_tol_Nm : float, optional
+            Largest accepted equilibrium residual ``||J^T T + tau_load||`` (N m).
+        bound_tol_N : float, optional
+            Largest accepted bound violation (N).
+
+        Returns
+        -------
+        bool
+        """
         return self.equilibrium_residual_Nm <= eq_tol_Nm and self.bound_violation_N <= bound_tol_N
 
     def as_dict(self) -> dict:
