@@ -133,7 +133,12 @@ class DesignMetrics:
     seconds: float
 
     def as_dict(self) -> dict[str, Any]:
-        """JSON-safe dict (NaN and infinities become ``None``)."""
+        """The metrics as a JSON-able dict (the ``metrics`` of a sweep record).
+
+        Returns
+        -------
+        dict
+        """
         return {k: _json_safe(v) for k, v in dataclasses.asdict(self).items()}
 
 

@@ -55,11 +55,23 @@ class OrientationSampling:
             raise DesignError(f"expected one of {METHODS}, got {self.method!r}", "method")
 
     def angles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(tilt, azimuth, torsion) in rad, each (n,)."""
+        """The sampled angles.
+
+        Returns
+        -------
+        tilt, azimuth, torsion : ndarray, shape (n,)
+            Angles (rad).
+        """
         return _angles(self)
 
     def rotations(self) -> np.ndarray:
-        """(n, 3, 3) orientations of {A} in {B} (read-only, cached per process)."""
+        """The sampled orientations (read-only, cached per process).
+
+        Returns
+        -------
+        ndarray, shape (n, 3, 3)
+            Orientations of {A} in {B}.
+        """
         return _rotations(self)
 
 

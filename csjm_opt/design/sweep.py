@@ -68,7 +68,14 @@ class SweepResult:
         return self.computed / self.seconds if self.computed and self.seconds > 0 else 0.0
 
     def as_json(self) -> dict[str, Any]:
-        """The ``csjm sweep --json`` document (docs/conventions.md keys plus more)."""
+        """The ``csjm sweep --json`` document.
+
+        Returns
+        -------
+        dict
+            ``{"designs": [...], "designs_per_second", "computed", "skipped", "seconds",
+            "complete"}`` (keys in docs/conventions.md).
+        """
         designs = []
         for r in self.records:
             designs.append({"params": r["params"], "status": r["status"],

@@ -105,7 +105,13 @@ class EvaluationSettings:
     limits: GeometryLimits
 
     def digest(self) -> str:
-        """Stable hash of these settings (results from other settings are never mixed)."""
+        """Fingerprint of the settings; a result file made with other settings is refused.
+
+        Returns
+        -------
+        str
+            Hex digest of the base design, sampling, loads and metric options.
+        """
         data = {"base": self.base, "sampling": dataclasses.asdict(self.sampling),
                 "loads": self.loads.taus_ext_A_Nm.tolist(), "options": dataclasses.asdict(self.options),
                 "limits": dataclasses.asdict(self.limits)}
@@ -124,7 +130,12 @@ class SweepSpec:
     path: str | None = None
 
     def designs(self) -> list[dict[str, float]]:
-        """The swept parameter values of every design, in sweep order."""
+        """The swept parameter values of every design, in sweep order.
+
+        Returns
+        -------
+        list of dict of str to float
+        """
         names = [a.name for a in self.axes]
         if self.method == "grid":
             return [dict(zip(names, combo)) for combo in itertools.product(*(a.values for a in self.axes))]

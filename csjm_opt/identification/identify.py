@@ -222,6 +222,14 @@ class StiffnessEstimate:
         return out
 
     def as_dict(self) -> dict[str, Any]:
+        """The estimate as a JSON-able dict (the per-cycle entry of ``csjm identify --json``).
+
+        Returns
+        -------
+        dict
+            ``cycle``, ``K_D``, ``K_L``, ``K``, ``K_sym``, ``K_paper``, intervals, condition numbers,
+            symmetry, residuals and ``problems`` (keys in docs/conventions.md).
+        """
         d = {"cycle": self.cycle, "n_rows": self.n_rows, "order": self.order,
              "K_D": self.K_D, "K_L": self.K_L, "K": self.K, "K_sym": self.K_sym,
              "K_D_paper": self.K_D_paper, "K_paper": self.K_paper,

@@ -52,15 +52,39 @@ class ParameterFit:
         return np.sqrt(np.diag(self.cov))
 
     def summary(self) -> dict[str, Any]:
+        """The fit as a JSON-able dict.
+
+        Returns
+        -------
+        dict
+            Fitted parameters with standard deviations, residual RMS and condition.
+        """
         return {"parameters": {n: {"value": float(v), "std": float(s)}
                                for n, v, s in zip(self.names, self.values, self.std)},
                 "residual_rms_Nm": self.residual_rms_Nm, "initial_residual_rms_Nm": self.initial_residual_rms_Nm,
                 "condition": self.condition, "n_rows": self.n_rows}
 
     def predict(self, log: MeasurementLog, R_init: np.ndarray | None = None, model: Model | None = None) -> np.ndarray:
-        """Equilibrium orientations (n, 3, 3) of the fitted model for the log's rest lengths and loads.
+        """Equilibrium orientations of the fitted model for the log's rest lengths and loads.
 
-        ``R_init`` (n, 3, 3) starts each solve (default: the row's measured pose).
+        Parameters
+        ----------
+        log : MeasurementLog
+            Rows to predict.
+        R_init : ndarray, shape (n, 3, 3), optional
+            Starting pose of each forward-statics solve (default: the row's measured pose).
+        model : Model, optional
+            A numeric model of the fitted rig to reuse.
+
+        Returns
+        -------
+        ndarray, shape (n, 3, 3)
+            Predicted orientations of {A} in {B}.
+
+        Raises
+        ------
+        NoEquilibrium
+            If the fitted model has no equilibrium for a row.
         """
         if model is None or model.rig is not self.rig:   # the model must carry the fitted stiffness
             model = Model(self.rig)
@@ -77,7 +101,20 @@ class ParameterFit:
         return out
 
     def pose_errors_rad(self, log: MeasurementLog, model: Model | None = None) -> np.ndarray:
-        """``||log(R_pred^T R_meas)||`` per row (rad)."""
+        """Pose error of the fitted model per row: ``||log(R_pred^T R_meas)||``.
+
+        Parameters
+        ----------
+        log : MeasurementLog
+            Rows to check.
+        model : Model, optional
+            A numeric model of the fitted rig to reuse.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Errors (rad).
+        """
         return so3.angle_between(self.predict(log, model=model), log.R)
 
 

@@ -177,7 +177,12 @@ class Verification:
         return float(np.max(self.E_theta_rad)) if len(self.R_act) else float("nan")
 
     def table(self) -> str:
-        """Plain-text table: case, load increment, E_theta."""
+        """Plain-text table of the verification: case, load increment, ``E_theta``.
+
+        Returns
+        -------
+        str
+        """
         lines = [f"{'case':>10}  {'dtau_x':>8} {'dtau_y':>8} {'dtau_z':>8}  {'E_theta (rad)':>13}"]
         for i, (d, e) in enumerate(zip(self.dtau_A_Nm, self.E_theta_rad)):
             label = self.labels[i] if i < len(self.labels) else str(i + 1)
@@ -186,6 +191,13 @@ class Verification:
         return "\n".join(lines)
 
     def as_dict(self) -> dict[str, Any]:
+        """The verification as a JSON-able dict.
+
+        Returns
+        -------
+        dict
+            ``{"use", "rms_rad", "max_rad", "cases": [...]}``.
+        """
         return {"use": self.use, "rms_rad": self.rms_rad, "max_rad": self.max_rad,
                 "cases": [{"case": self.labels[i] if i < len(self.labels) else i + 1,
                            "dtau_A_Nm": self.dtau_A_Nm[i].tolist(), "R_est": self.R_est[i].tolist(),

@@ -72,6 +72,13 @@ class ReachableSet:
         return directional_range(self.basis, self.tau_load_A_Nm, directions, t_min_N, t_max_N)
 
     def as_dict(self) -> dict:
+        """The reachable set as a JSON-able dict.
+
+        Returns
+        -------
+        dict
+            Eigenvalue ranges with their methods, cutting-plane gap, trace range, vertex count.
+        """
         return {"eigen_ranges_Nm_per_rad": self.eigen_ranges.tolist(),
                 "eigen_method": [list(m) for m in self.eigen_method],
                 "cutting_plane_gap_Nm_per_rad": self.cutting_plane_gap,

@@ -80,7 +80,12 @@ class ShapingResult:
         return self.equilibrium_residual_Nm <= eq_tol_Nm and self.bound_violation_N <= bound_tol_N
 
     def as_dict(self) -> dict:
-        """JSON-able summary."""
+        """The result as a JSON-able dict (the output of ``csjm shape --json``).
+
+        Returns
+        -------
+        dict
+        """
         return {"tensions_N": self.tensions_N.tolist(), "K": self.K.tolist(), "K_target": self.K_target.tolist(),
                 "objective": self.objective.name, "residual": self.residual, "exact": self.exact,
                 "frobenius_error": self.frobenius_error, "active_bounds": self.active_bounds,

@@ -151,6 +151,18 @@ class Shaper:
         self._weight = (rig.weight_B_N[None], np.asarray(rig.com_A_m, float)[None])
 
     def basis(self, R: np.ndarray) -> StiffnessBasis:
+        """The stiffness basis ``K(T) = K0 + sum_i T_i G_i`` at ``R`` (cached for the last pose).
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3)
+            Orientation of {A} in {B} (trusted: validate user input first).
+
+        Returns
+        -------
+        StiffnessBasis
+            ``K0``, ``G``, ``J`` and the weight moment at ``R``.
+        """
         if self._basis is None or not np.array_equal(self._basis.R, R):
             R = np.array(R, float)
             if self.compiled:
@@ -164,7 +176,35 @@ class Shaper:
 
     def solve(self, R: np.ndarray, tau_ext: np.ndarray, objective: StiffnessObjective,
               x0: np.ndarray | None = None) -> tuple[np.ndarray, StiffnessBasis, dense_qp.DenseQPResult]:
-        """Tensions (6,), the basis used and the QP result; raises InfeasibleLoad/SolverError."""
+        """Solve the shaping QP at ``R`` under ``tau_ext`` (the fast path of a control loop).
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3)
+            Orientation of {A} in {B} (trusted).
+        tau_ext : ndarray, shape (3,)
+            External moment in {A} (N m).
+        objective : StiffnessObjective
+            From :func:`~csjm_opt.shaping.objectives.make_objective`.
+        x0 : ndarray, shape (6,), optional
+            Tensions whose active bounds start the active-set method (warm start).
+
+        Returns
+        -------
+        T : ndarray, shape (6,)
+            Shaped tensions (N).
+        basis : StiffnessBasis
+            The basis used.
+        result : DenseQPResult
+            The QP solution with its active set and KKT data.
+
+        Raises
+        ------
+        InfeasibleLoad
+            If no tensions within the bounds hold the load.
+        SolverError
+            If the active-set method does not settle.
+        """
         basis = self.basis(R)
         if x0 is not None:
             tol = 1e-5 * max(1.0, self.rig.t_max_N)
