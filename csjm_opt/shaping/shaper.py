@@ -13,7 +13,8 @@ of ``J^T``). Shaping solves the QP (build, then solve)::
                 t_min <= T <= t_max
 
 Objectives (:mod:`csjm_opt.shaping.objectives`; each a set of linear
-functionals ``L_k`` of K with targets ``s_k``): ``"frobenius"`` (entries of K, elementwise weights ``W`` (3, 3):
+functionals ``L_k`` of K with targets ``s_k``; the basis ``K0, G`` and the dense QP are in
+:mod:`csjm_opt.shaping.basis`): ``"frobenius"`` (entries of K, elementwise weights ``W`` (3, 3):
 ``||K - K_target||_W^2 = sum W_ab (K_ab - K_target_ab)^2``), ``"eigen"``
 (``u_k^T K u_k`` along the eigenvectors ``u_k`` of ``K_target``, targets its
 eigenvalues: shapes the principal stiffnesses, ignores coupling), and
@@ -31,8 +32,6 @@ basis reused while the pose does not change, active set warm-started).
 
 from __future__ import annotations
 
-import dataclasses
-import functools
 import warnings
 from typing import Any
 
@@ -41,59 +40,15 @@ import qpsolvers
 from scipy import sparse
 
 from ..planning import _dense_qp as dense_qp
-from ..model.cable_terms import CableTerms, point_force_terms
+from ..model.cable_terms import point_force_terms
 from ..errors import InfeasibleLoad, InvalidInput, SolverError
 from ..model.numeric import Model
 from ..planning.planner import feasibility_distance_Nm
 from ..model.rig import Rig
 from .objectives import OBJECTIVES, StiffnessObjective, make_objective  # noqa: F401 (re-export)
+from .basis import REGULARIZATION, StiffnessBasis, _terms, qp_matrices, stiffness_basis  # noqa: F401 (re-export)
 from .result import ShapingResult
 from .._validate import as_array, as_rotation, as_vector3
-
-#: Default tie-breaking regulariser, relative to the mean curvature of the objective.
-REGULARIZATION = 1e-10
-
-
-@dataclasses.dataclass(frozen=True, eq=False)
-class StiffnessBasis:
-    """``K(T) = K0 + sum_i T_i G_i`` at one pose, with J and the weight moment there."""
-
-    R: np.ndarray             # (3, 3)
-    J: np.ndarray             # (6, 3)
-    K0: np.ndarray            # (3, 3) N m/rad, J^T diag(k) J
-    G: np.ndarray             # (6, 3, 3) m, dK/dt_i
-    tau_weight_A_Nm: np.ndarray  # (3,)
-
-    def K(self, tensions_N: np.ndarray) -> np.ndarray:
-        return self.K0 + np.einsum("i,ijk->jk", tensions_N, self.G)
-
-
-# --------------------------------------------------------------------- build
-@functools.lru_cache(maxsize=64)
-def _terms(rig: Rig) -> CableTerms:
-    return CableTerms.from_rig(rig)
-
-
-def stiffness_basis(rig: Rig, R: np.ndarray) -> StiffnessBasis:
-    """``J, K0, G`` and the weight moment at ``R`` (closed form; trusted ``R``)."""
-    J, K0, G = _terms(rig).stiffness_basis(R)
-    tau_w, _ = point_force_terms(R, rig.weight_B_N[None], np.asarray(rig.com_A_m)[None])
-    return StiffnessBasis(R, J, K0, G, tau_w)
-
-
-def qp_matrices(basis: StiffnessBasis, tau_ext: np.ndarray, objective: StiffnessObjective,
-                t_mid: np.ndarray, regularization: float = REGULARIZATION):
-    """Dense ``P, q, A, b`` of the shaping QP (``1/2 x^T P x + q^T x``, ``A x = b``)."""
-    M = objective.L @ basis.G.reshape(6, 9).T                     # (m, 6)
-    d = objective.s - objective.L @ basis.K0.reshape(9)
-    MW = M.T * objective.w
-    H = MW @ M
-    curvature = float(np.trace(H)) / 6.0
-    rho = regularization * (curvature if curvature > 1e-300 else 1.0)   # all-zero weights: regulariser only
-    P = 2.0 * (H + rho * np.eye(6))
-    q = -2.0 * (MW @ d + rho * t_mid)
-    return P, q, basis.J.T, -(tau_ext + basis.tau_weight_A_Nm)
-
 
 def build_shaping_qp(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray, K_target: np.ndarray,
                      weights: np.ndarray | None = None, objective: str = "frobenius",
