@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _loop_kernels as loop_kernels
+from ._rigid_body import _cross3
 from ...model.rig import Rig
 from ...planning import _kernels as qp_kernels
 from ...planning.planner import plan_tensions
@@ -35,7 +36,7 @@ class TensionQP:
         """Tensions (6,) N that hold ``tau_ext_A_Nm`` (plus the weight) at ``R``."""
         R = np.ascontiguousarray(R, dtype=np.float64)
         J = loop_kernels.geometry(self._A, self._B, R)[2]
-        tau_w = np.cross(self._mr, R.T @ self._g)                             # (m r) x (R^T g)
+        tau_w = _cross3(self._mr, R.T @ self._g)                              # (m r) x (R^T g)
         T = np.zeros(6)
         b = -(tau_w + np.asarray(tau_ext_A_Nm, float))
         status = qp_kernels.solve_one(J, b, self.t_ref, self.rig.t_min_N, self.rig.t_max_N, self._lower,

@@ -13,6 +13,7 @@ from typing import Callable, Union
 import numpy as np
 
 from ... import so3
+from .. import _loop_kernels as loop_kernels
 from ...model.cable_terms import CableTerms
 from ...model.rig import Rig
 from ..._validate import as_rotation
@@ -99,8 +100,9 @@ class PoseHoldingController(Controller):
         return R_ref
 
     def rest_lengths(self, R_cmd: np.ndarray, tensions_N: np.ndarray) -> np.ndarray:
-        """``l = c(R_cmd) - T / k`` (m), closed form."""
-        return self._terms.geometry(R_cmd)[0] - tensions_N / self._terms.k
+        """``l = c(R_cmd) - T / k`` (m), closed form (compiled)."""
+        c = loop_kernels.geometry(self._terms.A, self._terms.B, np.ascontiguousarray(R_cmd, dtype=np.float64))[0]
+        return c - tensions_N / self._terms.k
 
     @abc.abstractmethod
     def tensions(self, R_cmd: np.ndarray, observation: Observation) -> tuple[np.ndarray, np.ndarray | None,
