@@ -150,7 +150,8 @@ def checked_stiffness_into(A, B, k, mr, g, R, T, t_lo, t_hi, tau_ext, check_eq, 
 
     Returns a status code; ``info`` (2,) receives the largest bound violation
     (N) and the equilibrium residual ``||J^T T + tau_ext + tau_w||`` (N m, when
-    ``check_eq``). Bounds are not checked when ``t_lo > t_hi``.
+    ``check_eq``) of the taut cables (``T_i > 0``; slack ones are exempt). Bounds are not checked
+    when ``t_lo > t_hi``.
     """
     for i in range(3):
         for j in range(3):
@@ -160,7 +161,7 @@ def checked_stiffness_into(A, B, k, mr, g, R, T, t_lo, t_hi, tau_ext, check_eq, 
     for i in range(6):
         if not np.isfinite(T[i]):
             return NON_FINITE
-        if t_lo <= t_hi:
+        if t_lo <= t_hi and T[i] > 0.0:            # t <= 0: a slack cable, not a bound violation
             viol = max(viol, t_lo - T[i], T[i] - t_hi)
     info[0] = viol
     err, det = rotation_error(R)
