@@ -74,14 +74,22 @@ def bench_poses(rig: co.Rig, sizes: list[int], max_casadi: int, slsqp_sample: in
         plans = co.plan_tensions_batch(rig, Rs, taus)
         T = plans.tensions_N
         r = repeats_for(n)
-        t_plan = median_time(lambda: co.plan_tensions_batch(rig, Rs, taus), r, 1)
-        t_K = median_time(lambda: co.stiffness_batch(rig, Rs, T, model=model), r, 1)
+
+        def plan(Rs=Rs, taus=taus):
+            return co.plan_tensions_batch(rig, Rs, taus)
+
+        def stiffness(Rs=Rs, T=T):
+            return co.stiffness_batch(rig, Rs, T, model=model)
+
+        def casadi(Rs=Rs, T=T):
+            return model.casadi("stiffness", Rs, T)
+
+        t_plan, t_K = median_time(plan, r, 1), median_time(stiffness, r, 1)
         row = {"n": n, "plan_s": t_plan, "K_s": t_K, "slsqp_s": slsqp_per_pose * n,
-               "plan_peak_bytes": peak_bytes(lambda: co.plan_tensions_batch(rig, Rs, taus)),
-               "K_peak_bytes": peak_bytes(lambda: co.stiffness_batch(rig, Rs, T, model=model)),
+               "plan_peak_bytes": peak_bytes(plan), "K_peak_bytes": peak_bytes(stiffness),
                "fallbacks": plans.fallbacks}
         if n <= max_casadi:
-            row["casadi_s"] = median_time(lambda: model.casadi("stiffness", Rs, T), max(1, r // 4), 1)
+            row["casadi_s"] = median_time(casadi, max(1, r // 4), 1)
             if n >= 2:
                 (K_ref,) = model.casadi("stiffness", Rs, T)
                 K = co.stiffness_batch(rig, Rs, T, model=model)

@@ -7,8 +7,9 @@ controller can call them every step at a cost of ~1 us. The ``*_many``
 functions loop over poses; their ``*_many_par`` twins do the same in
 parallel (``prange``, ``NUMBA_NUM_THREADS`` threads), for large batches
 called from the main thread (the workqueue threading layer must not be
-entered from two threads at once; see :func:`csjm_opt.model.numeric.parallel_ok`). ``tests/test_stiffness_kernel.py`` checks every kernel against the
-numpy reference, the CasADi model and a finite-difference energy Hessian.
+entered from two threads at once; see :func:`csjm_opt.model.numeric.parallel_ok`).
+``tests/test_stiffness_kernel.py`` checks every kernel against the numpy reference,
+the CasADi model and a finite-difference energy Hessian.
 Compiled on first use and cached on disk (``cache=True``).
 
 Argument names: ``A`` (6, 3) platform holes in {A}, ``B`` (6, 3) base holes
@@ -27,7 +28,7 @@ from numba import njit, prange
 # The parallel kernels run in processes that a sweep may fork; GNU OpenMP aborts
 # on fork(), the workqueue layer does not (set NUMBA_THREADING_LAYER to override).
 if "NUMBA_THREADING_LAYER" not in os.environ:
-    numba.config.THREADING_LAYER = "workqueue"
+    numba.config.THREADING_LAYER = "workqueue"  # type: ignore[attr-defined]
 
 #: Status codes of :func:`checked_stiffness_into`.
 OK, NOT_A_ROTATION, NON_FINITE = 0, 1, 2
