@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from .._fileio import atomic_write_json
 from .._limits import MAX_BOOTSTRAP, MAX_EXACT_INT
@@ -43,7 +44,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "(less finite-displacement bias; needs 11 / 21 rows)")
     p.add_argument("--noise", choices=("none", "paper"), default="none",
                    help="'paper': weight and correct with the instrument uncertainties of Tables 1-2")
-    p.add_argument("--ci-level", type=float_in(0, 1, low_open=True, high_open=True), default=0.95, help="confidence level (default 0.95)")
+    p.add_argument("--ci-level", type=float_in(0, 1, low_open=True, high_open=True), default=0.95,
+                   help="confidence level (default 0.95)")
     p.add_argument("--bootstrap", type=int_in(0, MAX_BOOTSTRAP), default=0, metavar="N",
                    help=f"pairs-bootstrap resamples per cycle (0 to {MAX_BOOTSTRAP})")
     p.add_argument("--max-condition", type=float_in(1, 1e12), default=None,
@@ -126,7 +128,7 @@ def run_identify(args: argparse.Namespace) -> int:
                                       **options | {"bootstrap": 0, "allow_ill_conditioned": True})
             ax = plot_convergence(curve, title=f"Cycle {e.cycle}: det K against measurements")
             figures.append(str(save(ax.figure, Path(args.figures) / f"convergence_cycle{e.cycle}.png")))
-    out = {"source": str(args.data), "cycles": [e.as_dict() for e in estimates], "skipped": skipped,
+    out: dict[str, Any] = {"source": str(args.data), "cycles": [e.as_dict() for e in estimates], "skipped": skipped,
            "figures": figures}
     if args.fit_parameters != "none":
         from ..identification.param_fit import fit_parameters

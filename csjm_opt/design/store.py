@@ -13,10 +13,10 @@ sweep's settings is refused rather than mixed. Lines repeating a design id
 ignored: the first record of each id is kept.
 
 The lock is taken with ``flock``, which the kernel drops when the holding
-process dies, so a sweep killed by any signal leaves no stale lock. Worker
-processes close their inherited copy of the descriptor and die with their
-parent (:mod:`csjm_opt.design.sweep`); while one is still exiting, opening
-retries for up to :data:`LOCK_WAIT_S` seconds before reporting the holders.
+process dies, so a sweep killed by any signal leaves no stale lock (worker
+processes never inherit the descriptor, see :mod:`csjm_opt.design.sweep`).
+Opening retries for up to :data:`LOCK_WAIT_S` seconds, so a sweep that is
+still exiting does not make a resumed one fail, before naming the holders.
 """
 
 from __future__ import annotations

@@ -190,7 +190,7 @@ def _check_bounds(log: MeasurementLog, source: str | None, lines: np.ndarray) ->
         lim = LIMITS[quantity]
         ok = lim.contains(getattr(log, attr))
         if not ok.all():
-            i, j = np.unravel_index(int(np.argmin(ok.ravel())), ok.shape)
+            i, j = (int(x) for x in np.unravel_index(int(np.argmin(ok.ravel())), ok.shape))
             value = float(getattr(log, attr)[i, j])
             raise DataFileError(f"{value:.6g} outside {lim.describe()} ({lim.why.split(';')[0]})",
                                 source, int(lines[i]), columns[j])
