@@ -318,9 +318,13 @@ def atomic_write_text(path: str | Path, text: str, overwrite: bool = True) -> Pa
     return path
 
 
-def atomic_write_json(path: str | Path, data: Any, overwrite: bool = True) -> Path:
-    """Write JSON atomically (see :func:`atomic_write_text`); ``path == "-"`` prints to stdout instead."""
-    text = json.dumps(data, indent=2, default=_jsonable) + "\n"
+def atomic_write_json(path: str | Path, data: Any, overwrite: bool = True, indent: int | None = 2) -> Path:
+    """Write JSON atomically (see :func:`atomic_write_text`); ``path == "-"`` prints to stdout instead.
+
+    ``indent=None`` writes compact JSON with the C encoder (several times
+    faster: for large documents).
+    """
+    text = json.dumps(data, indent=indent, default=_jsonable) + "\n"
     if str(path) == "-":
         print(text, end="")
         return Path("-")

@@ -13,6 +13,10 @@ from ..model.rig import load_rig
 from ._options import check_outputs, float_in, int_in
 
 
+#: Above this many cycles, one line per cycle is printed and the JSON is compact.
+LONG_LOG_CYCLES = 50
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("preprocess", help="raw tracker/F/T CSV -> measurement log",
                        description="Turn a raw instrument CSV (tracker base points, platform poses "
@@ -135,9 +139,15 @@ def run_identify(args: argparse.Namespace) -> int:
 
         fit = fit_parameters(log, rig, shared_stiffness=args.fit_parameters == "shared", noise=noise, model=model)
         out["parameters"] = fit.summary()
-    if args.json:
-        atomic_write_json(args.json, out)
-    if args.json != "-":
+    if args.json:  # compact (C encoder) for long logs: indented JSON of 10^4 cycles takes a minute
+        atomic_write_json(args.json, out, indent=2 if len(estimates) <= LONG_LOG_CYCLES else None)
+    if args.json != "-" and len(estimates) > LONG_LOG_CYCLES:  # one line per cycle
+        for e in estimates:
+            d = np.diag(e.K)
+            print(f"cycle {e.cycle}: {e.n_rows} rows, diag K [{d[0]:.3f}, {d[1]:.3f}, {d[2]:.3f}] N m/rad, "
+                  f"+-{e.relative_half_width:.1%} of ||K||, condition {e.condition:.3g}"
+                  + ("  ILL-CONDITIONED" if e.ill_conditioned else ""))
+    elif args.json != "-":
         np.set_printoptions(precision=3, suppress=True)
         for e in estimates:
             print(f"cycle {e.cycle}: {e.n_rows} rows, condition {e.condition:.3g}, symmetry error "
@@ -147,6 +157,7 @@ def run_identify(args: argparse.Namespace) -> int:
             print(f"  K_sym =\n{e.K_sym}")
             for problem in e.problems():
                 print(f"  warning: {problem}")
+    if args.json != "-":
         for s in skipped:
             print(f"cycle {s['cycle']}: skipped: {s['reason']}")
         for name, p in out.get("parameters", {}).get("parameters", {}).items():
