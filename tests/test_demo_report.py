@@ -5,6 +5,7 @@ One quick demo run per session (``demo_dir``) is shared by every test here.
 
 from __future__ import annotations
 
+import fcntl
 import json
 import shutil
 
@@ -13,6 +14,7 @@ import pytest
 from csjm_opt.cli import main
 from csjm_opt.report.demo import STEPS
 
+from report_figures import problems, record_figures
 from report_html import mismatches, parse, unresolved
 
 STEP_TITLES = {"plan tensions and stiffness": "Tensions and stiffness",
@@ -22,10 +24,22 @@ STEP_TITLES = {"plan tensions and stiffness": "Tensions and stiffness",
 
 
 @pytest.fixture(scope="session")
-def demo_dir(tmp_path_factory):
-    out = tmp_path_factory.mktemp("demo") / "report"
-    assert main(["demo", "--quick", "--out", str(out)]) == 0
-    return out
+def demo_run(tmp_path_factory):
+    """One quick demo for the whole session, also across xdist workers (they share the parent temp dir)."""
+    shared = tmp_path_factory.getbasetemp().parent
+    out, figs = shared / "csjm_demo_quick", shared / "csjm_demo_quick_figures.json"
+    with open(shared / "csjm_demo_quick.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)          # the first worker runs the demo, the others wait and reuse it
+        if not figs.exists():
+            with record_figures() as figures:
+                assert main(["demo", "--quick", "--out", str(out)]) == 0
+            figs.write_text(json.dumps(figures))
+    return out, json.loads(figs.read_text())
+
+
+@pytest.fixture(scope="session")
+def demo_dir(demo_run):
+    return demo_run[0]
 
 
 @pytest.fixture(scope="session")
@@ -37,13 +51,14 @@ def test_every_step_has_a_section_with_verdict_and_table(demo_dir, summary):
     page = parse(demo_dir / "index.html")
     assert list(summary) == [name for name, _ in STEPS]        # JSON keys: the step names, in order
     by_title = {s["title"].strip(): s for s in page.sections}
-    for name, title in STEP_TITLES.items():
+    for title in STEP_TITLES.values():
         sec = by_title[title]
         assert sec["verdict"] and sec["verdict"].strip().endswith("."), title
         assert sec["tables"] >= 1, title
     # verdicts state the result and the expectation, with the numbers of summary.json
     core = summary["plan tensions and stiffness"]
-    assert f"{core['max_equilibrium_residual_Nm']:.1e} N m: at round-off" in by_title["Tensions and stiffness"]["verdict"]
+    residual = f"{core['max_equilibrium_residual_Nm']:.1e} N m: at round-off"
+    assert residual in by_title["Tensions and stiffness"]["verdict"]
     shaping = by_title["Stiffness shaping and closed loop"]["verdict"]
     assert "is not reachable here" in shaping and "t_min" in shaping
     diag = summary["diagnose model-rig gap"]
@@ -114,3 +129,13 @@ def test_diagnosis_page_leads_with_the_verdict(demo_dir):
     assert f"{1e3 * j['gap']['before_rad']:.3g}" in first["verdict"]
     text = (demo_dir / "diagnosis" / "index.html").read_text()
     assert "{'" not in text and "tension_band_percent" in text     # derived values as a table, no raw dict
+
+
+#: Figures drawn by the report layer itself (the others come from the plotting of their own modules).
+REPORT_FIGURES = ("tensions_and_stiffness", "residual_map", "hysteresis", "candidates", "before_after")
+
+
+def test_report_figures_have_titles_units_and_free_legends(demo_run):
+    _, figures = demo_run
+    assert set(REPORT_FIGURES) <= set(figures)
+    assert [p for name in REPORT_FIGURES for p in problems(name, figures[name])] == []

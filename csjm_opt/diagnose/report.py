@@ -41,7 +41,8 @@ def hysteresis_loops(d: Diagnosis, path: Path, n_cycles: int = 4) -> Path:
     plt = plots.figure()
     t = d.heldout_table
     ids = list(dict.fromkeys(t.cycle.tolist()))[:n_cycles]
-    fig, axes = plt.subplots(1, max(len(ids), 1), figsize=(3.2 * max(len(ids), 1), 3.4), squeeze=False)
+    n = max(len(ids), 1)
+    fig, axes = plt.subplots(1, n, figsize=(3.2 * n, 3.4), squeeze=False, sharey=True)
     after = d.selected_score.heldout_zeta_rad
     for ax, c in zip(axes[0], ids):
         idx = np.flatnonzero(t.cycle == c)
@@ -73,6 +74,7 @@ def candidate_errors(d: Diagnosis, path: Path) -> Path:
     ax.axhline(1e3 * d.noise_floor_rad, color="k", ls=":", label=f"noise floor {1e3 * d.noise_floor_rad:.2f} mrad")
     ax.set_xticks(range(len(names)), names, rotation=30, ha="right")
     ax.set_ylabel("held-out RMS (mrad)")
+    ax.set_xlabel("candidate model")
     ax.set_title("Held-out error of each candidate model (green: selected)")
     ax.legend(loc="best")
     return plots.save(fig, path)

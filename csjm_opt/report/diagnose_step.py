@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import inspect
 import time
 from pathlib import Path
 
@@ -13,7 +12,7 @@ from ..diagnose.report import write_report
 from ..model.rig import Rig
 from ..testbed import simulate_experiment
 from ._step import DemoContext, StepOutput
-from .document import Cell, Column, Figure, Link, Links, Section, Table, format_number, quantity_table, sig
+from .document import Block, Cell, Column, Figure, Link, Links, Section, Table, format_number, quantity_table, sig
 
 NAME = "diagnose model-rig gap"
 #: The effect the demo injects (friction: the paper's first suspect, Section IV-D).
@@ -49,8 +48,7 @@ def run_demo(rig: Rig, out_dir: Path, rng: np.random.Generator, effect: str = DE
     t0 = time.perf_counter()
     log = simulate_experiment(rig, n_cycles, rng, effect=effect, severity=severity)
     log.to_csv(out_dir / "log.csv", overwrite=True)
-    options = {"secondary": secondary} if "secondary" in inspect.signature(diagnose).parameters else {}
-    d = diagnose(rig, log, **options)
+    d = diagnose(rig, log, secondary=secondary)
     write_report(d, out_dir, "log.csv (simulated, effect injected: " + effect + ")")
     j = d.as_json()
     return {"injected": effect, "severity": severity, "selected": j["selected"],
@@ -58,7 +56,7 @@ def run_demo(rig: Rig, out_dir: Path, rng: np.random.Generator, effect: str = DE
             "gap": j["gap"], "noise_floor_rad": j["noise_floor_rad"], "rows": len(log),
             "candidates": {c["effect"]: c["heldout_rms_rad"] for c in j["candidates"]},
             "report": "index.md", "report_html": "index.html", "log": "log.csv", "n_cycles": n_cycles,
-            "secondary_search": bool(options.get("secondary", True)),
+            "secondary_search": secondary,
             "secondary": (j.get("secondary") or {}).get("effect", "none"),
             "seconds": time.perf_counter() - t0}
 
@@ -91,7 +89,7 @@ def section(s: dict) -> Section:
     cands = Table([Column("candidate effect"), Column("held-out RMS", "mrad", scale=1e3)],
                   [[name + (" (selected)" if name == s["selected"] else ""), Cell(v, src=("candidates", name))]
                    for name, v in s["candidates"].items()], "Held-out error of each candidate model")
-    blocks = [facts, cands,
+    blocks: list[Block] = [facts, cands,
               Figure("candidates.png", "Held-out error of every candidate against the noise floor."),
               Links([Link(s.get("report_html", "index.html"), "diagnosis report",
                           "verdict, figures, fitted parameters with units, where the gap lies"),

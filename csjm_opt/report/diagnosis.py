@@ -35,36 +35,55 @@ def unit_of(name: str) -> tuple[str, float]:
     return "", 1.0
 
 
+def _tests(c: dict) -> tuple[str | None, str | None]:
+    """Keys of (held-out paired test p, F-test p) in a candidate: newer diagnoses use p_value / f_p_value."""
+    if "f_p_value" in c:
+        return "p_value", "f_p_value"
+    return ("heldout_p_value" if "heldout_p_value" in c else None), ("p_value" if "p_value" in c else None)
+
+
 def headline(j: dict[str, Any], alpha: float = 0.01) -> tuple[str, str]:
-    """The verdict sentence of a diagnosis and its status."""
+    """The verdict sentence of a diagnosis and its status (``ok``, ``warn`` or ``info``)."""
     g, sel = j["gap"], j["selected"]
-    floor = j["noise_floor_rad"]
+    v = j.get("verdict") or {}
+    warnings = list(v.get("warnings") or [])
     gap = (f"held-out error {sig(g['before_rad'], 3, 1e3)} -> {sig(g['after_rad'], 3, 1e3)} mrad RMS "
-           f"(noise floor {sig(floor, 3, 1e3)} mrad)")
+           f"(noise floor {sig(j['noise_floor_rad'], 3, 1e3)} mrad)")
     cand = next((c for c in j["candidates"] if c["effect"] == sel), None)
     if cand is not None:
-        share = g.get("fraction_explained")
         sig_ = j.get("significance", {})
-        text = (f"`{sel}` explains the model-rig gap: {gap}, {format_number(share, 'fix0', 100)}% of the systematic "
-                f"gap closed. Confidence: F-test p = {sig(cand.get('p_value'), 2)} (threshold "
-                f"{sig(sig_.get('per_candidate_alpha', alpha), 2)}), held-out paired test p = "
-                f"{sig(cand.get('heldout_p_value'), 2)} (threshold {sig(sig_.get('heldout_alpha'), 2)}).")
+        second = (j.get("secondary") or {}).get("effect", "none")
+        model = f"`{sel}`" + (f" with `{second}` on top" if second not in (None, "none") else "")
+        held, ftest = _tests(cand)
+        level = cand.get("level", sig_.get("per_candidate_alpha", alpha))
+        text = (f"{model} explains the model-rig gap: {gap}, "
+                f"{format_number(g.get('fraction_explained'), 'fix0', 100)}% of the systematic gap closed. "
+                f"Confidence: held-out paired test p = {sig(cand.get(held) if held else None, 2)} "
+                f"(threshold {sig(level, 2)})")
+        if "improvement_rad" in cand:
+            text += f", improvement {sig(cand['improvement_rad'], 3, 1e3)} mrad"
+        elif ftest:
+            text += f", F-test p = {sig(cand.get(ftest), 2)}"
+        text += "."
         status = "ok"
         if j.get("confounded_with"):
             text += f" It cannot be told apart from {', '.join(f'`{c}`' for c in j['confounded_with'])} on these data."
             status = "warn"
-        second = (j.get("secondary") or {}).get("effect", "none")
-        if second not in (None, "none"):
-            text += f" A second effect on top of it is significant: `{second}`."
         if cand.get("plausible") is False:
             text += " Its fitted parameters are physically implausible: treat it as a stand-in."
             status = "warn"
+        if warnings:
+            text += " Warnings: " + "; ".join(warnings) + "."
+            status = "warn"
         return text, status
+    reason = v.get("reason")
     if sel == "unexplained":
-        return (f"A systematic gap remains that no candidate explains: {gap}. Look at where it lies (tables "
-                "below) and consider an effect outside the candidate list.", "warn")
-    return (f"No candidate effect is needed: {gap}; no candidate passes the decision rule, so the nominal "
-            f"model (with its stiffness scale and pretension refitted) is the explanation on these data.", "info")
+        return (f"A systematic gap remains that no candidate explains: {gap}"
+                + (f"; {reason}" if reason else "") + "."
+                + (" " + "; ".join(warnings) + "." if warnings else "")
+                + " Look at where it lies (below) and consider an effect outside the candidate list.", "warn")
+    return (f"No unmodelled effect is needed: {gap}; "
+            + (reason or "no candidate passes the decision rule") + ".", "info")
 
 
 def document(j: dict[str, Any], data_name: str, alpha: float = 0.01) -> Document:
@@ -89,8 +108,9 @@ def document(j: dict[str, Any], data_name: str, alpha: float = 0.01) -> Document
     top.add(_gap_table(j))
     sig_ = j.get("significance", {})
     top.add(Paragraph(f"Held-out rows: {j.get('heldout', '')}. Decision rule: {sig_.get('test', '')}; family-wise "
-                      f"alpha {sig(sig_.get('alpha', alpha), 2)}. A recalibration of stiffness and pretension alone "
-                      f"closes {format_number(g.get('fraction_explained_by_nominal_refit'), 'fix0', 100)}% of the gap."))
+                      f"alpha {sig(sig_.get('alpha', alpha), 2)}. Refitting the nominal model alone (nominal_refit) "
+                      f"closes {format_number(g.get('fraction_explained_by_nominal_refit'), 'fix0', 100)}% "
+                      "of the gap."))
     sections = [top, _candidates(j)]
     sel = next((c for c in j["candidates"] if c["effect"] == j["selected"] and not c.get("error")), None)
     if sel is not None:
@@ -118,40 +138,54 @@ def _gap_table(j: dict) -> Table:
 
 
 def _candidates(j: dict) -> Section:
-    plaus = any("plausible" in c for c in j["candidates"])
-    cols = [Column("effect"), Column("held-out RMS", "mrad", scale=1e3), Column("train RMS", "mrad", scale=1e3),
-            Column("BIC", fmt="fix1"), Column("F-test p", fmt="sig2"), Column("held-out p", fmt="sig2"),
-            Column("significant"), Column("rank / params"), Column("condition"),
-            Column("share closed", "%", "fix0", 100.0)] + ([Column("plausible")] if plaus else [])
-    b, n = j["baseline"], j.get("nominal_refit", {})
-    rows = [["nominal (rig file)", Cell(b["heldout_rms_rad"], src=("baseline", "heldout_rms_rad")),
-             Cell(b.get("train_rms_rad"), src=("baseline", "train_rms_rad")), None, None, None, "", "0", None, 0.0]
-            + ([""] if plaus else [])]
-    if n:
-        rows.append(["nominal_refit", Cell(n["heldout_rms_rad"], src=("nominal_refit", "heldout_rms_rad")),
-                     Cell(n.get("train_rms_rad"), src=("nominal_refit", "train_rms_rad")),
-                     Cell(n.get("bic"), src=("nominal_refit", "bic")), None, None, "", "2", None,
-                     Cell(j["gap"].get("fraction_explained_by_nominal_refit"),
-                          src=("gap", "fraction_explained_by_nominal_refit"))] + ([""] if plaus else []))
-    for i, c in enumerate(j["candidates"]):
+    cands = j["candidates"]
+    plaus = any("plausible" in c for c in cands)
+    improve = any("improvement_rad" in c for c in cands)
+    cols = [Column("effect"), Column("held-out RMS", "mrad", scale=1e3), Column("train RMS", "mrad", scale=1e3)]
+    cols += [Column("improvement", "mrad", scale=1e3)] if improve else []
+    cols += [Column("held-out p", fmt="sig2"), Column("F-test p", fmt="sig2"), Column("BIC", fmt="fix1"),
+             Column("significant")] + ([Column("plausible")] if plaus else [])
+    cols += [Column("share closed", "%", "fix0", 100.0), Column("rank / params"), Column("condition")]
+    width = len(cols)
+
+    def fixed(name: str, key: str, share: Any, rank: str) -> list[Any]:
+        m = j.get(key) or {}
+        row = [name, Cell(m.get("heldout_rms_rad"), src=(key, "heldout_rms_rad")),
+               Cell(m.get("train_rms_rad"), src=(key, "train_rms_rad"))]
+        row += [None] if improve else []
+        row += [None, None, Cell(m["bic"], src=(key, "bic")) if "bic" in m else None, ""]
+        row += [""] if plaus else []
+        return row + [share, rank, None]
+
+    rows = [fixed("nominal (rig file)", "baseline", 0.0, "0")]
+    if j.get("nominal_refit"):
+        rows.append(fixed("nominal_refit", "nominal_refit",
+                          Cell(j["gap"].get("fraction_explained_by_nominal_refit"),
+                               src=("gap", "fraction_explained_by_nominal_refit")),
+                          str(len(j["nominal_refit"].get("params", {})))))
+    for i, c in enumerate(cands):
         name = c["effect"] + (" (selected)" if c["effect"] == j["selected"] else "")
         if c.get("error"):
-            rows.append([name, c["error"]] + [None] * (len(cols) - 2))
+            rows.append([name, c["error"]] + [None] * (width - 2))
             continue
-        rows.append([name] + [Cell(c.get(k), src=("candidates", i, k)) for k in
-                              ("heldout_rms_rad", "train_rms_rad", "bic", "p_value", "heldout_p_value")]
-                    + [bool(c.get("significant")), f"{c.get('rank')} / {c.get('n_params')}",
-                       Cell(c.get("condition"), src=("candidates", i, "condition")),
-                       Cell(c.get("fraction_explained"), src=("candidates", i, "fraction_explained"))]
-                    + ([_plausible_text(c)] if plaus else []))
-    best = min((c for c in j["candidates"] if c.get("heldout_rms_rad") is not None),
+        held, ftest = _tests(c)
+        def num(key: str | None, c: dict = c, i: int = i) -> Cell | None:
+            return Cell(c.get(key), src=("candidates", i, key)) if key and key in c else None
+
+        row = [name, num("heldout_rms_rad"), num("train_rms_rad")] + ([num("improvement_rad")] if improve else [])
+        row += [num(held), num(ftest), num("bic"), bool(c.get("significant"))]
+        row += [_plausible_text(c)] if plaus else []
+        row += [num("fraction_explained"), f"{c.get('rank')} / {c.get('n_params')}", num("condition")]
+        rows.append(row)
+    best = min((c for c in cands if c.get("heldout_rms_rad") is not None),
                key=lambda c: c["heldout_rms_rad"], default=None)
-    text = (f"{len(j['candidates'])} candidate effects, each fitted together with the nominal stiffness scale and "
-            "pretension and scored on held-out cycles"
+    text = (f"{len(cands)} candidate effects, each fitted together with the nominal pretension and scored on "
+            "held-out cycles"
             + (f"; lowest held-out error: `{best['effect']}` ({sig(best['heldout_rms_rad'], 3, 1e3)} mrad)." if best
                else "."))
-    return Section("Candidates", text, "info", [Table(cols, rows, "Candidate models (share closed: of the "
-                                                                  "systematic gap, against each model's noise floor)")])
+    caption = ("Candidate models. Held-out p: paired test of per-cycle held-out error against nominal_refit; "
+               "F-test p: linearised, on training rows (informative); share closed: of the systematic gap.")
+    return Section("Candidates", text, "info", [Table(cols, rows, caption)])
 
 
 def _plausible_text(c: dict) -> str:
@@ -163,17 +197,24 @@ def _plausible_text(c: dict) -> str:
 
 def _parameters(c: dict, index: int) -> Section:
     bad = set(c.get("implausible_params") or [])
+    ranges = c.get("prior_ranges") or {}
+    sd = c.get("param_sd") or {}
     rows = []
     for key, value in c.get("params", {}).items():
         unit, scale = unit_of(key)
-        rows.append([key + (" (implausible)" if key in bad else ""),
-                     Cell(value, "sig4", scale, ("candidates", index, "params", key)),
-                     Cell(c.get("param_sd", {}).get(key), "sig2", scale, ("candidates", index, "param_sd", key)), unit])
-    for key, value in c.get("nuisance", {}).items():
+        rng = ranges.get(key)
+        span = (f"{format_number(rng[0], 'sig3', scale)} to {format_number(rng[1], 'sig3', scale)}"
+                if isinstance(rng, (list, tuple)) and len(rng) == 2 else None)
+        rows.append([key, Cell(value, "sig4", scale, ("candidates", index, "params", key)),
+                     Cell(sd.get(key), "sig2", scale, ("candidates", index, "param_sd", key)) if key in sd else None,
+                     unit] + ([span, "no" if key in bad else "yes"] if ranges else []))
+    for key, value in (c.get("nuisance") or {}).items():
         unit, scale = unit_of(key)
-        rows.append([f"{key} (nuisance)", Cell(value, "sig4", scale, ("candidates", index, "nuisance", key)), None, unit])
-    table = Table([Column("parameter"), Column("value"), Column("standard error"), Column("unit")], rows,
-                  "Fitted parameters (+- 1 standard error; nuisance: common stiffness scale and pretension)")
+        rows.append([f"{key} (nuisance)", Cell(value, "sig4", scale, ("candidates", index, "nuisance", key)), None,
+                     unit] + ([None, None] if ranges else []))
+    cols = [Column("parameter"), Column("value"), Column("standard error"), Column("unit")]
+    cols += [Column("plausible range"), Column("plausible")] if ranges else []
+    table = Table(cols, rows, "Fitted parameters (+- 1 standard error; nuisance: fitted with every candidate)")
     sec = Section(f"Fitted parameters of {c['effect']}", "", "info", [table])
     derived = c.get("derived") or {}
     drows = []
@@ -189,7 +230,8 @@ def _parameters(c: dict, index: int) -> Section:
     if drows:
         sec.add(Table([Column("derived quantity"), Column("value"), Column("unit")], drows))
     if c.get("identifiable") is False:
-        sec.verdict = (f"The augmented fit is ill-conditioned (condition {sig(c.get('condition'))}, rank {c.get('rank')} "
+        sec.verdict = (f"The augmented fit is ill-conditioned (condition {sig(c.get('condition'))}, "
+                       f"rank {c.get('rank')} "
                        f"of {c.get('n_params')}): some parameter combinations are not determined by these data.")
         sec.status = "warn"
     else:
@@ -228,32 +270,40 @@ def _where(j: dict) -> Section:
 
 def _secondary_and_pairs(j: dict) -> Section | None:
     sec = j.get("secondary") or {}
-    pairs = j.get("pairs") or []
-    if not sec.get("tried") and not pairs:
+    pairs = [p for p in (j.get("pairs") or []) if isinstance(p, dict)]
+    steps = [st for st in (j.get("steps") or []) if isinstance(st, dict)]
+    if not sec.get("tried") and not pairs and not steps and sec.get("effect", "none") in ("none", None):
         return None
     effect = sec.get("effect", "none")
-    out = Section("Second effects", f"Second effect on top of the selected one: `{effect}`"
+    out = Section("Second effects and pairs", f"Second effect on top of the selected one: `{effect}`"
                   + (f" (held-out {sig(sec.get('heldout_rms_rad'), 3, 1e3)} mrad)." if effect not in ("none", None)
-                     else " (none significant)."), "info")
-    if sec.get("tried"):
+                     else " (none needed or none significant)."), "info")
+    if steps:
+        out.add(Table([Column("model"), Column("held-out RMS", "mrad", scale=1e3),
+                       Column("share closed", "%", "fix0", 100.0)],
+                      [[st.get("model", ""), Cell(st.get("heldout_rms_rad"), src=("steps", i, "heldout_rms_rad")),
+                        Cell(st.get("fraction_explained"), src=("steps", i, "fraction_explained"))]
+                       for i, st in enumerate(steps)], "The path of the selection, one model after the other"))
+    if sec.get("tried"):                                  # older diagnoses: every second effect tried
         rows = [[t["effect"], Cell(t.get("heldout_rms_rad"), src=("secondary", "tried", i, "heldout_rms_rad")),
                  Cell(t.get("p_value"), "sig2", src=("secondary", "tried", i, "p_value")),
-                 Cell(t.get("heldout_p_value"), "sig2", src=("secondary", "tried", i, "heldout_p_value")),
                  bool(t.get("significant")) if "error" not in t else t["error"]]
-                for i, t in enumerate(sec["tried"])]
-        out.add(Table([Column("added effect"), Column("held-out RMS", "mrad", scale=1e3), Column("F-test p"),
-                       Column("held-out p"), Column("significant")], rows))
-    if pairs and all(isinstance(p, dict) for p in pairs):
-        keys = list(dict.fromkeys(k for p in pairs for k in p if not isinstance(p[k], (dict, list))))
-        rows = [[Cell(p.get(k), src=("pairs", i, k)) if isinstance(p.get(k), (int, float)) and
-                 not isinstance(p.get(k), bool) else p.get(k, "") for k in keys] for i, p in enumerate(pairs)]
-        cols = []
-        for k in keys:
-            unit, scale = unit_of(k)
-            cols.append(Column(k, unit, scale=scale))
-        out.add(Table(cols, rows, "Pairs of effects"))
-    elif pairs:
-        out.add(Paragraph("Pairs: " + "; ".join(str(p) for p in pairs)))
+                for i, t in enumerate(sec["tried"]) if "p_value" in t or "error" in t]
+        out.add(Table([Column("added effect"), Column("held-out RMS", "mrad", scale=1e3), Column("p"),
+                       Column("significant")], rows))
+    if pairs:
+        def num(i: int, p: dict, key: str, fmt: str | None = None) -> Any:
+            return Cell(p[key], fmt, src=("pairs", i, key)) if isinstance(p.get(key), (int, float)) \
+                and not isinstance(p.get(key), bool) else None
+
+        rows = [[" + ".join(p.get("effects", [])), p.get("separable"), num(i, p, "max_correlation", "fix2"),
+                 p.get("fitted"), num(i, p, "heldout_rms_rad"), num(i, p, "fraction_explained"),
+                 num(i, p, "p_value_vs_first", "sig2"), p.get("significant"),
+                 _plausible_text(p) if "plausible" in p else None] for i, p in enumerate(pairs)]
+        out.add(Table([Column("pair"), Column("separable"), Column("max correlation"), Column("fitted"),
+                       Column("held-out RMS", "mrad", scale=1e3), Column("share closed", "%", "fix0", 100.0),
+                       Column("p vs first"), Column("significant"), Column("plausible")], rows,
+                      "Pairs of effects: separable when their parameter blocks are not strongly correlated"))
     return out
 
 

@@ -117,7 +117,8 @@ class Table:
                 c = cell if isinstance(cell, Cell) else Cell(cell)
                 fmt = c.fmt or col.fmt
                 scale = col.scale if c.scale is None else c.scale
-                numeric = isinstance(c.value, (int, float)) and not isinstance(c.value, bool)
+                numeric = (isinstance(c.value, (int, float)) and not isinstance(c.value, bool)) or \
+                    (c.value is None and c.src is not None)         # a missing number: "n/a", still checkable
                 rendered.append({"text": format_number(c.value, fmt, scale), "numeric": numeric,
                                  "src": list(c.src) if c.src is not None else None, "fmt": fmt, "scale": scale})
             out.append(rendered)

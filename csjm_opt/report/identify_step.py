@@ -80,7 +80,8 @@ def run_demo(rig: Rig, log: MeasurementLog, out_dir: Path, test_log: Measurement
         train, test = log.subset(train_rows), log.subset(test_rows)
     else:
         train, test = log, test_log
-    estimates, cycles, skipped, figures = [], [], [], []
+    estimates, cycles, skipped = [], [], []
+    figures: list[str] = []
     for c in train.cycle_ids:
         rows = train.cycle_rows(c)
         order = 2 if len(rows) >= ORDER2_MIN_ROWS else 1
@@ -226,7 +227,8 @@ def section(s: dict) -> Section:
     cols = [Column("cycle", fmt="int"), Column("rows", fmt="int"), Column("fit order", fmt="int"),
             Column("eigenvalue 1", "N m/rad"), Column("eigenvalue 2", "N m/rad"), Column("eigenvalue 3", "N m/rad"),
             Column("condition"), Column("symmetry error", fmt="sig2"), Column("residual RMS", "N m", "sig2")]
-    blocks.append(Table(cols, [[Cell(c["cycle"], src=("cycles", i, "cycle")), Cell(c["n_rows"], src=("cycles", i, "n_rows")),
+    blocks.append(Table(cols, [[Cell(c["cycle"], src=("cycles", i, "cycle")),
+                                Cell(c["n_rows"], src=("cycles", i, "n_rows")),
                                 Cell(c["order"], src=("cycles", i, "order"))]
                                + [Cell(c["eig_K_sym"][k], src=("cycles", i, "eig_K_sym", k)) for k in range(3)]
                                + [Cell(c[key], src=("cycles", i, key))

@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import so3
 from .._plotting import save
@@ -29,7 +30,7 @@ PAPER_R0 = np.array([[0.992, -0.060, -0.111], [0.090, 0.952, 0.292], [0.088, -0.
 DEMO_TAU_EXT = np.array([0.2, -0.5, 0.1])
 
 
-def soft_stiff_targets(rig: Rig, R: np.ndarray, tau_ext: np.ndarray, direction: np.ndarray = (1.0, 0.0, 0.0),
+def soft_stiff_targets(rig: Rig, R: np.ndarray, tau_ext: np.ndarray, direction: ArrayLike = (1.0, 0.0, 0.0),
                        margin: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
     """Two reachable targets (N m/rad) at ``R`` under ``tau_ext``: softest and stiffest along ``direction``.
 
@@ -98,7 +99,8 @@ def run_demo(rig: Rig, out_dir: Path, R: np.ndarray | None = None, tau_ext: np.n
     # 3. closed loop: hold R, step + sinusoidal disturbance about x, soft/stiff (about x) switching at half time
     half = duration_s / 2
     target = lambda t: K_soft if t < half else K_stiff                         # noqa: E731
-    load = Constant(tau) + Step(0.2 * duration_s, [STEP_NM, 0.0, 0.0]) + Sinusoid([SINE_NM, 0.0, 0.0], SINE_HZ)
+    load = Constant(tau) + Step(0.2 * duration_s, np.array([STEP_NM, 0.0, 0.0]))
+    load = load + Sinusoid(np.array([SINE_NM, 0.0, 0.0]), SINE_HZ)
     ctrl = StiffnessShapingController(rig, R, target)
     log = simulate(rig, ctrl, load, duration_s, dt_s)
     figs = [save(plot_closed_loop(log, rig.t_min_N, rig.t_max_N)[0].figure, out_dir / "closed_loop.png"),
@@ -156,7 +158,8 @@ def section(s: dict) -> Section:
     ranges = s["eigen_ranges_Nm_per_rad"]
     reach_ok = bool(s["reachable_target_exact"])
     iso_ok = not s["isotropic_target_exact"]
-    verdict = (f"At Table 3's pose under {sig(float(np.linalg.norm(s['tau_ext_Nm'])))} N m, a target built from feasible "
+    verdict = (f"At Table 3's pose under {sig(float(np.linalg.norm(s['tau_ext_Nm'])))} N m, a target built from "
+               "feasible "
                f"tensions (K_xx = {sig(s['stiff_Kxx_Nm_per_rad'])} N m/rad) is met to "
                f"{sig(s['reachable_target_residual_Nm_per_rad'], 2)} N m/rad: "
                + ("exact, as expected for a reachable target. " if reach_ok else "NOT exact, unexpected. ")
@@ -184,7 +187,8 @@ def section(s: dict) -> Section:
                     Cell(hi, src=("eigen_ranges_Nm_per_rad", k, 1))] for k, (lo, hi) in enumerate(ranges)],
                   "Reachable set at this pose and load (all tensions in [t_min, t_max])")
     figs = {name.split(".")[0]: name for name in s["figures"]}
-    shaping = Section("Stiffness shaping and closed loop", verdict, "ok" if reach_ok and iso_ok else "warn", [facts, reach])
+    shaping = Section("Stiffness shaping and closed loop", verdict, "ok" if reach_ok and iso_ok else "warn",
+                      [facts, reach])
     if "reachable_set" in figs:
         shaping.add(Figure(figs["reachable_set"], "Reachable eigenvalues of K and directional stiffness in the "
                                                   "x-y plane, with the two shaped results marked."))
@@ -202,7 +206,8 @@ def _closed_loop_section(s: dict, figs: dict) -> Section:
                f"disturbance about x, switching from soft (K_xx {sig(s['soft_Kxx_Nm_per_rad'])}) to stiff "
                f"(K_xx {sig(s['stiff_Kxx_Nm_per_rad'])} N m/rad) at {sig(s['closed_loop_switch_s'])} s. Largest "
                f"pose error {sig(err, 3, 1e3)} mrad against the static estimate (step + amplitude) / K_xx,soft = "
-               f"{sig(est, 3, 1e3)} mrad; final stiffness error {sig(s['closed_loop_final_stiffness_error_Nm_per_rad'], 2)}"
+               f"{sig(est, 3, 1e3)} mrad; final stiffness error "
+               f"{sig(s['closed_loop_final_stiffness_error_Nm_per_rad'], 2)}"
                f" N m/rad; median controller step {sig(s['closed_loop_median_step_us'], 2)} us "
                + ("(real time at 1 kHz needs < 1000 us)." if period_us == 1000 else f"(period {sig(period_us)} us)."))
     facts = quantity_table([

@@ -1,0 +1,38 @@
+"""``csjm report RESULTS [--sweep SWEEP.toml] [--out DIR] [--top N]``: the design-study report of a sweep."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from .._fileio import refuse_input_overwrite
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("report", help="design-study report (HTML + Markdown) of csjm sweep results",
+                       description="Pareto front of workspace against minimum stiffness, the best designs in a "
+                       "table and their hole geometry drawn, from a csjm sweep result file; writes index.html "
+                       "(open it in a browser), index.md, figures and design_report.json into a folder.")
+    p.add_argument("results", metavar="RESULTS", help="csjm sweep result file (JSON Lines)")
+    p.add_argument("--sweep", metavar="SWEEP.toml", default=None,
+                   help="the sweep file of the results: draws the geometry with its [base] parameters and "
+                   "evaluates the paper's design with the same settings to mark it")
+    p.add_argument("--out", metavar="DIR", default=None, help="report folder (default: RESULTS without its "
+                   "suffix + _report)")
+    p.add_argument("--top", type=int, default=8, help="best designs in the table (default 8)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..errors import InvalidInput
+    from ..report.design import write_design_report
+
+    results = Path(args.results)
+    if not results.is_file():
+        raise InvalidInput(f"no result file {results}", "RESULTS")
+    out = Path(args.out) if args.out else results.with_name(results.stem + "_report")
+    for name in ("index.html", "index.md", "design_report.json", "pareto.png", "geometry.png"):
+        refuse_input_overwrite(out / name, args.results, args.sweep)
+    page = write_design_report(results, out, args.sweep, args.top)
+    print(f"report written to {page}")
+    return 0
