@@ -27,6 +27,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from .._fileio import read_bytes
 from ..errors import DesignError
 
 try:  # POSIX only; elsewhere the lock is skipped
@@ -44,12 +45,9 @@ def read_records(path: str | Path) -> tuple[list[dict[str, Any]], int]:
     Every complete line is returned, duplicates included (see :func:`unique_records`).
     """
     path = Path(path)
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
+    if not os.path.lexists(path):
         return [], 0
-    except OSError as exc:
-        raise DesignError(f"cannot read results: {exc.strerror}", "--out", str(path)) from exc
+    data = read_bytes(path, lambda msg: DesignError(msg, "--out", str(path)), "results file")
     end = data.rfind(b"\n") + 1          # complete lines end with a newline
     records = []
     for number, line in enumerate(data[:end].splitlines(), start=1):
