@@ -300,7 +300,8 @@ add("diagnose-report-is-file", "diagnose {log} --report {rig}", "--report")
 add("diagnose-json-is-dir", "diagnose {log} --json {dir}", "--json")
 
 MJCF = "export-mjcf --rig {rig} -o {tmp}/model.xml"
-for label, opt, at in (("rotvec-1e308", "--rotvec 1e308 0 0", "--rotvec"), ("rotvec-norm", "--rotvec 2 2 2", "--rotvec"),
+for label, opt, at in (("rotvec-1e308", "--rotvec 1e308 0 0", "--rotvec"),
+                       ("rotvec-norm", "--rotvec 2 2 2", "--rotvec"),
                        ("tau-nan", "--tau nan 0 0", "--tau"), ("timestep-zero", "--timestep 0", "--timestep"),
                        ("timestep-nan", "--timestep nan", "--timestep")):
     add(f"export-mjcf-{label}", f"{MJCF} {opt}", at)
