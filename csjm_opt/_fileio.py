@@ -196,7 +196,7 @@ def check_output(path: str | Path | None, *inputs: str | Path | None, name: str 
     out = Path(path)
     for item in inputs:
         if item is not None and str(item) not in ("-", "paper") and _same_file(out, Path(item)):
-            raise InvalidInput(f"{name} {path} is an input of this command ({item}); refusing to "
+            raise InvalidInput(f"{name} {path} is an input file of this command ({item}); refusing to "
                                "overwrite it", name)
     try:
         st = os.stat(out)
