@@ -22,6 +22,7 @@ from .errors import (
     DataFileError,
     DesignError,
     IllConditionedData,
+    InconsistentTensions,
     InfeasibleLoad,
     InvalidInput,
     NoEquilibrium,
@@ -43,7 +44,7 @@ __version__ = "0.1.0"
 
 __all__ = sorted([
     "CsjmError", "DataFileError", "DesignError", "Diagnosis", "Equilibrium", "IllConditionedData",
-    "InfeasibleLoad", "InvalidInput", "MeasurementLog", "Model", "NoEquilibrium", "NotARotation",
+    "InconsistentTensions", "InfeasibleLoad", "InvalidInput", "MeasurementLog", "Model", "NoEquilibrium", "NotARotation",
     "Rig", "RigFileError", "ShapingResult", "SolverError", "StiffnessEstimate", "TensionPlan",
     "TensionPlanBatch", "UsageError", "__version__", "diagnose_log", "identify_log",
     "identify_stiffness", "load_rig", "paper_rig", "plan_tensions", "plan_tensions_batch",

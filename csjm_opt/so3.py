@@ -14,7 +14,31 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from .errors import InvalidInput
+
 _SMALL = 1e-6
+
+
+def _vectors(w: Any, name: str) -> np.ndarray:
+    """float64 array of shape (..., 3), else :class:`InvalidInput` ("expected ..., got ...")."""
+    try:
+        arr = np.asarray(w, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInput(f"{name}: expected numbers of shape (..., 3), got {w!r:.60}", name) from None
+    if arr.ndim == 0 or arr.shape[-1] != 3:
+        raise InvalidInput(f"{name}: expected shape (..., 3), got {arr.shape}", name)
+    return arr
+
+
+def _matrices(M: Any, name: str) -> np.ndarray:
+    """float64 array of shape (..., 3, 3), else :class:`InvalidInput`."""
+    try:
+        arr = np.asarray(M, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInput(f"{name}: expected numbers of shape (..., 3, 3), got {M!r:.60}", name) from None
+    if arr.ndim < 2 or arr.shape[-2:] != (3, 3):
+        raise InvalidInput(f"{name}: expected shape (..., 3, 3), got {arr.shape}", name)
+    return arr
 
 
 def _symbolic(x: Any) -> bool:
@@ -23,12 +47,28 @@ def _symbolic(x: Any) -> bool:
 
 
 def hat(w: Any) -> Any:
-    """Skew matrix of (2): ``hat(w) @ v == cross(w, v)``."""
+    """Skew matrix of paper (2): ``hat(w) @ v == cross(w, v)``.
+
+    Parameters
+    ----------
+    w : array_like, shape (..., 3), or CasADi SX/MX/DM (3, 1)
+        Vector(s).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3), or CasADi (3, 3)
+        The skew-symmetric matrices.
+
+    Raises
+    ------
+    InvalidInput
+        If a numpy input does not have shape (..., 3).
+    """
     if _symbolic(w):
         return ca.vertcat(ca.horzcat(0, -w[2], w[1]),
                           ca.horzcat(w[2], 0, -w[0]),
                           ca.horzcat(-w[1], w[0], 0))
-    w = np.asarray(w, dtype=float)
+    w = _vectors(w, "w")
     out = np.zeros(w.shape[:-1] + (3, 3))
     out[..., 0, 1], out[..., 0, 2] = -w[..., 2], w[..., 1]
     out[..., 1, 0], out[..., 1, 2] = w[..., 2], -w[..., 0]
@@ -37,17 +77,49 @@ def hat(w: Any) -> Any:
 
 
 def vee(W: Any) -> Any:
-    """Inverse of :func:`hat` (uses the antisymmetric part)."""
+    """Inverse of :func:`hat` (uses the antisymmetric part of ``W``).
+
+    Parameters
+    ----------
+    W : array_like, shape (..., 3, 3), or CasADi (3, 3)
+        Matrices.
+
+    Returns
+    -------
+    ndarray, shape (..., 3), or CasADi (3, 1)
+        ``w`` with ``hat(w) == (W - W^T) / 2``.
+
+    Raises
+    ------
+    InvalidInput
+        If a numpy input does not have shape (..., 3, 3).
+    """
     if _symbolic(W):
         return 0.5 * ca.vertcat(W[2, 1] - W[1, 2], W[0, 2] - W[2, 0], W[1, 0] - W[0, 1])
-    W = np.asarray(W, dtype=float)
+    W = _matrices(W, "W")
     return 0.5 * np.stack([W[..., 2, 1] - W[..., 1, 2],
                            W[..., 0, 2] - W[..., 2, 0],
                            W[..., 1, 0] - W[..., 0, 1]], axis=-1)
 
 
 def exp(w: Any) -> Any:
-    """Rodrigues' formula, ``exp(hat(w))``, with a Taylor branch near zero."""
+    """Rotation matrix ``exp(hat(w))`` by Rodrigues' formula, with a Taylor branch near zero.
+
+    Parameters
+    ----------
+    w : array_like, shape (..., 3), or CasADi (3, 1)
+        Rotation vector(s) (rad): axis times angle.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3), or CasADi (3, 3)
+        The rotation matrices; finite (and exact to round-off) at ``w = 0``.
+
+    Raises
+    ------
+    InvalidInput
+        If a numpy input does not have shape (..., 3).
+    """
     if _symbolic(w):
         th2 = ca.dot(w, w)
         th = ca.sqrt(th2 + 1e-300)
@@ -55,7 +127,7 @@ def exp(w: Any) -> Any:
         b = ca.if_else(th2 < _SMALL**2, 0.5 - th2 / 24, (1 - ca.cos(th)) / (th2 + 1e-300))
         W = hat(w)
         return ca.DM.eye(3) + a * W + b * (W @ W)
-    w = np.asarray(w, dtype=float)
+    w = _vectors(w, "w")
     th2 = np.sum(w * w, axis=-1)
     th = np.sqrt(th2)
     small = th < _SMALL
@@ -67,10 +139,27 @@ def exp(w: Any) -> Any:
 
 
 def log(R: Any) -> Any:
-    """Rotation vector ``w`` with ``exp(w) == R``, ``|w| <= pi``; batched over (..., 3, 3)."""
+    """Rotation vector ``w`` with ``exp(w) == R`` and ``|w| <= pi``.
+
+    Parameters
+    ----------
+    R : array_like, shape (..., 3, 3), or CasADi (3, 3)
+        Rotation matrices (not checked to be rotations: validate inputs from users with
+        ``csjm_opt._validate.as_rotation``).
+
+    Returns
+    -------
+    ndarray, shape (..., 3), or CasADi (3, 1)
+        Rotation vectors (rad); accurate near 0 and near pi.
+
+    Raises
+    ------
+    InvalidInput
+        If a numpy input does not have shape (..., 3, 3).
+    """
     if _symbolic(R):
         return _log_casadi(R)
-    R = np.asarray(R, dtype=float)
+    R = _matrices(R, "R")
     cos = np.clip((np.trace(R, axis1=-2, axis2=-1) - 1) / 2, -1.0, 1.0)
     v = vee(R)  # = sin(th) * axis
     sin = np.linalg.norm(v, axis=-1)
@@ -111,14 +200,54 @@ def _log_casadi(R: Any) -> Any:
 
 
 def random_rotations(n: int, rng: np.random.Generator, max_angle: float = np.pi) -> np.ndarray:
-    """``n`` rotations with axes uniform on the sphere and angles uniform in [0, max_angle]."""
+    """Random rotations: axes uniform on the sphere, angles uniform in ``[0, max_angle]``.
+
+    Parameters
+    ----------
+    n : int
+        Number of rotations (>= 0).
+    rng : numpy.random.Generator
+        Random generator.
+    max_angle : float, optional
+        Largest rotation angle (rad).
+
+    Returns
+    -------
+    ndarray, shape (n, 3, 3)
+        The rotations.
+
+    Raises
+    ------
+    InvalidInput
+        If ``n`` is negative or not an integer, or ``max_angle`` is negative or not finite.
+    """
+    if not (isinstance(n, (int, np.integer)) and n >= 0):
+        raise InvalidInput(f"n: expected an integer >= 0, got {n!r}", "n")
+    if not (np.isfinite(max_angle) and max_angle >= 0):
+        raise InvalidInput(f"max_angle: expected a finite angle >= 0 (rad), got {max_angle!r}", "max_angle")
     axis = rng.normal(size=(n, 3))
     axis /= np.linalg.norm(axis, axis=1, keepdims=True)
     return exp(axis * rng.uniform(0, max_angle, size=(n, 1)))
 
 
 def angle_between(R1: Any, R2: Any) -> np.ndarray:
-    """Geodesic distance ``||log(R1^T R2)||`` (rad), paper (63)-(65)."""
-    R1 = np.asarray(R1, dtype=float)
-    R2 = np.asarray(R2, dtype=float)
+    """Geodesic distance ``||log(R1^T R2)||`` (rad), paper (63)-(65).
+
+    Parameters
+    ----------
+    R1, R2 : array_like, shape (..., 3, 3)
+        Rotations (broadcast against each other).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Angles in ``[0, pi]`` (rad).
+
+    Raises
+    ------
+    InvalidInput
+        If an input does not have shape (..., 3, 3).
+    """
+    R1 = _matrices(R1, "R1")
+    R2 = _matrices(R2, "R2")
     return np.linalg.norm(log(np.swapaxes(R1, -1, -2) @ R2), axis=-1)

@@ -2,13 +2,53 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import matplotlib
 import numpy as np
 import pytest
 
 matplotlib.use("Agg")   # the tests write figures to files only (the library never picks a backend)
 
-import csjm_opt as co
+import csjm_opt as co  # noqa: E402
+
+#: Code that compiles (and caches, numba ``cache=True``) the compiled kernels, split in two
+#: halves that compile in parallel; see :func:`pytest_configure`.
+_WARM_UP = (
+    "import csjm_opt as co, numpy as np\n"
+    "rig = co.paper_rig(); R = co.so3.exp([0.1, 0.0, 0.0])\n"
+    "co.plan_tensions(rig, R, [0.1, 0.0, 0.0]); co.plan_tensions_batch(rig, np.stack([R, R]))\n",
+    "import csjm_opt as co, numpy as np\n"
+    "from csjm_opt.control.closed_loop import simulate\n"
+    "from csjm_opt.control.controllers import StiffnessShapingController\n"
+    "from csjm_opt.control.load_profiles import Constant\n"
+    "rig = co.paper_rig(); R = co.so3.exp([0.1, 0.0, 0.0])\n"
+    "p = co.plan_tensions(rig, R)\n"
+    "co.solve_equilibrium(rig, co.rest_lengths_for(rig, R, p.tensions_N), R_init=R)\n"
+    "K = co.stiffness(rig, R, p.tensions_N)\n"
+    "simulate(rig, StiffnessShapingController(rig, R, K), Constant(np.zeros(3)), 0.002, 1e-3)\n",
+)
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Compile the numba kernels once, before the xdist workers start.
+
+    On a fresh clone every worker (and every ``csjm`` subprocess a CLI test starts) would
+    otherwise compile the same kernels itself; compiled here, in two parallel processes,
+    they are loaded from numba's cache by everyone else. A no-op in the workers, and cheap
+    when the cache is already warm. Failures are left to the tests to report.
+    """
+    if hasattr(config, "workerinput") or os.environ.get("CSJM_NO_WARM_UP"):
+        return
+    root = str(Path(__file__).resolve().parents[1])
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")])))
+    procs = [subprocess.Popen([sys.executable, "-c", code], cwd=root, env=env,
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) for code in _WARM_UP]
+    for proc in procs:
+        proc.wait()
 
 #: Table 3's original pose R0 with errata item 3 applied (element (3,2) = -0.300).
 R0_CORRECTED = np.array([[0.992, -0.060, -0.111],

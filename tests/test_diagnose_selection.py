@@ -1,18 +1,42 @@
-"""Selection: the right effect is named, `none` on effect-free data, the gap closes on held-out cycles."""
+"""Selection: held-out folds, the residual-signature test's level, separability, verdicts on small logs.
+
+Statistics over many logs and random rigs (false-alarm rate, naming rates) are in
+``studies/diagnose_confusion.py``; these tests check the pieces and a few verdicts.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from csjm_opt.diagnose import VOCABULARY, diagnose
+from csjm_opt.diagnose import diagnose
+from csjm_opt.diagnose.localisation import remaining_signature
 from csjm_opt.diagnose.noise import noise_floor
+from csjm_opt.diagnose.pairs import block_correlation
 from csjm_opt.diagnose.residuals import compute_residuals
-from csjm_opt.diagnose.selection import ALPHA, folds_by_cycle
+from csjm_opt.diagnose.scoring import folds_by_cycle
 from csjm_opt.errors import InvalidInput
 from csjm_opt.testbed import simulate_experiment
 
-SPEC_KEYS = {"baseline", "noise_floor_rad", "candidates", "selected", "gap", "localisation"}
+CONTRACT = {"baseline", "noise_floor_rad", "candidates", "selected", "secondary", "pairs", "gap", "localisation"}
+#: a few candidates keep these tests fast; the whole vocabulary runs in the study and the benchmark
+FEW = ["sensor_bias", "mass_com", "tracker_registration", "stiffness_scale"]
+
+
+@pytest.fixture(scope="module")
+def logs(rig):
+    """Small logs (6 cycles of 7 rows), simulated once for the module."""
+    def sim(effect, severity, seed, cycles=6):
+        return simulate_experiment(rig, cycles, np.random.default_rng(seed), effect=effect, severity=severity, steps=3)
+    return {"none": sim(None, 1.0, 21), "sensor_bias": sim("sensor_bias", 1.5, 35),
+            "tracker_registration": sim("tracker_registration", 3.0, 36),
+            "sensor_drift": sim("sensor_drift", 8.0, 37),
+            "pair": sim(["sensor_bias", "stiffness_scale"], 2.0, 38, cycles=10)}
+
+
+@pytest.fixture(scope="module")
+def none_table(rig, logs):
+    return compute_residuals(rig, logs["none"])
 
 
 def test_folds_are_grouped_by_cycle():
@@ -27,48 +51,77 @@ def test_folds_are_grouped_by_cycle():
         folds_by_cycle(np.zeros(9, int))
 
 
-def test_noise_floor_matches_the_instrument_noise(rig):
-    log = simulate_experiment(rig, 10, np.random.default_rng(20))
-    t = compute_residuals(rig, log)
+def test_noise_floor_matches_the_instrument_noise(none_table):
+    t = none_table
     floor, dof = noise_floor(t)
-    # effect-free plant: the nominal residual *is* the noise
-    assert dof > 50
-    assert floor == pytest.approx(t.rms_rad, rel=0.2)
-    assert floor == pytest.approx(t.instrument_floor_rad, rel=0.2)
+    assert dof > 15
+    assert floor == pytest.approx(t.instrument_floor_rad, rel=0.35)
 
 
-def test_none_on_effect_free_data(rig):
-    d = diagnose(rig, simulate_experiment(rig, 8, np.random.default_rng(21)))
-    j = d.as_json()
-    assert SPEC_KEYS <= set(j)
-    assert j["selected"] == "none"
-    assert j["significance"]["alpha"] == ALPHA
-    assert {c["effect"] for c in j["candidates"]} == set(VOCABULARY[1:])
+def test_signature_test_holds_its_level_and_can_reject(none_table):
+    """Pure instrument noise (drawn here through the table's own noise model) rejects at about alpha;
+    a per-cycle offset of one noise sd is found."""
+    t = none_table
+    L = np.linalg.inv(t.whiten)                  # zeta = L e, e ~ N(0, I)
+    rng = np.random.default_rng(0)
+    draws = [np.einsum("nij,nj->ni", L, rng.normal(size=(len(t), 3))) for _ in range(300)]
+    p = np.array([remaining_signature(t, z, t.instrument_floor_rad, alpha=0.1)["p_value"] for z in draws])
+    assert 0.04 <= np.mean(p < 0.1) <= 0.18      # binomial(300, 0.1): 0.1 +- 3 sd
+    assert 0.3 <= np.mean(p < 0.5) <= 0.7
+    offset = np.array([rng.normal(size=3) for _ in np.unique(t.cycle)])[np.searchsorted(np.unique(t.cycle), t.cycle)]
+    hit = [remaining_signature(t, z + np.einsum("nij,nj->ni", L, 1.5 * offset), 1.0, 0.01)["significant"]
+           for z in draws[:20]]
+    assert np.mean(hit) > 0.9
+
+
+def test_block_correlation_closed_form():
+    """Two scalar parameters with information [[1, r], [r, 1]]: the covariance correlation is -r."""
+    for r in (0.0, 0.5, 0.99):
+        assert block_correlation(np.array([[1.0, r], [r, 1.0]]), np.array([0]), np.array([1])) \
+            == pytest.approx(r, abs=1e-6)
+    # blocks: a parameter informed only jointly with another is fully confounded with it
+    info = np.diag([1.0, 1.0, 1.0])
+    info[1, 2] = info[2, 1] = 0.999999
+    assert block_correlation(info, np.array([0, 1]), np.array([2])) > 0.99
+
+
+def test_none_on_effect_free_data(rig, logs):
+    j = diagnose(rig, logs["none"], effects=FEW, secondary=False).as_json()
+    assert CONTRACT <= set(j)
+    assert j["selected"] == "none" and j["secondary"] == {"effect": "none"}
+    for c in j["candidates"]:
+        assert {"effect", "heldout_rms_rad", "params", "bic", "plausible", "implausible_params"} <= set(c)
     assert j["gap"]["after_rad"] == pytest.approx(j["nominal_refit"]["heldout_rms_rad"])
 
 
-# one seed per effect, severities varied; the seeds x severities study is studies/diagnose_confusion.py
-CASES = [("hole_offsets", 1.5, 31), ("friction", 1.0, 32), ("cable_hardening", 0.5, 33),
-         ("link_compliance", 1.5, 34), ("sensor_bias", 1.0, 35), ("mass_com", 2.0, 36)]
-
-
-@pytest.mark.parametrize("effect,severity,seed", CASES)
-def test_injected_effect_is_named_and_gap_closes(rig, effect, severity, seed):
-    log = simulate_experiment(rig, 8, np.random.default_rng(seed), effect=effect, severity=severity)
-    j = diagnose(rig, log).as_json()
+@pytest.mark.parametrize("effect", ["sensor_bias", "tracker_registration"])
+def test_injected_effect_is_named_plausibly_and_gap_closes(rig, logs, effect):
+    j = diagnose(rig, logs[effect], effects=["hole_offsets"] + FEW, secondary=False).as_json()
     assert j["selected"] == effect
     gap = j["gap"]
-    assert gap["systematic_before_rad"] > j["noise_floor_rad"]      # a real gap was injected
-    assert gap["fraction_explained"] >= 0.8                           # >= 80 % of the systematic gap, held out
+    assert gap["systematic_before_rad"] > 2 * j["noise_floor_rad"]    # a real gap was injected
+    assert gap["fraction_explained"] >= 0.8                            # >= 80 % of the systematic gap, held out
     sel = next(c for c in j["candidates"] if c["effect"] == effect)
-    assert sel["significant"] and sel["p_value"] < ALPHA / 6
-    assert sel["heldout_rms_rad"] < j["nominal_refit"]["heldout_rms_rad"]
-    assert sel["bic"] == min(c["bic"] for c in j["candidates"] if c["significant"])
+    assert sel["significant"] and sel["plausible"] and sel["implausible_params"] == []
+    assert sel["p_value"] < j["significance"]["per_candidate_alpha"]
 
 
-def test_two_effects_dominant_selected_second_reported(rig):
-    log = simulate_experiment(rig, 10, np.random.default_rng(37), effect=["friction", "sensor_bias"], severity=1.5)
-    j = diagnose(rig, log).as_json()
-    assert j["selected"] == "friction"          # the larger gap
-    assert j["secondary"]["effect"] == "sensor_bias"
-    assert j["secondary"]["fraction_explained"] > j["gap"]["fraction_explained"]
+def test_effect_outside_the_vocabulary_is_unexplained(rig, logs):
+    """A drifting F/T offset: a constant bias takes part of it but cannot bring the gap to the floor."""
+    j = diagnose(rig, logs["sensor_drift"], effects=FEW, secondary=False).as_json()
+    assert j["selected"] == "unexplained"
+    assert j["gap_signature"]["significant"]
+    assert j["verdict"]["reason"]
+
+
+def test_two_effects_both_named(rig, logs):
+    j = diagnose(rig, logs["pair"], effects=FEW).as_json()
+    assert {j["selected"], j["secondary"]["effect"]} == {"sensor_bias", "stiffness_scale"}
+    assert j["gap"]["fraction_explained"] >= 0.8
+    assert len(j["pairs"]) == 6 and all("separable" in p for p in j["pairs"])
+    assert [s["model"] for s in j["steps"]][-1] == f"{j['selected']}+{j['secondary']['effect']}"
+
+
+def test_unknown_effect_is_an_input_error(rig, logs):
+    with pytest.raises(InvalidInput):
+        diagnose(rig, logs["none"], effects=["gremlins"])

@@ -14,9 +14,10 @@ def test_planner_kernel_matches_casadi_model(rig, model):
     Rs = so3.random_rotations(20, rng, max_angle=0.6)
     for R in Rs:
         tau = rng.normal(size=3) * 0.3
-        T, J, w, c, l = np.empty(6), np.empty((6, 3)), np.empty(3), np.empty(6), np.empty(6)
-        kernels.plan_one(model.A, model.B, model.k, model.first_moment_A_kgm, model.g, R, tau, rig.t_mid_N,
-                         rig.t_min_N, rig.t_max_N, 40, T, J, w, c, l)
+        T, J, w, c, l, info = np.empty(6), np.empty((6, 3)), np.empty(3), np.empty(6), np.empty(6), np.empty(2)
+        status = kernels.plan_one(model.A, model.B, model.k, model.first_moment_A_kgm, model.g, R, tau,
+                                  rig.t_mid_N, rig.t_min_N, rig.t_max_N, 40, T, J, w, c, l, info)
+        assert status == kernels.OK and info[0] < 1e-12 and info[1] <= 0.0
         (J_ref,) = model.casadi("jacobian", R)
         (c_ref,) = model.casadi("cable_lengths", R)
         tau_w_ref, _ = model.point_force_moment(R, rig.weight_B_N, rig.com_A_m)

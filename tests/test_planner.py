@@ -147,3 +147,61 @@ def test_bad_inputs(rig):
         co.plan_tensions(rig, np.eye(3), [0.0, 1.0])
     with pytest.raises(co.InvalidInput, match="unknown QP solver"):
         co.plan_tensions(rig, np.eye(3), np.zeros(3), solver="nope")
+
+
+def _independent_lengths(rig, R):
+    return np.linalg.norm(rig.base_holes_B_m - rig.platform_holes_A_m @ R.T, axis=1)
+
+
+def test_plan_rest_lengths_reproduce_the_tensions(rig, model):
+    """t = k (c - l) with c written from scratch; l held at R by those tensions is an equilibrium."""
+    R = so3.exp([0.15, -0.1, 0.2])
+    tau = np.array([0.7, -0.4, 0.2])
+    plan = co.plan_tensions(rig, R, tau)
+    c = _independent_lengths(rig, R)
+    np.testing.assert_allclose(plan.cable_lengths_m, c, atol=1e-15)
+    np.testing.assert_allclose(rig.cable_stiffness_N_per_m * (c - plan.rest_lengths_m), plan.tensions_N, atol=1e-9)
+    eq = co.solve_equilibrium(rig, plan.rest_lengths_m, tau, R_init=R)   # forward statics, same load
+    assert np.linalg.norm(so3.log(R.T @ eq.R)) < 1e-8
+    Rs = so3.random_rotations(30, np.random.default_rng(2), max_angle=0.3)
+    taus = np.random.default_rng(3).normal(size=(30, 3)) * 0.5
+    batch = co.plan_tensions_batch(rig, Rs, taus)
+    c = np.array([_independent_lengths(rig, R) for R in Rs])
+    np.testing.assert_allclose(batch.cable_lengths_m, c, atol=1e-15)
+    np.testing.assert_allclose(rig.cable_stiffness_N_per_m * (c - batch.rest_lengths_m), batch.tensions_N, atol=1e-9)
+    np.testing.assert_allclose(batch[4].rest_lengths_m, batch.rest_lengths_m[4])
+
+
+def _boundary_scale(rig, model, R, direction):
+    """Largest s with tau_ext = s * direction feasible at R: an LP (HiGHS), independent of the planner."""
+    J = model.casadi("jacobian", R)[0]
+    tau_w = model.point_force_moment(R, rig.weight_B_N, rig.com_A_m)[0]
+    # variables (T, s): maximise s subject to J^T T + s d = -tau_w, t_min <= T <= t_max
+    A_eq = np.hstack([J.T, direction[:, None]])
+    res = linprog(np.r_[np.zeros(6), -1.0], A_eq=A_eq, b_eq=-tau_w,
+                  bounds=[(rig.t_min_N, rig.t_max_N)] * 6 + [(0, None)], method="highs")
+    assert res.status == 0
+    return res.x[-1]
+
+
+@pytest.mark.parametrize("solver", ["active_set", "osqp", "clarabel"])
+def test_near_boundary_loads_are_planned_by_every_solver(rig, model, solver):
+    if solver not in qpsolvers.available_solvers + ["active_set"]:
+        pytest.skip(f"{solver} not installed")
+    rng = np.random.default_rng(11)
+    R = so3.exp([0.1, -0.05, 0.0])
+    for d in [np.array([1.0, 0.0, 0.0]), *rng.normal(size=(3, 3))]:
+        d = d / np.linalg.norm(d)
+        s = _boundary_scale(rig, model, R, d)
+        for frac in (1 - 1e-3, 1 - 1e-6, 1 - 1e-9, 1.0):
+            plan = co.plan_tensions(rig, R, frac * s * d, solver=solver)
+            _check_plan(plan, rig)
+        with pytest.raises(co.InfeasibleLoad) as info:
+            co.plan_tensions(rig, R, (1 + 1e-3) * s * d, solver=solver)
+        assert info.value.distance_Nm > 1e-8
+
+
+def test_issue_load_near_boundary_is_held(rig):
+    """csjm stiffness --rotvec 0.1 -0.05 0 --tau 10.80221 0 0 was refused 5e-15 N m 'outside'."""
+    plan = co.plan_tensions(rig, so3.exp([0.1, -0.05, 0.0]), [10.80221, 0.0, 0.0])
+    _check_plan(plan, rig)

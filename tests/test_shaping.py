@@ -44,8 +44,8 @@ def slsqp_shaping(rig, model, R, tau, K_target, W=None):
     J = model.jacobian(R)
     tau_load = tau + model.weight_moment(R)
     basis_T = np.eye(6)
-    K0 = model.stiffness(R, np.zeros(6))
-    G = np.array([model.stiffness(R, e) - K0 for e in basis_T])      # K affine in T (checked below)
+    K0 = model.casadi("stiffness", R, np.zeros(6))[0]                 # all cables taut (CasADi)
+    G = np.array([model.casadi("stiffness", R, e)[0] - K0 for e in basis_T])  # K affine in T (checked below)
 
     def f(T):
         E = K0 + np.einsum("i,ijk->jk", T, G) - K_target

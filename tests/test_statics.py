@@ -217,3 +217,14 @@ def test_model_of_another_rig_is_not_used(rig):
     eq = solve_equilibrium(other, l, np.zeros(3), model=co.Model(rig))
     assert eq.residual_Nm < 1e-9
     assert np.allclose(eq.R, np.eye(3), atol=1e-9)
+
+
+def test_stability_check_is_routh_hurwitz_exact():
+    """statics._stable (Routh-Hurwitz on det(sI + K_t)) agrees with the eigenvalues of random 3x3 matrices."""
+    from csjm_opt.model.statics import _stable
+
+    rng = np.random.default_rng(0)
+    for _ in range(3000):
+        M = rng.normal(size=(3, 3)) * rng.uniform(0.1, 10.0)
+        assert _stable(M) == bool(np.all(np.linalg.eigvals(M).real > 0))
+    assert not _stable(np.diag([1.0, 2.0, np.nan]))

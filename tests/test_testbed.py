@@ -93,3 +93,63 @@ def test_sensor_bias_and_link_compliance_laws(rig):
     eq = solve_equilibrium(rig, c.rest_lengths_m, so3.exp(C @ tau_m) @ tau_m, R_init=R_cable,
                            include_weight=False)
     assert so3.angle_between(eq.R, R_cable) < 1e-8
+
+
+def test_random_rigs_hold_their_experiment_and_stay_in_range():
+    from csjm_opt.testbed import RigRanges, random_rig
+
+    ranges = RigRanges()
+    k_all = []
+    for seed in range(3):
+        rig, noise = random_rig(np.random.default_rng(seed))
+        k = np.asarray(rig.cable_stiffness_N_per_m)
+        k_all.append(k.mean())
+        lo, hi = ranges.stiffness_N_per_m
+        assert np.all(k >= lo * 0.9) and np.all(k <= hi * 1.1)
+        assert ranges.mass_kg[0] <= rig.platform_mass_kg <= ranges.mass_kg[1]
+        assert ranges.t_min_N[0] <= rig.t_min_N <= ranges.t_min_N[1]
+        paper = InstrumentNoise.paper()
+        f = np.asarray(noise.tau_sigma_Nm) / np.asarray(paper.tau_sigma_Nm)
+        assert np.allclose(f, f[0]) and ranges.noise_factor[0] <= f[0] <= ranges.noise_factor[1]
+        log = simulate_experiment(rig, 2, np.random.default_rng(seed), steps=2)   # the drawn rig runs the experiment
+        assert len(log) == 10
+    assert np.ptp(k_all) > 100                                                    # rigs differ
+
+
+def test_tracker_registration_and_drift_laws(rig):
+    import dataclasses
+
+    Q = so3.exp([0.01, -0.02, 0.005])
+    plant = dataclasses.replace(Plant.nominal(rig), tracker_rotation_B=Q,
+                                sensor_drift_A_Nm_per_row=np.array([1e-3, 0.0, 0.0]))
+    R = so3.random_rotations(4, np.random.default_rng(6), 0.3)
+    np.testing.assert_allclose(plant.measured_pose(R), Q @ R)
+    tau = np.zeros((5, 3))
+    np.testing.assert_allclose(plant.measured_moment(tau)[:, 0], 1e-3 * np.arange(5))
+
+
+def test_eyelet_moves_the_base_hole_towards_the_cable(rig):
+    import dataclasses
+
+    plant = dataclasses.replace(Plant.nominal(rig), eyelet_radius_m=2e-3)
+    R = so3.random_rotations(3, np.random.default_rng(7), 0.3)
+    B_eff = plant._base_holes(R)
+    shift = B_eff - np.asarray(rig.base_holes_B_m)
+    np.testing.assert_allclose(np.linalg.norm(shift, axis=-1), 2e-3)          # on the rim
+    np.testing.assert_allclose(shift[..., 2], 0.0)                             # in the base plane
+    a_B = np.einsum("nij,kj->nki", R, np.asarray(rig.platform_holes_A_m))
+    assert np.all(np.sum(shift * (a_B - np.asarray(rig.base_holes_B_m)), axis=-1) > 0)   # towards the cable
+
+
+def test_outside_effects_make_a_gap_and_unknown_names_are_input_errors(rig):
+    from csjm_opt.errors import InvalidInput
+    from csjm_opt.testbed import OUTSIDE_NAMES
+
+    for name in OUTSIDE_NAMES:
+        clean = simulate_experiment(rig, 2, np.random.default_rng(8), effect=name, severity=2.0,
+                                    noise=InstrumentNoise.none(), steps=2)
+        nominal = simulate_experiment(rig, 2, np.random.default_rng(8), noise=InstrumentNoise.none(), steps=2)
+        assert np.abs(clean.rotvec_rad - nominal.rotvec_rad).max() + \
+            np.abs(clean.tau_ext_A_Nm - nominal.tau_ext_A_Nm).max() > 1e-4, name
+    with pytest.raises(InvalidInput):
+        make_plant(rig, "gremlins", 1.0, np.random.default_rng(0))

@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from .._fileio import atomic_write_json
+from ..errors import InvalidInput
+from ._options import check_outputs, int_in
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -15,7 +18,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "in a browser), README.md (the same in Markdown), figures, summary.json, and the "
                        "sub-reports experiment/index.html and diagnosis/index.html.")
     p.add_argument("--out", default="csjm_report", help="report folder (default: ./csjm_report)")
-    p.add_argument("--seed", type=int, default=0, help="random seed of the simulated experiment")
+    p.add_argument("--seed", type=int_in(0, 2 ** 63 - 1), default=0, help="random seed of the simulated experiment")
     p.add_argument("--quick", action="store_true",
                    help="every step shortened (smaller experiments, no second-effect search): ~10-20 s")
     p.add_argument("--json", metavar="PATH", help="write the summary as JSON ('-' = stdout)")
@@ -25,6 +28,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..report import demo
 
+    check_outputs([], {"--json": args.json}, {"--out": args.out})  # before the work, not after it
+    if args.json and args.json != "-" and Path(args.json).resolve().parent == Path(args.out).resolve() \
+            and Path(args.json).name in ("summary.json", "README.md", "index.html"):
+        raise InvalidInput(f"--json {args.json} is a file the report writes; choose another name", "--json")
     summary = demo.run(args.out, seed=args.seed, quick=args.quick, progress=sys.stderr.isatty())
     if args.json:
         atomic_write_json(args.json, summary)

@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 from ..diagnose import EFFECTS
-from ..errors import InvalidInput
+from ..errors import InvalidInput, UsageError
 from .._fileio import atomic_write_json
 from ._options import check_outputs
 from ..measurement.logfile import MeasurementLog
@@ -33,6 +33,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--report", metavar="DIR", default=None, help="write a Markdown report with figures here")
     p.add_argument("--effects", nargs="+", choices=list(EFFECTS), default=None,
                    help="candidates to try (default: all)")
+    p.add_argument("--prior", action="append", default=[], metavar="NAME=LO:HI",
+                   help="override an effect parameter's plausible range (SI units; NAME may be a pattern such "
+                        "as 'dA*_m'); repeatable")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -61,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
         from tqdm import tqdm
 
         progress = partial(tqdm, file=sys.stderr, disable=None, leave=False)
-    diagnosis = diagnose(rig, log, test, effects=args.effects, progress=progress)
+    diagnosis = diagnose(rig, log, test, effects=args.effects, progress=progress, ranges=_priors(args.prior))
     result = diagnosis.as_json()
     if args.json:
         atomic_write_json(args.json, result)
@@ -69,8 +72,12 @@ def run(args: argparse.Namespace) -> int:
         write_report(diagnosis, args.report, Path(args.data).name)
     if args.json != "-":
         g = result["gap"]
-        print(f"selected: {result['selected']}"
+        sec = result["secondary"]["effect"]
+        print(f"selected: {result['selected']}" + (f" + {sec}" if sec != "none" else "")
               + (f" (confounded with {', '.join(result['confounded_with'])})" if result["confounded_with"] else ""))
+        print(f"  {result['verdict']['reason']}")
+        for w in result["verdict"]["warnings"]:
+            print(f"  warning: {w}")
         print(f"gap: {1e3 * g['before_rad']:.3f} -> {1e3 * g['after_rad']:.3f} mrad held-out RMS; noise floor "
               f"{1e3 * result['noise_floor_rad']:.3f} mrad; systematic part explained {g['fraction_explained']:.0%}")
         for c in result["candidates"]:
@@ -79,5 +86,22 @@ def run(args: argparse.Namespace) -> int:
                 continue
             mark = "*" if c["effect"] == result["selected"] else " "
             print(f" {mark} {c['effect']:16s} held-out {1e3 * c['heldout_rms_rad']:8.3f} mrad  BIC {c['bic']:9.1f}  "
-                  f"p {c['p_value']:.2g}{'  significant' if c['significant'] else ''}")
+                  f"p {c['p_value']:.2g}{'  significant' if c['significant'] else ''}"
+                  f"{'' if c['plausible'] else '  implausible: ' + ', '.join(c['implausible_params'][:4])}")
     return 0
+
+
+def _priors(items: list[str]) -> dict[str, tuple[float, float]]:
+    """``["NAME=LO:HI", ...]`` -> ``{NAME: (LO, HI)}``; a malformed item is a usage error."""
+    out = {}
+    for item in items:
+        name, _, rng = item.partition("=")
+        lo, _, hi = rng.partition(":")
+        try:
+            bounds = (float(lo), float(hi))
+        except ValueError:
+            bounds = (float("nan"), float("nan"))
+        if not name or not (bounds[0] < bounds[1]):
+            raise UsageError(f"--prior {item!r}: expected NAME=LO:HI with LO < HI (numbers)", "--prior")
+        out[name] = bounds
+    return out

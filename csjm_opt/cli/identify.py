@@ -16,7 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("preprocess", help="raw tracker/F/T CSV -> measurement log",
                        description="Turn a raw instrument CSV (tracker base points, platform poses "
                        "in the tracker frame, F/T readings in the sensor frame; format in "
-                       "csjm_opt/preprocess.py and the README) into the measurement log of docs/conventions.md: "
+                       "docs/guide/input-files.md) into the measurement log of docs/conventions.md: "
                        "least-squares base frame fit, pose in {B} (53)-(54), wrench moved to {A} "
                        "about O (55), weight handled explicitly (56).")
     p.add_argument("raw", metavar="RAW.csv", help="raw instrument CSV")

@@ -21,7 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "sweep", help="hole-geometry design sweep (workspace, stiffness, margins)",
         description="Evaluate every design of a sweep description (TOML; see studies/paper_sweep.toml "
-        "and the README): wrench-feasible workspace, stiffness, tension and wrench margins, "
+        "and docs/guide/design.md): wrench-feasible workspace, stiffness, tension and wrench margins, "
         "shaping range. Results are appended to RESULTS (JSON Lines) as designs finish; "
         "running again with the same RESULTS resumes, skipping finished designs.")
     p.add_argument("sweep", metavar="SWEEP.toml", help="sweep description")

@@ -143,3 +143,40 @@ def shaping_qp(G, K0, L, s, w, J, tau_load, t_mid, rho_rel):
     P = 2.0 * (H + rho * np.eye(6))
     q = -2.0 * (MW @ d + rho * t_mid)
     return P, q, J.T.copy(), -tau_load
+
+
+@njit(cache=True)
+def log_so3(R):
+    """Rotation vector of ``R`` (rad), with small-angle and near-pi branches (see :func:`csjm_opt.so3.log`)."""
+    cos = min(1.0, max(-1.0, 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0)))
+    v = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    th = np.arccos(cos)
+    if th < 1e-6:
+        return 0.5 * (1.0 + th * th / 6.0) * v
+    if th < np.pi - 1e-6:
+        return 0.5 * th / np.sin(th) * v
+    # near pi: axis from the symmetric part
+    S = 0.5 * (R + R.T) - cos * np.eye(3)
+    i = 0
+    for j in range(1, 3):
+        if S[j, j] > S[i, i]:
+            i = j
+    axis = S[i] / np.sqrt(max(S[i, i], 1e-300))
+    if axis @ v < 0:
+        axis = -axis
+    return th * axis / np.sqrt(axis @ axis)
+
+
+@njit(cache=True)
+def rest_state(A, B, k, R, l):
+    """Tensions T (6,) and cable stiffness K (3, 3) for rest lengths ``l`` at ``R`` (slack: nothing)."""
+    c, U, J = geometry(A, B, R)
+    G = length_hessians(A, c, U, J)
+    T = np.zeros(6)
+    K = np.zeros((3, 3))
+    for i in range(6):
+        s = c[i] - l[i]
+        if s > 0:
+            T[i] = k[i] * s
+            K += k[i] * np.outer(J[i], J[i]) + T[i] * G[i]
+    return T, K

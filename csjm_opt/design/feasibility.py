@@ -24,6 +24,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+from numba import njit
 
 _PAIRS = np.array(list(itertools.combinations(range(6), 2)))   # (15, 2)
 #: Relative flatness below which the moment set counts as rank deficient (J of rank < 3).
@@ -36,8 +37,73 @@ def wrench_margin_Nm(J: np.ndarray, tau_load_A_Nm: np.ndarray, t_min_N: float,
 
     ``J`` is (n, 6, 3); ``tau_load_A_Nm`` is (n, 3) or (n, m, 3) for ``m``
     loads per pose. Returns (n,) or (n, m). Feasible iff the result is >= 0
-    (use a small negative tolerance for round-off).
+    (use a small negative tolerance for round-off). Compiled
+    (:func:`_margin_kernel`); :func:`wrench_margin_reference` is the same
+    computation in numpy, kept as the test reference.
     """
+    J = np.ascontiguousarray(J, dtype=np.float64)
+    tau = np.asarray(tau_load_A_Nm, float)
+    single = tau.ndim == 2
+    tau = np.ascontiguousarray(tau[:, None, :] if single else tau)
+    out = np.empty(tau.shape[:2])
+    _margin_kernel(J, tau, float(t_min_N), float(t_max_N), RANK_TOL, _PAIRS, out)
+    return out[:, 0] if single else out
+
+
+@njit(cache=True)
+def _margin_kernel(J, tau, t_min, t_max, rank_tol, pairs, out):
+    h = 0.5 * (t_max - t_min)
+    mid = 0.5 * (t_min + t_max)
+    n_loads = tau.shape[1]
+    unit = np.empty((15, 3))
+    width = np.empty(15)
+    valid = np.empty(15, np.bool_)
+    for n in range(J.shape[0]):
+        G = J[n]
+        g_max = 0.0
+        c0 = c1 = c2 = 0.0
+        for i in range(6):
+            g_max = max(g_max, np.sqrt(G[i, 0] ** 2 + G[i, 1] ** 2 + G[i, 2] ** 2))
+            c0 += G[i, 0]
+            c1 += G[i, 1]
+            c2 += G[i, 2]
+        c0, c1, c2 = mid * c0, mid * c1, mid * c2
+        w_max = 0.0
+        for p in range(15):
+            a, b = pairs[p, 0], pairs[p, 1]
+            n0 = G[a, 1] * G[b, 2] - G[a, 2] * G[b, 1]
+            n1 = G[a, 2] * G[b, 0] - G[a, 0] * G[b, 2]
+            n2 = G[a, 0] * G[b, 1] - G[a, 1] * G[b, 0]
+            norm = np.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+            scale = np.sqrt(G[a, 0] ** 2 + G[a, 1] ** 2 + G[a, 2] ** 2) \
+                * np.sqrt(G[b, 0] ** 2 + G[b, 1] ** 2 + G[b, 2] ** 2)
+            valid[p] = norm > 1e-12 * max(scale, 1e-300)
+            if valid[p]:
+                unit[p, 0], unit[p, 1], unit[p, 2] = n0 / norm, n1 / norm, n2 / norm
+                w = 0.0
+                for i in range(6):
+                    w += abs(unit[p, 0] * G[i, 0] + unit[p, 1] * G[i, 1] + unit[p, 2] * G[i, 2])
+                width[p] = w
+                w_max = max(w_max, w)
+        flat = w_max <= rank_tol * max(g_max, 1e-300)
+        for m in range(n_loads):
+            if flat:
+                out[n, m] = -np.inf
+                continue
+            d0 = -tau[n, m, 0] - c0
+            d1 = -tau[n, m, 1] - c1
+            d2 = -tau[n, m, 2] - c2
+            best = np.inf
+            for p in range(15):
+                if valid[p]:
+                    off = d0 * unit[p, 0] + d1 * unit[p, 1] + d2 * unit[p, 2]
+                    best = min(best, h * width[p] - abs(off))
+            out[n, m] = best
+
+
+def wrench_margin_reference(J: np.ndarray, tau_load_A_Nm: np.ndarray, t_min_N: float,
+                            t_max_N: float) -> np.ndarray:
+    """:func:`wrench_margin_Nm` in vectorised numpy (the reference the kernel is tested against)."""
     J = np.asarray(J, float)
     tau = np.asarray(tau_load_A_Nm, float)
     single = tau.ndim == 2

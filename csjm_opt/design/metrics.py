@@ -243,12 +243,8 @@ def _feasible_at(rig: Rig, model: Model, tilt: np.ndarray, azimuth: np.ndarray, 
 
 
 def stiffness_affine_parts(model: Model, Rs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``K(T) = K0 + sum_i T_i K_i`` at each pose: K0 (n, 3, 3), K_i (n, 6, 3, 3)."""
-    n = Rs.shape[0]
-    R7 = np.repeat(Rs, 7, axis=0)
-    T7 = np.tile(np.vstack([np.zeros(6), np.eye(6)]), (n, 1))
-    K7 = model.stiffness(R7, T7).reshape(n, 7, 3, 3)
-    return K7[:, 0], K7[:, 1:] - K7[:, :1]
+    """``K(T) = K0 + sum_i T_i K_i`` at each pose (all cables taut): K0 (n, 3, 3), K_i (n, 6, 3, 3)."""
+    return model.stiffness_basis(Rs)
 
 
 def _shaping(rig: Rig, model: Model, pm: PoseMetrics, loads: LoadSet,

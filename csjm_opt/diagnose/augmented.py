@@ -83,7 +83,7 @@ class Evaluation:
     link_rotation: np.ndarray
     rows: Rows
     cable_stiffness_N_per_m: np.ndarray
-    R_body: np.ndarray | None = None          # true pose of the measured body (adjust_frame)
+    R_body: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))   # true body pose (adjust_frame)
     tau_weight_A_Nm: np.ndarray | None = None
     lengths_m: np.ndarray | None = None       # cable lengths at R_cable (set before adjust_tension)
     state_out: np.ndarray | None = None       # path state after this row (path-dependent effects)

@@ -134,9 +134,10 @@ def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray
     Fisher information of the scaled parameters under whitened noise."""
     scales = model.scales
     rows, R_meas = table.rows, table.R_meas
-    x = np.asarray(theta, float) / scales
+    theta = np.asarray(theta, float)
+    x = theta / scales
 
-    def g(R: np.ndarray, th: np.ndarray = np.asarray(theta, float)) -> np.ndarray:
+    def g(R: np.ndarray, th: np.ndarray = theta) -> np.ndarray:
         return model.balance(R, rows, th)
 
     g0 = g(R_meas)
@@ -144,7 +145,7 @@ def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray
     Jd = np.empty((g0.size, len(x)))
     for j in range(len(x)):
         step = 1e-6 * max(1.0, abs(x[j]))
-        th = np.array(theta, float)
+        th = theta.copy()
         th[j] += step * scales[j]
         Jd[:, j] = np.einsum("nij,nj->ni", WGinv, (g(R_meas, th) - g0) / step).ravel()
     return Jd

@@ -119,7 +119,8 @@ class Diagnosis:
         return {"effect": name, "heldout_rms_rad": sc.heldout_rms_rad, "train_rms_rad": sc.train_rms_rad,
                 "params": f.params(), "param_sd": f.param_sd(),
                 "nuisance": {k: v for k, v in f.params(False).items() if k not in f.params()},
-                "derived": {k: v for e, p in zip(m.effects, m.effect_params(f.theta)) for k, v in e.describe(p).items()},
+                "derived": {k: v for e, p in zip(m.effects, m.effect_params(f.theta))
+                            for k, v in e.describe(p).items()},
                 "prior_ranges": {k: list(v) for e in m.effects for k, v in e.ranges().items()},
                 "bic": f.bic, "p_eff": f.p_eff, "rank": f.rank, "n_params": m.n_params,
                 "condition": f.condition, "identifiable": f.identifiable, "failed_forward_solves": sc.failed_rows,

@@ -113,9 +113,13 @@ def nested_f_test(base: FitResult, cand: FitResult) -> tuple[float, float]:
 
 
 def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
-    """One-sided p-value that ``b``'s per-cycle held-out MSE is lower than ``a``'s (paired t over cycles)."""
+    """One-sided p-value that ``b``'s per-cycle held-out MSE is lower than ``a``'s.
+
+    Paired t-test over cycles of ``log(MSE_a / MSE_b)``: cycles with large loads have large
+    errors under both models, and the log ratio keeps them from drowning the rest."""
     ma, mb = a.cycle_mse(), b.cycle_mse()
-    d = np.array([ma[c] - mb[c] for c in ma])
+    tiny = 1e-30
+    d = np.array([np.log((ma[c] + tiny) / (mb[c] + tiny)) for c in ma])
     if len(d) < 2 or np.allclose(d, d[0]):
         return 0.0 if d.mean() > 0 else 1.0
     return float(stats.ttest_1samp(d, 0.0, alternative="greater").pvalue)

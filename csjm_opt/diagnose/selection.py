@@ -160,7 +160,7 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     The fits are many small dense problems: BLAS runs single-threaded inside (threads
     only contend for the cores there; parallelism belongs one level up, across logs).
     """
-    with threadpool_limits(1):
+    with threadpool_limits(1), np.errstate(all="ignore"):   # trial steps may overflow; fits guard themselves
         return _diagnose(rig, log, test, effects, noise, progress, secondary, ranges)
 
 

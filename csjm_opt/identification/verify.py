@@ -37,27 +37,96 @@ if TYPE_CHECKING:
 
 
 def predict_pose(R0: np.ndarray, K: np.ndarray, dtau_A_Nm: np.ndarray) -> np.ndarray:
-    """(61)-(62): ``R0 exp(hat(K^-1 dtau))`` for one increment (3,) or a stack (n, 3)."""
+    """Pose after a load increment, (61)-(62): ``R0 exp(hat(K^-1 dtau))``.
+
+    Parameters
+    ----------
+    R0 : ndarray, shape (3, 3)
+        Reference orientation of {A} in {B}.
+    K : ndarray, shape (3, 3)
+        Stiffness (N m/rad) used as predictor; ``K_D`` predicts a measured increment of
+        the moment's {A} components to first order (erratum 4 in docs/conventions.md).
+    dtau_A_Nm : array_like, shape (3,) or (n, 3)
+        Load increment(s) in {A} (N m).
+
+    Returns
+    -------
+    ndarray, shape (3, 3) or (n, 3, 3)
+        Predicted orientation(s) of {A} in {B}.
+
+    Raises
+    ------
+    NotARotation
+        If ``R0`` is not a rotation.
+    InvalidInput
+        If the shapes are wrong, a value is not finite, or ``K`` is singular.
+    """
     R0 = as_rotation(R0, "R0")
     K = as_array(K, (3, 3), "K")
-    dtau = np.asarray(dtau_A_Nm, float)
-    dzeta = np.linalg.solve(K, dtau.T).T
-    return R0 @ so3.exp(dzeta)
+    dtau = _increments(dtau_A_Nm, "dtau_A_Nm")
+    return R0 @ so3.exp(_solve(K, dtau.T, "K").T)
+
+
+def _increments(value: Any, name: str) -> np.ndarray:
+    """(3,) or (n, 3) finite floats, else :class:`InvalidInput`."""
+    arr = np.asarray(value, dtype=float) if not isinstance(value, str) else np.empty(0)
+    if arr.ndim not in (1, 2) or arr.shape[-1] != 3 or not np.all(np.isfinite(arr)):
+        raise InvalidInput(f"{name}: expected finite (3,) or (n, 3), got shape {arr.shape}", name)
+    return arr
+
+
+def _solve(K: np.ndarray, b: np.ndarray, name: str) -> np.ndarray:
+    """``K^-1 b``, with a singular ``K`` reported as :class:`InvalidInput`."""
+    try:
+        return np.linalg.solve(K, b)
+    except np.linalg.LinAlgError:
+        raise InvalidInput(f"{name} is singular: no pose follows from it", name) from None
 
 
 def predict_pose_external(R0: np.ndarray, K_D: np.ndarray, tau_load_ref_A_Nm: np.ndarray,
                           tau_ext_A_Nm: np.ndarray, model: Model, iterations: int = 50,
                           tol_rad: float = 1e-13) -> np.ndarray:
-    """Pose under a new external moment (n, 3), weight moment re-evaluated at the predicted pose.
+    """Pose under a new external moment, the weight moment re-evaluated at the predicted pose.
 
     Solves ``tau_ext + tau_weight(R0 exp(dzeta)) - tau_load_ref = K_D dzeta`` by fixed point.
+
+    Parameters
+    ----------
+    R0 : ndarray, shape (3, 3)
+        Reference orientation of {A} in {B}.
+    K_D : ndarray, shape (3, 3)
+        ``dtau_load/dzeta`` at the reference (N m/rad).
+    tau_load_ref_A_Nm : array_like, shape (3,)
+        Total load at the reference, in {A} (N m).
+    tau_ext_A_Nm : array_like, shape (3,) or (n, 3)
+        New external moment(s) in {A} (N m), platform weight excluded.
+    model : Model
+        Numeric model of the rig (for the weight moment).
+    iterations : int, optional
+        Largest number of fixed-point iterations.
+    tol_rad : float, optional
+        Stop when ``dzeta`` changes by less than this (rad).
+
+    Returns
+    -------
+    ndarray, shape (3, 3) or (n, 3, 3)
+        Predicted orientation(s) of {A} in {B}, one per row of ``tau_ext_A_Nm``.
+
+    Raises
+    ------
+    NotARotation
+        If ``R0`` is not a rotation.
+    InvalidInput
+        If the shapes are wrong, a value is not finite, or ``K_D`` is singular.
     """
     R0 = as_rotation(R0, "R0")
-    tau_ext = np.atleast_2d(np.asarray(tau_ext_A_Nm, float))
+    K_D = as_array(K_D, (3, 3), "K_D")
+    tau_ref = as_array(tau_load_ref_A_Nm, (3,), "tau_load_ref_A_Nm")
+    tau_ext = np.atleast_2d(_increments(tau_ext_A_Nm, "tau_ext_A_Nm"))
     dzeta = np.zeros_like(tau_ext)
     for _ in range(iterations):
         R = R0 @ so3.exp(dzeta)
-        new = np.linalg.solve(K_D, (tau_ext + model.weight_moment(R) - tau_load_ref_A_Nm).T).T
+        new = _solve(K_D, (tau_ext + model.weight_moment(R) - tau_ref).T, "K_D").T
         done = np.max(np.abs(new - dzeta)) < tol_rad
         dzeta = new
         if done:

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import so3
-from ..errors import DataFileError
+from ..errors import DataFileError, InvalidInput
 from .._fileio import atomic_write_text, read_text
 from .._limits import LIMITS, MAX_EXACT_INT, ROTVEC_MAX_NORM_RAD
 
@@ -66,8 +66,27 @@ class MeasurementLog:
         return rows
 
     def subset(self, rows: np.ndarray) -> "MeasurementLog":
-        """The log restricted to ``rows`` (kept in the given order)."""
+        """The log restricted to ``rows`` (kept in the given order).
+
+        Parameters
+        ----------
+        rows : array_like of int
+            Row indices (0-based, in the order wanted).
+
+        Returns
+        -------
+        MeasurementLog
+            A new log with those rows.
+
+        Raises
+        ------
+        InvalidInput
+            If an index is not an integer or is out of range.
+        """
         rows = np.asarray(rows)
+        if rows.size and (rows.dtype.kind not in "iu" or rows.min() < -len(self) or rows.max() >= len(self)):
+            raise InvalidInput(f"rows: expected integer indices in [0, {len(self)}), got {rows.tolist()[:8]}",
+                               "rows")
         return MeasurementLog(self.sample[rows], self.cycle[rows], self.rest_lengths_m[rows],
                               self.tau_ext_A_Nm[rows], self.rotvec_rad[rows],
                               {k: v[rows] for k, v in self.extra.items()}, self.source)
@@ -76,18 +95,48 @@ class MeasurementLog:
     @classmethod
     def from_arrays(cls, cycle, rest_lengths_m, tau_ext_A_Nm, R_or_rotvec, sample=None,
                     extra: dict | None = None) -> "MeasurementLog":
-        """Build from arrays; ``R_or_rotvec`` is (n, 3, 3) rotations or (n, 3) rotation vectors."""
-        X = np.asarray(R_or_rotvec, float)
+        """Build a log from arrays (one row per static equilibrium, in time order).
+
+        Parameters
+        ----------
+        cycle : array_like of int, shape (n,)
+            Load-cycle id of each row.
+        rest_lengths_m : array_like, shape (n, 6)
+            Commanded rest lengths (m).
+        tau_ext_A_Nm : array_like, shape (n, 3)
+            Measured external moments in {A} (N m), platform weight excluded.
+        R_or_rotvec : array_like, shape (n, 3, 3) or (n, 3)
+            Measured orientations of {A} in {B}, as rotations or rotation vectors (rad).
+        sample : array_like of int, shape (n,), optional
+            Unique row ids (default ``0 .. n-1``).
+        extra : dict of str to array_like (n,), optional
+            Extra columns, kept and written after the standard ones.
+
+        Returns
+        -------
+        MeasurementLog
+            The log, checked like a file (finite values, unique sample ids).
+
+        Raises
+        ------
+        InvalidInput
+            If the arrays do not share ``n`` rows or have the wrong shapes.
+        DataFileError
+            If a value is not finite or sample ids repeat.
+        """
+        X = _rows(R_or_rotvec, None, "R_or_rotvec")
+        if X.ndim not in (2, 3) or X.shape[1:] not in ((3,), (3, 3)):
+            raise InvalidInput(f"R_or_rotvec: expected (n, 3, 3) or (n, 3), got {X.shape}", "R_or_rotvec")
         rotvec = so3.log(X) if X.ndim == 3 else X
         n = rotvec.shape[0]
         if sample is not None and np.any(np.abs(np.asarray(sample, dtype=float)) > MAX_EXACT_INT):
             raise DataFileError("sample id outside +-(2^53 - 1)", None, None, "sample")
         if np.any(np.abs(np.asarray(cycle, dtype=float)) > MAX_EXACT_INT):
             raise DataFileError("cycle id outside +-(2^53 - 1)", None, None, "cycle")
-        sample = np.arange(n) if sample is None else np.asarray(sample, int)
-        log = cls(sample, np.asarray(cycle, int), np.asarray(rest_lengths_m, float).reshape(n, 6),
-                  np.asarray(tau_ext_A_Nm, float).reshape(n, 3), rotvec,
-                  {k: np.asarray(v) for k, v in (extra or {}).items()})
+        sample = np.arange(n) if sample is None else _rows(sample, (n,), "sample").astype(int)
+        log = cls(sample, _rows(cycle, (n,), "cycle").astype(int), _rows(rest_lengths_m, (n, 6), "rest_lengths_m"),
+                  _rows(tau_ext_A_Nm, (n, 3), "tau_ext_A_Nm"), rotvec,
+                  {k: _rows(v, (n,), k, float_=False) for k, v in (extra or {}).items()})
         _check_rows(log, None, lines=np.arange(2, n + 2))
         return log
 
@@ -154,6 +203,17 @@ class MeasurementLog:
         return buf.getvalue()
 
 
+def _rows(value, shape: tuple[int, ...] | None, name: str, float_: bool = True) -> np.ndarray:
+    """An array of ``shape`` (``None``: any), else :class:`InvalidInput` naming ``name``."""
+    try:
+        arr = np.asarray(value, float) if float_ else np.asarray(value)
+    except (TypeError, ValueError):
+        raise InvalidInput(f"{name}: expected numbers, got {value!r:.60}", name) from None
+    if shape is not None and arr.shape != shape:
+        raise InvalidInput(f"{name}: expected shape {shape}, got {arr.shape}", name)
+    return arr
+
+
 def parse_number(cell: str, column: str, source: str | None, line: int, integer: bool = False) -> float | int:
     """A finite number (an ``int`` if ``integer``) from a CSV cell, or a :class:`DataFileError`.
 
@@ -195,7 +255,8 @@ def _check_bounds(log: MeasurementLog, source: str | None, lines: np.ndarray) ->
             raise DataFileError(f"{value:.6g} outside {lim.describe()} ({lim.why.split(';')[0]})",
                                 source, int(lines[i]), columns[j])
     rv = log.rotvec_rad
-    norm = np.sqrt(np.sum(rv * rv, axis=1))
+    with np.errstate(over="ignore", invalid="ignore"):
+        norm = np.sqrt(np.sum(rv * rv, axis=1))
     bad = ~(norm <= ROTVEC_MAX_NORM_RAD)
     if bad.any():
         i = int(np.argmax(bad))

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from pathlib import Path
 from typing import Any
 
@@ -149,7 +150,7 @@ def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int,
                 raise DataFileError(f"{values[col]:.6g} outside {lim.describe()} ({lim.why.split(';')[0]})",
                                     source, line, col)
         if "rx" in values and "ry" in values and "rz" in values:
-            norm = float(np.linalg.norm([values["rx"], values["ry"], values["rz"]]))
+            norm = math.hypot(values["rx"], values["ry"], values["rz"])  # no overflow warning
             if not norm <= ROTVEC_MAX_NORM_RAD:
                 raise DataFileError(f"rotation vector of norm {norm:.6g} rad; expected a principal rotation "
                                     "vector (norm <= pi; degrees written as radians?)", source, line, "rx..rz")

@@ -4,8 +4,10 @@ The same closed forms as the numpy reference :mod:`csjm_opt.model.cable_terms`
 (read its docstring for the formulas), written as loops that allocate
 nothing: ``*_into`` functions write into arrays the caller owns, so a
 controller can call them every step at a cost of ~1 us. The ``*_many``
-functions loop over poses in parallel (``prange``; ``NUMBA_NUM_THREADS``
-threads). ``tests/test_stiffness_kernel.py`` checks every kernel against the
+functions loop over poses; their ``*_many_par`` twins do the same in
+parallel (``prange``, ``NUMBA_NUM_THREADS`` threads), for large batches
+called from the main thread (the workqueue threading layer must not be
+entered from two threads at once; see :func:`csjm_opt.model.numeric.parallel_ok`). ``tests/test_stiffness_kernel.py`` checks every kernel against the
 numpy reference, the CasADi model and a finite-difference energy Hessian.
 Compiled on first use and cached on disk (``cache=True``).
 
@@ -16,8 +18,16 @@ mass (kg m) in {A} and ``g`` gravity in {B}; ``R`` (3, 3) or ``Rs`` (n, 3, 3).
 
 from __future__ import annotations
 
+import os
+
+import numba
 import numpy as np
 from numba import njit, prange
+
+# The parallel kernels run in processes that a sweep may fork; GNU OpenMP aborts
+# on fork(), the workqueue layer does not (set NUMBA_THREADING_LAYER to override).
+if "NUMBA_THREADING_LAYER" not in os.environ:
+    numba.config.THREADING_LAYER = "workqueue"
 
 #: Status codes of :func:`checked_stiffness_into`.
 OK, NOT_A_ROTATION, NON_FINITE = 0, 1, 2
@@ -175,9 +185,80 @@ def checked_stiffness_into(A, B, k, mr, g, R, T, t_lo, t_hi, tau_ext, check_eq, 
     return OK
 
 
+@njit(cache=True)
+def all_exact_rotations(Rs):
+    """True when every (3, 3) of ``Rs`` is finite with ``||R^T R - I|| <= 1e-12`` and det > 0."""
+    for n in range(Rs.shape[0]):
+        for i in range(3):
+            for j in range(3):
+                if not np.isfinite(Rs[n, i, j]):
+                    return False
+        err, det = rotation_error(Rs[n])
+        if err > 1e-12 or det <= 0.0:
+            return False
+    return True
+
+
 # ------------------------------------------------------------------ many poses
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def geometry_many(A, B, Rs, c, J):
+    """Lengths ``c`` (n, 6) and J (n, 6, 3) for poses ``Rs`` (n, 3, 3)."""
+    for n in range(Rs.shape[0]):
+        U = np.empty((6, 3))
+        geometry_into(A, B, Rs[n], c[n], U, J[n])
+
+
+@njit(cache=True)
+def weight_moment_many(mr, g, Rs, out):
+    """Weight moments (n, 3) for poses ``Rs``."""
+    for n in range(Rs.shape[0]):
+        weight_moment_into(mr, g, Rs[n], out[n])
+
+
+@njit(cache=True)
+def stiffness_many(A, B, k, Rs, Ts, Ks):
+    """K (n, 3, 3) for poses ``Rs`` (n, 3, 3) and tensions ``Ts`` (n, 6)."""
+    for n in range(Rs.shape[0]):
+        c = np.empty(6)
+        U = np.empty((6, 3))
+        J = np.empty((6, 3))
+        geometry_into(A, B, Rs[n], c, U, J)
+        stiffness_from_geometry_into(A, k, c, U, J, Ts[n], Ks[n])
+
+
+@njit(cache=True)
+def rest_terms_many(A, B, k, Rs, ls, Ks, Ts, taus):
+    """:func:`rest_terms_into` for every pose; ``ls`` (n, 6)."""
+    for n in range(Rs.shape[0]):
+        rest_terms_into(A, B, k, Rs[n], ls[n], Ks[n], Ts[n], taus[n])
+
+
+@njit(cache=True)
+def stiffness_basis_many(A, B, k, Rs, K0, G):
+    """``K(T) = K0 + sum_i T_i G_i`` (all cables taut): K0 (n, 3, 3), G (n, 6, 3, 3)."""
+    for n in range(Rs.shape[0]):
+        c = np.empty(6)
+        U = np.empty((6, 3))
+        J = np.empty((6, 3))
+        e = np.zeros(6)
+        geometry_into(A, B, Rs[n], c, U, J)
+        # K0 = J^T diag(k) J; G_i = Hess(c_i) = (K(e_i) - k_i j_i j_i^T) at unit tension
+        for p in range(3):
+            for q in range(3):
+                s = 0.0
+                for i in range(6):
+                    s += k[i] * J[i, p] * J[i, q]
+                K0[n, p, q] = s
+        zero_k = np.zeros(6)
+        for i in range(6):
+            e[i] = 1.0
+            stiffness_from_geometry_into(A, zero_k, c, U, J, e, G[n, i])
+            e[i] = 0.0
+
+
+# ------------------------------------------------- many poses, parallel (main thread)
+@njit(cache=True, parallel=True)
+def geometry_many_par(A, B, Rs, c, J):
     """Lengths ``c`` (n, 6) and J (n, 6, 3) for poses ``Rs`` (n, 3, 3)."""
     for n in prange(Rs.shape[0]):
         U = np.empty((6, 3))
@@ -185,14 +266,14 @@ def geometry_many(A, B, Rs, c, J):
 
 
 @njit(cache=True, parallel=True)
-def weight_moment_many(mr, g, Rs, out):
+def weight_moment_many_par(mr, g, Rs, out):
     """Weight moments (n, 3) for poses ``Rs``."""
     for n in prange(Rs.shape[0]):
         weight_moment_into(mr, g, Rs[n], out[n])
 
 
 @njit(cache=True, parallel=True)
-def stiffness_many(A, B, k, Rs, Ts, Ks):
+def stiffness_many_par(A, B, k, Rs, Ts, Ks):
     """K (n, 3, 3) for poses ``Rs`` (n, 3, 3) and tensions ``Ts`` (n, 6)."""
     for n in prange(Rs.shape[0]):
         c = np.empty(6)
@@ -203,14 +284,14 @@ def stiffness_many(A, B, k, Rs, Ts, Ks):
 
 
 @njit(cache=True, parallel=True)
-def rest_terms_many(A, B, k, Rs, ls, Ks, Ts, taus):
+def rest_terms_many_par(A, B, k, Rs, ls, Ks, Ts, taus):
     """:func:`rest_terms_into` for every pose; ``ls`` (n, 6)."""
     for n in prange(Rs.shape[0]):
         rest_terms_into(A, B, k, Rs[n], ls[n], Ks[n], Ts[n], taus[n])
 
 
 @njit(cache=True, parallel=True)
-def stiffness_basis_many(A, B, k, Rs, K0, G):
+def stiffness_basis_many_par(A, B, k, Rs, K0, G):
     """``K(T) = K0 + sum_i T_i G_i`` (all cables taut): K0 (n, 3, 3), G (n, 6, 3, 3)."""
     for n in prange(Rs.shape[0]):
         c = np.empty(6)

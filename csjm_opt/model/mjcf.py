@@ -38,7 +38,7 @@ file's rest lengths or tensions are those planned for it by
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Iterable
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
@@ -54,7 +54,7 @@ def _f(x: float) -> str:
     return repr(float(x))
 
 
-def _v(values: Sequence[float]) -> str:
+def _v(values: Iterable[float]) -> str:
     return " ".join(_f(x) for x in values)
 
 

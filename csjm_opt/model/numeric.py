@@ -16,12 +16,15 @@ symbolic reference the kernels are tested against (evaluated by a CasADi
 from __future__ import annotations
 
 import functools
+import threading
 import weakref
-from typing import Callable
+from collections.abc import Callable
+from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from .._validate import as_rotations
 from . import _kernels as kernels
 from .casadi_model import build_functions
 from .rig import Rig
@@ -43,6 +46,36 @@ def _f64(X: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(X, dtype=np.float64)
 
 
+#: Batches at least this large run on all numba threads (smaller ones are not worth the start-up).
+PARALLEL_MIN_POSES = 4096
+
+
+def parallel_ok(n: int) -> bool:
+    """Whether ``n`` poses go to the parallel kernels: large batches, from the main thread only.
+
+    numba's workqueue threading layer (chosen because it survives ``fork()``)
+    must not be entered from two threads at once, so calls from other threads
+    (a threaded Dask worker, a GUI) run the serial kernels.
+    """
+    return n >= PARALLEL_MIN_POSES and threading.current_thread() is threading.main_thread()
+
+
+def as_rotations_fast(Rs: Any, name: str = "Rs") -> np.ndarray:
+    """:func:`csjm_opt._validate.as_rotations` with a compiled check for the common case.
+
+    A float64 stack of exact rotations (to 1e-12) is returned as is (no copy);
+    anything else goes through the validator (which explains or re-orthonormalises).
+    """
+    if isinstance(Rs, np.ndarray) and Rs.dtype == np.float64 and Rs.ndim == 3 and Rs.shape[1:] == (3, 3) \
+            and Rs.flags.c_contiguous and kernels.all_exact_rotations(Rs):
+        return Rs
+    return as_rotations(Rs, name)
+
+
+def _many(name: str, n: int):
+    return getattr(kernels, name + "_par" if parallel_ok(n) else name)
+
+
 class Model:
     """Cable geometry, Jacobian, moments and stiffness of one rig (compiled kernels).
 
@@ -61,6 +94,8 @@ class Model:
         self.k = _f64(rig.cable_stiffness_N_per_m).copy()
         self.first_moment_A_kgm = rig.platform_mass_kg * _f64(rig.com_A_m)
         self.g = _f64(rig.gravity_B_m_per_s2).copy()
+        self.t_mid = np.full(6, 0.5 * (rig.t_min_N + rig.t_max_N))
+        self.t_mid.setflags(write=False)
 
     @property
     def functions(self) -> dict[str, ca.Function]:
@@ -87,7 +122,7 @@ class Model:
             return c, J
         n = R.shape[0]
         c, J = np.empty((n, 6)), np.empty((n, 6, 3))
-        kernels.geometry_many(self.A, self.B, _f64(R), c, J)
+        _many("geometry_many", R.shape[0])(self.A, self.B, _f64(R), c, J)
         return c, J
 
     def cable_vectors_B(self, R: np.ndarray) -> np.ndarray:
@@ -114,7 +149,7 @@ class Model:
             kernels.stiffness_into(self.A, self.B, self.k, R, _f64(T), K)
             return K
         K = np.empty((R.shape[0], 3, 3))
-        kernels.stiffness_many(self.A, self.B, self.k, _f64(R), _f64(T), K)
+        _many("stiffness_many", R.shape[0])(self.A, self.B, self.k, _f64(R), _f64(T), K)
         return K
 
     def stiffness_rest(self, R: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -125,7 +160,7 @@ class Model:
         else:
             n = R.shape[0]
             K, T, tau = np.empty((n, 3, 3)), np.empty((n, 6)), np.empty((n, 3))
-            kernels.rest_terms_many(self.A, self.B, self.k, _f64(R), _f64(l), K, T, tau)
+            _many("rest_terms_many", R.shape[0])(self.A, self.B, self.k, _f64(R), _f64(l), K, T, tau)
         energy = 0.5 * np.sum(T * T / self.k, axis=-1)       # 1/2 k s^2 = 1/2 t^2 / k
         return K, T, tau, (float(energy) if R.ndim == 2 else energy)
 
@@ -144,14 +179,14 @@ class Model:
             kernels.weight_moment_into(self.first_moment_A_kgm, self.g, R, out)
             return out
         out = np.empty((R.shape[0], 3))
-        kernels.weight_moment_many(self.first_moment_A_kgm, self.g, _f64(R), out)
+        _many("weight_moment_many", R.shape[0])(self.first_moment_A_kgm, self.g, _f64(R), out)
         return out
 
     def stiffness_basis(self, Rs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``K(T) = K0 + sum_i T_i G_i`` (all cables taut): K0 (n, 3, 3), G (n, 6, 3, 3)."""
         n = Rs.shape[0]
         K0, G = np.empty((n, 3, 3)), np.empty((n, 6, 3, 3))
-        kernels.stiffness_basis_many(self.A, self.B, self.k, _f64(Rs), K0, G)
+        _many("stiffness_basis_many", Rs.shape[0])(self.A, self.B, self.k, _f64(Rs), K0, G)
         return K0, G
 
     def point_force_moment(self, R: np.ndarray, force_B_N: np.ndarray,
@@ -188,7 +223,7 @@ class Model:
         return [o.T if o.shape[1] == n else _unstack_h(o, n) for o in outs]
 
 
-_MODELS: "weakref.WeakKeyDictionary[Rig, Model]" = weakref.WeakKeyDictionary()
+_MODELS: weakref.WeakKeyDictionary[Rig, Model] = weakref.WeakKeyDictionary()
 
 
 def model_for(rig: Rig, model: Model | None = None) -> Model:
@@ -212,7 +247,7 @@ def _mapped(name: str, n: int, compiled: bool = False) -> Callable:
     return f.map(n, "serial")
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _jit(name: str) -> ca.Function:
     f = build_functions()[name]
     mx = f.mx_in()

@@ -31,7 +31,7 @@ import numpy as np
 
 from . import hexagon
 from .dynamics import Dynamics
-from ..errors import RigFileError
+from ..errors import InvalidInput, RigFileError
 from .._fileio import atomic_write_text, read_text
 from .._limits import LIMITS, MIN_HOLE_RADIUS_M, MIN_HOLE_SPACING_M
 
@@ -40,8 +40,8 @@ from .._limits import LIMITS, MIN_HOLE_RADIUS_M, MIN_HOLE_SPACING_M
 #: squares: the model's K at the corrected R0 under Table 3's pre-load (as the
 #: total load), tensions planned from mid-range, fitted to the symmetric part of
 #: Table 3's K_D gives k = 4638 N/m, rounded to 4600. Eigenvalues of K are then
-#: about 17, 27, 29 N m/rad against K_D's 6.8, 28.9, 30.6. See README and
-#: ``tests/test_rig.py``.
+#: about 17, 27, 29 N m/rad against K_D's 6.8, 28.9, 30.6. See docs/guide/modelling.md
+#: and ``tests/test_rig.py``.
 PAPER_CABLE_STIFFNESS_N_PER_M = 4600.0
 PAPER_T_MIN_N = 5.0
 PAPER_T_MAX_N = 150.0
@@ -108,7 +108,27 @@ class Rig:
         return np.full(6, 0.5 * (self.t_min_N + self.t_max_N))
 
     def replace(self, **changes: Any) -> "Rig":
-        """A copy with some fields changed (validated again)."""
+        """A copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields, e.g. ``cable_stiffness_N_per_m=[6000.0] * 6``.
+
+        Returns
+        -------
+        Rig
+            The changed copy; this rig is unchanged.
+
+        Raises
+        ------
+        InvalidInput
+            If a name is not a field of :class:`Rig` or a value is invalid.
+        """
+        unknown = sorted(set(changes) - {f.name for f in dataclasses.fields(self)})
+        if unknown:
+            raise InvalidInput(f"Rig has no field {', '.join(unknown)}; fields: "
+                               + ", ".join(f.name for f in dataclasses.fields(self)), unknown[0])
         return dataclasses.replace(self, **changes)
 
     # ------------------------------------------------------------ conversion
@@ -163,6 +183,16 @@ class Rig:
         if path is not None:
             atomic_write_text(path, text, overwrite=overwrite)
         return text
+
+
+    def to_mjcf(self, R: np.ndarray | None = None, tau_ext_A_Nm: np.ndarray | None = None, **options: Any) -> str:
+        """MuJoCo model (MJCF text) of this rig, rest lengths planned for ``R`` and ``tau_ext_A_Nm``.
+
+        See :func:`csjm_opt.model.mjcf.export_mjcf` (frames, actuation, options).
+        """
+        from .mjcf import export_mjcf
+
+        return export_mjcf(self, R, tau_ext_A_Nm, **options)
 
 
 def paper_rig(cable_stiffness_N_per_m: float = PAPER_CABLE_STIFFNESS_N_PER_M) -> Rig:

@@ -168,14 +168,15 @@ class EquilibriumSolver:
                 if not ok:
                     break
                 R = state[0]
-        if self.globalise and not (ok and _stable(state[1][2])):
+        stable = ok and _stable(state[1][2])
+        if self.globalise and not stable:
             # plain Newton failed or found a saddle: energy descent from the start (model/_descent.py)
             from . import _descent
 
             state, status = _descent.descend(self._evaluate, cable_terms_for(self.rig), self._evaluate._F,
                                              self._evaluate._P, l, R_init, tau_ext, self.tol_Nm,
                                              max_step_rad=self.max_step_rad)
-            ok = status in ("ok", "unstable")
+            ok, stable = status in ("ok", "unstable"), status == "ok"
             if status == "fell":
                 R, (g, *_, T, _, _), it = state
                 raise NoEquilibrium(f"no equilibrium within {np.degrees(_descent.FALL_ANGLE_RAD):.0f} deg of the "
@@ -189,7 +190,7 @@ class EquilibriumSolver:
             raise NoEquilibrium(f"no equilibrium found: residual {best:.3g} N m after {it} Newton steps "
                                 f"({n_slack} slack cables)", reason, best)
         eq = Equilibrium(R, l, T, tau_ext, tau_c, tau_p, K, K_t, it)
-        if not eq.stable:
+        if not stable:
             raise NoEquilibrium(f"equilibrium found is unstable: tangent stiffness eigenvalues "
                                 f"{np.round(np.linalg.eigvals(K_t).real, 4).tolist()} N m/rad "
                                 f"({n_slack} slack cables)", "slack" if n_slack else "unstable", best)
@@ -201,7 +202,14 @@ class EquilibriumSolver:
 
 
 def _stable(K_t: np.ndarray) -> bool:
-    return bool(np.all(np.isfinite(K_t)) and np.all(np.linalg.eigvals(K_t).real > 0))
+    """All eigenvalues of the 3x3 ``K_t`` have positive real part (Routh-Hurwitz on ``det(s I + K_t)``)."""
+    if not np.all(np.isfinite(K_t)):
+        return False
+    tr = K_t[0, 0] + K_t[1, 1] + K_t[2, 2]
+    m2 = (K_t[0, 0] * K_t[1, 1] - K_t[0, 1] * K_t[1, 0] + K_t[0, 0] * K_t[2, 2] - K_t[0, 2] * K_t[2, 0]
+          + K_t[1, 1] * K_t[2, 2] - K_t[1, 2] * K_t[2, 1])
+    det = float(np.linalg.det(K_t))
+    return bool(tr > 0 and det > 0 and tr * m2 > det)
 
 
 def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: npt.ArrayLike = (0.0, 0.0, 0.0),

@@ -25,11 +25,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _kernels as kernels
-from .numeric import Model, model_for
-from .rig import Rig
-from .._validate import ROTATION_TOL, as_array, as_rotation, as_rotations, as_vector3
+from .._validate import ROTATION_TOL, as_array, as_rotation, as_vector3
 from ..errors import InconsistentTensions, InvalidInput
+from . import _kernels as kernels
+from .numeric import Model, as_rotations_fast, model_for
+from .rig import Rig
 
 #: Default tolerances of the tension checks.
 BOUND_TOL_N = 1e-6
@@ -122,7 +122,7 @@ def stiffness_batch(rig: Rig, Rs: np.ndarray, tensions_N: np.ndarray, model: Mod
     InconsistentTensions : a row of tensions outside the bounds.
     """
     model = model_for(rig, model)
-    Rs = as_rotations(Rs)
+    Rs = as_rotations_fast(Rs)
     T = as_array(tensions_N, (Rs.shape[0], 6), "tensions")
     if check_bounds and T.size:
         viol = np.maximum(rig.t_min_N - T, T - rig.t_max_N).max(axis=1)

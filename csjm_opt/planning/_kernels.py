@@ -23,13 +23,13 @@ Compiled on first use and cached on disk (``cache=True``).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ..model._kernels import det3 as _det3
-from ..model._kernels import geometry_into, rotation_error, weight_moment_into  # noqa: F401 (re-exported)
+from ..model._kernels import geometry_into, rotation_error, weight_moment_into
 
 #: Status codes of :func:`solve_one`.
-OK, SINGULAR, NOT_CONVERGED = 0, 1, 2
+OK, SINGULAR, NOT_CONVERGED, BAD_INPUT = 0, 1, 2, 3
 
 
 @njit(cache=True)
@@ -100,8 +100,26 @@ def _rest_lengths(k, c, T, l):
 
 
 @njit(cache=True)
-def plan_one(A, B, k, mr, g, R, tau_ext, t_ref, lo, hi, max_iter, T, J, tau_w, c, l):
-    """Plan one pose cold: J, weight moment, the QP, cable and rest lengths. Returns a status."""
+def plan_one(A, B, k, mr, g, R, tau_ext, t_ref, lo, hi, max_iter, T, J, tau_w, c, l, info):
+    """Plan one pose cold: J, weight moment, the QP, cable and rest lengths. Returns a status.
+
+    BAD_INPUT when ``R`` is not a rotation to 1e-12 or an input is not finite
+    (the caller validates and calls again). ``info`` (2,) receives the
+    equilibrium residual ``||J^T T + tau_load||`` (N m) and the largest bound
+    violation (N) of the answer.
+    """
+    for p in range(3):
+        if not np.isfinite(tau_ext[p]):
+            return BAD_INPUT
+        for q in range(3):
+            if not np.isfinite(R[p, q]):
+                return BAD_INPUT
+    for i in range(6):
+        if not np.isfinite(t_ref[i]):
+            return BAD_INPUT
+    err, det = rotation_error(R)
+    if err > 1e-12 or det <= 0.0:
+        return BAD_INPUT
     U = np.empty((6, 3))
     geometry_into(A, B, R, c, U, J)
     weight_moment_into(mr, g, R, tau_w)
@@ -112,6 +130,17 @@ def plan_one(A, B, k, mr, g, R, tau_ext, t_ref, lo, hi, max_iter, T, J, tau_w, c
     upper = np.zeros(6, dtype=np.bool_)
     status = solve_one(J, b, t_ref, lo, hi, lower, upper, T, max_iter)
     _rest_lengths(k, c, T, l)
+    res = 0.0
+    for p in range(3):
+        r = -b[p]
+        for i in range(6):
+            r += J[i, p] * T[i]
+        res += r * r
+    viol = 0.0
+    for i in range(6):
+        viol = max(viol, lo - T[i], T[i] - hi)
+    info[0] = np.sqrt(res)
+    info[1] = viol
     return status
 
 
@@ -137,6 +166,18 @@ def plan_batch(A, B, k, mr, g, Rs, taus, t_ref, lo, hi, max_iter, T, J_out, tau_
                 lower[:] = False
                 upper[:] = False
         _rest_lengths(k, c_out[m], T[m], l_out[m])
+
+
+@njit(cache=True, parallel=True)
+def plan_batch_par(A, B, k, mr, g, Rs, taus, t_ref, lo, hi, max_iter, T, J_out, tau_w_out, c_out, l_out,
+                   status, n_chunks):
+    """:func:`plan_batch` on ``n_chunks`` consecutive chunks in parallel (warm starts within a chunk)."""
+    n = Rs.shape[0]
+    for ch in prange(n_chunks):
+        s = ch * n // n_chunks
+        e = (ch + 1) * n // n_chunks
+        plan_batch(A, B, k, mr, g, Rs[s:e], taus[s:e], t_ref[s:e], lo, hi, max_iter, T[s:e], J_out[s:e],
+                   tau_w_out[s:e], c_out[s:e], l_out[s:e], status[s:e])
 
 
 @njit(cache=True)

@@ -25,17 +25,18 @@ from __future__ import annotations
 
 import warnings
 
+import numba
 import numpy as np
 import qpsolvers
 from scipy import sparse
 from scipy.optimize import lsq_linear
 
+from .._validate import as_array, as_rotation, as_vector3
+from ..errors import InfeasibleLoad, InvalidInput, SolverError
+from ..model.numeric import Model, as_rotations_fast, model_for, parallel_ok
+from ..model.rig import Rig
 from . import _dense_qp as dense_qp
 from . import _kernels as kernels
-from ..errors import InfeasibleLoad, InvalidInput, SolverError
-from ..model.numeric import Model, model_for
-from ..model.rig import Rig
-from .._validate import as_array, as_rotation, as_rotations, as_vector3
 from .plans import TensionPlan, TensionPlanBatch
 
 __all__ = ["FEASIBILITY_TOL_NM", "SOLVERS", "TensionPlan", "TensionPlanBatch", "build_tension_qp",
@@ -101,25 +102,32 @@ def plan_tensions(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray = (0.0, 0.0,
     InfeasibleLoad : only when the load lies more than ``FEASIBILITY_TOL_NM``
         outside the wrench-feasible set (``distance_Nm`` says how far).
     """
-    R = _rotation(R)
-    tau_ext = _vector3(tau_ext_A_Nm, "tau_ext")
-    t_ref = _t_ref(rig, t_ref_N)
     _check_solver(solver)
     m = model_for(rig, model)
-    T, J, tau_w, c, l = np.empty(6), np.empty((6, 3)), np.empty(3), np.empty(6), np.empty(6)
+    R_arr, tau_ext = np.asarray(R, dtype=np.float64), np.asarray(tau_ext_A_Nm, dtype=np.float64)
+    t_ref = m.t_mid if t_ref_N is None else _t_ref(rig, t_ref_N)
+    if R_arr.shape != (3, 3) or tau_ext.shape != (3,):  # the validators say what is wrong
+        R_arr, tau_ext = as_rotation(R), as_vector3(tau_ext_A_Nm, "tau_ext")
+    T, J, tau_w, c, l, info = (np.empty(6), np.empty((6, 3)), np.empty(3), np.empty(6), np.empty(6),
+                               np.empty(2))
     default = solver in SOLVERS
-    status = kernels.plan_one(m.A, m.B, m.k, m.first_moment_A_kgm, m.g, R, tau_ext, t_ref, rig.t_min_N,
-                              rig.t_max_N, 40 if default else 0, T, J, tau_w, c, l)
+    args = (m.A, m.B, m.k, m.first_moment_A_kgm, m.g)
+    tail = (rig.t_min_N, rig.t_max_N, 40 if default else 0, T, J, tau_w, c, l, info)
+    status = kernels.plan_one(*args, R_arr, tau_ext, t_ref, *tail)
+    if status == kernels.BAD_INPUT:  # not a rotation to round-off, or not finite: validate, re-orthonormalise
+        R_arr, tau_ext = as_rotation(R), as_vector3(tau_ext_A_Nm, "tau_ext")
+        status = kernels.plan_one(*args, R_arr, tau_ext, t_ref, *tail)
     used = "active_set"
     if status != kernels.OK:
         b = -(tau_ext + tau_w)
-        T, used = _solve_hard(J, b, t_ref, rig, R, tau_ext, None if default else solver)
+        T, used = _solve_hard(J, b, t_ref, rig, R_arr, tau_ext, None if default else solver)
         l = c - T / m.k
-    plan = TensionPlan(T, R, tau_ext, tau_w, J, rig.t_min_N, rig.t_max_N, t_ref, used, c, l)
-    if not plan.is_valid(FEASIBILITY_TOL_NM, 1e-9):  # cannot happen unless a solver misbehaves
-        raise SolverError(f"{used}: tension plan fails its own check (residual "
-                          f"{plan.equilibrium_residual_Nm:.3g} N m, bound violation "
-                          f"{plan.bound_violation_N:.3g} N)", used)
+        info[0], info[1] = np.linalg.norm(J.T @ T - b), max(0.0, float(np.max(np.maximum(rig.t_min_N - T,
+                                                                                           T - rig.t_max_N))))
+    plan = TensionPlan(T, R_arr, tau_ext, tau_w, J, rig.t_min_N, rig.t_max_N, t_ref, used, c, l)
+    if info[0] > FEASIBILITY_TOL_NM or info[1] > 1e-9:  # cannot happen unless a solver misbehaves
+        raise SolverError(f"{used}: tension plan fails its own check (residual {info[0]:.3g} N m, "
+                          f"bound violation {info[1]:.3g} N)", used)
     return plan
 
 
@@ -148,7 +156,7 @@ def plan_tensions_batch(rig: Rig, Rs: np.ndarray, taus_A_Nm: np.ndarray | None =
     ------
     InfeasibleLoad : for the first pose whose load is infeasible (``index`` set).
     """
-    Rs = as_rotations(Rs, "Rs")
+    Rs = as_rotations_fast(Rs, "Rs")
     n = Rs.shape[0]
     taus = np.zeros((n, 3)) if taus_A_Nm is None else as_array(taus_A_Nm, (n, 3), "taus")
     t_ref = _t_ref_batch(rig, t_ref_N, n)
@@ -157,8 +165,12 @@ def plan_tensions_batch(rig: Rig, Rs: np.ndarray, taus_A_Nm: np.ndarray | None =
     T, J, tau_w = np.zeros((n, 6)), np.empty((n, 6, 3)), np.empty((n, 3))
     c, l = np.empty((n, 6)), np.empty((n, 6))
     status = np.full(n, kernels.NOT_CONVERGED, np.int64)
-    kernels.plan_batch(m.A, m.B, m.k, m.first_moment_A_kgm, m.g, Rs, taus, t_ref, rig.t_min_N,
-                       rig.t_max_N, 40 if solver in SOLVERS else 0, T, J, tau_w, c, l, status)
+    args = (m.A, m.B, m.k, m.first_moment_A_kgm, m.g, Rs, taus, t_ref, rig.t_min_N, rig.t_max_N,
+            40 if solver in SOLVERS else 0, T, J, tau_w, c, l, status)
+    if parallel_ok(n):  # consecutive chunks, one per thread, each warm-started along its poses
+        kernels.plan_batch_par(*args, numba.get_num_threads())
+    else:
+        kernels.plan_batch(*args)
     todo = np.flatnonzero(status != kernels.OK)
     for i in todo:
         try:
@@ -233,23 +245,6 @@ def _t_ref_batch(rig: Rig, t_ref_N: np.ndarray | None, n: int) -> np.ndarray:
     return np.ascontiguousarray(np.broadcast_to(_t_ref(rig, t_ref_N), (n, 6)))
 
 
-def _rotation(R: np.ndarray) -> np.ndarray:
-    """Fast path of :func:`as_rotation` for exact rotations (the common case)."""
-    arr = np.asarray(R, dtype=np.float64)
-    if arr.shape == (3, 3) and arr.flags.c_contiguous:
-        err, det = kernels.rotation_error(arr)
-        if err < 1e-12 and det > 0:
-            return arr
-    return as_rotation(R)
-
-
-def _vector3(v: np.ndarray, name: str) -> np.ndarray:
-    arr = np.asarray(v, dtype=np.float64) if not isinstance(v, str) else None
-    if arr is not None and arr.shape == (3,) and np.isfinite(arr).all():
-        return arr
-    return as_vector3(v, name)
-
-
 def _check_solver(solver: str) -> None:
     if solver not in SOLVERS and solver not in qpsolvers.available_solvers:
         raise InvalidInput(f"unknown QP solver {solver!r}; choose from "
@@ -262,6 +257,6 @@ def _solve_qp(problem: qpsolvers.Problem, solver: str) -> np.ndarray | None:
         with warnings.catch_warnings():  # infeasibility is reported by InfeasibleLoad instead
             warnings.simplefilter("ignore")
             sol = qpsolvers.solve_problem(problem, solver=solver, **opts)
-    except Exception as exc:  # noqa: BLE001 - backend errors are wrapped, never leaked
+    except Exception as exc:
         raise SolverError(f"{solver} failed: {exc}", solver) from exc
     return sol.x if sol.found and sol.x is not None else None

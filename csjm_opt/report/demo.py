@@ -3,9 +3,10 @@
 Steps (:data:`STEPS`, in order): plan tensions and compute K over a set of
 poses; shape the stiffness and run a short closed loop; simulate an
 experiment, identify K and verify it on held-out loads; diagnose a model-rig
-gap. Each step is a function ``step(ctx) -> StepOutput`` (see
-:mod:`csjm_opt.report._step`) returning its summary and its report section;
-adding a step is adding one entry to :data:`STEPS`. Everything lands in one
+gap; controllers with dynamics in a closed loop on MuJoCo. Each step is a
+function ``step(ctx) -> StepOutput`` (see :mod:`csjm_opt.report._step`)
+returning its summary and its report section; adding a step is adding one
+entry to :data:`STEPS`. Everything lands in one
 report folder: ``index.html`` (open it in a browser) and its Markdown twin
 ``README.md``, figures beside them, ``summary.json`` with every number, and the
 sub-reports ``experiment/index.html`` and ``diagnosis/index.html``.
@@ -22,7 +23,7 @@ import numpy as np
 from .._fileio import atomic_write_json
 from ..errors import InvalidInput
 from ..model.rig import Rig, paper_rig
-from . import core_step, diagnose_step, identify_step, shaping_step
+from . import core_step, diagnose_step, identify_step, mujoco_step, shaping_step
 from ._step import DemoContext, StepOutput
 from .document import Document, Link
 from .render import write_document
@@ -35,6 +36,7 @@ STEPS: list[tuple[str, Callable[[DemoContext], StepOutput]]] = [
     (shaping_step.NAME, shaping_step.step),
     (identify_step.NAME, identify_step.step),
     (diagnose_step.NAME, diagnose_step.step),
+    (mujoco_step.NAME, mujoco_step.step),
 ]
 
 __all__ = ["MARKER", "STEPS", "DemoContext", "StepOutput", "prepare_out_dir", "run"]

@@ -160,9 +160,47 @@ def _cutting_plane(basis: StiffnessBasis, tau_load: np.ndarray, t_min: float, t_
 def reachable_set(rig: Rig, R: np.ndarray, tau_ext_A_Nm: npt.ArrayLike = (0.0, 0.0, 0.0), n_samples: int = 2000,
                   rng: np.random.Generator | None = None, tol: float = 1e-6,
                   max_cuts: int = 200) -> ReachableSet:
-    """Eigenvalue and trace ranges of K over all feasible tensions at ``R`` under ``tau_ext``."""
+    """Eigenvalue and trace ranges of K over all feasible tensions at ``R`` under ``tau_ext``.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig (tension bounds from it).
+    R : ndarray, shape (3, 3)
+        Orientation of {A} in {B}.
+    tau_ext_A_Nm : array_like, shape (3,), optional
+        External moment in {A} (N m), platform weight excluded.
+    n_samples : int, optional
+        Random feasible tension vectors sampled for the inner estimate of the middle
+        eigenvalue's range (0 for none).
+    rng : numpy.random.Generator, optional
+        Random generator for the samples (seeded 0 by default: reproducible).
+    tol : float, optional
+        Gap (N m/rad) at which the cutting planes stop.
+    max_cuts : int, optional
+        Largest number of cutting planes per bound.
+
+    Returns
+    -------
+    ReachableSet
+        Eigenvalue ranges (with the method of each bound), trace range, the vertices of the
+        feasible tension polytope and the sampled eigenvalues.
+
+    Raises
+    ------
+    NotARotation
+        If ``R`` is not a rotation.
+    InvalidInput
+        If ``tau_ext_A_Nm`` or ``n_samples`` is invalid.
+    InfeasibleLoad
+        If no tensions within the bounds hold the load.
+    SolverError
+        If an LP fails.
+    """
     R = as_rotation(R)
     tau_ext = as_vector3(tau_ext_A_Nm, "tau_ext")
+    if not (isinstance(n_samples, (int, np.integer)) and n_samples >= 0):
+        raise InvalidInput(f"n_samples: expected an integer >= 0, got {n_samples!r}", "n_samples")
     rng = rng or np.random.default_rng(0)
     basis = stiffness_basis(rig, R)
     tau_load = tau_ext + basis.tau_weight_A_Nm

@@ -138,8 +138,9 @@ class Plant:
 
     def measured_moment(self, tau_ext_A_Nm: np.ndarray) -> np.ndarray:
         """What the F/T sensor reads without noise (N m): bias plus drift over the rows (time order)."""
-        t = np.arange(len(tau_ext_A_Nm))[:, None]
-        return tau_ext_A_Nm + self.sensor_bias_A_Nm + t * np.asarray(self.sensor_drift_A_Nm_per_row)
+        tau = np.asarray(tau_ext_A_Nm, float)
+        t = np.arange(len(tau))[:, None] if tau.ndim == 2 else 0.0       # rows in time order
+        return tau + self.sensor_bias_A_Nm + t * np.asarray(self.sensor_drift_A_Nm_per_row)
 
     def measured_pose(self, R_true: np.ndarray) -> np.ndarray:
         """What the tracker reports without noise: ``Q_B R Q_A``."""

@@ -80,7 +80,8 @@ def draw_noise(rng: np.random.Generator, ranges: RigRanges = RigRanges()) -> Ins
     """The paper's instrument noise with the F/T and tracker sigmas scaled independently."""
     paper = InstrumentNoise.paper()
     f_tau, f_angle = _u(rng, ranges.noise_factor), _u(rng, ranges.noise_factor)
-    return InstrumentNoise(tuple(f_tau * s for s in paper.tau_sigma_Nm), f_angle * paper.angle_sigma_rad)
+    tx, ty, tz = (f_tau * s for s in paper.tau_sigma_Nm)
+    return InstrumentNoise((tx, ty, tz), f_angle * paper.angle_sigma_rad)
 
 
 def holds_experiment(rig: Rig, rng: np.random.Generator, n_cycles: int = 4) -> bool:

@@ -6,9 +6,12 @@ from typing import Callable, Union
 
 import numpy as np
 
+from ...model.dynamics import Dynamics
 from ...model.rig import Rig
 from ...shaping.shaper import REGULARIZATION, Shaper, StiffnessObjective, make_objective
 from ..._validate import as_array
+from ._reference import MemoReference
+from ._rigid_body import RigidBody
 from .base import Observation, PoseHoldingController, PoseReference
 
 #: A stiffness target: a fixed (3, 3) matrix (N m/rad) or a function of time returning one.
@@ -23,13 +26,24 @@ class StiffnessShapingController(PoseHoldingController):
     is warm-started from the previous step, so a step costs tens of
     microseconds. ``objective``/``weights``/``directions`` as in
     :func:`csjm_opt.shaping.shaper.make_objective`.
+
+    With ``feedforward=True`` the load held also carries the inverse-dynamics
+    moment of the reference (as in
+    :class:`~csjm_opt.control.controllers.InverseDynamicsController`, inertia
+    from ``dynamics`` or the rig), and ``lookahead_s`` plans for the
+    reference that far ahead (one control period suits a plant with
+    inertia; 0 keeps the quasi-static behaviour). ``use_measured_load=False``
+    ignores the measured external moment.
     """
 
     def __init__(self, rig: Rig, R_ref: PoseReference, K_target: StiffnessReference,
                  weights: np.ndarray | None = None, objective: str = "frobenius",
                  directions: np.ndarray | None = None, integral_gain: float = 0.0,
-                 regularization: float = REGULARIZATION):
-        super().__init__(rig, R_ref, integral_gain)
+                 regularization: float = REGULARIZATION, feedforward: bool = False,
+                 lookahead_s: float = 0.0, use_measured_load: bool = True, dynamics: Dynamics | None = None):
+        super().__init__(rig, MemoReference(R_ref) if callable(R_ref) else R_ref, integral_gain)
+        self.feedforward, self.lookahead_s, self.use_measured_load = feedforward, float(lookahead_s), use_measured_load
+        self.body = RigidBody(rig, dynamics)
         self._K_target = K_target if callable(K_target) else as_array(K_target, (3, 3), "K_target")
         self._objective_args = (weights, objective, directions)
         self._shaper = Shaper(rig, regularization)
@@ -49,8 +63,17 @@ class StiffnessShapingController(PoseHoldingController):
             self._cache = (np.array(K_target, float), make_objective(K_target, *self._objective_args))
         return self._cache[1]
 
+    def commanded_pose(self, observation: Observation) -> np.ndarray:
+        if not self.lookahead_s:
+            return super().commanded_pose(observation)
+        return super().commanded_pose(Observation(observation.time_s + self.lookahead_s, observation.R,
+                                                  observation.tau_ext_A_Nm, observation.omega_A_rad_s))
+
     def tensions(self, R_cmd: np.ndarray, observation: Observation):
         K_target = self.target(observation.time_s)
-        T, basis, _ = self._shaper.solve(R_cmd, observation.tau_ext_A_Nm, self._objective(K_target))
+        tau = np.array(observation.tau_ext_A_Nm, float) if self.use_measured_load else np.zeros(3)
+        if self.feedforward:
+            tau -= self.body.reference_moment(self._R_ref, observation.time_s + self.lookahead_s)
+        T, basis, _ = self._shaper.solve(R_cmd, tau, self._objective(K_target))
         self._last_T = T
         return T, np.asarray(K_target, float), basis.K(T)

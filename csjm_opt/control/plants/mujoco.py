@@ -26,6 +26,7 @@ import mujoco
 import numpy as np
 
 from ...errors import InvalidInput
+from .. import _loop_kernels as loop_kernels
 from ...model.cable_terms import CableTerms
 from ...model.mjcf import quat_wxyz, rig_to_mjcf
 from ...model.perturbation import LOAD_FRAMES, stiffness_from_engine
@@ -96,7 +97,7 @@ class MujocoPlant(Plant):
     def _state(self) -> PlantState:
         R = self.R
         if self.actuation == "rest_length" and self._l is not None:
-            T, _, K = self._terms.rest_terms(R, self._l)
+            T, K = loop_kernels.rest_state(self._terms.A, self._terms.B, self._terms.k, R, self._l)
         else:
             T = np.clip(self.data.ctrl[:6], self.rig.t_min_N, self.rig.t_max_N) if self.actuation == "tension" \
                 else np.zeros(6)
@@ -145,7 +146,6 @@ class MujocoPlant(Plant):
             self._l = end.copy()
             lengthspring[:, 1] = end
         self._apply_load(load, t1_s)
-        mujoco.mj_forward(self.model, self.data)
         return self._state()
 
     # ------------------------------------------------------------ measurement

@@ -27,6 +27,14 @@ class StiffnessScale(Effect):
     def scales(self):
         return np.array([0.05])
 
+    @property
+    def lower_bounds(self):
+        return np.array([-2.0])
+
+    @property
+    def upper_bounds(self):
+        return np.array([2.0])
+
     def default_ranges(self):
         """A factor between 0.5 and 2."""
         return {"log_k_scale": (float(np.log(0.5)), float(np.log(2.0)))}

@@ -1,0 +1,52 @@
+"""``csjm export-mjcf``: a MuJoCo model (MJCF) of a rig, rest lengths planned for a pose and load."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from .. import so3
+from .._fileio import atomic_write_json, atomic_write_text, refuse_input_overwrite
+from .._validate import as_vector3
+from ..model.mjcf import ACTUATIONS, export_mjcf
+from ..model.rig import load_rig
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("export-mjcf", help="MuJoCo model (MJCF) of a rig",
+                       description="Write a MuJoCo model of the rig: ball joint at O, six pull-only tendon "
+                       "springs with rest lengths planned for the pose and load, the platform's mass and "
+                       "inertia, base sites fixed, load motors in {A}. Frames: world = {B}, body "
+                       "'platform' = {A}; the ball joint's qpos is R as (w, x, y, z).")
+    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
+    p.add_argument("--rotvec", nargs=3, type=float, default=(0.0, 0.0, 0.0), metavar=("RX", "RY", "RZ"),
+                   help="pose of {A} in {B} as a rotation vector (rad; default identity)")
+    p.add_argument("--tau", nargs=3, type=float, default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
+                   help="external moment about O in {A} (N m), platform weight excluded")
+    p.add_argument("--actuation", choices=ACTUATIONS, default="spring",
+                   help="cables as pull-only springs (default), winch actuators (ctrl = rest length) "
+                   "or tension motors (ctrl = tension)")
+    p.add_argument("--timestep", type=float, default=5e-4, help="engine step (s; default 5e-4)")
+    p.add_argument("--integrator", default="RK4", choices=("RK4", "implicitfast", "implicit", "Euler"),
+                   help="MuJoCo integrator (default RK4)")
+    p.add_argument("-o", "--output", required=True, metavar="FILE.xml", help="MJCF file to write")
+    p.add_argument("--json", metavar="PATH", help="write a summary as JSON ('-' = stdout)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    refuse_input_overwrite(args.output, args.rig, args.json)
+    rig = load_rig(args.rig)
+    rotvec, tau = as_vector3(args.rotvec, "--rotvec"), as_vector3(args.tau, "--tau")
+    xml = export_mjcf(rig, so3.exp(rotvec), tau, actuation=args.actuation, timestep_s=args.timestep,
+                      integrator=args.integrator)
+    path = atomic_write_text(args.output, xml)
+    if args.json:
+        atomic_write_json(args.json, {"output": str(path), "rotvec": rotvec.tolist(), "tau_ext": tau.tolist(),
+                                      "actuation": args.actuation, "timestep_s": args.timestep,
+                                      "integrator": args.integrator})
+    if args.json != "-":
+        print(f"wrote {path} (pose rotvec {np.round(rotvec, 4).tolist()} rad, load {np.round(tau, 4).tolist()} N m, "
+              f"{args.actuation} actuation)")
+    return 0
