@@ -3,7 +3,7 @@
 Perturb the platform at a static equilibrium, ``R exp(hat(zeta))``, and read
 the net moment ``Q`` on it (in {A}; in MuJoCo ``qfrc_smooth`` of the ball
 joint). The measured tangent stiffness ``-dQ/dzeta`` is **not** the cable
-stiffness ``K`` of the SPEC.md convention but::
+stiffness ``K`` of the load convention (docs/conventions.md) but::
 
     -dQ/dzeta = K + H_weight + s/2 hat(tau_ext)
 
@@ -44,7 +44,7 @@ def engine_stiffness(rig: Rig, R: np.ndarray, K: np.ndarray, tau_ext_A_Nm: np.nd
     R : (3, 3) array
         Equilibrium pose.
     K : (3, 3) array
-        Cable stiffness (SPEC.md convention), e.g. :attr:`Equilibrium.K`.
+        Cable stiffness (load convention, docs/conventions.md), e.g. :attr:`Equilibrium.K`.
     tau_ext_A_Nm : (3,) array
         External moment at the equilibrium, in {A}.
     load_fixed_in : {"A", "B"}

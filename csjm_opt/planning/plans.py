@@ -31,7 +31,7 @@ class TensionPlan:
 
     @property
     def tensions(self) -> np.ndarray:
-        """Alias of ``tensions_N`` (SPEC.md name)."""
+        """Alias of ``tensions_N`` (the documented API name)."""
         return self.tensions_N
 
     @property
@@ -89,7 +89,7 @@ class TensionPlanBatch:
 
     @property
     def tensions(self) -> np.ndarray:
-        """Alias of ``tensions_N`` (SPEC.md name)."""
+        """Alias of ``tensions_N`` (the documented API name)."""
         return self.tensions_N
 
     def __len__(self) -> int:
