@@ -16,12 +16,14 @@ A design is identified by a hash of the evaluation settings and its
 parameters, so a resumed run (or a larger grid over the same settings)
 skips every design already in the file.
 
-Local worker processes die with the sweep, whatever signal ends it (SIGKILL
-included): each asks the kernel for SIGKILL when its parent dies
-(``prctl(PR_SET_PDEATHSIG)`` on Linux) and also watches its parent pid, and
-each closes its inherited copy of the locked result file, so a killed sweep
-leaves no process behind and no lock held: running the same command again
-resumes it.
+Local worker processes are started by a fork server (``spawn`` where there is
+none), never forked from the sweep itself: they inherit neither the locked
+result file nor the OpenMP state of compiled kernels (forking a process that
+has used GNU OpenMP aborts the child). They die with the sweep, whatever signal
+ends it (SIGKILL included): each asks the kernel for SIGKILL when its parent
+dies (``prctl(PR_SET_PDEATHSIG)`` on Linux; the fork server exits when the
+sweep does) and a thread also watches the sweep's pid. A killed sweep leaves
+no process behind and no lock held: running the same command again resumes it.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ import ctypes
 import dataclasses
 import hashlib
 import json
+import multiprocessing
 import os
 import signal
 import sys
@@ -188,7 +191,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
             elif workers == 1 or len(todo) <= 1:
                 stream = ((i, evaluate_design(p, settings)) for i, p in todo)
             else:
-                stream = _run_processes(todo, settings, workers, store.fileno)
+                stream = _run_processes(todo, settings, workers)
             for i, record in stream:
                 record.update(id=ids[i], index=i, settings=digest)
                 store.append(record)
@@ -205,10 +208,19 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
                        duplicates=store.duplicates)
 
 
+def _pool_context() -> Any:
+    """A fork server (modules preloaded, so workers start fast), or ``spawn`` where there is none."""
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        ctx = multiprocessing.get_context("forkserver")
+        ctx.set_forkserver_preload(["csjm_opt.design.sweep"])
+        return ctx
+    return multiprocessing.get_context("spawn")  # pragma: no cover - Windows
+
+
 def _run_processes(todo: list[tuple[int, dict]], settings: EvaluationSettings,
-                   workers: int, lock_fd: int = -1) -> Iterator[tuple[int, dict[str, Any]]]:
-    pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers, initializer=_worker_init,
-                                                  initargs=(os.getpid(), lock_fd))
+                   workers: int) -> Iterator[tuple[int, dict[str, Any]]]:
+    pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context(),
+                                                  initializer=_worker_init, initargs=(os.getpid(),))
     try:
         futures = {pool.submit(evaluate_design, p, settings): i for i, p in todo}
         for future in concurrent.futures.as_completed(futures):
@@ -223,32 +235,43 @@ def _run_processes(todo: list[tuple[int, dict]], settings: EvaluationSettings,
 _PR_SET_PDEATHSIG = 1
 
 
-def _worker_init(parent_pid: int, lock_fd: int = -1) -> None:
-    """Set up a worker: leave Ctrl-C to the parent, drop the inherited lock, die with the parent.
+def _worker_init(sweep_pid: int) -> None:
+    """Set up a worker: leave Ctrl-C to the sweep, die with the sweep.
 
-    The parent stops the pool on Ctrl-C and keeps the file whole. If the
-    parent dies any other way, the kernel kills the worker (Linux
-    ``PR_SET_PDEATHSIG``); a thread watching the parent pid does the same
-    elsewhere (and covers a parent that died before the ``prctl``).
+    The sweep stops the pool on Ctrl-C and keeps the file whole. If it dies
+    any other way, the kernel kills the worker when its parent (the fork
+    server, which exits with the sweep) dies (Linux ``PR_SET_PDEATHSIG``), and
+    a thread watching the sweep's pid does the same elsewhere, and covers a
+    parent that died before the ``prctl``.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    if lock_fd >= 0:
-        try:
-            os.close(lock_fd)  # a forked copy of the locked descriptor: the lock stays with the parent
-        except OSError:
-            pass
     if sys.platform.startswith("linux"):
         try:
             ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
         except (OSError, AttributeError):  # pragma: no cover - no libc prctl
             pass
-    if os.getppid() != parent_pid:
+    if not _alive(sweep_pid):
         os._exit(1)
-    threading.Thread(target=_watch_parent, args=(parent_pid,), name="csjm-parent-watch", daemon=True).start()
+    threading.Thread(target=_watch_sweep, args=(sweep_pid,), name="csjm-sweep-watch", daemon=True).start()
 
 
-def _watch_parent(parent_pid: int, interval_s: float = 0.5) -> None:
-    while os.getppid() == parent_pid:
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie counts as dead)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # pragma: no cover - exists, owned by someone else
+        return True
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as fh:
+            return fh.read().rsplit(b")", 1)[1].split()[0] != b"Z"
+    except OSError:
+        return True  # no /proc: kill(0) said it exists
+
+
+def _watch_sweep(sweep_pid: int, interval_s: float = 0.5) -> None:
+    while _alive(sweep_pid):
         time.sleep(interval_s)
     os._exit(1)
 

@@ -204,27 +204,7 @@ class Model:
         return K
 
     def stiffness_rest(self, R: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any]:
-        """K, tensions, cable moment and cable energy for given rest lengths (slack cables drop out).
-
-        Parameters
-        ----------
-        R : ndarray, shape (3, 3) or (n, 3, 3)
-            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
-            top-level functions for user input).
-        l : ndarray, shape (6,) or (n, 6)
-            Rest lengths (m).
-
-        Returns
-        -------
-        K : ndarray, shape (3, 3) or (n, 3, 3)
-            Stiffness (N m/rad).
-        T : ndarray, shape (6,) or (n, 6)
-            Tensions ``k (c - l)`` of taut cables, else 0 (N).
-        tau : ndarray, shape (3,) or (n, 3)
-            Cable moment ``J^T T`` in {A} (N m).
-        energy : float or ndarray, shape (n,)
-            ``sum 1/2 k (c - l)^2`` over taut cables (J).
-        """
+        """K, tensions T, cable moment and cable energy for rest lengths ``l`` (m)."""
         if R.ndim == 2:
             K, T, tau = np.empty((3, 3)), np.empty(6), np.empty(3)
             kernels.rest_terms_into(self.A, self.B, self.k, R, _f64(l), K, T, tau)
@@ -352,7 +332,7 @@ def _squeeze(M: np.ndarray) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=32)
-def _mapped(name: str, n: int, compiled: bool = False) -> Any:
+def _mapped(name: str, n: int, compiled: bool = False) -> ca.Function:
     """``build_functions()[name].map(n)``, cached by size (JIT-compiled C if asked)."""
     f = _jit(name) if compiled else build_functions()[name]
     return f.map(n, "serial")

@@ -392,7 +392,7 @@ def _check(data: Any, path: str | None) -> None:
                                path, f"geometry.{name}")
         d = np.linalg.norm(P[:, None, :] - P[None, :, :], axis=-1) + np.eye(6) * 1e9
         if d.min() < MIN_HOLE_SPACING_M:
-            i, j = map(int, np.unravel_index(int(np.argmin(d)), d.shape))
+            i, j = (int(x) for x in np.unravel_index(int(np.argmin(d)), d.shape))
             raise RigFileError(f"holes {i + 1} and {j + 1} are {d[i, j] * 1e3:.3g} mm apart (at least "
                                f"{MIN_HOLE_SPACING_M * 1e3:g} mm: duplicated row?)", path, f"geometry.{name}")
 

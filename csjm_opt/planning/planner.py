@@ -26,11 +26,13 @@ from __future__ import annotations
 from typing import Any
 
 import warnings
+from typing import Any
 
 import numba
 import numpy as np
 import numpy.typing as npt
 import qpsolvers
+from numpy.typing import ArrayLike
 from scipy import sparse
 from scipy.optimize import lsq_linear
 
@@ -76,7 +78,7 @@ def build_tension_qp_for(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray,
 SOLVERS = ("active_set", "auto")
 
 
-def plan_tensions(rig: Rig, R: np.ndarray, tau_ext_A_Nm: npt.ArrayLike = (0.0, 0.0, 0.0),
+def plan_tensions(rig: Rig, R: np.ndarray, tau_ext_A_Nm: ArrayLike = (0.0, 0.0, 0.0),
                   t_ref_N: np.ndarray | None = None, solver: str = "active_set",
                   model: Model | None = None) -> TensionPlan:
     """Tensions that hold ``tau_ext`` (N m, {A}) at ``R``, closest to ``t_ref`` (N).
@@ -255,8 +257,7 @@ def _check_solver(solver: str) -> None:
 
 
 def _solve_qp(problem: qpsolvers.Problem, solver: str) -> np.ndarray | None:
-    opts: dict[str, Any]
-    opts = {"eps_abs": 1e-9, "eps_rel": 1e-9, "verbose": False} if solver == "osqp" else {}  # we polish ourselves
+    opts: dict[str, Any] = {"eps_abs": 1e-9, "eps_rel": 1e-9, "verbose": False} if solver == "osqp" else {}
     try:
         with warnings.catch_warnings():  # infeasibility is reported by InfeasibleLoad instead
             warnings.simplefilter("ignore")

@@ -7,6 +7,7 @@ from typing import Iterable
 import numpy as np
 
 from .. import so3
+from ..errors import InvalidInput
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import Rig
@@ -27,6 +28,8 @@ def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
     responds; the F/T reading (plus any bias) and the tracked pose get the
     instrument noise (``InstrumentNoise.paper()`` by default).
     """
+    if int(n_cycles) < 1 or int(steps) < 1:
+        raise InvalidInput(f"need n_cycles >= 1 and steps >= 1 (got {n_cycles}, {steps})", "n_cycles")
     noise = InstrumentNoise.paper() if noise is None else noise
     plant = effect if isinstance(effect, Plant) else make_plant(rig, effect, severity, rng)
     cycles = design_cycles(rig, n_cycles, rng, steps=steps)
