@@ -26,11 +26,9 @@ from __future__ import annotations
 from typing import Any
 
 import warnings
-from typing import Any
 
 import numba
 import numpy as np
-import numpy.typing as npt
 import qpsolvers
 from numpy.typing import ArrayLike
 from scipy import sparse
