@@ -18,7 +18,6 @@ from __future__ import annotations
 import functools
 import threading
 import weakref
-from collections.abc import Callable
 from typing import Any
 
 import casadi as ca
@@ -152,7 +151,7 @@ class Model:
         _many("stiffness_many", R.shape[0])(self.A, self.B, self.k, _f64(R), _f64(T), K)
         return K
 
-    def stiffness_rest(self, R: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def stiffness_rest(self, R: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any]:
         """K, tensions T, cable moment and cable energy for rest lengths ``l`` (m)."""
         if R.ndim == 2:
             K, T, tau = np.empty((3, 3)), np.empty(6), np.empty(3)
@@ -241,7 +240,7 @@ def _squeeze(M: np.ndarray) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=32)
-def _mapped(name: str, n: int, compiled: bool = False) -> Callable:
+def _mapped(name: str, n: int, compiled: bool = False) -> ca.Function:
     """``build_functions()[name].map(n)``, cached by size (JIT-compiled C if asked)."""
     f = _jit(name) if compiled else build_functions()[name]
     return f.map(n, "serial")
