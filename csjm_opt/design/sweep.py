@@ -71,7 +71,14 @@ class SweepResult:
         return self.computed / self.seconds if self.computed and self.seconds > 0 else 0.0
 
     def as_json(self) -> dict[str, Any]:
-        """The ``csjm sweep --json`` document (docs/conventions.md keys plus more)."""
+        """The ``csjm sweep --json`` document.
+
+        Returns
+        -------
+        dict
+            ``{"designs": [...], "designs_per_second", "computed", "skipped", "seconds",
+            "complete"}`` (keys in docs/conventions.md).
+        """
         designs = []
         for r in self.records:
             designs.append({"params": r["params"], "status": r["status"],
@@ -90,7 +97,22 @@ def design_id(settings_digest: str, params: dict[str, float]) -> str:
 
 
 def evaluate_design(params: dict[str, float], settings: EvaluationSettings) -> dict[str, Any]:
-    """Metrics record of one design: ``status`` "ok", "invalid" (geometry rejected) or "error"."""
+    """Metrics record of one design, as stored in a sweep's result file.
+
+    Parameters
+    ----------
+    params : dict of str to float
+        Design parameters (names in :data:`csjm_opt.design.PARAMETERS`).
+    settings : EvaluationSettings
+        Base design, sampling, loads and metric options of the sweep.
+
+    Returns
+    -------
+    dict
+        ``{"params", "status", "workspace_fraction", "min_stiffness_Nm_per_rad", "metrics",
+        "error"}``; ``status`` is ``"ok"``, ``"invalid"`` (geometry rejected, ``error`` says why)
+        or ``"error"``. Never raises for a bad design: the record carries the reason.
+    """
     start = time.perf_counter()
     try:
         rig = design_rig({**settings.base, **params}, settings.limits)
@@ -115,10 +137,40 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
               stop_after: int | None = None, connect_timeout_s: float = 10.0) -> SweepResult:
     """Evaluate the designs of ``spec`` missing from ``out`` and return all of them.
 
-    ``progress=None`` shows a bar only on a terminal. ``stop_after`` stops
-    after that many designs were written (an orderly interruption, for tests
-    and for splitting a long sweep into sessions). ``connect_timeout_s``
-    bounds the wait for a Dask scheduler.
+    Each finished design is appended to ``out`` (JSON Lines, flushed and fsynced); running again
+    resumes, skipping finished designs.
+
+    Parameters
+    ----------
+    spec : SweepSpec
+        The sweep (from :meth:`SweepSpec.from_toml`).
+    out : str or Path
+        Result file; created, or resumed when it exists with the same settings.
+    workers : int, optional
+        Local worker processes (1 runs in this process); with ``dask``, the local cluster size.
+    scheduler : str, optional
+        Address of a running Dask scheduler (``tcp://host:8786``).
+    dask : bool, optional
+        Run on Dask; without ``scheduler``, on a local cluster.
+    progress : bool, optional
+        Show a progress bar on stderr; ``None`` shows it only on a terminal.
+    stop_after : int, optional
+        Stop after this many designs were written (an orderly interruption).
+    connect_timeout_s : float, optional
+        Longest wait for a Dask scheduler (s).
+
+    Returns
+    -------
+    SweepResult
+        Every design's record (finished before and now), counts and speed; ``as_json()`` gives
+        the ``csjm sweep --json`` document.
+
+    Raises
+    ------
+    DesignError
+        If ``workers < 1``, or ``out`` was made with other settings or is locked by a running sweep.
+    SolverError
+        If a worker process dies.
     """
     if workers < 1:
         raise DesignError(f"workers must be >= 1, got {workers}", "workers")

@@ -144,7 +144,25 @@ class StiffnessEstimate:
         return np.asarray(out)
 
     def covers(self, K_true: np.ndarray, which: str = "K") -> np.ndarray:
-        """(3, 3) mask: does the interval of ``which`` (K, K_sym, bootstrap) contain ``K_true``?"""
+        """Does the confidence interval of each entry contain the true value? (For simulation studies.)
+
+        Parameters
+        ----------
+        K_true : array_like, shape (3, 3)
+            The true stiffness (N m/rad).
+        which : {"K", "K_sym", "bootstrap"}, optional
+            Which interval: of the affine estimate, the symmetric one, or the pairs bootstrap.
+
+        Returns
+        -------
+        ndarray of bool, shape (3, 3)
+            True where the interval contains ``K_true``.
+
+        Raises
+        ------
+        InvalidInput
+            If ``which="bootstrap"`` but the estimate was made without bootstrap resamples.
+        """
         interval = {"K": self.K_ci, "K_sym": self.K_sym_ci, "bootstrap": self.bootstrap_K_ci}[which]
         if interval is None:
             raise InvalidInput("no bootstrap interval: identify with bootstrap > 0", "which")
@@ -152,11 +170,37 @@ class StiffnessEstimate:
         return (lo <= K_true) & (K_true <= hi)
 
     def is_well_conditioned(self, max_condition: float = MAX_CONDITION) -> bool:
+        """Whether the excitation determines K: condition number at most ``max_condition``.
+
+        Parameters
+        ----------
+        max_condition : float, optional
+            Largest accepted condition number of the excitation.
+
+        Returns
+        -------
+        bool
+        """
         return bool(np.isfinite(self.condition) and self.condition <= max_condition)
 
     def problems(self, max_condition: float = MAX_CONDITION, max_symmetry_z: float = 3.0,
                  max_chi2: float = 2.0) -> list[str]:
-        """What the estimate itself says is doubtful (empty list: nothing)."""
+        """What the estimate itself says is doubtful (an empty list: nothing).
+
+        Parameters
+        ----------
+        max_condition : float, optional
+            Largest accepted condition number of the excitation.
+        max_symmetry_z : float, optional
+            Largest accepted z-score of the asymmetry of K (K is symmetric in theory).
+        max_chi2 : float, optional
+            Largest accepted chi^2 per degree of freedom against the instrument model.
+
+        Returns
+        -------
+        list of str
+            One sentence per problem found.
+        """
         out = []
         if self.ill_conditioned or self.relative_half_width > MAX_RELATIVE_HALF_WIDTH:
             out.append(f"ill-conditioned: K determined only to {self.relative_half_width:.0%} of ||K|| "
@@ -179,6 +223,14 @@ class StiffnessEstimate:
         return out
 
     def as_dict(self) -> dict[str, Any]:
+        """The estimate as a JSON-able dict (the per-cycle entry of ``csjm identify --json``).
+
+        Returns
+        -------
+        dict
+            ``cycle``, ``K_D``, ``K_L``, ``K``, ``K_sym``, ``K_paper``, intervals, condition numbers,
+            symmetry, residuals and ``problems`` (keys in docs/conventions.md).
+        """
         d = {"cycle": self.cycle, "n_rows": self.n_rows, "order": self.order,
              "K_D": self.K_D, "K_L": self.K_L, "K": self.K, "K_sym": self.K_sym,
              "K_D_paper": self.K_D_paper, "K_paper": self.K_paper,

@@ -59,7 +59,23 @@ class MeasurementLog:
         return [int(self.cycle[i]) for i in sorted(first)]
 
     def cycle_rows(self, cycle: int) -> np.ndarray:
-        """Row indices of one cycle (time order)."""
+        """Row indices of one load cycle, in time order.
+
+        Parameters
+        ----------
+        cycle : int
+            A cycle id of this log.
+
+        Returns
+        -------
+        ndarray of int
+            Indices of the cycle's rows; the first is the cycle's reference.
+
+        Raises
+        ------
+        DataFileError
+            If the log has no such cycle.
+        """
         rows = np.flatnonzero(self.cycle == cycle)
         if rows.size == 0:
             raise DataFileError(f"no cycle {cycle} (cycles: {self.cycle_ids})", self.source)
@@ -129,12 +145,13 @@ class MeasurementLog:
             raise InvalidInput(f"R_or_rotvec: expected (n, 3, 3) or (n, 3), got {X.shape}", "R_or_rotvec")
         rotvec = so3.log(X) if X.ndim == 3 else X
         n = rotvec.shape[0]
-        if sample is not None and np.any(np.abs(np.asarray(sample, dtype=float)) > MAX_EXACT_INT):
+        sample = np.arange(n) if sample is None else _rows(sample, (n,), "sample")
+        cycle = _rows(cycle, (n,), "cycle")
+        if np.any(np.abs(sample) > MAX_EXACT_INT):
             raise DataFileError("sample id outside +-(2^53 - 1)", None, None, "sample")
-        if np.any(np.abs(np.asarray(cycle, dtype=float)) > MAX_EXACT_INT):
+        if np.any(np.abs(cycle) > MAX_EXACT_INT):
             raise DataFileError("cycle id outside +-(2^53 - 1)", None, None, "cycle")
-        sample = np.arange(n) if sample is None else _rows(sample, (n,), "sample").astype(int)
-        log = cls(sample, _rows(cycle, (n,), "cycle").astype(int), _rows(rest_lengths_m, (n, 6), "rest_lengths_m"),
+        log = cls(sample.astype(int), cycle.astype(int), _rows(rest_lengths_m, (n, 6), "rest_lengths_m"),
                   _rows(tau_ext_A_Nm, (n, 3), "tau_ext_A_Nm"), rotvec,
                   {k: _rows(v, (n,), k, float_=False) for k, v in (extra or {}).items()})
         _check_rows(log, None, lines=np.arange(2, n + 2))
@@ -142,7 +159,24 @@ class MeasurementLog:
 
     @classmethod
     def from_csv(cls, path: str | Path) -> "MeasurementLog":
-        """Read and validate a log file."""
+        """Read and validate a measurement log file (format in docs/conventions.md).
+
+        Parameters
+        ----------
+        path : str or Path
+            The CSV file (UTF-8, a byte-order mark is accepted).
+
+        Returns
+        -------
+        MeasurementLog
+            The log, rows in file order.
+
+        Raises
+        ------
+        DataFileError
+            If the file cannot be read, the header is wrong, or a row is malformed (missing,
+            non-numeric or non-finite value, duplicate sample id), naming the line.
+        """
         path = Path(path)
         text = read_text(path, lambda msg: DataFileError(msg, str(path)), "log file", encoding="utf-8-sig")
         return cls.from_text(text, str(path))
@@ -196,10 +230,35 @@ class MeasurementLog:
         return log
 
     def to_csv(self, path: str | Path, overwrite: bool = False) -> Path:
-        """Write atomically; an existing file is kept unless ``overwrite``."""
+        """Write the log as CSV, atomically.
+
+        Parameters
+        ----------
+        path : str or Path
+            Output file.
+        overwrite : bool, optional
+            Replace an existing file (by default an existing file is kept and an error raised).
+
+        Returns
+        -------
+        Path
+            The file written.
+
+        Raises
+        ------
+        InvalidInput
+            If the file exists and ``overwrite`` is false, or it cannot be written.
+        """
         return atomic_write_text(path, self.to_text(), overwrite=overwrite)
 
     def to_text(self) -> str:
+        """The log as CSV text (standard columns, then the extra ones).
+
+        Returns
+        -------
+        str
+            CSV text that :meth:`from_text` reads back to the same log.
+        """
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
         w.writerow(COLUMNS + tuple(self.extra))

@@ -12,12 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-<<<<<<< HEAD
-from .. import _loop_kernels as loop_kernels
-from ._rigid_body import _cross3
-=======
 from ...model.numeric import model_for
->>>>>>> kernel
 from ...model.rig import Rig
 from ...planning import _kernels as qp_kernels
 from ...planning.planner import plan_tensions
@@ -36,12 +31,7 @@ class TensionQP:
     def __call__(self, R: np.ndarray, tau_ext_A_Nm: np.ndarray) -> np.ndarray:
         """Tensions (6,) N that hold ``tau_ext_A_Nm`` (plus the weight) at ``R``."""
         R = np.ascontiguousarray(R, dtype=np.float64)
-<<<<<<< HEAD
-        J = loop_kernels.geometry(self._A, self._B, R)[2]
-        tau_w = _cross3(self._mr, R.T @ self._g)                              # (m r) x (R^T g)
-=======
         _, J, tau_w = self._model.pose_terms(R)
->>>>>>> kernel
         T = np.zeros(6)
         b = -(tau_w + np.asarray(tau_ext_A_Nm, float))
         status = qp_kernels.solve_one(J, b, self.t_ref, self.rig.t_min_N, self.rig.t_max_N, self._lower,

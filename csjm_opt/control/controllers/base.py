@@ -13,12 +13,7 @@ from typing import Callable, Union
 import numpy as np
 
 from ... import so3
-<<<<<<< HEAD
-from .. import _loop_kernels as loop_kernels
-from ...model.cable_terms import CableTerms
-=======
 from ...model.numeric import model_for
->>>>>>> kernel
 from ...model.rig import Rig
 from ..._validate import as_rotation
 
@@ -104,14 +99,8 @@ class PoseHoldingController(Controller):
         return R_ref
 
     def rest_lengths(self, R_cmd: np.ndarray, tensions_N: np.ndarray) -> np.ndarray:
-<<<<<<< HEAD
-        """``l = c(R_cmd) - T / k`` (m), closed form (compiled)."""
-        c = loop_kernels.geometry(self._terms.A, self._terms.B, np.ascontiguousarray(R_cmd, dtype=np.float64))[0]
-        return c - tensions_N / self._terms.k
-=======
         """``l = c(R_cmd) - T / k`` (m), closed form."""
         return self._model.geometry(R_cmd)[0] - tensions_N / self._model.k
->>>>>>> kernel
 
     @abc.abstractmethod
     def tensions(self, R_cmd: np.ndarray, observation: Observation) -> tuple[np.ndarray, np.ndarray | None,
