@@ -305,8 +305,8 @@ for label, opt, at in (("rotvec-1e308", "--rotvec 1e308 0 0", "--rotvec"),
                        ("tau-nan", "--tau nan 0 0", "--tau"), ("timestep-zero", "--timestep 0", "--timestep"),
                        ("timestep-nan", "--timestep nan", "--timestep")):
     add(f"export-mjcf-{label}", f"{MJCF} {opt}", at)
-add("export-mjcf-output-is-rig", "export-mjcf --rig {rig} -o {rig}", "--output")
-add("export-mjcf-output-is-dir", "export-mjcf --rig {rig} -o {dir}", "--output")
+add("export-mjcf-output-is-rig", "export-mjcf --rig {rig} -o {rig}", "-o/--output")
+add("export-mjcf-output-is-dir", "export-mjcf --rig {rig} -o {dir}", "-o/--output")
 add("export-mjcf-json-is-output", f"{MJCF} --json {{tmp}}/model.xml", "--json")
 add("export-mjcf-rig-fifo", "export-mjcf --rig {fifo} -o {tmp}/model.xml", "FIFO")
 add("report-results-fifo", "report {fifo} --out {tmp}/rep", "")
