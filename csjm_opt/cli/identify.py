@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from .._fileio import atomic_write_json
 from .._limits import MAX_BOOTSTRAP, MAX_EXACT_INT
