@@ -125,3 +125,31 @@ def test_two_effects_both_named(rig, logs):
 def test_unknown_effect_is_an_input_error(rig, logs):
     with pytest.raises(InvalidInput):
         diagnose(rig, logs["none"], effects=["gremlins"])
+
+
+def test_prior_overrides_from_the_command_line():
+    from csjm_opt.cli.diagnose import _priors
+    from csjm_opt.errors import UsageError
+
+    assert _priors(["dA*_m=-0.01:0.01", "log_k_scale=-1:1"]) == {"dA*_m": (-0.01, 0.01), "log_k_scale": (-1.0, 1.0)}
+    for bad in ("dA1_x_m", "x=1:0", "x=a:b", "=0:1"):
+        with pytest.raises(UsageError):
+            _priors([bad])
+
+
+def test_registration_error_without_its_model_is_not_passed_off_as_hole_offsets(rig):
+    """A 1 degree tracker rotation, diagnosed without its model: hole offsets within a few mm cannot close
+    the gap (and larger ones would be implausible), so the verdict is ``unexplained``, not ``hole_offsets``."""
+    import dataclasses
+
+    from csjm_opt import so3
+    from csjm_opt.testbed import Plant
+
+    Q = so3.exp(np.radians(1.0) * np.array([0.6, 0.8, 0]))
+    plant = dataclasses.replace(Plant.nominal(rig), tracker_rotation_B=Q)
+    log = simulate_experiment(rig, 6, np.random.default_rng(39), effect=plant, steps=3)
+    j = diagnose(rig, log, effects=["hole_offsets", "stiffness_scale"], secondary=False).as_json()
+    holes = next(c for c in j["candidates"] if c["effect"] == "hole_offsets")
+    assert holes["significant"] and not (holes["plausible"] and holes["closes_gap"])
+    assert j["selected"] == "unexplained" and j["verdict"]["warnings"]
+    assert max(abs(v) for v in holes["params"].values()) > 1e-3          # it did try mm-sized offsets

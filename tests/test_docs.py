@@ -57,3 +57,20 @@ def test_public_subpackage_names_are_documented_somewhere():
             if callable(obj) and not (getattr(obj, "__doc__", None) or "").strip():
                 missing.append(f"{pkg}.{name}")
     assert missing == []
+
+
+def test_errata_numbers_on_the_conventions_page_are_what_the_code_computes():
+    from csjm_opt.identification import paper_report
+
+    page = " ".join((ROOT / "docs" / "conventions.md").read_text().split())   # lines joined
+    rep = paper_report()
+    e_theta = ", ".join(f"{c['E_theta_rad']:.3f}" for c in rep["table4"])
+    assert e_theta in page                                                     # erratum 5
+    col_c = max(c["col_C_max_entry_error"] for c in rep["table4"])
+    assert f"column C to {col_c:.4f}" in page                                  # erratum 4
+    printed = [c["col_C_max_entry_error_K_printed"] for c in rep["table4"]]
+    assert f"errors of {min(printed):.3f}-{max(printed):.3f}" in page
+    assert f"`-hat(tau0)` to {rep['table3']['K_L_printed_vs_minus_hat_tau0']:.3f}" in page   # erratum 1
+    m = re.search(r"\|\|R\^T R - I\|\| = ([\d.]+) \(tolerance [\d.]+\), det = ([\d.]+)", rep["R0_printed_rejected"])
+    assert m and f"`||R0^T R0 - I|| = {float(m.group(1)):.3f}`" in page                  # erratum 3
+    assert f"`det R0 = {float(m.group(2)):.3f}`" in page

@@ -1,4 +1,4 @@
-"""Synthetic experiment generator: designs, plant physics, noisy logs in the SPEC format."""
+"""Synthetic experiment generator: designs, plant physics, noisy logs in the documented log format."""
 
 from __future__ import annotations
 
@@ -153,3 +153,5 @@ def test_outside_effects_make_a_gap_and_unknown_names_are_input_errors(rig):
             np.abs(clean.tau_ext_A_Nm - nominal.tau_ext_A_Nm).max() > 1e-4, name
     with pytest.raises(InvalidInput):
         make_plant(rig, "gremlins", 1.0, np.random.default_rng(0))
+    with pytest.raises(InvalidInput):
+        simulate_experiment(rig, 0, np.random.default_rng(0))

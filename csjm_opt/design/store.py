@@ -13,10 +13,10 @@ sweep's settings is refused rather than mixed. Lines repeating a design id
 ignored: the first record of each id is kept.
 
 The lock is taken with ``flock``, which the kernel drops when the holding
-process dies, so a sweep killed by any signal leaves no stale lock. Worker
-processes close their inherited copy of the descriptor and die with their
-parent (:mod:`csjm_opt.design.sweep`); while one is still exiting, opening
-retries for up to :data:`LOCK_WAIT_S` seconds before reporting the holders.
+process dies, so a sweep killed by any signal leaves no stale lock (worker
+processes never inherit the descriptor, see :mod:`csjm_opt.design.sweep`).
+Opening retries for up to :data:`LOCK_WAIT_S` seconds, so a sweep that is
+still exiting does not make a resumed one fail, before naming the holders.
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from .._fileio import read_bytes
 from ..errors import DesignError
 
 try:  # POSIX only; elsewhere the lock is skipped
@@ -44,12 +45,9 @@ def read_records(path: str | Path) -> tuple[list[dict[str, Any]], int]:
     Every complete line is returned, duplicates included (see :func:`unique_records`).
     """
     path = Path(path)
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
+    if not os.path.lexists(path):
         return [], 0
-    except OSError as exc:
-        raise DesignError(f"cannot read results: {exc.strerror}", "--out", str(path)) from exc
+    data = read_bytes(path, lambda msg: DesignError(msg, "--out", str(path)), "results file")
     end = data.rfind(b"\n") + 1          # complete lines end with a newline
     records = []
     for number, line in enumerate(data[:end].splitlines(), start=1):

@@ -19,6 +19,7 @@ import dataclasses
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..errors import SolverError
 from ..model import kinematics as kin
 from .augmented import N_NUISANCE, AugmentedModel
 from .residuals import ResidualTable
@@ -40,6 +41,25 @@ class FitResult:
     rank: int                  # numerical rank of the data Jacobian
     condition: float           # condition number of the scaled data Jacobian
     zeta_lin_rad: np.ndarray   # (n, 3) linearised pose residuals at the fit
+    jac_x: np.ndarray | None = None   # (3 n + priors, p) Jacobian of the scaled problem at the fit
+    res_x: np.ndarray | None = None   # (3 n + priors,) its residuals
+    free: np.ndarray | None = None    # (p,) parameters not at a bound
+
+    def refit_rows(self, keep: np.ndarray) -> np.ndarray:
+        """Parameters fitted to rows ``keep`` only: one Gauss-Newton step from this fit.
+
+        Exact for a linear problem, and the problem is linearised already (a whole refit
+        moves the parameters by the same step to first order); used for the held-out folds."""
+        if self.jac_x is None or self.res_x is None or self.free is None:
+            raise SolverError("this fit carries no Jacobian for a fold refit", "diagnose")
+        n = self.n_obs
+        idx = np.r_[(3 * np.asarray(keep)[:, None] + np.arange(3)).ravel(), np.arange(n, len(self.res_x))]
+        J, r = self.jac_x[idx][:, self.free], self.res_x[idx]
+        scales = self.model.scales
+        dx = np.zeros(len(scales))
+        dx[self.free] = -np.linalg.lstsq(J, r, rcond=None)[0]
+        x = np.clip(self.theta / scales + dx, self.model.lower_bounds / scales, self.model.upper_bounds / scales)
+        return x * scales
 
     @property
     def sigma2(self) -> float:
@@ -124,7 +144,7 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     cov = cov_x * np.outer(scales, scales)
     theta = x * scales
     zeta = linearised_zeta(model, table, theta)
-    return FitResult(model, theta, cov, rss, N, p_eff, rank, cond, zeta)
+    return FitResult(model, theta, cov, rss, N, p_eff, rank, cond, zeta, Jfull, res(x), free)
 
 
 def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray) -> np.ndarray:

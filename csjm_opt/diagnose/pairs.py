@@ -17,6 +17,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..errors import CsjmError
 from ..model.rig import Rig
 from .augmented import N_NUISANCE, AugmentedModel
 from .effects import Effect
@@ -82,5 +83,8 @@ def all_separabilities(rig: Rig, table: ResidualTable, singles: dict[str, Candid
     for i, a in enumerate(fitted):
         for b in fitted[i + 1:]:
             fa, fb = singles[a].fit, singles[b].fit
-            out[(a, b)] = separability(rig, table, fa.model.effects[0], fa.theta, fb.model.effects[0], fb.theta)
+            try:
+                out[(a, b)] = separability(rig, table, fa.model.effects[0], fa.theta, fb.model.effects[0], fb.theta)
+            except (np.linalg.LinAlgError, CsjmError) as exc:      # reported, never guessed
+                out[(a, b)] = {"max_correlation": float("nan"), "separable": False, "error": str(exc)}
     return out

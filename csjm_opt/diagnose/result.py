@@ -26,7 +26,8 @@
     steps               the greedy path: [{model, heldout_rms_rad, fraction_explained}]
     confounded_with     effects whose single fits are not separable from the selected one
                         and not significantly worse on held-out cycles
-    verdict             {selected, reason, warnings[]}: why, in words
+    verdict             {selected, reason, warnings[], alternatives[]}: why, in words; alternatives are
+                        detected effects not separable from the selected one on this log
     significance        the decision rule's constants and tests
     gap                 {before_rad, after_rad, fraction_explained, systematic_before_rad,
                          systematic_after_rad, noise_floor_after_rad, fraction_explained_by_nominal_refit,

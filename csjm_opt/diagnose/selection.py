@@ -43,7 +43,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from ..errors import CsjmError
+from ..errors import CsjmError, SolverError
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import Rig
@@ -154,6 +154,8 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     ------
     InvalidInput
         Fewer than two cycles and no test log, an unknown effect name, or a malformed log.
+    SolverError
+        The nominal model cannot be evaluated on the log (singular tangents: slack cables).
 
     Notes
     -----
@@ -161,7 +163,11 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     only contend for the cores there; parallelism belongs one level up, across logs).
     """
     with threadpool_limits(1), np.errstate(all="ignore"):   # trial steps may overflow; fits guard themselves
-        return _diagnose(rig, log, test, effects, noise, progress, secondary, ranges)
+        try:
+            return _diagnose(rig, log, test, effects, noise, progress, secondary, ranges)
+        except np.linalg.LinAlgError as exc:      # e.g. rows where every cable is slack at the measured pose
+            raise SolverError(f"the nominal model cannot be evaluated on this log ({exc}); check that the log "
+                              "belongs to this rig (cables taut at the measured poses)", "numpy") from exc
 
 
 def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Diagnosis:
@@ -214,6 +220,12 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
             if n != selected and paired_heldout_test(singles[n], singles[selected]) >= HELDOUT_ALPHA \
                     and (sep is None or not sep["separable"]):
                 confounded.append(n)
+    alternatives = [n for n in detected if n != selected and selected in singles
+                    and any(set(p["effects"]) == {n, selected} and not p["separable"] for p in pairs)]
+    verdict["alternatives"] = alternatives
+    if alternatives:
+        verdict["warnings"].append(f"{selected} is not separable on this log from {', '.join(alternatives)} "
+                                   "(detected too; Fisher block correlation above the separability limit)")
     steps = [{"model": "nominal_refit", "heldout_rms_rad": baseline.heldout_rms_rad}]
     if first is not None:
         steps.append({"model": first, "heldout_rms_rad": singles[first].heldout_rms_rad})

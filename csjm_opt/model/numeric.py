@@ -129,20 +129,72 @@ class Model:
         return self.B - self.A @ np.swapaxes(R, -1, -2)
 
     def cable_lengths(self, R: np.ndarray) -> np.ndarray:
-        """Cable lengths ``c_i`` (m): (6,) or (n, 6)."""
+        """Cable lengths ``c_i = ||b_i - R a_i||``.
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3) or (n, 3, 3)
+            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
+            top-level functions for user input).
+
+        Returns
+        -------
+        ndarray, shape (6,) or (n, 6)
+            Lengths (m).
+        """
         return self.geometry(R)[0]
 
     def jacobian(self, R: np.ndarray) -> np.ndarray:
-        """J of (38): (6, 3) or (n, 6, 3); rows ``a_i x (R^T u_i)`` in {A}."""
+        """The Jacobian ``J`` of (38): row i is ``a_i x (R^T u_i)`` in {A}; ``dc = -J dzeta`` (40).
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3) or (n, 3, 3)
+            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
+            top-level functions for user input).
+
+        Returns
+        -------
+        ndarray, shape (6, 3) or (n, 6, 3)
+            ``J`` per pose (m).
+        """
         return self.geometry(R)[1]
 
     def cable_moment(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
-        """Cables' moment ``J^T T`` on the platform about O, in {A} (N m)."""
+        """The cables' moment ``J^T T`` on the platform about O, in {A}.
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3) or (n, 3, 3)
+            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
+            top-level functions for user input).
+        T : ndarray, shape (6,) or (n, 6)
+            Cable tensions (N).
+
+        Returns
+        -------
+        ndarray, shape (3,) or (n, 3)
+            Moment (N m).
+        """
         J = self.jacobian(R)
         return np.einsum("...ij,...i->...j", J, T)
 
     def stiffness(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
-        """K (docs/conventions.md load convention, N m/rad): (3, 3) or (n, 3, 3); ``T_i <= 0`` is slack."""
+        """The stiffness K (load convention of docs/conventions.md) for given tensions.
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3) or (n, 3, 3)
+            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
+            top-level functions for user input).
+        T : ndarray, shape (6,) or (n, 6)
+            Cable tensions (N); ``T_i <= 0`` is a slack cable.
+
+        Returns
+        -------
+        ndarray, shape (3, 3) or (n, 3, 3)
+            K (N m/rad), symmetric.
+        """
         if R.ndim == 2:
             K = np.empty((3, 3))
             kernels.stiffness_into(self.A, self.B, self.k, R, _f64(T), K)
@@ -164,15 +216,55 @@ class Model:
         return K, T, tau, (float(energy) if R.ndim == 2 else energy)
 
     def tensions_from_rest(self, R: np.ndarray, l: np.ndarray) -> np.ndarray:
-        """``t = k (c - l)`` for taut cables, 0 for slack ones (N)."""
+        """Tensions ``t = k (c - l)`` for taut cables, 0 for slack ones.
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3) or (n, 3, 3)
+            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
+            top-level functions for user input).
+        l : ndarray, shape (6,) or (n, 6)
+            Rest lengths (m).
+
+        Returns
+        -------
+        ndarray, shape (6,) or (n, 6)
+            Tensions (N).
+        """
         return np.maximum(self.k * (self.cable_lengths(R) - l), 0.0)
 
     def rest_lengths(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
-        """Rest lengths that produce tensions ``T`` at ``R``: ``l = c - T / k`` (m)."""
+        """Rest lengths that produce tensions ``T`` at ``R``: ``l = c - T / k``.
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3) or (n, 3, 3)
+            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
+            top-level functions for user input).
+        T : ndarray, shape (6,) or (n, 6)
+            Cable tensions (N).
+
+        Returns
+        -------
+        ndarray, shape (6,) or (n, 6)
+            Rest lengths (m).
+        """
         return self.cable_lengths(R) - np.asarray(T) / self.k
 
     def weight_moment(self, R: np.ndarray) -> np.ndarray:
-        """Moment of the platform's weight about O in {A} (N m): (3,) or (n, 3)."""
+        """Moment of the platform's weight about O, in {A}: ``m r_G x (R^T g)``, (56).
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3) or (n, 3, 3)
+            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
+            top-level functions for user input).
+
+        Returns
+        -------
+        ndarray, shape (3,) or (n, 3)
+            Moment (N m).
+        """
         if R.ndim == 2:
             out = np.empty(3)
             kernels.weight_moment_into(self.first_moment_A_kgm, self.g, R, out)

@@ -17,14 +17,15 @@ from ..control.controllers import StiffnessShapingController
 from .._fileio import atomic_write_json
 from ..control.load_profiles import Constant, Sinusoid, Step
 from ..model.numeric import Model
-from ..shaping.reachable import _lp, plot_reachable_set, reachable_set
+from ..shaping.figures import plot_reachable_set
+from ..shaping.reachable import _lp, reachable_set
 from ..model.rig import Rig
 from ..shaping.shaper import shape_stiffness, stiffness_basis
 from .._validate import as_rotation
 from ._step import DemoContext, StepOutput
 from .document import Cell, Column, Figure, Section, Table, quantity_table, sig
 
-#: Table 3's original pose R0 with ERRATA item 3 applied (element (3,2) = -0.300).
+#: Table 3's original pose R0 with erratum 3 applied (element (3,2) = -0.300).
 PAPER_R0 = np.array([[0.992, -0.060, -0.111], [0.090, 0.952, 0.292], [0.088, -0.300, 0.950]])
 #: A moderate external moment for the demo (N m, in {A}).
 DEMO_TAU_EXT = np.array([0.2, -0.5, 0.1])

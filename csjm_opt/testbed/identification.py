@@ -16,7 +16,7 @@ from typing import Iterable
 import numpy as np
 
 from .. import so3
-from ..errors import CsjmError
+from ..errors import CsjmError, InvalidInput
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..model.numeric import Model
@@ -46,6 +46,9 @@ def simulate_identification_experiment(
     ``effect`` injected) responds; instrument noise (``InstrumentNoise.paper()``
     by default) is added to the F/T moment and the tracked orientation.
     """
+    if int(n_cycles) < 1 or int(loads_per_cycle) < 1:
+        raise InvalidInput(f"need n_cycles >= 1 and loads_per_cycle >= 1 (got {n_cycles}, {loads_per_cycle})",
+                           "n_cycles")
     noise = InstrumentNoise.paper() if noise is None else noise
     plant = effect if isinstance(effect, Plant) else make_plant(rig, effect, severity, rng)
     model = Model(rig)

@@ -7,6 +7,7 @@ from typing import Iterable
 import numpy as np
 
 from .. import so3
+from ..errors import InvalidInput
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import Rig
@@ -22,11 +23,13 @@ def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
     """A log of ``n_cycles`` load cycles (``2 * steps + 1`` rows each) on ``rig``.
 
     ``effect``: ``None``/``"none"`` (nominal plant), an effect name from the
-    SPEC vocabulary, several names, or a ready :class:`Plant`. Rest lengths are
+    documented vocabulary, several names, or a ready :class:`Plant`. Rest lengths are
     commanded with the *nominal* rig (as an experimenter would); the plant
     responds; the F/T reading (plus any bias) and the tracked pose get the
     instrument noise (``InstrumentNoise.paper()`` by default).
     """
+    if int(n_cycles) < 1 or int(steps) < 1:
+        raise InvalidInput(f"need n_cycles >= 1 and steps >= 1 (got {n_cycles}, {steps})", "n_cycles")
     noise = InstrumentNoise.paper() if noise is None else noise
     plant = effect if isinstance(effect, Plant) else make_plant(rig, effect, severity, rng)
     cycles = design_cycles(rig, n_cycles, rng, steps=steps)
