@@ -21,7 +21,7 @@ in the engine: K measured by perturbation (weight Hessian and
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 
@@ -139,7 +139,7 @@ def stiffness_switch(rig: Rig, R: np.ndarray | None = None, tau_ext_A_Nm: np.nda
     load = lambda t: tau  # noqa: E731
     state = plant.reset(R, load=load)
     out, k, dt = {}, 0, 1e-3
-    for phase, t_end, _K_target in (("soft", switch_s, K_soft), ("stiff", end_s, K_stiff)):
+    for phase, t_end, K_target in (("soft", switch_s, K_soft), ("stiff", end_s, K_stiff)):
         while k * dt < t_end - 1e-12:
             cmd = ctrl(Observation(k * dt, state.R, state.tau_ext_A_Nm))
             state = plant.step(cmd, load, k * dt, (k + 1) * dt)

@@ -203,9 +203,9 @@ def _closed_loop_section(s: dict, figs: dict) -> Section:
     period_us = 1e6 * s["closed_loop_dt_s"]
     ok = err <= 1.5 * est and s["closed_loop_median_step_us"] < period_us
     verdict = (f"Held the pose for {s['closed_loop']['duration_s']:.2f} s ({s['closed_loop_steps']} steps) under a "
-               f"{sig(d['step_Nm'])} N m step and a {sig(d['sinusoid_amplitude_Nm'])} N m, {sig(d['sinusoid_Hz'])} Hz "
+               f"{d['step_Nm']:g} N m step and a {d['sinusoid_amplitude_Nm']:g} N m, {d['sinusoid_Hz']:g} Hz "
                f"disturbance about x, switching from soft (K_xx {sig(s['soft_Kxx_Nm_per_rad'])}) to stiff "
-               f"(K_xx {sig(s['stiff_Kxx_Nm_per_rad'])} N m/rad) at {sig(s['closed_loop_switch_s'])} s. Largest "
+               f"(K_xx {sig(s['stiff_Kxx_Nm_per_rad'])} N m/rad) at {s['closed_loop_switch_s']:g} s. Largest "
                f"pose error {sig(err, 3, 1e3)} mrad against the static estimate (step + amplitude) / K_xx,soft = "
                f"{sig(est, 3, 1e3)} mrad; final stiffness error "
                f"{sig(s['closed_loop_final_stiffness_error_Nm_per_rad'], 2)}"
