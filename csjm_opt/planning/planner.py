@@ -23,14 +23,11 @@ tension box; a load within that tolerance always gets a plan.
 
 from __future__ import annotations
 
-from typing import Any
-
 import warnings
 from typing import Any
 
 import numba
 import numpy as np
-import numpy.typing as npt
 import qpsolvers
 from numpy.typing import ArrayLike
 from scipy import sparse
