@@ -23,8 +23,6 @@ tension box; a load within that tolerance always gets a plan.
 
 from __future__ import annotations
 
-from typing import Any
-
 import warnings
 
 import numba
