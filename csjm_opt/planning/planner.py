@@ -24,6 +24,7 @@ tension box; a load within that tolerance always gets a plan.
 from __future__ import annotations
 
 import warnings
+from typing import Any
 
 import numba
 import numpy as np
