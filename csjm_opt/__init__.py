@@ -44,7 +44,8 @@ __version__ = "0.1.0"
 
 __all__ = sorted([
     "CsjmError", "DataFileError", "DesignError", "Diagnosis", "Equilibrium", "IllConditionedData",
-    "InconsistentTensions", "InfeasibleLoad", "InvalidInput", "MeasurementLog", "Model", "NoEquilibrium", "NotARotation",
+    "InconsistentTensions", "InfeasibleLoad", "InvalidInput", "MeasurementLog", "Model", "NoEquilibrium",
+    "NotARotation",
     "Rig", "RigFileError", "ShapingResult", "SolverError", "StiffnessEstimate", "TensionPlan",
     "TensionPlanBatch", "UsageError", "__version__", "diagnose_log", "identify_log",
     "identify_stiffness", "load_rig", "paper_rig", "plan_tensions", "plan_tensions_batch",

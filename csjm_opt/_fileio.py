@@ -196,7 +196,7 @@ def check_output(path: str | Path | None, *inputs: str | Path | None, name: str 
     out = Path(path)
     for item in inputs:
         if item is not None and str(item) not in ("-", "paper") and _same_file(out, Path(item)):
-            raise InvalidInput(f"{name} {path} is an input of this command ({item}); refusing to "
+            raise InvalidInput(f"{name} {path} is an input file of this command ({item}); refusing to "
                                "overwrite it", name)
     try:
         st = os.stat(out)
@@ -318,9 +318,13 @@ def atomic_write_text(path: str | Path, text: str, overwrite: bool = True) -> Pa
     return path
 
 
-def atomic_write_json(path: str | Path, data: Any, overwrite: bool = True) -> Path:
-    """Write JSON atomically (see :func:`atomic_write_text`); ``path == "-"`` prints to stdout instead."""
-    text = json.dumps(data, indent=2, default=_jsonable) + "\n"
+def atomic_write_json(path: str | Path, data: Any, overwrite: bool = True, indent: int | None = 2) -> Path:
+    """Write JSON atomically (see :func:`atomic_write_text`); ``path == "-"`` prints to stdout instead.
+
+    ``indent=None`` writes compact JSON with the C encoder (several times
+    faster: for large documents).
+    """
+    text = json.dumps(data, indent=indent, default=_jsonable) + "\n"
     if str(path) == "-":
         print(text, end="")
         return Path("-")

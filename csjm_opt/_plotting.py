@@ -22,13 +22,30 @@ def figure():
 
 
 def save(fig, path: str | Path) -> Path:
-    """Save atomically (temp file + rename) and close the figure."""
+    """Save atomically (temp file + rename) and close the figure.
+
+    A figure with constrained layout already fits its labels and outside legends, so it is drawn once;
+    any other figure is cropped to its content (``bbox_inches="tight"``, which draws it twice).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    path : str or Path
+        PNG (or any format matplotlib writes) to create or replace.
+
+    Returns
+    -------
+    Path
+    """
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
     os.close(fd)
     try:
-        fig.savefig(tmp, dpi=120, bbox_inches="tight")
+        constrained = isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine)
+        fig.savefig(tmp, dpi=120, bbox_inches=None if constrained else "tight")
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
@@ -48,7 +65,8 @@ def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.nda
     plt = figure()
     n = len(labels)
     show = tuple(show if show is not None else sorted({0, n // 2, n - 1}))
-    fig = plt.figure(figsize=(14, 9))
+    fig = plt.figure(figsize=(14, 9), layout="constrained")
+    fig.get_layout_engine().set(wspace=0.1)                  # room for the 3-D z labels, which the layout ignores
     grid = fig.add_gridspec(2, len(show) + 1, height_ratios=(1, 1.1), width_ratios=(1,) * len(show) + (1.3,))
     ax = fig.add_subplot(grid[0, :])
     width = 0.8 / 6
@@ -76,7 +94,7 @@ def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.nda
         a3.set_title(f"{labels[j]}\neig {np.round(w, 1).tolist()} N m/rad", fontsize=8)
         a3.set_xlabel("x (N m/rad)", fontsize=7)
         a3.set_ylabel("y (N m/rad)", fontsize=7)
-        a3.set_zlabel("z (N m/rad)", fontsize=7)
+        a3.set_zlabel("z (N m/rad)", fontsize=7, labelpad=-1)
         a3.tick_params(labelsize=6)
     ae = fig.add_subplot(grid[1, -1])
     eig = np.linalg.eigvalsh(K)
@@ -84,9 +102,10 @@ def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.nda
         ae.plot(np.arange(n), eig[:, k], "o-", ms=3, label=f"eigenvalue {k + 1}")
     ae.set_xticks(np.arange(n), [str(i) for i in range(n)], fontsize=7)
     ae.set_xlabel("pose index (as above)")
+    ae.yaxis.tick_right()
+    ae.yaxis.set_label_position("right")                     # clear of the ellipsoids' z labels
     ae.set_ylabel("eigenvalue of K (N m/rad)")
     ae.set_title("Eigenvalues of K per pose")
     ae.legend(fontsize=7, loc="best")
     fig.suptitle("Tensions and stiffness under the platform's weight (ellipsoid semi-axes: eigenvalues, N m/rad)")
-    fig.tight_layout()
     return save(fig, path)

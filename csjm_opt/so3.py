@@ -246,8 +246,12 @@ def angle_between(R1: Any, R2: Any) -> np.ndarray:
     Raises
     ------
     InvalidInput
-        If an input does not have shape (..., 3, 3).
+        If an input does not have shape (..., 3, 3) or the shapes do not broadcast.
     """
     R1 = _matrices(R1, "R1")
     R2 = _matrices(R2, "R2")
-    return np.linalg.norm(log(np.swapaxes(R1, -1, -2) @ R2), axis=-1)
+    try:
+        product = np.swapaxes(R1, -1, -2) @ R2
+    except ValueError:
+        raise InvalidInput(f"R1 {R1.shape} and R2 {R2.shape} do not broadcast", "R2") from None
+    return np.linalg.norm(log(product), axis=-1)

@@ -30,7 +30,7 @@ def main(out_dir: Path) -> dict:
 
     plan = co.plan_tensions(rig, R, tau_ext)          # QP: t_min <= T <= t_max, J^T T + tau_load = 0
     K = co.stiffness(rig, R, plan.tensions_N)         # N m/rad, symmetric, positive definite here
-    eq = co.solve_equilibrium(rig, co.rest_lengths_for(rig, R, plan.tensions_N), tau_ext, R_init=R)
+    eq = co.solve_equilibrium(rig, plan.rest_lengths_m, tau_ext, R_init=R)   # the rest lengths of the plan
 
     summary = {
         "tensions_N": plan.tensions_N.tolist(),

@@ -32,7 +32,8 @@ from csjm_opt.report.shaping_step import DEMO_TAU_EXT, PAPER_R0, soft_stiff_targ
 from csjm_opt._fileio import atomic_write_json
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.control.load_profiles import Constant, Sinusoid, Step
-from csjm_opt.shaping.reachable import plot_reachable_set, reachable_set
+from csjm_opt.shaping.figures import plot_reachable_set
+from csjm_opt.shaping.reachable import reachable_set
 from csjm_opt.model.rig import paper_rig
 from csjm_opt._validate import as_rotation
 

@@ -55,7 +55,8 @@ RAW_COLUMNS = ("record", "sample", "cycle", "name", "x", "y", "z", "rx", "ry", "
 
 def raw_text(edit: tuple[int, str, str] | None = None) -> str:
     recs = [{"record": "base_point", "name": f"b{i}", "x": x, "y": y, "z": z, "px": x, "py": y, "pz": z}
-            for i, (x, y, z) in enumerate([("0.1", "0", "0"), ("0", "0.1", "0"), ("0", "0", "0.1"), ("0.1", "0.1", "0")])]
+            for i, (x, y, z) in enumerate([("0.1", "0", "0"), ("0", "0.1", "0"), ("0", "0", "0.1"),
+                                           ("0.1", "0.1", "0")])]
     recs.append({"record": "sensor", "x": "0", "y": "0", "z": "0.02", "rx": "0", "ry": "0", "rz": "0"})
     for s in range(3):
         recs.append({"record": "sample", "sample": str(s), "cycle": "0", "x": "0", "y": "0", "z": "0",
@@ -122,9 +123,6 @@ for name, cmd in (("rig", PLAN), ("log", IDENT), ("raw", PRE), ("sweep", SWP)):
     add(f"{name}-missing", cmd.replace("{" + name + "}", "{tmp}/nothing_here"), "nothing_here")
 
 # ------------------------------------------------------------------ rig contents
-_RIG_NUMBERS = {"platform_holes": "[0.05773502691896258, -0.005, 0.08]", "base_holes": "[0.03983716857408418, -0.064, -0.08]",
-                "stiffness": "4600.0, 4600.0", "t_min": "t_min = 5.0", "t_max": "t_max = 150.0",
-                "mass": "mass = 0.4913", "com": "com = [0.0, 0.0, 0.081]", "gravity": "gravity = [0.0, 0.0, -9.81]"}
 _RIG_EDIT = {
     "platform_holes": lambda v: ("[0.05773502691896258, -0.005, 0.08]", f"[{v}, -0.005, 0.08]"),
     "base_holes": lambda v: ("[0.03983716857408418, -0.064, -0.08]", f"[{v}, -0.064, -0.08]"),
@@ -300,6 +298,23 @@ add("demo-json-under-file", "demo --out {tmp}/report --json {log}/x.json", "--js
 add("diagnose-json-is-log", "diagnose {log} --json {log}", "--json")
 add("diagnose-report-is-file", "diagnose {log} --report {rig}", "--report")
 add("diagnose-json-is-dir", "diagnose {log} --json {dir}", "--json")
+
+MJCF = "export-mjcf --rig {rig} -o {tmp}/model.xml"
+for label, opt, at in (("rotvec-1e308", "--rotvec 1e308 0 0", "--rotvec"),
+                       ("rotvec-norm", "--rotvec 2 2 2", "--rotvec"),
+                       ("tau-nan", "--tau nan 0 0", "--tau"), ("timestep-zero", "--timestep 0", "--timestep"),
+                       ("timestep-nan", "--timestep nan", "--timestep")):
+    add(f"export-mjcf-{label}", f"{MJCF} {opt}", at)
+add("export-mjcf-output-is-rig", "export-mjcf --rig {rig} -o {rig}", "-o/--output")
+add("export-mjcf-output-is-dir", "export-mjcf --rig {rig} -o {dir}", "-o/--output")
+add("export-mjcf-json-is-output", f"{MJCF} --json {{tmp}}/model.xml", "--json")
+add("export-mjcf-rig-fifo", "export-mjcf --rig {fifo} -o {tmp}/model.xml", "FIFO")
+add("report-results-fifo", "report {fifo} --out {tmp}/rep", "")
+add("report-results-utf16", "report {sweep} --out {tmp}/rep", "", sweep='{"id": 1}\n'.encode("utf-16"))
+add("report-top-zero", "report {sweep} --out {tmp}/rep --top 0", "--top")
+add("report-top-huge", "report {sweep} --out {tmp}/rep --top " + HUGE[:30], "--top")
+add("report-out-is-file", "report {sweep} --out {rig}", "--out")
+add("report-out-is-input", "report {sweep} --out {sweep}", "--out")
 
 # ------------------------------------------------------------------ usage
 add("no-command", "")

@@ -75,3 +75,17 @@ def test_every_subcommand_has_help(capsys):
             cli.main([name, "--help"])
         assert info.value.code == 0
         assert "usage" in capsys.readouterr().out
+
+
+def test_stiffness_near_the_boundary_with_default_solver_reports_stability(capsys):
+    """Issue 12 item 5: this feasible load was refused by the old OSQP default."""
+    code, out, err = _run(capsys, "stiffness", "--rotvec", "0.1", "-0.05", "0", "--tau", "10.80221", "0", "0",
+                          "--json", "-")
+    assert code == 0 and err == ""
+    data = json.loads(out)
+    assert data["solver"] == "active_set" and data["stable"] is True
+    assert np.linalg.eigvalsh(np.array(data["K"]))[0] > 0
+    for solver in ("osqp", "clarabel"):
+        code, out, _ = _run(capsys, "plan", "--rotvec", "0.1", "-0.05", "0", "--tau", "10.80221", "0", "0",
+                            "--solver", solver, "--json", "-")
+        assert code == 0 and json.loads(out)["equilibrium_residual_Nm"] < 1e-8

@@ -1,4 +1,4 @@
-"""``csjm diagnose``: SPEC JSON, report folder, bad logs, inputs never overwritten."""
+"""``csjm diagnose``: documented JSON, report folder, bad logs, inputs never overwritten."""
 
 from __future__ import annotations
 

@@ -4,10 +4,13 @@ repository, every API page names an importable module, and the guide's code snip
 from __future__ import annotations
 
 import importlib
+import os
 import re
 import subprocess
+import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -57,3 +60,61 @@ def test_public_subpackage_names_are_documented_somewhere():
             if callable(obj) and not (getattr(obj, "__doc__", None) or "").strip():
                 missing.append(f"{pkg}.{name}")
     assert missing == []
+
+
+def test_errata_numbers_on_the_conventions_page_are_what_the_code_computes():
+    from csjm_opt.identification import paper_report
+
+    page = " ".join((ROOT / "docs" / "conventions.md").read_text().split())   # lines joined
+    rep = paper_report()
+    e_theta = ", ".join(f"{c['E_theta_rad']:.3f}" for c in rep["table4"])
+    assert e_theta in page                                                     # erratum 5
+    col_c = max(c["col_C_max_entry_error"] for c in rep["table4"])
+    assert f"column C to {col_c:.4f}" in page                                  # erratum 4
+    printed = [c["col_C_max_entry_error_K_printed"] for c in rep["table4"]]
+    assert f"errors of {min(printed):.3f}-{max(printed):.3f}" in page
+    assert f"`-hat(tau0)` to {rep['table3']['K_L_printed_vs_minus_hat_tau0']:.3f}" in page   # erratum 1
+    m = re.search(r"\|\|R\^T R - I\|\| = ([\d.]+) \(tolerance [\d.]+\), det = ([\d.]+)", rep["R0_printed_rejected"])
+    assert m and f"`||R0^T R0 - I|| = {float(m.group(1)):.3f}`" in page                  # erratum 3
+    assert f"`det R0 = {float(m.group(2)):.3f}`" in page
+
+
+def test_library_never_picks_a_matplotlib_backend_or_shows_figures():
+    """Only the command line (cli/) and scripts choose Agg; library plot functions return axes."""
+    offenders = []
+    for path in (ROOT / "csjm_opt").rglob("*.py"):
+        if "cli" in path.relative_to(ROOT / "csjm_opt").parts:
+            continue
+        text = path.read_text()
+        for needle in ("matplotlib.use(", "plt.show(", "pyplot.show("):
+            if needle in text:
+                offenders.append(f"{path.relative_to(ROOT)}: {needle}")
+    assert offenders == []
+
+
+def test_importing_the_package_imports_no_plotting_or_cluster_library():
+    code = ("import sys, csjm_opt, csjm_opt.identification, csjm_opt.shaping, csjm_opt.design; "
+            "print(sorted(m for m in ('matplotlib.pyplot', 'mujoco', 'distributed') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
+                         env={**os.environ, "PYTHONPATH": str(ROOT)}, check=True).stdout
+    assert out.strip() == "[]"
+
+
+@pytest.mark.parametrize("plot", ["plot_convergence", "plot_verification"])
+def test_identification_plots_draw_on_the_given_axes(plot):
+    import matplotlib
+    from matplotlib.figure import Figure
+
+    from csjm_opt import identification
+
+    matplotlib.use("Agg")
+    ax = Figure().subplots()
+    if plot == "plot_convergence":
+        n = np.arange(5, 9.0)
+        curve = identification.ConvergenceCurve(n, n, n, n, 0.1 * n)
+        returned = identification.plot_convergence(curve, ax=ax)
+    else:
+        R = np.eye(3)[None].repeat(3, 0)
+        v = identification.verify_increments(np.eye(3), np.eye(3), np.zeros((3, 3)), R)
+        returned = identification.plot_verification([v], ax=ax)
+    assert returned is ax and (ax.lines or ax.patches)

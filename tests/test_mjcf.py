@@ -95,7 +95,7 @@ def test_cli_export(tmp_path, rig, capsys):
     before = rig_file.read_text()
     assert main(["export-mjcf", "--rig", str(rig_file), "-o", str(rig_file)]) == 2
     assert rig_file.read_text() == before
-    assert "input file" in capsys.readouterr().err
+    assert "refusing to overwrite" in capsys.readouterr().err
     assert main(["export-mjcf", "--rotvec", "0", "0", "3.0", "--tau", "50", "0", "0", "-o", str(out)]) == 2
 
 

@@ -113,3 +113,14 @@ def test_plant_input_errors(rig):
     with pytest.raises(co.InvalidInput):
         simulate(rig, TensionPlanningController(rig, np.eye(3)), Constant([0, 0, 0]), 0.01,
                  plant=MujocoPlant(rig), point_forces=[(np.array([0, 0, -1.0]), np.array([0, 0, 0.1]))])
+
+
+def test_tension_actuation_needs_and_takes_feedback(rig):
+    """Cables as force sources (no k J^T J): a PID with kp above the negative geometric stiffness
+    holds the pose and rejects an unknown step; the tensions stay within the rig's bounds."""
+    ctrl = SO3FeedbackController(rig, R_HOLD, kp=40.0, kd=0.5, ki=200.0, use_measured_load=False)
+    log = simulate(rig, ctrl, Step(0.5, [0.3, -0.2, 0.1]), 2.0, plant=MujocoPlant(rig, actuation="tension"))
+    e = log.pose_error_rad
+    assert e[:500].max() < 1e-9                              # at rest, planned tensions hold the pose
+    assert e[500:].max() > 1e-3 and e[-100:].max() < 0.01 * e[500:].max()
+    assert rig.t_min_N <= log.tensions_N[1:].min() and log.tensions_N[1:].max() <= rig.t_max_N

@@ -94,7 +94,7 @@ def test_slack_cables_contribute_nothing():
     assert np.linalg.norm(K_rest - H) / np.linalg.norm(H) < 1e-5
     T = np.maximum(rig.cable_stiffness_N_per_m * (c - l), 0.0)
     assert T[1] == 0.0 and T[4] == 0.0
-    K_t = co.stiffness(rig, R, T, check_bounds=False)    # t <= 0 marks a slack cable
+    K_t = co.stiffness(rig, R, T)                        # t <= 0 marks a slack cable (not out of bounds)
     assert _rel(K_t, K_rest) < REL
     # the CasADi rest-length form agrees, and its all-taut form does not (k j j^T of the slack cables)
     K_cas_rest = model.casadi("stiffness_rest", R, l)[0]
@@ -123,6 +123,9 @@ def test_stiffness_checks_its_tensions(rig):
         co.stiffness(rig, 1.1 * np.eye(3), np.full(6, 50.0))
     with pytest.raises(co.InconsistentTensions):
         co.stiffness_batch(rig, R[None], np.full((1, 6), 2.0))
+    with pytest.raises(co.InconsistentTensions):            # taut below t_min
+        co.stiffness(rig, R, np.array([2.0, 50, 50, 50, 50, 50]))
+    co.stiffness_batch(rig, R[None], np.array([[0.0, 50, 50, 50, 50, 50]]))   # slack: accepted
 
 
 def test_nearly_orthogonal_rotation_is_accepted_like_the_validator(rig):

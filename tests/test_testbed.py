@@ -1,4 +1,4 @@
-"""Synthetic experiment generator: designs, plant physics, noisy logs in the SPEC format."""
+"""Synthetic experiment generator: designs, plant physics, noisy logs in the documented log format."""
 
 from __future__ import annotations
 

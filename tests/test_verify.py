@@ -8,7 +8,8 @@ import pytest
 from csjm_opt import so3
 from csjm_opt.errors import InvalidInput
 from csjm_opt.identification.identify import identify_log, identify_stiffness
-from csjm_opt.identification.verify import (estimation_error, plot_verification, predict_pose, predict_pose_external,
+from csjm_opt.identification.figures import plot_verification
+from csjm_opt.identification.verify import (estimation_error, predict_pose, predict_pose_external,
                              verify_increments, verify_log)
 from identify_sim import load_directions, simulate_cycle, simulate_log
 

@@ -7,10 +7,11 @@ import argparse
 import numpy as np
 
 from .. import so3
-from .._fileio import atomic_write_json, atomic_write_text, refuse_input_overwrite
+from .._fileio import atomic_write_json, atomic_write_text
 from .._validate import as_vector3
 from ..model.mjcf import ACTUATIONS, export_mjcf
 from ..model.rig import load_rig
+from ._options import check_outputs, check_rotvec, float_in, quantity, rotvec_component
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -20,14 +21,15 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "inertia, base sites fixed, load motors in {A}. Frames: world = {B}, body "
                        "'platform' = {A}; the ball joint's qpos is R as (w, x, y, z).")
     p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
-    p.add_argument("--rotvec", nargs=3, type=float, default=(0.0, 0.0, 0.0), metavar=("RX", "RY", "RZ"),
-                   help="pose of {A} in {B} as a rotation vector (rad; default identity)")
-    p.add_argument("--tau", nargs=3, type=float, default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
+    p.add_argument("--rotvec", nargs=3, type=rotvec_component, default=(0.0, 0.0, 0.0),
+                   metavar=("RX", "RY", "RZ"), help="pose of {A} in {B} as a rotation vector (rad; default identity)")
+    p.add_argument("--tau", nargs=3, type=quantity("moment_Nm"), default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
                    help="external moment about O in {A} (N m), platform weight excluded")
     p.add_argument("--actuation", choices=ACTUATIONS, default="spring",
                    help="cables as pull-only springs (default), winch actuators (ctrl = rest length) "
                    "or tension motors (ctrl = tension)")
-    p.add_argument("--timestep", type=float, default=5e-4, help="engine step (s; default 5e-4)")
+    p.add_argument("--timestep", type=float_in(0.0, 0.1, low_open=True, unit="s"), default=5e-4,
+                   help="engine step (s; default 5e-4)")
     p.add_argument("--integrator", default="RK4", choices=("RK4", "implicitfast", "implicit", "Euler"),
                    help="MuJoCo integrator (default RK4)")
     p.add_argument("-o", "--output", required=True, metavar="FILE.xml", help="MJCF file to write")
@@ -36,9 +38,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    refuse_input_overwrite(args.output, args.rig, args.json)
+    check_outputs([args.rig], {"-o/--output": args.output, "--json": args.json})
     rig = load_rig(args.rig)
-    rotvec, tau = as_vector3(args.rotvec, "--rotvec"), as_vector3(args.tau, "--tau")
+    rotvec, tau = as_vector3(check_rotvec(args.rotvec), "--rotvec"), as_vector3(args.tau, "--tau")
     xml = export_mjcf(rig, so3.exp(rotvec), tau, actuation=args.actuation, timestep_s=args.timestep,
                       integrator=args.integrator)
     path = atomic_write_text(args.output, xml)

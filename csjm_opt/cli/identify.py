@@ -5,11 +5,16 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from .._fileio import atomic_write_json
 from .._limits import MAX_BOOTSTRAP, MAX_EXACT_INT
 from ..model.rig import load_rig
 from ._options import check_outputs, float_in, int_in
+
+
+#: Above this many cycles, one line per cycle is printed and the JSON is compact.
+LONG_LOG_CYCLES = 50
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -43,7 +48,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "(less finite-displacement bias; needs 11 / 21 rows)")
     p.add_argument("--noise", choices=("none", "paper"), default="none",
                    help="'paper': weight and correct with the instrument uncertainties of Tables 1-2")
-    p.add_argument("--ci-level", type=float_in(0, 1, low_open=True, high_open=True), default=0.95, help="confidence level (default 0.95)")
+    p.add_argument("--ci-level", type=float_in(0, 1, low_open=True, high_open=True), default=0.95,
+                   help="confidence level (default 0.95)")
     p.add_argument("--bootstrap", type=int_in(0, MAX_BOOTSTRAP), default=0, metavar="N",
                    help=f"pairs-bootstrap resamples per cycle (0 to {MAX_BOOTSTRAP})")
     p.add_argument("--max-condition", type=float_in(1, 1e12), default=None,
@@ -126,16 +132,22 @@ def run_identify(args: argparse.Namespace) -> int:
                                       **options | {"bootstrap": 0, "allow_ill_conditioned": True})
             ax = plot_convergence(curve, title=f"Cycle {e.cycle}: det K against measurements")
             figures.append(str(save(ax.figure, Path(args.figures) / f"convergence_cycle{e.cycle}.png")))
-    out = {"source": str(args.data), "cycles": [e.as_dict() for e in estimates], "skipped": skipped,
+    out: dict[str, Any] = {"source": str(args.data), "cycles": [e.as_dict() for e in estimates], "skipped": skipped,
            "figures": figures}
     if args.fit_parameters != "none":
         from ..identification.param_fit import fit_parameters
 
         fit = fit_parameters(log, rig, shared_stiffness=args.fit_parameters == "shared", noise=noise, model=model)
         out["parameters"] = fit.summary()
-    if args.json:
-        atomic_write_json(args.json, out)
-    if args.json != "-":
+    if args.json:  # compact (C encoder) for long logs: indented JSON of 10^4 cycles takes a minute
+        atomic_write_json(args.json, out, indent=2 if len(estimates) <= LONG_LOG_CYCLES else None)
+    if args.json != "-" and len(estimates) > LONG_LOG_CYCLES:  # one line per cycle
+        for e in estimates:
+            d = np.diag(e.K)
+            print(f"cycle {e.cycle}: {e.n_rows} rows, diag K [{d[0]:.3f}, {d[1]:.3f}, {d[2]:.3f}] N m/rad, "
+                  f"+-{e.relative_half_width:.1%} of ||K||, condition {e.condition:.3g}"
+                  + ("  ILL-CONDITIONED" if e.ill_conditioned else ""))
+    elif args.json != "-":
         np.set_printoptions(precision=3, suppress=True)
         for e in estimates:
             print(f"cycle {e.cycle}: {e.n_rows} rows, condition {e.condition:.3g}, symmetry error "
@@ -145,6 +157,7 @@ def run_identify(args: argparse.Namespace) -> int:
             print(f"  K_sym =\n{e.K_sym}")
             for problem in e.problems():
                 print(f"  warning: {problem}")
+    if args.json != "-":
         for s in skipped:
             print(f"cycle {s['cycle']}: skipped: {s['reason']}")
         for name, p in out.get("parameters", {}).get("parameters", {}).items():

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from .._fileio import refuse_input_overwrite
+from ._options import check_outputs, int_in
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -19,7 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "evaluates the paper's design with the same settings to mark it")
     p.add_argument("--out", metavar="DIR", default=None, help="report folder (default: RESULTS without its "
                    "suffix + _report)")
-    p.add_argument("--top", type=int, default=8, help="best designs in the table (default 8)")
+    p.add_argument("--top", type=int_in(1, 1000), default=8, help="best designs in the table (default 8)")
     p.set_defaults(func=run)
 
 
@@ -31,6 +32,7 @@ def run(args: argparse.Namespace) -> int:
     if not results.is_file():
         raise InvalidInput(f"no result file {results}", "RESULTS")
     out = Path(args.out) if args.out else results.with_name(results.stem + "_report")
+    check_outputs([args.results, args.sweep], dirs={"--out": out})
     for name in ("index.html", "index.md", "design_report.json", "pareto.png", "geometry.png"):
         refuse_input_overwrite(out / name, args.results, args.sweep)
     page = write_design_report(results, out, args.sweep, args.top)

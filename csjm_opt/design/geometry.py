@@ -100,7 +100,26 @@ def chords_from_circle(radius_m: float, gamma_deg: float) -> tuple[float, float]
 
 
 def design_holes(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
-    """Platform holes (6, 3) in {A} and base holes (6, 3) in {B} of a design (m), unchecked."""
+    """Platform and base holes of a design, not yet checked.
+
+    Parameters
+    ----------
+    params : mapping of str to value
+        Design parameters (names in :data:`PARAMETERS`); anything missing takes the paper's value.
+
+    Returns
+    -------
+    platform_A_m : ndarray, shape (6, 3)
+        Platform holes in {A} (m).
+    base_B_m : ndarray, shape (6, 3)
+        Base holes in {B} (m).
+
+    Raises
+    ------
+    DesignError
+        If a parameter is unknown, not a finite number, or no semi-regular hexagon has the given
+        chords.
+    """
     _check_names(params)
     p = {**PAPER_DESIGN, **params}
     holes = []
@@ -131,7 +150,28 @@ def design_holes(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
 
 def check_holes(platform_A_m: np.ndarray, base_B_m: np.ndarray,
                 limits: GeometryLimits = GeometryLimits()) -> None:
-    """Raise :class:`DesignError` unless the holes make a usable joint (see module doc)."""
+    """Check that the holes make a usable joint (see the module docstring).
+
+    Parameters
+    ----------
+    platform_A_m : ndarray, shape (6, 3)
+        Platform holes in {A} (m).
+    base_B_m : ndarray, shape (6, 3)
+        Base holes in {B} (m).
+    limits : GeometryLimits, optional
+        Smallest hole spacing and cable clearance from O.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    DesignError
+        If a coordinate is not finite, two holes of a body are closer than
+        ``limits.min_hole_spacing_m``, or a cable passes closer than
+        ``limits.min_cable_clearance_m`` to O at the home pose.
+    """
     for name, holes in (("platform_holes", platform_A_m), ("base_holes", base_B_m)):
         if not np.all(np.isfinite(holes)):
             raise DesignError("hole coordinates must be finite", name)
@@ -161,7 +201,27 @@ def cable_clearance_m(platform_A_m: np.ndarray, base_B_m: np.ndarray) -> np.ndar
 
 def design_rig(params: Mapping[str, Any] | None = None,
                limits: GeometryLimits = GeometryLimits()) -> Rig:
-    """The validated :class:`Rig` of a design; ``{}`` or ``None`` gives the paper's rig."""
+    """The validated :class:`~csjm_opt.model.rig.Rig` of a design.
+
+    Parameters
+    ----------
+    params : mapping of str to value, optional
+        Design parameters (names in :data:`PARAMETERS`: hexagon chords or radius and angle,
+        heights, per-hole offsets, free hole coordinates, cable and platform values); ``None`` or
+        ``{}`` gives the paper's rig.
+    limits : GeometryLimits, optional
+        Smallest hole spacing and cable clearance from O.
+
+    Returns
+    -------
+    Rig
+        The rig of the design.
+
+    Raises
+    ------
+    DesignError
+        If a parameter is unknown or invalid, or the holes fail :func:`check_holes` (naming the key).
+    """
     params = dict(params or {})
     platform, base = design_holes(params)
     check_holes(platform, base, limits)

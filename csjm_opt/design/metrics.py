@@ -133,13 +133,37 @@ class DesignMetrics:
     seconds: float
 
     def as_dict(self) -> dict[str, Any]:
-        """JSON-safe dict (NaN and infinities become ``None``)."""
+        """The metrics as a JSON-able dict (the ``metrics`` of a sweep record).
+
+        Returns
+        -------
+        dict
+        """
         return {k: _json_safe(v) for k, v in dataclasses.asdict(self).items()}
 
 
 def evaluate_poses(rig: Rig, Rs: np.ndarray, loads: LoadSet = LoadSet(),
                    options: MetricOptions = MetricOptions(), model: Model | None = None) -> PoseMetrics:
-    """Feasibility, planned tensions and K at every orientation of ``Rs`` (n, 3, 3)."""
+    """Feasibility, planned tensions and K at every given orientation.
+
+    Parameters
+    ----------
+    rig : Rig
+        The design.
+    Rs : ndarray, shape (n, 3, 3)
+        Orientations of {A} in {B}.
+    loads : LoadSet, optional
+        External moments (N m in {A}).
+    options : MetricOptions, optional
+        Feasibility tolerance.
+    model : Model, optional
+        A numeric model of ``rig`` to reuse.
+
+    Returns
+    -------
+    PoseMetrics
+        Per pose: feasible or not, tensions under the first load, K and its eigenvalues, margins.
+    """
     model = model or Model(rig)
     J = model.jacobian(Rs)
     tau_w = model.weight_moment(Rs)
@@ -168,7 +192,28 @@ def evaluate_poses(rig: Rig, Rs: np.ndarray, loads: LoadSet = LoadSet(),
 def evaluate(rig: Rig, sampling: OrientationSampling = OrientationSampling(),
              loads: LoadSet = LoadSet(), options: MetricOptions = MetricOptions(),
              model: Model | None = None) -> DesignMetrics:
-    """All scalar metrics of one design over ``sampling`` (see the module docstring)."""
+    """All scalar metrics of one design over sampled orientations (see the module docstring).
+
+    Parameters
+    ----------
+    rig : Rig
+        The design.
+    sampling : OrientationSampling, optional
+        Orientations to evaluate (tilt and torsion ranges, count, seed).
+    loads : LoadSet, optional
+        External moments (N m in {A}); a pose is feasible when every load can be held; the first
+        load is the one the stiffness is computed under.
+    options : MetricOptions, optional
+        Number of shaping poses, feasibility tolerance.
+    model : Model, optional
+        A numeric model of ``rig`` to reuse.
+
+    Returns
+    -------
+    DesignMetrics
+        Workspace fraction, tilt cone, stiffness (minimum and median smallest eigenvalue,
+        condition, torsion and bending), tension and wrench margins, shaping range.
+    """
     start = time.perf_counter()
     model = model or Model(rig)
     pm = evaluate_poses(rig, sampling.rotations(), loads, options, model)

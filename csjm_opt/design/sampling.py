@@ -55,11 +55,23 @@ class OrientationSampling:
             raise DesignError(f"expected one of {METHODS}, got {self.method!r}", "method")
 
     def angles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(tilt, azimuth, torsion) in rad, each (n,)."""
+        """The sampled angles.
+
+        Returns
+        -------
+        tilt, azimuth, torsion : ndarray, shape (n,)
+            Angles (rad).
+        """
         return _angles(self)
 
     def rotations(self) -> np.ndarray:
-        """(n, 3, 3) orientations of {A} in {B} (read-only, cached per process)."""
+        """The sampled orientations (read-only, cached per process).
+
+        Returns
+        -------
+        ndarray, shape (n, 3, 3)
+            Orientations of {A} in {B}.
+        """
         return _rotations(self)
 
 
@@ -71,13 +83,43 @@ def unit_cube(n: int, seed: int, method: str = "halton") -> np.ndarray:
 
 
 def tilt_torsion_rotations(tilt: np.ndarray, azimuth: np.ndarray, torsion: np.ndarray) -> np.ndarray:
-    """``Rz(phi) Ry(theta) Rz(-phi) Rz(sigma)`` for arrays of angles (rad): (n, 3, 3)."""
+    """Rotations ``Rz(phi) Ry(theta) Rz(-phi) Rz(sigma)`` from tilt, azimuth and torsion angles.
+
+    Parameters
+    ----------
+    tilt : array_like, shape (n,)
+        Tilt ``theta`` of the platform axis from the base axis (rad).
+    azimuth : array_like, shape (n,)
+        Azimuth ``phi`` of the tilt (rad).
+    torsion : array_like, shape (n,)
+        Torsion ``sigma`` about the platform axis (rad).
+
+    Returns
+    -------
+    ndarray, shape (n, 3, 3)
+        Orientations of {A} in {B}.
+    """
     tilt, azimuth, torsion = (np.asarray(a, float) for a in (tilt, azimuth, torsion))
     return _rz(azimuth) @ _ry(tilt) @ _rz(torsion - azimuth)
 
 
 def tilt_torsion_angles(R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Inverse of :func:`tilt_torsion_rotations` (tilt in [0, pi]; azimuth, torsion in (-pi, pi])."""
+    """Inverse of :func:`tilt_torsion_rotations`.
+
+    Parameters
+    ----------
+    R : array_like, shape (n, 3, 3)
+        Orientations of {A} in {B}.
+
+    Returns
+    -------
+    tilt : ndarray, shape (n,)
+        In ``[0, pi]`` (rad).
+    azimuth : ndarray, shape (n,)
+        In ``(-pi, pi]`` (rad).
+    torsion : ndarray, shape (n,)
+        In ``(-pi, pi]`` (rad).
+    """
     R = np.asarray(R, float)
     z = R[..., :, 2]                                  # platform axis in {B}
     tilt = np.arccos(np.clip(z[..., 2], -1.0, 1.0))

@@ -16,12 +16,14 @@ A design is identified by a hash of the evaluation settings and its
 parameters, so a resumed run (or a larger grid over the same settings)
 skips every design already in the file.
 
-Local worker processes die with the sweep, whatever signal ends it (SIGKILL
-included): each asks the kernel for SIGKILL when its parent dies
-(``prctl(PR_SET_PDEATHSIG)`` on Linux) and also watches its parent pid, and
-each closes its inherited copy of the locked result file, so a killed sweep
-leaves no process behind and no lock held: running the same command again
-resumes it.
+Local worker processes are started by a fork server (``spawn`` where there is
+none), never forked from the sweep itself: they inherit neither the locked
+result file nor the OpenMP state of compiled kernels (forking a process that
+has used GNU OpenMP aborts the child). They die with the sweep, whatever signal
+ends it (SIGKILL included): each asks the kernel for SIGKILL when its parent
+dies (``prctl(PR_SET_PDEATHSIG)`` on Linux; the fork server exits when the
+sweep does) and a thread also watches the sweep's pid. A killed sweep leaves
+no process behind and no lock held: running the same command again resumes it.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ import ctypes
 import dataclasses
 import hashlib
 import json
+import multiprocessing
 import os
 import signal
 import sys
@@ -68,7 +71,14 @@ class SweepResult:
         return self.computed / self.seconds if self.computed and self.seconds > 0 else 0.0
 
     def as_json(self) -> dict[str, Any]:
-        """The ``csjm sweep --json`` document (docs/conventions.md keys plus more)."""
+        """The ``csjm sweep --json`` document.
+
+        Returns
+        -------
+        dict
+            ``{"designs": [...], "designs_per_second", "computed", "skipped", "seconds",
+            "complete"}`` (keys in docs/conventions.md).
+        """
         designs = []
         for r in self.records:
             designs.append({"params": r["params"], "status": r["status"],
@@ -87,7 +97,22 @@ def design_id(settings_digest: str, params: dict[str, float]) -> str:
 
 
 def evaluate_design(params: dict[str, float], settings: EvaluationSettings) -> dict[str, Any]:
-    """Metrics record of one design: ``status`` "ok", "invalid" (geometry rejected) or "error"."""
+    """Metrics record of one design, as stored in a sweep's result file.
+
+    Parameters
+    ----------
+    params : dict of str to float
+        Design parameters (names in :data:`csjm_opt.design.PARAMETERS`).
+    settings : EvaluationSettings
+        Base design, sampling, loads and metric options of the sweep.
+
+    Returns
+    -------
+    dict
+        ``{"params", "status", "workspace_fraction", "min_stiffness_Nm_per_rad", "metrics",
+        "error"}``; ``status`` is ``"ok"``, ``"invalid"`` (geometry rejected, ``error`` says why)
+        or ``"error"``. Never raises for a bad design: the record carries the reason.
+    """
     start = time.perf_counter()
     try:
         rig = design_rig({**settings.base, **params}, settings.limits)
@@ -112,10 +137,40 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
               stop_after: int | None = None, connect_timeout_s: float = 10.0) -> SweepResult:
     """Evaluate the designs of ``spec`` missing from ``out`` and return all of them.
 
-    ``progress=None`` shows a bar only on a terminal. ``stop_after`` stops
-    after that many designs were written (an orderly interruption, for tests
-    and for splitting a long sweep into sessions). ``connect_timeout_s``
-    bounds the wait for a Dask scheduler.
+    Each finished design is appended to ``out`` (JSON Lines, flushed and fsynced); running again
+    resumes, skipping finished designs.
+
+    Parameters
+    ----------
+    spec : SweepSpec
+        The sweep (from :meth:`SweepSpec.from_toml`).
+    out : str or Path
+        Result file; created, or resumed when it exists with the same settings.
+    workers : int, optional
+        Local worker processes (1 runs in this process); with ``dask``, the local cluster size.
+    scheduler : str, optional
+        Address of a running Dask scheduler (``tcp://host:8786``).
+    dask : bool, optional
+        Run on Dask; without ``scheduler``, on a local cluster.
+    progress : bool, optional
+        Show a progress bar on stderr; ``None`` shows it only on a terminal.
+    stop_after : int, optional
+        Stop after this many designs were written (an orderly interruption).
+    connect_timeout_s : float, optional
+        Longest wait for a Dask scheduler (s).
+
+    Returns
+    -------
+    SweepResult
+        Every design's record (finished before and now), counts and speed; ``as_json()`` gives
+        the ``csjm sweep --json`` document.
+
+    Raises
+    ------
+    DesignError
+        If ``workers < 1``, or ``out`` was made with other settings or is locked by a running sweep.
+    SolverError
+        If a worker process dies.
     """
     if workers < 1:
         raise DesignError(f"workers must be >= 1, got {workers}", "workers")
@@ -136,7 +191,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
             elif workers == 1 or len(todo) <= 1:
                 stream = ((i, evaluate_design(p, settings)) for i, p in todo)
             else:
-                stream = _run_processes(todo, settings, workers, store.fileno)
+                stream = _run_processes(todo, settings, workers)
             for i, record in stream:
                 record.update(id=ids[i], index=i, settings=digest)
                 store.append(record)
@@ -153,10 +208,19 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
                        duplicates=store.duplicates)
 
 
+def _pool_context() -> Any:
+    """A fork server (modules preloaded, so workers start fast), or ``spawn`` where there is none."""
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        ctx = multiprocessing.get_context("forkserver")
+        ctx.set_forkserver_preload(["csjm_opt.design.sweep"])
+        return ctx
+    return multiprocessing.get_context("spawn")  # pragma: no cover - Windows
+
+
 def _run_processes(todo: list[tuple[int, dict]], settings: EvaluationSettings,
-                   workers: int, lock_fd: int = -1) -> Iterator[tuple[int, dict[str, Any]]]:
-    pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers, initializer=_worker_init,
-                                                  initargs=(os.getpid(), lock_fd))
+                   workers: int) -> Iterator[tuple[int, dict[str, Any]]]:
+    pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context(),
+                                                  initializer=_worker_init, initargs=(os.getpid(),))
     try:
         futures = {pool.submit(evaluate_design, p, settings): i for i, p in todo}
         for future in concurrent.futures.as_completed(futures):
@@ -171,32 +235,43 @@ def _run_processes(todo: list[tuple[int, dict]], settings: EvaluationSettings,
 _PR_SET_PDEATHSIG = 1
 
 
-def _worker_init(parent_pid: int, lock_fd: int = -1) -> None:
-    """Set up a worker: leave Ctrl-C to the parent, drop the inherited lock, die with the parent.
+def _worker_init(sweep_pid: int) -> None:
+    """Set up a worker: leave Ctrl-C to the sweep, die with the sweep.
 
-    The parent stops the pool on Ctrl-C and keeps the file whole. If the
-    parent dies any other way, the kernel kills the worker (Linux
-    ``PR_SET_PDEATHSIG``); a thread watching the parent pid does the same
-    elsewhere (and covers a parent that died before the ``prctl``).
+    The sweep stops the pool on Ctrl-C and keeps the file whole. If it dies
+    any other way, the kernel kills the worker when its parent (the fork
+    server, which exits with the sweep) dies (Linux ``PR_SET_PDEATHSIG``), and
+    a thread watching the sweep's pid does the same elsewhere, and covers a
+    parent that died before the ``prctl``.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    if lock_fd >= 0:
-        try:
-            os.close(lock_fd)  # a forked copy of the locked descriptor: the lock stays with the parent
-        except OSError:
-            pass
     if sys.platform.startswith("linux"):
         try:
             ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
         except (OSError, AttributeError):  # pragma: no cover - no libc prctl
             pass
-    if os.getppid() != parent_pid:
+    if not _alive(sweep_pid):
         os._exit(1)
-    threading.Thread(target=_watch_parent, args=(parent_pid,), name="csjm-parent-watch", daemon=True).start()
+    threading.Thread(target=_watch_sweep, args=(sweep_pid,), name="csjm-sweep-watch", daemon=True).start()
 
 
-def _watch_parent(parent_pid: int, interval_s: float = 0.5) -> None:
-    while os.getppid() == parent_pid:
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie counts as dead)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # pragma: no cover - exists, owned by someone else
+        return True
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as fh:
+            return fh.read().rsplit(b")", 1)[1].split()[0] != b"Z"
+    except OSError:
+        return True  # no /proc: kill(0) said it exists
+
+
+def _watch_sweep(sweep_pid: int, interval_s: float = 0.5) -> None:
+    while _alive(sweep_pid):
         time.sleep(interval_s)
     os._exit(1)
 

@@ -105,7 +105,13 @@ class EvaluationSettings:
     limits: GeometryLimits
 
     def digest(self) -> str:
-        """Stable hash of these settings (results from other settings are never mixed)."""
+        """Fingerprint of the settings; a result file made with other settings is refused.
+
+        Returns
+        -------
+        str
+            Hex digest of the base design, sampling, loads and metric options.
+        """
         data = {"base": self.base, "sampling": dataclasses.asdict(self.sampling),
                 "loads": self.loads.taus_ext_A_Nm.tolist(), "options": dataclasses.asdict(self.options),
                 "limits": dataclasses.asdict(self.limits)}
@@ -124,7 +130,12 @@ class SweepSpec:
     path: str | None = None
 
     def designs(self) -> list[dict[str, float]]:
-        """The swept parameter values of every design, in sweep order."""
+        """The swept parameter values of every design, in sweep order.
+
+        Returns
+        -------
+        list of dict of str to float
+        """
         names = [a.name for a in self.axes]
         if self.method == "grid":
             return [dict(zip(names, combo)) for combo in itertools.product(*(a.values for a in self.axes))]
@@ -146,6 +157,24 @@ class SweepSpec:
 
     @classmethod
     def from_toml(cls, path: str | Path) -> "SweepSpec":
+        """Read a sweep description (format in docs/guide/design.md).
+
+        Parameters
+        ----------
+        path : str or Path
+            The TOML file.
+
+        Returns
+        -------
+        SweepSpec
+            The validated sweep: method, base design, swept parameters, sampling, loads, metrics.
+
+        Raises
+        ------
+        DesignError
+            If the file cannot be read, is not TOML, or a section or key is unknown or invalid (naming
+            the key and file).
+        """
         path = Path(path)
         text = read_text(path, lambda msg: DesignError(msg, path=str(path)), "sweep file")
         try:
@@ -156,6 +185,25 @@ class SweepSpec:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any], path: str | None = None) -> "SweepSpec":
+        """Build a sweep from the nested TOML layout (see :meth:`from_toml`).
+
+        Parameters
+        ----------
+        data : dict
+            Sections ``sweep``, ``base``, ``parameters``, ``sampling``, ``loads``, ``metrics``.
+        path : str, optional
+            File the data came from, named in errors.
+
+        Returns
+        -------
+        SweepSpec
+            The validated sweep.
+
+        Raises
+        ------
+        DesignError
+            If a section or key is unknown or a value is invalid (naming the key).
+        """
         def fail(message: str, key: str) -> DesignError:
             return DesignError(message, key, path)
 

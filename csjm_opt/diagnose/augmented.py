@@ -170,6 +170,7 @@ class AugmentedModel:
             e.adjust_load(ev, p)
         for e, p in zip(self.effects, params):
             e.adjust_frame(ev, p)
+        assert ev.R_body is not None   # set by adjust_frame
         ev.R_cable = ev.R_body
         ev.tau_weight_A_Nm = kin.weight_moment(ev.R_body, ev.first_moment_A_kgm, self._g)
         for e, p in zip(self.effects, params):

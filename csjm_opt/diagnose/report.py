@@ -24,7 +24,7 @@ def residual_map(d: Diagnosis, path: Path) -> Path:
     before = 1e3 * np.linalg.norm(t.zeta_rad, axis=1)
     after = 1e3 * np.linalg.norm(d.selected_score.heldout_zeta_rad, axis=1)
     vmax = float(np.percentile(before, 98)) or 1.0
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2), sharex=True, sharey=True)
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2), sharex=True, sharey=True, layout="constrained")
     for ax, val, title in ((axes[0], before, "nominal model (rig file)"),
                            (axes[1], after, f"selected: {d.selected}")):
         sc = ax.scatter(x, y, c=val, s=18, cmap="viridis", vmin=0, vmax=vmax)
@@ -42,7 +42,7 @@ def hysteresis_loops(d: Diagnosis, path: Path, n_cycles: int = 4) -> Path:
     t = d.heldout_table
     ids = list(dict.fromkeys(t.cycle.tolist()))[:n_cycles]
     n = max(len(ids), 1)
-    fig, axes = plt.subplots(1, n, figsize=(3.2 * n, 3.4), squeeze=False, sharey=True)
+    fig, axes = plt.subplots(1, n, figsize=(3.2 * n, 3.4), squeeze=False, sharey=True, layout="constrained")
     after = d.selected_score.heldout_zeta_rad
     for ax, c in zip(axes[0], ids):
         idx = np.flatnonzero(t.cycle == c)
@@ -57,10 +57,11 @@ def hysteresis_loops(d: Diagnosis, path: Path, n_cycles: int = 4) -> Path:
         ax.plot(s, 1e3 * zb @ v, "o-", label="nominal")
         ax.plot(s, 1e3 * after[idx] @ v, "s--", label=d.selected)
         ax.set_title(f"cycle {c}")
-        ax.set_xlabel("load along the cycle's main direction (N m)")
+        ax.set_xlabel("load along main direction (N m)", fontsize=8)
     axes[0][0].set_ylabel("residual along its main axis (mrad)")
     axes[0][0].legend(fontsize=8, loc="best")
-    fig.suptitle("hysteresis: loading and unloading branches (arrows of time follow the markers)")
+    fig.suptitle("Hysteresis: residual against the load along each cycle's main direction, loading and "
+                 "unloading branches")
     return plots.save(fig, path)
 
 
@@ -69,7 +70,7 @@ def candidate_errors(d: Diagnosis, path: Path) -> Path:
     names = ["nominal", "nominal_refit"] + list(d.candidates)
     vals = [d.nominal_heldout_rms_rad, d.baseline.heldout_rms_rad] + [c.heldout_rms_rad for c in d.candidates.values()]
     colors = ["grey", "silver"] + ["tab:green" if n == d.selected else "tab:blue" for n in d.candidates]
-    fig, ax = plt.subplots(figsize=(8, 3.6))
+    fig, ax = plt.subplots(figsize=(8, 3.6), layout="constrained")
     ax.bar(range(len(names)), 1e3 * np.asarray(vals), color=colors)
     ax.axhline(1e3 * d.noise_floor_rad, color="k", ls=":", label=f"noise floor {1e3 * d.noise_floor_rad:.2f} mrad")
     ax.set_xticks(range(len(names)), names, rotation=30, ha="right")
@@ -83,7 +84,7 @@ def candidate_errors(d: Diagnosis, path: Path) -> Path:
 def before_after(d: Diagnosis, path: Path) -> Path:
     plt = plots.figure()
     zb, za = d.heldout_table.zeta_rad, d.selected_score.heldout_zeta_rad
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.4))
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), layout="constrained")
     w = 0.38
     axes[0].bar(np.arange(3) - w / 2, 1e3 * np.sqrt(np.mean(zb ** 2, axis=0)), w, label="before")
     axes[0].bar(np.arange(3) + w / 2, 1e3 * np.sqrt(np.mean(za ** 2, axis=0)), w, label="after")

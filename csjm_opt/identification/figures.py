@@ -1,4 +1,5 @@
-"""Figures of the identification: the convergence curve of Figure 5 (det K against N).
+"""Figures of the identification: the convergence curve of Figure 5 (det K against N), and
+the verification bar chart of E_theta per held-out case.
 
 ``convergence_curve`` re-identifies K from the first N rows of a cycle for
 growing N; ``plot_convergence`` draws det K (paper estimate (50), affine and
@@ -9,12 +10,13 @@ delta method) against N.
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
 from ..errors import IllConditionedData
 from .identify import identify_stiffness
+from .verify import Verification
 from ..model.numeric import Model
 
 if TYPE_CHECKING:
@@ -120,4 +122,37 @@ def plot_convergence(curve: ConvergenceCurve, *, title: str = "", ax: Axes | Non
     ax.set_ylabel(r"det $K$ ((N m/rad)$^3$)")
     ax.set_title(title or "Convergence of the identified stiffness (Figure 5)")
     ax.legend(fontsize=8)
+    return ax
+
+
+def plot_verification(results: Sequence[Verification], *, title: str = "",
+                      ax: Axes | None = None) -> Axes:
+    """Bar chart of E_theta per held-out case, one series per verification (e.g. K_D and K).
+
+    Parameters
+    ----------
+    results : sequence of Verification
+        From :func:`verify_increments` or :func:`verify_log`, all over the same cases.
+    title : str, optional
+        Axes title (a default names (63)-(65)).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure is made when omitted.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots(figsize=(7, 3.5), layout="constrained")
+    width = 0.8 / max(1, len(results))
+    for k, res in enumerate(results):
+        x = np.arange(len(res.E_theta_rad)) + k * width
+        ax.bar(x, res.E_theta_rad, width, label=f"{res.use} (rms {res.rms_rad:.4f} rad)")
+    ax.set_xlabel("held-out case")
+    ax.set_ylabel(r"$E_\theta$ (rad)")
+    ax.set_title(title or "Verification of the identified stiffness (63)-(65)")
+    ax.legend()
     return ax

@@ -42,6 +42,7 @@ marked ``ill_conditioned``.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from typing import Any
 
 import numpy as np
@@ -143,7 +144,25 @@ class StiffnessEstimate:
         return np.asarray(out)
 
     def covers(self, K_true: np.ndarray, which: str = "K") -> np.ndarray:
-        """(3, 3) mask: does the interval of ``which`` (K, K_sym, bootstrap) contain ``K_true``?"""
+        """Does the confidence interval of each entry contain the true value? (For simulation studies.)
+
+        Parameters
+        ----------
+        K_true : array_like, shape (3, 3)
+            The true stiffness (N m/rad).
+        which : {"K", "K_sym", "bootstrap"}, optional
+            Which interval: of the affine estimate, the symmetric one, or the pairs bootstrap.
+
+        Returns
+        -------
+        ndarray of bool, shape (3, 3)
+            True where the interval contains ``K_true``.
+
+        Raises
+        ------
+        InvalidInput
+            If ``which="bootstrap"`` but the estimate was made without bootstrap resamples.
+        """
         interval = {"K": self.K_ci, "K_sym": self.K_sym_ci, "bootstrap": self.bootstrap_K_ci}[which]
         if interval is None:
             raise InvalidInput("no bootstrap interval: identify with bootstrap > 0", "which")
@@ -151,11 +170,37 @@ class StiffnessEstimate:
         return (lo <= K_true) & (K_true <= hi)
 
     def is_well_conditioned(self, max_condition: float = MAX_CONDITION) -> bool:
+        """Whether the excitation determines K: condition number at most ``max_condition``.
+
+        Parameters
+        ----------
+        max_condition : float, optional
+            Largest accepted condition number of the excitation.
+
+        Returns
+        -------
+        bool
+        """
         return bool(np.isfinite(self.condition) and self.condition <= max_condition)
 
     def problems(self, max_condition: float = MAX_CONDITION, max_symmetry_z: float = 3.0,
                  max_chi2: float = 2.0) -> list[str]:
-        """What the estimate itself says is doubtful (empty list: nothing)."""
+        """What the estimate itself says is doubtful (an empty list: nothing).
+
+        Parameters
+        ----------
+        max_condition : float, optional
+            Largest accepted condition number of the excitation.
+        max_symmetry_z : float, optional
+            Largest accepted z-score of the asymmetry of K (K is symmetric in theory).
+        max_chi2 : float, optional
+            Largest accepted chi^2 per degree of freedom against the instrument model.
+
+        Returns
+        -------
+        list of str
+            One sentence per problem found.
+        """
         out = []
         if self.ill_conditioned or self.relative_half_width > MAX_RELATIVE_HALF_WIDTH:
             out.append(f"ill-conditioned: K determined only to {self.relative_half_width:.0%} of ||K|| "
@@ -178,6 +223,14 @@ class StiffnessEstimate:
         return out
 
     def as_dict(self) -> dict[str, Any]:
+        """The estimate as a JSON-able dict (the per-cycle entry of ``csjm identify --json``).
+
+        Returns
+        -------
+        dict
+            ``cycle``, ``K_D``, ``K_L``, ``K``, ``K_sym``, ``K_paper``, intervals, condition numbers,
+            symmetry, residuals and ``problems`` (keys in docs/conventions.md).
+        """
         d = {"cycle": self.cycle, "n_rows": self.n_rows, "order": self.order,
              "K_D": self.K_D, "K_L": self.K_L, "K": self.K, "K_sym": self.K_sym,
              "K_D_paper": self.K_D_paper, "K_paper": self.K_paper,
@@ -228,6 +281,13 @@ def _check_rows(n: int, p: int) -> None:
 
 
 # --------------------------------------------------------------- estimators
+@functools.lru_cache(maxsize=256)
+def _quantile(ci_level: float, dof: int) -> float:
+    """Two-sided quantile: Student t with ``dof`` degrees of freedom, normal for ``dof = 0`` (cached)."""
+    a = 0.5 + ci_level / 2
+    return float(stats.norm.ppf(a) if dof == 0 else stats.t.ppf(a, dof))
+
+
 def weakest_load_direction(tau_load_A_Nm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unit direction in {A} along which the centred load moments vary least, and their singular values (N m).
 
@@ -329,12 +389,12 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
     fit = affine_fit(dzeta, tau_load, order, noise)
     sym = symmetric_fit(dzeta, tau_load, order, fit["Sigma"])
     if noise is not None:
-        q = float(stats.norm.ppf(0.5 + ci_level / 2))
+        q = _quantile(ci_level, 0)
         Y_std = np.sqrt(np.asarray(noise.tau_sigma_Nm) ** 2
                         + noise.angle_sigma_rad ** 2 * np.sum(fit["K_D"] ** 2, axis=1))
         chi2 = float(np.sum((fit["resid"] / Y_std) ** 2) / (3 * (n - p)))
     else:
-        q = float(stats.t.ppf(0.5 + ci_level / 2, n - p))
+        q = _quantile(ci_level, n - p)
         chi2 = float("nan")
     half = q * np.sqrt(np.maximum(np.diag(fit["cov_K"]), 0.0))
     scale = float(np.linalg.norm(fit["K"], 2))
@@ -391,9 +451,11 @@ def identify_log(log: MeasurementLog, rig: Rig, cycle: int | None = None, model:
     model = model or Model(rig)
     cycles = log.cycle_ids if cycle is None else [cycle]
     out = []
-    for c, rows in _cycle_rows(log, cycles, progress):
+    pairs = _cycle_rows(log, cycles)
+    R, W = _poses_and_weight(log, np.concatenate([rows for _, rows in pairs]), model)
+    for c, rows in (progress(pairs) if progress is not None else pairs):
         try:
-            out.append(_identify_rows(log, rows, model, c, options))
+            out.append(identify_stiffness(R[rows], log.tau_ext_A_Nm[rows], model, W[rows], cycle=c, **options))
         except IllConditionedData as exc:
             raise IllConditionedData(f"cycle {c}: {exc}", exc.condition, exc.rank, exc.direction) from exc
     return out
@@ -416,9 +478,12 @@ def identify_cycles(log: MeasurementLog, rig: Rig, model: Model | None = None, p
     """
     model = model or Model(rig)
     estimates, skipped, first_error = [], [], None
-    for c, rows in _cycle_rows(log, log.cycle_ids, progress):
+    pairs = _cycle_rows(log, log.cycle_ids)
+    R, W = _poses_and_weight(log, np.arange(len(log)), model)
+    for c, rows in (progress(pairs) if progress is not None else pairs):
         try:
-            estimates.append(_identify_rows(log, rows, model, c, options))
+            estimates.append(identify_stiffness(R[rows], log.tau_ext_A_Nm[rows], model, W[rows], cycle=c,
+                                                **options))
         except IllConditionedData as exc:
             err = IllConditionedData(f"cycle {c}: {exc}", exc.condition, exc.rank, exc.direction)
             first_error = first_error or err
@@ -429,7 +494,7 @@ def identify_cycles(log: MeasurementLog, rig: Rig, model: Model | None = None, p
     return estimates, skipped
 
 
-def _cycle_rows(log: MeasurementLog, cycles: list[int], progress: Any) -> Any:
+def _cycle_rows(log: MeasurementLog, cycles: list[int]) -> list[tuple[int, np.ndarray]]:
     """(cycle id, row indices) pairs; rows found once for the whole log (no per-cycle scan)."""
     cyc = np.asarray(log.cycle)
     starts = np.flatnonzero(np.r_[True, cyc[1:] != cyc[:-1]])
@@ -440,10 +505,15 @@ def _cycle_rows(log: MeasurementLog, cycles: list[int], progress: Any) -> Any:
         if c not in where:
             log.cycle_rows(c)  # raises DataFileError naming the cycles
         pairs.append((c, where[c]))
-    return progress(pairs) if progress is not None else pairs
+    return pairs
 
 
-def _identify_rows(log: MeasurementLog, rows: np.ndarray, model: Model, cycle: int,
-                   options: dict[str, Any]) -> StiffnessEstimate:
-    R = so3.exp(log.rotvec_rad[rows])
-    return identify_stiffness(R, log.tau_ext_A_Nm[rows], model, cycle=cycle, **options)
+def _poses_and_weight(log: MeasurementLog, rows: np.ndarray, model: Model) -> tuple[np.ndarray, np.ndarray]:
+    """Orientations (n, 3, 3) and weight moments (n, 3) of the log, computed once for ``rows``
+    (other rows are left zero): one batched call instead of one per cycle."""
+    R = np.zeros((len(log), 3, 3))
+    W = np.zeros((len(log), 3))
+    if len(rows):
+        R[rows] = so3.exp(log.rotvec_rad[rows])
+        W[rows] = model.weight_moment(R[rows])
+    return R, W

@@ -81,7 +81,15 @@ def table4(R0: np.ndarray = pd.R0_CORRECTED) -> dict[str, Any]:
 
 
 def paper_report() -> dict[str, Any]:
-    """The JSON-able report of ``csjm paper`` (keys per docs/conventions.md plus details)."""
+    """The report of ``csjm paper``: Tables 3 and 4 recomputed from the printed numbers, and the errata.
+
+    Returns
+    -------
+    dict
+        ``{"table3": {"K_D", "K_L", "K", ...}, "table4": [{"case", "R_est", "E_theta_rad", ...}],
+        "errata": [...], "R0_corrected", "R0_printed_rejected"}`` (JSON-able; keys in
+        docs/conventions.md).
+    """
     t3, t4 = table3(), table4()
     try:
         check_printed_R0()

@@ -52,15 +52,39 @@ class ParameterFit:
         return np.sqrt(np.diag(self.cov))
 
     def summary(self) -> dict[str, Any]:
+        """The fit as a JSON-able dict.
+
+        Returns
+        -------
+        dict
+            Fitted parameters with standard deviations, residual RMS and condition.
+        """
         return {"parameters": {n: {"value": float(v), "std": float(s)}
                                for n, v, s in zip(self.names, self.values, self.std)},
                 "residual_rms_Nm": self.residual_rms_Nm, "initial_residual_rms_Nm": self.initial_residual_rms_Nm,
                 "condition": self.condition, "n_rows": self.n_rows}
 
     def predict(self, log: MeasurementLog, R_init: np.ndarray | None = None, model: Model | None = None) -> np.ndarray:
-        """Equilibrium orientations (n, 3, 3) of the fitted model for the log's rest lengths and loads.
+        """Equilibrium orientations of the fitted model for the log's rest lengths and loads.
 
-        ``R_init`` (n, 3, 3) starts each solve (default: the row's measured pose).
+        Parameters
+        ----------
+        log : MeasurementLog
+            Rows to predict.
+        R_init : ndarray, shape (n, 3, 3), optional
+            Starting pose of each forward-statics solve (default: the row's measured pose).
+        model : Model, optional
+            A numeric model of the fitted rig to reuse.
+
+        Returns
+        -------
+        ndarray, shape (n, 3, 3)
+            Predicted orientations of {A} in {B}.
+
+        Raises
+        ------
+        NoEquilibrium
+            If the fitted model has no equilibrium for a row.
         """
         if model is None or model.rig is not self.rig:   # the model must carry the fitted stiffness
             model = Model(self.rig)
@@ -77,7 +101,20 @@ class ParameterFit:
         return out
 
     def pose_errors_rad(self, log: MeasurementLog, model: Model | None = None) -> np.ndarray:
-        """``||log(R_pred^T R_meas)||`` per row (rad)."""
+        """Pose error of the fitted model per row: ``||log(R_pred^T R_meas)||``.
+
+        Parameters
+        ----------
+        log : MeasurementLog
+            Rows to check.
+        model : Model, optional
+            A numeric model of the fitted rig to reuse.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Errors (rad).
+        """
         return so3.angle_between(self.predict(log, model=model), log.R)
 
 
@@ -91,7 +128,40 @@ def _unpack(theta: np.ndarray, shared: bool, offsets: bool, k0: np.ndarray) -> t
 def fit_parameters(log: MeasurementLog, rig: Rig, *, shared_stiffness: bool = False,
                    rest_length_offsets: bool = True, noise: InstrumentNoise | None = None,
                    model: Model | None = None) -> ParameterFit:
-    """Fit cable stiffness (shared or per cable) and rest-length offsets to ``log``."""
+    """Fit the cable stiffness (shared or per cable) and rest-length offsets to a whole log.
+
+    Moment residuals at the measured poses, ``J(R_i)^T T_i + tau_load_i`` with
+    ``T_i = k (c(R_i) - l_i - dl)``, are minimised by least squares; standard deviations come
+    from the Jacobian.
+
+    Parameters
+    ----------
+    log : MeasurementLog
+        The measurements (all cycles).
+    rig : Rig
+        The nominal rig (geometry and starting values).
+    shared_stiffness : bool, optional
+        One stiffness for all six cables instead of one per cable.
+    rest_length_offsets : bool, optional
+        Also fit one rest-length offset per cable (m).
+    noise : InstrumentNoise, optional
+        Weights the residuals by the instrument uncertainties.
+    model : Model, optional
+        A numeric model of ``rig`` to reuse.
+
+    Returns
+    -------
+    ParameterFit
+        Fitted values with standard deviations; ``predict`` and ``pose_errors_rad`` give the poses
+        the fitted model predicts.
+
+    Raises
+    ------
+    IllConditionedData
+        If the log has too few rows for the parameters or does not determine them.
+    SolverError
+        If the least-squares solver fails.
+    """
     model = model or Model(rig)
     R = log.R
     n = len(log)
@@ -149,7 +219,27 @@ def fit_parameters(log: MeasurementLog, rig: Rig, *, shared_stiffness: bool = Fa
 
 
 def check_fit(fit: ParameterFit, log: MeasurementLog) -> dict[str, float]:
-    """Held-out check: rms and max of the predicted-vs-measured pose error (rad) on ``log``."""
+    """Held-out check of a parameter fit: predicted against measured poses on ``log``.
+
+    Parameters
+    ----------
+    fit : ParameterFit
+        From :func:`fit_parameters` (on other rows).
+    log : MeasurementLog
+        Held-out rows.
+
+    Returns
+    -------
+    dict
+        ``{"rms_rad": ..., "max_rad": ...}`` of the pose error by forward statics.
+
+    Raises
+    ------
+    InvalidInput
+        If ``log`` is empty.
+    NoEquilibrium
+        If the fitted model has no equilibrium for a row.
+    """
     if len(log) == 0:
         raise InvalidInput("empty held-out log", "log")
     e = fit.pose_errors_rad(log)

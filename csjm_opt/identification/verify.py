@@ -21,7 +21,7 @@ change at the (unknown) new pose is then found by a fixed-point iteration.
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -32,8 +32,6 @@ from ..measurement.logfile import MeasurementLog
 from ..model.numeric import Model
 from .._validate import as_array, as_rotation, as_rotations
 
-if TYPE_CHECKING:
-    from matplotlib.axes import Axes
 
 
 def predict_pose(R0: np.ndarray, K: np.ndarray, dtau_A_Nm: np.ndarray) -> np.ndarray:
@@ -136,7 +134,23 @@ def predict_pose_external(R0: np.ndarray, K_D: np.ndarray, tau_load_ref_A_Nm: np
 
 
 def estimation_error(R_act: np.ndarray, R_est: np.ndarray) -> np.ndarray:
-    """(63)-(65): ``E_theta = ||log(R_act^-1 R_est)||`` (rad), batched."""
+    """Estimation error (63)-(65): ``E_theta = ||log(R_act^-1 R_est)||`` (rad), batched.
+
+    Parameters
+    ----------
+    R_act, R_est : array_like, shape (..., 3, 3)
+        Actual and estimated orientations.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Angles in ``[0, pi]`` (rad).
+
+    Raises
+    ------
+    InvalidInput
+        If the shapes are wrong or do not broadcast.
+    """
     return so3.angle_between(R_act, R_est)
 
 
@@ -163,7 +177,12 @@ class Verification:
         return float(np.max(self.E_theta_rad)) if len(self.R_act) else float("nan")
 
     def table(self) -> str:
-        """Plain-text table: case, load increment, E_theta."""
+        """Plain-text table of the verification: case, load increment, ``E_theta``.
+
+        Returns
+        -------
+        str
+        """
         lines = [f"{'case':>10}  {'dtau_x':>8} {'dtau_y':>8} {'dtau_z':>8}  {'E_theta (rad)':>13}"]
         for i, (d, e) in enumerate(zip(self.dtau_A_Nm, self.E_theta_rad)):
             label = self.labels[i] if i < len(self.labels) else str(i + 1)
@@ -172,6 +191,13 @@ class Verification:
         return "\n".join(lines)
 
     def as_dict(self) -> dict[str, Any]:
+        """The verification as a JSON-able dict.
+
+        Returns
+        -------
+        dict
+            ``{"use", "rms_rad", "max_rad", "cases": [...]}``.
+        """
         return {"use": self.use, "rms_rad": self.rms_rad, "max_rad": self.max_rad,
                 "cases": [{"case": self.labels[i] if i < len(self.labels) else i + 1,
                            "dtau_A_Nm": self.dtau_A_Nm[i].tolist(), "R_est": self.R_est[i].tolist(),
@@ -181,7 +207,35 @@ class Verification:
 
 def verify_increments(R0: np.ndarray, K: np.ndarray, dtau_A_Nm: np.ndarray, R_act: np.ndarray,
                       use: str = "K_D", labels: Sequence[str] = ()) -> Verification:
-    """Table 4: predict each ``R_est`` from ``R0``, ``K`` and ``dtau``; compare with ``R_act``."""
+    """Table 4 of the paper: predict each pose from ``R0``, ``K`` and a load increment; compare.
+
+    Parameters
+    ----------
+    R0 : ndarray, shape (3, 3)
+        Reference orientation of {A} in {B}.
+    K : ndarray, shape (3, 3)
+        Stiffness used as predictor (N m/rad).
+    dtau_A_Nm : array_like, shape (n, 3)
+        Load increments in {A} (N m).
+    R_act : array_like, shape (n, 3, 3)
+        Actual (measured) orientations.
+    use : str, optional
+        Label of the predictor, reported in the result.
+    labels : sequence of str, optional
+        One label per case.
+
+    Returns
+    -------
+    Verification
+        Predicted poses and ``E_theta`` (rad) per case.
+
+    Raises
+    ------
+    NotARotation
+        If ``R0`` or a row of ``R_act`` is not a rotation.
+    InvalidInput
+        If the shapes disagree, a value is not finite, or ``K`` is singular.
+    """
     dtau = as_array(dtau_A_Nm, (None, 3), "dtau")
     R_act = as_rotations(R_act, "R_act")
     return Verification(use, dtau, R_act, predict_pose(R0, K, dtau), tuple(labels))
@@ -189,13 +243,35 @@ def verify_increments(R0: np.ndarray, K: np.ndarray, dtau_A_Nm: np.ndarray, R_ac
 
 def verify_log(estimates: Sequence[StiffnessEstimate], log: MeasurementLog, model: Model,
                use: str = "K_D", load: str = "total") -> Verification:
-    """Predict every row of ``log`` from the estimate of its cycle (same cycle id), else
-    from the estimate whose reference pose is nearest.
+    """Predict the pose of every row of ``log`` from an identified stiffness, (61)-(65).
 
-    ``load="total"``: increment of the total load measured at the actual pose
-    (the paper's Column A); ``load="external"``: only the external moment is
-    known and the weight moment is re-evaluated at the predicted pose (needs
-    ``use="K_D"``).
+    Each row is predicted from the estimate of its cycle (same cycle id), else from the estimate
+    whose reference pose is nearest.
+
+    Parameters
+    ----------
+    estimates : sequence of StiffnessEstimate
+        From :func:`~csjm_opt.identification.identify_log` (on training rows).
+    log : MeasurementLog
+        The rows to predict (held out from the identification).
+    model : Model
+        Numeric model of the rig (weight moment at the measured or predicted pose).
+    use : {"K_D", "K"}, optional
+        Which matrix predicts; ``K_D`` is right to first order (erratum 4).
+    load : {"total", "external"}, optional
+        ``"total"``: the increment of the total load at the actual pose (the paper's Column A);
+        ``"external"``: only the external moment is known and the weight moment is re-evaluated at
+        the predicted pose (needs ``use="K_D"``).
+
+    Returns
+    -------
+    Verification
+        Load increments, actual and predicted poses, ``E_theta`` per row, ``rms_rad``, ``max_rad``.
+
+    Raises
+    ------
+    InvalidInput
+        If ``use`` or ``load`` is unknown, there are no estimates, or a matrix is singular.
     """
     if use not in ("K_D", "K") or load not in ("total", "external"):
         raise InvalidInput(f"use must be K_D or K and load total or external, got {use!r}, {load!r}", "use")
@@ -219,36 +295,3 @@ def verify_log(estimates: Sequence[StiffnessEstimate], log: MeasurementLog, mode
             R_est[i] = predict_pose(e.R_ref, getattr(e, use), dtau[i])
     labels = tuple(f"{int(c)}/{int(s)}" for c, s in zip(log.cycle, log.sample))
     return Verification(use, dtau, R, R_est, labels)
-
-
-def plot_verification(results: Sequence[Verification], *, title: str = "",
-                      ax: Axes | None = None) -> Axes:
-    """Bar chart of E_theta per held-out case, one series per verification (e.g. K_D and K).
-
-    Parameters
-    ----------
-    results : sequence of Verification
-        From :func:`verify_increments` or :func:`verify_log`, all over the same cases.
-    title : str, optional
-        Axes title (a default names (63)-(65)).
-    ax : matplotlib.axes.Axes, optional
-        Axes to draw on; a new figure is made when omitted.
-
-    Returns
-    -------
-    matplotlib.axes.Axes
-        The axes drawn on.
-    """
-    if ax is None:
-        import matplotlib.pyplot as plt
-
-        _, ax = plt.subplots(figsize=(7, 3.5), layout="constrained")
-    width = 0.8 / max(1, len(results))
-    for k, res in enumerate(results):
-        x = np.arange(len(res.E_theta_rad)) + k * width
-        ax.bar(x, res.E_theta_rad, width, label=f"{res.use} (rms {res.rms_rad:.4f} rad)")
-    ax.set_xlabel("held-out case")
-    ax.set_ylabel(r"$E_\theta$ (rad)")
-    ax.set_title(title or "Verification of the identified stiffness (63)-(65)")
-    ax.legend()
-    return ax

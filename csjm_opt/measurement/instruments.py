@@ -30,7 +30,21 @@ class InstrumentNoise:
 
     @classmethod
     def paper(cls, tracker_distance_m: float = 3.0, target_arm_m: float = 0.1) -> "InstrumentNoise":
-        """Noise of the paper's instruments (tracker ``distance`` away, targets ``arm`` apart)."""
+        """Noise of the paper's instruments (Tables 1-2): the F/T sensor and the laser tracker.
+
+        Parameters
+        ----------
+        tracker_distance_m : float, optional
+            Distance of the tracker from the targets (m); its point uncertainty grows with it.
+        target_arm_m : float, optional
+            Distance between the tracked targets on the platform (m); orientation noise is the point
+            noise over this arm.
+
+        Returns
+        -------
+        InstrumentNoise
+            Moment standard deviation per axis (N m) and orientation standard deviation (rad).
+        """
         tx, ty, tz = (FT_U95_FRACTION[a] * FT_FULL_SCALE[a] / 1.96 for a in ("tx", "ty", "tz"))
         tau = (tx, ty, tz)
         point_sigma = (TRACKER_U0_M + TRACKER_U_PER_M * tracker_distance_m) / 2
@@ -38,7 +52,26 @@ class InstrumentNoise:
 
     @classmethod
     def none(cls) -> "InstrumentNoise":
+        """No noise (for noise-free simulations).
+
+        Returns
+        -------
+        InstrumentNoise
+            Zero moment and orientation standard deviations.
+        """
         return cls((0.0, 0.0, 0.0), 0.0)
 
     def tracker_point_sigma_m(self, distance_m: float) -> float:
+        """Standard deviation of one tracked point at a distance: half the uncertainty ``U0 + U1 d`` of Table 1.
+
+        Parameters
+        ----------
+        distance_m : float
+            Distance from the tracker (m).
+
+        Returns
+        -------
+        float
+            Standard deviation (m).
+        """
         return (TRACKER_U0_M + TRACKER_U_PER_M * distance_m) / 2

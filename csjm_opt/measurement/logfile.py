@@ -59,7 +59,23 @@ class MeasurementLog:
         return [int(self.cycle[i]) for i in sorted(first)]
 
     def cycle_rows(self, cycle: int) -> np.ndarray:
-        """Row indices of one cycle (time order)."""
+        """Row indices of one load cycle, in time order.
+
+        Parameters
+        ----------
+        cycle : int
+            A cycle id of this log.
+
+        Returns
+        -------
+        ndarray of int
+            Indices of the cycle's rows; the first is the cycle's reference.
+
+        Raises
+        ------
+        DataFileError
+            If the log has no such cycle.
+        """
         rows = np.flatnonzero(self.cycle == cycle)
         if rows.size == 0:
             raise DataFileError(f"no cycle {cycle} (cycles: {self.cycle_ids})", self.source)
@@ -129,12 +145,13 @@ class MeasurementLog:
             raise InvalidInput(f"R_or_rotvec: expected (n, 3, 3) or (n, 3), got {X.shape}", "R_or_rotvec")
         rotvec = so3.log(X) if X.ndim == 3 else X
         n = rotvec.shape[0]
-        if sample is not None and np.any(np.abs(np.asarray(sample, dtype=float)) > MAX_EXACT_INT):
+        sample = np.arange(n) if sample is None else _rows(sample, (n,), "sample")
+        cycle = _rows(cycle, (n,), "cycle")
+        if np.any(np.abs(sample) > MAX_EXACT_INT):
             raise DataFileError("sample id outside +-(2^53 - 1)", None, None, "sample")
-        if np.any(np.abs(np.asarray(cycle, dtype=float)) > MAX_EXACT_INT):
+        if np.any(np.abs(cycle) > MAX_EXACT_INT):
             raise DataFileError("cycle id outside +-(2^53 - 1)", None, None, "cycle")
-        sample = np.arange(n) if sample is None else _rows(sample, (n,), "sample").astype(int)
-        log = cls(sample, _rows(cycle, (n,), "cycle").astype(int), _rows(rest_lengths_m, (n, 6), "rest_lengths_m"),
+        log = cls(sample.astype(int), cycle.astype(int), _rows(rest_lengths_m, (n, 6), "rest_lengths_m"),
                   _rows(tau_ext_A_Nm, (n, 3), "tau_ext_A_Nm"), rotvec,
                   {k: _rows(v, (n,), k, float_=False) for k, v in (extra or {}).items()})
         _check_rows(log, None, lines=np.arange(2, n + 2))
@@ -142,13 +159,39 @@ class MeasurementLog:
 
     @classmethod
     def from_csv(cls, path: str | Path) -> "MeasurementLog":
-        """Read and validate a log file."""
+        """Read and validate a measurement log file (format in docs/conventions.md).
+
+        Parameters
+        ----------
+        path : str or Path
+            The CSV file (UTF-8, a byte-order mark is accepted).
+
+        Returns
+        -------
+        MeasurementLog
+            The log, rows in file order.
+
+        Raises
+        ------
+        DataFileError
+            If the file cannot be read, the header is wrong, or a row is malformed (missing,
+            non-numeric or non-finite value, duplicate sample id), naming the line.
+        """
         path = Path(path)
         text = read_text(path, lambda msg: DataFileError(msg, str(path)), "log file", encoding="utf-8-sig")
         return cls.from_text(text, str(path))
 
     @classmethod
     def from_text(cls, text: str, source: str | None = None) -> "MeasurementLog":
+        """Parse and validate log text; ``source`` names it in errors.
+
+        A vectorised path reads plain logs (exactly the 14 columns, no quotes);
+        anything it does not accept is read again by the strict row-by-row
+        parser, which raises the :class:`DataFileError` naming the line.
+        """
+        fast = _fast_parse(text, source)
+        if fast is not None:
+            return fast
         reader = csv.reader(io.StringIO(text))
         try:
             header = [h.strip() for h in next(reader)]
@@ -187,10 +230,35 @@ class MeasurementLog:
         return log
 
     def to_csv(self, path: str | Path, overwrite: bool = False) -> Path:
-        """Write atomically; an existing file is kept unless ``overwrite``."""
+        """Write the log as CSV, atomically.
+
+        Parameters
+        ----------
+        path : str or Path
+            Output file.
+        overwrite : bool, optional
+            Replace an existing file (by default an existing file is kept and an error raised).
+
+        Returns
+        -------
+        Path
+            The file written.
+
+        Raises
+        ------
+        InvalidInput
+            If the file exists and ``overwrite`` is false, or it cannot be written.
+        """
         return atomic_write_text(path, self.to_text(), overwrite=overwrite)
 
     def to_text(self) -> str:
+        """The log as CSV text (standard columns, then the extra ones).
+
+        Returns
+        -------
+        str
+            CSV text that :meth:`from_text` reads back to the same log.
+        """
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
         w.writerow(COLUMNS + tuple(self.extra))
@@ -201,6 +269,32 @@ class MeasurementLog:
                        + [repr(float(x)) for x in self.rotvec_rad[i]]
                        + [str(v[i]) for v in self.extra.values()])
         return buf.getvalue()
+
+
+def _fast_parse(text: str, source: str | None) -> "MeasurementLog | None":
+    """Vectorised reading of a plain log, or ``None`` to fall back to the strict parser."""
+    if '"' in text or "\r" in text:
+        return None
+    lines = text.split("\n")
+    if tuple(h.strip() for h in lines[0].lstrip("\ufeff").split(",")) != COLUMNS:
+        return None
+    keep = [i for i in range(1, len(lines)) if lines[i].strip()]   # blank lines are skipped
+    if not keep:
+        return None
+    body = [lines[i] for i in keep]
+    if any(line.count(",") != len(COLUMNS) - 1 for line in body):
+        return None
+    try:
+        V = np.array(",".join(body).split(","), dtype=float).reshape(len(body), len(COLUMNS))
+    except ValueError:
+        return None
+    ids = V[:, :2]
+    if not (np.all(np.isfinite(V)) and np.all(np.floor(ids) == ids) and np.all(np.abs(ids) <= MAX_EXACT_INT)):
+        return None
+    log = MeasurementLog(V[:, 0].astype(np.int64), V[:, 1].astype(np.int64), V[:, 2:8], V[:, 8:11], V[:, 11:14],
+                         {}, source)
+    _check_rows(log, source, np.asarray(keep) + 1)
+    return log
 
 
 def _rows(value, shape: tuple[int, ...] | None, name: str, float_: bool = True) -> np.ndarray:
@@ -250,7 +344,7 @@ def _check_bounds(log: MeasurementLog, source: str | None, lines: np.ndarray) ->
         lim = LIMITS[quantity]
         ok = lim.contains(getattr(log, attr))
         if not ok.all():
-            i, j = np.unravel_index(int(np.argmin(ok.ravel())), ok.shape)
+            i, j = (int(x) for x in np.unravel_index(int(np.argmin(ok.ravel())), ok.shape))
             value = float(getattr(log, attr)[i, j])
             raise DataFileError(f"{value:.6g} outside {lim.describe()} ({lim.why.split(';')[0]})",
                                 source, int(lines[i]), columns[j])

@@ -51,9 +51,11 @@ import numpy as np
 
 from .. import so3
 from ..errors import DataFileError, IllConditionedData, InvalidInput
+from .._validate import as_array
 from .._fileio import read_text
 from .._limits import LIMITS, ROTVEC_MAX_NORM_RAD
 from .logfile import MeasurementLog, parse_number
+from ..model.cable_terms import weight_moment
 from ..model.rig import Rig
 
 RAW_COLUMNS = ("record", "sample", "cycle", "name", "x", "y", "z", "rx", "ry", "rz", "px", "py", "pz",
@@ -76,8 +78,36 @@ _QUANTITY = {**{c: "position_m" for c in ("x", "y", "z", "px", "py", "pz")},
 
 
 def fit_rigid_transform(P_src: np.ndarray, P_dst: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-    """Least-squares ``(R, p)`` with ``P_dst ~ P_src R^T + p`` (Kabsch/Umeyama, no scale); rms residual."""
-    P_src, P_dst = np.asarray(P_src, float), np.asarray(P_dst, float)
+    """Least-squares rigid transform between two point sets (Kabsch/Umeyama, no scale).
+
+    Replaces the 4 x 4 inverse of the paper's (52), exact only for noise-free points (erratum 6).
+
+    Parameters
+    ----------
+    P_src : array_like, shape (n, 3)
+        Points in the source frame (n >= 3, not collinear).
+    P_dst : array_like, shape (n, 3)
+        The same points measured in the destination frame.
+
+    Returns
+    -------
+    R : ndarray, shape (3, 3)
+        Rotation with ``P_dst ~ P_src R^T + p``.
+    p : ndarray, shape (3,)
+        Translation.
+    rms_m : float
+        RMS residual of the fit.
+
+    Raises
+    ------
+    InvalidInput
+        If the shapes differ or a value is not finite.
+    IllConditionedData
+        If there are fewer than 3 points or they are collinear.
+    """
+    P_src, P_dst = as_array(P_src, (None, 3), "P_src"), as_array(P_dst, (None, 3), "P_dst")
+    if P_src.shape != P_dst.shape:
+        raise InvalidInput(f"P_src {P_src.shape} and P_dst {P_dst.shape}: expected the same points", "P_dst")
     if len(P_src) < 3:
         raise IllConditionedData(f"a rigid fit needs at least 3 points, got {len(P_src)}", float("inf"), len(P_src))
     a, b = P_src.mean(axis=0), P_dst.mean(axis=0)
@@ -102,9 +132,11 @@ def wrench_to_A(f_S_N: np.ndarray, tau_S_Nm: np.ndarray, R_AS: np.ndarray,
 
 
 def weight_moment_A(rig: Rig, R_BA: np.ndarray) -> np.ndarray:
-    """(56) with coincident origins: ``r_G x (R^T m g)`` in {A} (N m); batched."""
-    f_A = (rig.platform_mass_kg * rig.gravity_B_m_per_s2) @ R_BA  # rows: R^T f for each R
-    return np.cross(rig.com_A_m, f_A)
+    """(56) with coincident origins: ``r_G x (R^T m g)`` in {A} (N m); batched.
+
+    The physics is :func:`csjm_opt.model.cable_terms.weight_moment` (the numpy reference).
+    """
+    return weight_moment(R_BA, rig.platform_mass_kg * np.asarray(rig.com_A_m), rig.gravity_B_m_per_s2)
 
 
 def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int, dict[str, Any]]]]:
@@ -165,7 +197,30 @@ def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int,
 
 def preprocess_text(text: str, rig: Rig, source: str | None = None, origin_tol_m: float = DEFAULT_ORIGIN_TOL_M,
                     ft_includes_weight: bool = False) -> tuple[MeasurementLog, dict[str, Any]]:
-    """Raw CSV text -> (MeasurementLog, summary dict).
+    """Raw instrument CSV text to a measurement log, Section III-B of the paper.
+
+    Base frame by a least-squares rigid fit (erratum 6), platform pose (53)-(54), wrench moved
+    to {A} about O (55), weight moment (56) in extra columns ``tauw_x..z``.
+
+    Parameters
+    ----------
+    text : str
+        Raw CSV text.
+    rig : Rig
+        The rig (weight moment, frames).
+    source : str, optional
+        Name of the source, used in error messages.
+    origin_tol_m : float, optional
+        Largest accepted distance between the origins of {A} and {B} (m), (54).
+    ft_includes_weight : bool, optional
+        The F/T moment contains the platform's weight (it is then subtracted).
+
+    Returns
+    -------
+    log : MeasurementLog
+        The measurement log.
+    summary : dict
+        Base-frame fit residual, origin distances and counts.
 
     Raises
     ------
@@ -261,7 +316,31 @@ def _platform_pose_L(v: dict, pts: list, source: str | None, line: int) -> tuple
 
 
 def preprocess_file(path: str | Path, rig: Rig, **options: Any) -> tuple[MeasurementLog, dict[str, Any]]:
-    """Read a raw CSV file and preprocess it (see :func:`preprocess_text`)."""
+    """Read a raw instrument CSV file and turn it into a measurement log (see :func:`preprocess_text`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The raw CSV file (format in docs/guide/input-files.md).
+    rig : Rig
+        The rig (weight moment, frames).
+    **options
+        Passed to :func:`preprocess_text` (``origin_tol_m``, ``ft_includes_weight``).
+
+    Returns
+    -------
+    log : MeasurementLog
+        The measurement log.
+    summary : dict
+        Base-frame fit residual, origin distances and counts.
+
+    Raises
+    ------
+    DataFileError
+        If the file cannot be read or is malformed (naming the line).
+    InvalidInput
+        If an option is invalid.
+    """
     path = Path(path)
     text = read_text(path, lambda msg: DataFileError(msg, str(path)), "raw file")
     return preprocess_text(text, rig, str(path), **options)

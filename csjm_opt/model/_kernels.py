@@ -7,8 +7,9 @@ controller can call them every step at a cost of ~1 us. The ``*_many``
 functions loop over poses; their ``*_many_par`` twins do the same in
 parallel (``prange``, ``NUMBA_NUM_THREADS`` threads), for large batches
 called from the main thread (the workqueue threading layer must not be
-entered from two threads at once; see :func:`csjm_opt.model.numeric.parallel_ok`). ``tests/test_stiffness_kernel.py`` checks every kernel against the
-numpy reference, the CasADi model and a finite-difference energy Hessian.
+entered from two threads at once; see :func:`csjm_opt.model.numeric.parallel_ok`).
+``tests/test_stiffness_kernel.py`` checks every kernel against the numpy reference,
+the CasADi model and a finite-difference energy Hessian.
 Compiled on first use and cached on disk (``cache=True``).
 
 Argument names: ``A`` (6, 3) platform holes in {A}, ``B`` (6, 3) base holes
@@ -27,7 +28,7 @@ from numba import njit, prange
 # The parallel kernels run in processes that a sweep may fork; GNU OpenMP aborts
 # on fork(), the workqueue layer does not (set NUMBA_THREADING_LAYER to override).
 if "NUMBA_THREADING_LAYER" not in os.environ:
-    numba.config.THREADING_LAYER = "workqueue"
+    numba.config.THREADING_LAYER = "workqueue"  # type: ignore[attr-defined]
 
 #: Status codes of :func:`checked_stiffness_into`.
 OK, NOT_A_ROTATION, NON_FINITE = 0, 1, 2
@@ -150,7 +151,8 @@ def checked_stiffness_into(A, B, k, mr, g, R, T, t_lo, t_hi, tau_ext, check_eq, 
 
     Returns a status code; ``info`` (2,) receives the largest bound violation
     (N) and the equilibrium residual ``||J^T T + tau_ext + tau_w||`` (N m, when
-    ``check_eq``). Bounds are not checked when ``t_lo > t_hi``.
+    ``check_eq``) of the taut cables (``T_i > 0``; slack ones are exempt). Bounds are not checked
+    when ``t_lo > t_hi``.
     """
     for i in range(3):
         for j in range(3):
@@ -160,7 +162,7 @@ def checked_stiffness_into(A, B, k, mr, g, R, T, t_lo, t_hi, tau_ext, check_eq, 
     for i in range(6):
         if not np.isfinite(T[i]):
             return NON_FINITE
-        if t_lo <= t_hi:
+        if t_lo <= t_hi and T[i] > 0.0:            # t <= 0: a slack cable, not a bound violation
             viol = max(viol, t_lo - T[i], T[i] - t_hi)
     info[0] = viol
     err, det = rotation_error(R)
@@ -203,8 +205,8 @@ def all_exact_rotations(Rs):
 @njit(cache=True)
 def geometry_many(A, B, Rs, c, J):
     """Lengths ``c`` (n, 6) and J (n, 6, 3) for poses ``Rs`` (n, 3, 3)."""
+    U = np.empty((6, 3))
     for n in range(Rs.shape[0]):
-        U = np.empty((6, 3))
         geometry_into(A, B, Rs[n], c[n], U, J[n])
 
 
@@ -218,10 +220,10 @@ def weight_moment_many(mr, g, Rs, out):
 @njit(cache=True)
 def stiffness_many(A, B, k, Rs, Ts, Ks):
     """K (n, 3, 3) for poses ``Rs`` (n, 3, 3) and tensions ``Ts`` (n, 6)."""
+    c = np.empty(6)
+    U = np.empty((6, 3))
+    J = np.empty((6, 3))
     for n in range(Rs.shape[0]):
-        c = np.empty(6)
-        U = np.empty((6, 3))
-        J = np.empty((6, 3))
         geometry_into(A, B, Rs[n], c, U, J)
         stiffness_from_geometry_into(A, k, c, U, J, Ts[n], Ks[n])
 
@@ -236,20 +238,20 @@ def rest_terms_many(A, B, k, Rs, ls, Ks, Ts, taus):
 @njit(cache=True)
 def stiffness_basis_many(A, B, k, Rs, K0, G):
     """``K(T) = K0 + sum_i T_i G_i`` (all cables taut): K0 (n, 3, 3), G (n, 6, 3, 3)."""
+    c = np.empty(6)
+    U = np.empty((6, 3))
+    J = np.empty((6, 3))
+    e = np.zeros(6)
+    zero_k = np.zeros(6)
     for n in range(Rs.shape[0]):
-        c = np.empty(6)
-        U = np.empty((6, 3))
-        J = np.empty((6, 3))
-        e = np.zeros(6)
         geometry_into(A, B, Rs[n], c, U, J)
-        # K0 = J^T diag(k) J; G_i = Hess(c_i) = (K(e_i) - k_i j_i j_i^T) at unit tension
+        # K0 = J^T diag(k) J; G_i = Hess(c_i) = K of cable i alone at unit tension and zero stiffness
         for p in range(3):
             for q in range(3):
                 s = 0.0
                 for i in range(6):
                     s += k[i] * J[i, p] * J[i, q]
                 K0[n, p, q] = s
-        zero_k = np.zeros(6)
         for i in range(6):
             e[i] = 1.0
             stiffness_from_geometry_into(A, zero_k, c, U, J, e, G[n, i])
@@ -257,57 +259,50 @@ def stiffness_basis_many(A, B, k, Rs, K0, G):
 
 
 # ------------------------------------------------- many poses, parallel (main thread)
+# Each runs its serial twin on consecutive chunks of poses, one chunk per prange iteration.
+_CHUNKS = 64
+
+
 @njit(cache=True, parallel=True)
 def geometry_many_par(A, B, Rs, c, J):
-    """Lengths ``c`` (n, 6) and J (n, 6, 3) for poses ``Rs`` (n, 3, 3)."""
-    for n in prange(Rs.shape[0]):
-        U = np.empty((6, 3))
-        geometry_into(A, B, Rs[n], c[n], U, J[n])
+    """:func:`geometry_many` in parallel."""
+    n = Rs.shape[0]
+    for ch in prange(_CHUNKS):
+        s, e = ch * n // _CHUNKS, (ch + 1) * n // _CHUNKS
+        geometry_many(A, B, Rs[s:e], c[s:e], J[s:e])
 
 
 @njit(cache=True, parallel=True)
 def weight_moment_many_par(mr, g, Rs, out):
-    """Weight moments (n, 3) for poses ``Rs``."""
-    for n in prange(Rs.shape[0]):
-        weight_moment_into(mr, g, Rs[n], out[n])
+    """:func:`weight_moment_many` in parallel."""
+    n = Rs.shape[0]
+    for ch in prange(_CHUNKS):
+        s, e = ch * n // _CHUNKS, (ch + 1) * n // _CHUNKS
+        weight_moment_many(mr, g, Rs[s:e], out[s:e])
 
 
 @njit(cache=True, parallel=True)
 def stiffness_many_par(A, B, k, Rs, Ts, Ks):
-    """K (n, 3, 3) for poses ``Rs`` (n, 3, 3) and tensions ``Ts`` (n, 6)."""
-    for n in prange(Rs.shape[0]):
-        c = np.empty(6)
-        U = np.empty((6, 3))
-        J = np.empty((6, 3))
-        geometry_into(A, B, Rs[n], c, U, J)
-        stiffness_from_geometry_into(A, k, c, U, J, Ts[n], Ks[n])
+    """:func:`stiffness_many` in parallel."""
+    n = Rs.shape[0]
+    for ch in prange(_CHUNKS):
+        s, e = ch * n // _CHUNKS, (ch + 1) * n // _CHUNKS
+        stiffness_many(A, B, k, Rs[s:e], Ts[s:e], Ks[s:e])
 
 
 @njit(cache=True, parallel=True)
 def rest_terms_many_par(A, B, k, Rs, ls, Ks, Ts, taus):
-    """:func:`rest_terms_into` for every pose; ``ls`` (n, 6)."""
-    for n in prange(Rs.shape[0]):
-        rest_terms_into(A, B, k, Rs[n], ls[n], Ks[n], Ts[n], taus[n])
+    """:func:`rest_terms_many` in parallel."""
+    n = Rs.shape[0]
+    for ch in prange(_CHUNKS):
+        s, e = ch * n // _CHUNKS, (ch + 1) * n // _CHUNKS
+        rest_terms_many(A, B, k, Rs[s:e], ls[s:e], Ks[s:e], Ts[s:e], taus[s:e])
 
 
 @njit(cache=True, parallel=True)
 def stiffness_basis_many_par(A, B, k, Rs, K0, G):
-    """``K(T) = K0 + sum_i T_i G_i`` (all cables taut): K0 (n, 3, 3), G (n, 6, 3, 3)."""
-    for n in prange(Rs.shape[0]):
-        c = np.empty(6)
-        U = np.empty((6, 3))
-        J = np.empty((6, 3))
-        e = np.zeros(6)
-        geometry_into(A, B, Rs[n], c, U, J)
-        # K0 = J^T diag(k) J; G_i = Hess(c_i) = (K(e_i) - k_i j_i j_i^T) at unit tension
-        for p in range(3):
-            for q in range(3):
-                s = 0.0
-                for i in range(6):
-                    s += k[i] * J[i, p] * J[i, q]
-                K0[n, p, q] = s
-        zero_k = np.zeros(6)
-        for i in range(6):
-            e[i] = 1.0
-            stiffness_from_geometry_into(A, zero_k, c, U, J, e, G[n, i])
-            e[i] = 0.0
+    """:func:`stiffness_basis_many` in parallel."""
+    n = Rs.shape[0]
+    for ch in prange(_CHUNKS):
+        s, e = ch * n // _CHUNKS, (ch + 1) * n // _CHUNKS
+        stiffness_basis_many(A, B, k, Rs[s:e], K0[s:e], G[s:e])

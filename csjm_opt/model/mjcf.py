@@ -186,8 +186,30 @@ def export_mjcf(rig: Rig, R: np.ndarray | None = None, tau_ext_A_Nm: np.ndarray 
 
     Plans the tensions with :func:`csjm_opt.plan_tensions` (mid-range
     reference), converts them to rest lengths ``l = c(R) - T/k`` and calls
-    :func:`rig_to_mjcf`; ``options`` are passed on. Raises
-    :class:`~csjm_opt.errors.InfeasibleLoad` when no tensions hold the load.
+    :func:`rig_to_mjcf`.
+
+    Parameters
+    ----------
+    rig : Rig
+    R : (3, 3) array, optional
+        Pose (identity by default).
+    tau_ext_A_Nm : (3,) array, optional
+        External moment fixed in {A} (N m), weight excluded.
+    actuation : {"spring", "winch", "tension"}
+    **options
+        Passed to :func:`rig_to_mjcf` (``timestep_s``, ``integrator``, ``joint_damping_Nms_per_rad``, ...).
+
+    Returns
+    -------
+    str
+        The MJCF document; at its keyframe MuJoCo is in equilibrium at ``R``.
+
+    Raises
+    ------
+    InfeasibleLoad
+        No tensions within the bounds hold the load at ``R``.
+    NotARotation, InvalidInput
+        Bad ``R`` or ``tau_ext_A_Nm``.
     """
     from .._validate import as_rotation, as_vector3
     from ..planning.planner import plan_tensions

@@ -18,7 +18,6 @@ from __future__ import annotations
 import functools
 import threading
 import weakref
-from collections.abc import Callable
 from typing import Any
 
 import casadi as ca
@@ -104,10 +103,17 @@ class Model:
 
     # ------------------------------------------------------- single-pose fast path
     def pose_terms(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Cable lengths (6,), J (6, 3) and weight moment (3,) at one pose, one kernel call.
+        """Cable lengths, J and weight moment at one pose, in one kernel call (~1 us).
 
-        The per-step call of a controller: no validation (``R`` must be a
-        float64 (3, 3) rotation).
+        The per-step call of a controller: no validation.
+
+        Parameters
+        ----------
+        R : (3, 3) float64 rotation of {A} in {B} (trusted).
+
+        Returns
+        -------
+        c : (6,) cable lengths (m); J : (6, 3) Jacobian (38); tau_weight : (3,) weight moment in {A} (N m).
         """
         c, J, tau_w = np.empty(6), np.empty((6, 3)), np.empty(3)
         kernels.pose_terms_into(self.A, self.B, self.first_moment_A_kgm, self.g, R, c, J, tau_w)
@@ -130,20 +136,72 @@ class Model:
         return self.B - self.A @ np.swapaxes(R, -1, -2)
 
     def cable_lengths(self, R: np.ndarray) -> np.ndarray:
-        """Cable lengths ``c_i`` (m): (6,) or (n, 6)."""
+        """Cable lengths ``c_i = ||b_i - R a_i||``.
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3) or (n, 3, 3)
+            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
+            top-level functions for user input).
+
+        Returns
+        -------
+        ndarray, shape (6,) or (n, 6)
+            Lengths (m).
+        """
         return self.geometry(R)[0]
 
     def jacobian(self, R: np.ndarray) -> np.ndarray:
-        """J of (38): (6, 3) or (n, 6, 3); rows ``a_i x (R^T u_i)`` in {A}."""
+        """The Jacobian ``J`` of (38): row i is ``a_i x (R^T u_i)`` in {A}; ``dc = -J dzeta`` (40).
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3) or (n, 3, 3)
+            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
+            top-level functions for user input).
+
+        Returns
+        -------
+        ndarray, shape (6, 3) or (n, 6, 3)
+            ``J`` per pose (m).
+        """
         return self.geometry(R)[1]
 
     def cable_moment(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
-        """Cables' moment ``J^T T`` on the platform about O, in {A} (N m)."""
+        """The cables' moment ``J^T T`` on the platform about O, in {A}.
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3) or (n, 3, 3)
+            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
+            top-level functions for user input).
+        T : ndarray, shape (6,) or (n, 6)
+            Cable tensions (N).
+
+        Returns
+        -------
+        ndarray, shape (3,) or (n, 3)
+            Moment (N m).
+        """
         J = self.jacobian(R)
         return np.einsum("...ij,...i->...j", J, T)
 
     def stiffness(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
-        """K (docs/conventions.md load convention, N m/rad): (3, 3) or (n, 3, 3); ``T_i <= 0`` is slack."""
+        """The stiffness K (load convention of docs/conventions.md) for given tensions.
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3) or (n, 3, 3)
+            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
+            top-level functions for user input).
+        T : ndarray, shape (6,) or (n, 6)
+            Cable tensions (N); ``T_i <= 0`` is a slack cable.
+
+        Returns
+        -------
+        ndarray, shape (3, 3) or (n, 3, 3)
+            K (N m/rad), symmetric.
+        """
         if R.ndim == 2:
             K = np.empty((3, 3))
             kernels.stiffness_into(self.A, self.B, self.k, R, _f64(T), K)
@@ -152,8 +210,19 @@ class Model:
         _many("stiffness_many", R.shape[0])(self.A, self.B, self.k, _f64(R), _f64(T), K)
         return K
 
-    def stiffness_rest(self, R: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """K, tensions T, cable moment and cable energy for rest lengths ``l`` (m)."""
+    def stiffness_rest(self, R: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any]:
+        """K, tensions, cable moment and cable energy for rest lengths, slack cables found.
+
+        Parameters
+        ----------
+        R : (3, 3) or (n, 3, 3) rotations (trusted).
+        l : (6,) or (n, 6) rest lengths (m).
+
+        Returns
+        -------
+        K : (..., 3, 3); T : (..., 6) tensions ``k (c - l)``, 0 when ``c <= l``;
+        tau : (..., 3) cables' moment ``J^T T`` in {A}; energy : float or (n,) cable energy (J).
+        """
         if R.ndim == 2:
             K, T, tau = np.empty((3, 3)), np.empty(6), np.empty(3)
             kernels.rest_terms_into(self.A, self.B, self.k, R, _f64(l), K, T, tau)
@@ -165,15 +234,55 @@ class Model:
         return K, T, tau, (float(energy) if R.ndim == 2 else energy)
 
     def tensions_from_rest(self, R: np.ndarray, l: np.ndarray) -> np.ndarray:
-        """``t = k (c - l)`` for taut cables, 0 for slack ones (N)."""
+        """Tensions ``t = k (c - l)`` for taut cables, 0 for slack ones.
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3) or (n, 3, 3)
+            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
+            top-level functions for user input).
+        l : ndarray, shape (6,) or (n, 6)
+            Rest lengths (m).
+
+        Returns
+        -------
+        ndarray, shape (6,) or (n, 6)
+            Tensions (N).
+        """
         return np.maximum(self.k * (self.cable_lengths(R) - l), 0.0)
 
     def rest_lengths(self, R: np.ndarray, T: np.ndarray) -> np.ndarray:
-        """Rest lengths that produce tensions ``T`` at ``R``: ``l = c - T / k`` (m)."""
+        """Rest lengths that produce tensions ``T`` at ``R``: ``l = c - T / k``.
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3) or (n, 3, 3)
+            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
+            top-level functions for user input).
+        T : ndarray, shape (6,) or (n, 6)
+            Cable tensions (N).
+
+        Returns
+        -------
+        ndarray, shape (6,) or (n, 6)
+            Rest lengths (m).
+        """
         return self.cable_lengths(R) - np.asarray(T) / self.k
 
     def weight_moment(self, R: np.ndarray) -> np.ndarray:
-        """Moment of the platform's weight about O in {A} (N m): (3,) or (n, 3)."""
+        """Moment of the platform's weight about O, in {A}: ``m r_G x (R^T g)``, (56).
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3) or (n, 3, 3)
+            Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
+            top-level functions for user input).
+
+        Returns
+        -------
+        ndarray, shape (3,) or (n, 3)
+            Moment (N m).
+        """
         if R.ndim == 2:
             out = np.empty(3)
             kernels.weight_moment_into(self.first_moment_A_kgm, self.g, R, out)
@@ -241,7 +350,7 @@ def _squeeze(M: np.ndarray) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=32)
-def _mapped(name: str, n: int, compiled: bool = False) -> Callable:
+def _mapped(name: str, n: int, compiled: bool = False) -> ca.Function:
     """``build_functions()[name].map(n)``, cached by size (JIT-compiled C if asked)."""
     f = _jit(name) if compiled else build_functions()[name]
     return f.map(n, "serial")

@@ -133,7 +133,14 @@ class Rig:
 
     # ------------------------------------------------------------ conversion
     def as_dict(self) -> dict[str, dict[str, Any]]:
-        """Nested dict in the TOML layout of docs/conventions.md (plain Python numbers)."""
+        """The rig as a nested dict in the TOML layout of docs/conventions.md.
+
+        Returns
+        -------
+        dict
+            ``{"geometry": {...}, "cables": {...}, "platform": {...}}`` of plain Python numbers
+            (plus ``"dynamics"`` when set).
+        """
         tolist = lambda a: np.asarray(a, dtype=float).tolist()  # noqa: E731
         data = {
             "geometry": {"platform_holes": tolist(self.platform_holes_A_m),
@@ -149,7 +156,26 @@ class Rig:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any], path: str | None = None) -> "Rig":
-        """Build from the nested TOML layout; errors name the key (and file)."""
+        """Build a rig from the nested TOML layout.
+
+        Parameters
+        ----------
+        data : dict
+            ``{"geometry": {...}, "cables": {...}, "platform": {...}}`` as in a rig file.
+        path : str, optional
+            File the data came from, named in errors.
+
+        Returns
+        -------
+        Rig
+            The validated rig.
+
+        Raises
+        ------
+        RigFileError
+            If a key is unknown or missing, a shape is wrong, a number is not finite, ``t_min >=
+            t_max``, a stiffness is not positive or holes coincide (naming the key and file).
+        """
         statics = {key: value for key, value in data.items() if key != "dynamics"} if isinstance(data, dict) else data
         _check(statics, path)
         g, c, p = data["geometry"], data["cables"], data["platform"]
@@ -165,7 +191,23 @@ class Rig:
 
     @classmethod
     def from_toml(cls, path: str | Path) -> "Rig":
-        """Read a rig file (format in docs/conventions.md)."""
+        """Read a rig file (format in docs/conventions.md).
+
+        Parameters
+        ----------
+        path : str or Path
+            The TOML file.
+
+        Returns
+        -------
+        Rig
+            The validated rig.
+
+        Raises
+        ------
+        RigFileError
+            If the file cannot be read, is not TOML, or fails the checks of :meth:`from_dict`.
+        """
         path = Path(path)
         text = read_text(path, lambda msg: RigFileError(msg, str(path)), "rig file")
         try:
@@ -175,9 +217,24 @@ class Rig:
         return cls.from_dict(data, str(path))
 
     def to_toml(self, path: str | Path | None = None, overwrite: bool = False) -> str:
-        """TOML text of this rig; written atomically to ``path`` when given.
+        """The rig as TOML text; written atomically to ``path`` when given.
 
-        An existing file is never replaced unless ``overwrite=True``.
+        Parameters
+        ----------
+        path : str or Path, optional
+            Output file; an existing file is never replaced unless ``overwrite=True``.
+        overwrite : bool, optional
+            Replace an existing file.
+
+        Returns
+        -------
+        str
+            The TOML text (one hole per line; :meth:`from_toml` reads it back to the same rig).
+
+        Raises
+        ------
+        InvalidInput
+            If ``path`` exists and ``overwrite`` is false, or it cannot be written.
         """
         text = _format_toml(self.as_dict())
         if path is not None:
@@ -196,7 +253,25 @@ class Rig:
 
 
 def paper_rig(cable_stiffness_N_per_m: float = PAPER_CABLE_STIFFNESS_N_PER_M) -> Rig:
-    """The rig of the paper's Section IV-A (hole pairing as the paper labels it)."""
+    """The rig of the paper's Section IV-A (holes paired as the paper labels them).
+
+    Parameters
+    ----------
+    cable_stiffness_N_per_m : float, optional
+        Shared stiffness of each cable with its drive (N/m); the paper gives none, the default
+        4600 N/m is fitted to Table 3 (docs/guide/modelling.md).
+
+    Returns
+    -------
+    Rig
+        Semi-regular hexagons of Section IV-A, weight 4.82 N at (0, 0, 0.081) m, tensions in
+        [5, 150] N.
+
+    Raises
+    ------
+    RigFileError
+        If ``cable_stiffness_N_per_m`` is not positive and finite.
+    """
     platform, base = hexagon.paper_holes()
     return Rig(platform_holes_A_m=platform, base_holes_B_m=base,
                cable_stiffness_N_per_m=np.full(6, float(cable_stiffness_N_per_m)),
@@ -204,7 +279,24 @@ def paper_rig(cable_stiffness_N_per_m: float = PAPER_CABLE_STIFFNESS_N_PER_M) ->
 
 
 def load_rig(spec: str | Path | None) -> Rig:
-    """A rig from a path, or the built-in paper rig for ``None`` / ``"paper"``."""
+    """A rig from a TOML file, or the built-in paper rig.
+
+    Parameters
+    ----------
+    spec : str or Path or None
+        Path of a rig file (format in docs/conventions.md), or ``None`` / ``"paper"`` for
+        :func:`paper_rig`.
+
+    Returns
+    -------
+    Rig
+        The validated rig.
+
+    Raises
+    ------
+    RigFileError
+        If the file cannot be read or is malformed (naming the key).
+    """
     if spec is None or str(spec) == "paper":
         return paper_rig()
     return Rig.from_toml(spec)
@@ -300,7 +392,7 @@ def _check(data: Any, path: str | None) -> None:
                                path, f"geometry.{name}")
         d = np.linalg.norm(P[:, None, :] - P[None, :, :], axis=-1) + np.eye(6) * 1e9
         if d.min() < MIN_HOLE_SPACING_M:
-            i, j = np.unravel_index(int(np.argmin(d)), d.shape)
+            i, j = (int(x) for x in np.unravel_index(int(np.argmin(d)), d.shape))
             raise RigFileError(f"holes {i + 1} and {j + 1} are {d[i, j] * 1e3:.3g} mm apart (at least "
                                f"{MIN_HOLE_SPACING_M * 1e3:g} mm: duplicated row?)", path, f"geometry.{name}")
 

@@ -15,8 +15,9 @@ a cable with ``t_i <= 0`` is slack and contributes nothing (neither
 tensions are ``t_i = k_i (c_i - l_i)`` for the others.
 
 **Checks.** Tensions from a planner lie in ``[t_min, t_max]`` and hold the
-pose's load; :func:`stiffness` checks the bounds (within ``bound_tol_N``)
-unless ``check_bounds=False``, and checks equilibrium when the load
+pose's load; :func:`stiffness` checks the bounds of the taut cables (within
+``bound_tol_N``; ``t_i <= 0`` is slack, not a violation) unless
+``check_bounds=False``, and checks equilibrium when the load
 ``tau_ext_A_Nm`` is given. K is returned whatever its eigenvalues: a K
 that is not positive definite means an unstable pose (see :func:`is_stable`).
 """
@@ -54,8 +55,8 @@ def stiffness(rig: Rig, R: np.ndarray, tensions_N: np.ndarray | None = None, mod
         tensions must hold it: ``||J^T T + tau_ext + tau_weight|| <= equilibrium_tol_Nm``.
     rest_lengths_m : (6,) rest lengths instead of tensions: tensions follow from
         ``t = k (c - l)``, slack cables are found, the bounds are not checked.
-    check_bounds : check ``t_min - bound_tol_N <= t_i <= t_max + bound_tol_N``
-        (set False for states outside the planner's box, e.g. slack cables).
+    check_bounds : check ``t_min - bound_tol_N <= t_i <= t_max + bound_tol_N`` for every
+        taut cable (``t_i > 0``); set False for states outside the planner's box.
     bound_tol_N, equilibrium_tol_Nm : tolerances of the checks.
 
     Returns
@@ -125,7 +126,7 @@ def stiffness_batch(rig: Rig, Rs: np.ndarray, tensions_N: np.ndarray, model: Mod
     Rs = as_rotations_fast(Rs)
     T = as_array(tensions_N, (Rs.shape[0], 6), "tensions")
     if check_bounds and T.size:
-        viol = np.maximum(rig.t_min_N - T, T - rig.t_max_N).max(axis=1)
+        viol = np.where(T > 0, np.maximum(rig.t_min_N - T, T - rig.t_max_N), -np.inf).max(axis=1)
         if viol.max() > bound_tol_N:
             i = int(np.argmax(viol))
             raise InconsistentTensions(

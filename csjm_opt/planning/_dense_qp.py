@@ -12,7 +12,8 @@ of an iterative solver such as OSQP). Two methods:
 
 1. Primal-dual active set (Hintermueller, Ito & Kunisch 2002), warm-started
    from a guessed active set (the previous solution along a trajectory):
-   usually one or two KKT solves, compiled (:func:`csjm_opt.planning._kernels.pdas`). It can cycle for a general ``P``, so
+   usually one or two KKT solves, compiled (:func:`csjm_opt.planning._kernels.pdas`).
+   It can cycle for a general ``P``, so
 2. if it does not settle in a few iterations, the primal active-set method
    (Nocedal & Wright, Numerical Optimization, Alg. 16.3) from a feasible
    point, which terminates finitely.

@@ -24,10 +24,12 @@ tension box; a load within that tolerance always gets a plan.
 from __future__ import annotations
 
 import warnings
+from typing import Any
 
 import numba
 import numpy as np
 import qpsolvers
+from numpy.typing import ArrayLike
 from scipy import sparse
 from scipy.optimize import lsq_linear
 
@@ -73,7 +75,7 @@ def build_tension_qp_for(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray,
 SOLVERS = ("active_set", "auto")
 
 
-def plan_tensions(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray = (0.0, 0.0, 0.0),
+def plan_tensions(rig: Rig, R: np.ndarray, tau_ext_A_Nm: ArrayLike = (0.0, 0.0, 0.0),
                   t_ref_N: np.ndarray | None = None, solver: str = "active_set",
                   model: Model | None = None) -> TensionPlan:
     """Tensions that hold ``tau_ext`` (N m, {A}) at ``R``, closest to ``t_ref`` (N).
@@ -252,7 +254,7 @@ def _check_solver(solver: str) -> None:
 
 
 def _solve_qp(problem: qpsolvers.Problem, solver: str) -> np.ndarray | None:
-    opts = {"eps_abs": 1e-9, "eps_rel": 1e-9, "verbose": False} if solver == "osqp" else {}  # we polish ourselves
+    opts: dict[str, Any] = {"eps_abs": 1e-9, "eps_rel": 1e-9, "verbose": False} if solver == "osqp" else {}
     try:
         with warnings.catch_warnings():  # infeasibility is reported by InfeasibleLoad instead
             warnings.simplefilter("ignore")

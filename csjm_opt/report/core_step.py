@@ -50,15 +50,15 @@ def section(s: dict) -> Section:
                f"{TILTS_DEG[0]:.0f} to {TILTS_DEG[-1]:.0f} deg at {len(AZIMUTHS_DEG)} azimuths) under the "
                f"platform's own weight. Largest equilibrium residual {sig(res, 2)} N m: "
                + ("at round-off, as expected" if res < ROUND_OFF_NM else f"above round-off ({ROUND_OFF_NM:g} N m)")
-               + f". Tensions stay {'within' if in_bounds else 'OUTSIDE'} [{sig(s['t_min_N'])}, {sig(s['t_max_N'])}] N "
+               + f". Tensions stay {'within' if in_bounds else 'OUTSIDE'} [{s['t_min_N']:g}, {s['t_max_N']:g}] N "
                f"(lowest {sig(s['min_tension_N'])} N, highest {sig(s['max_tension_N'])} N), and K is "
                + (f"positive definite at every pose (smallest eigenvalue {sig(lam)} N m/rad)." if lam > 0 else
                   f"NOT positive definite (smallest eigenvalue {sig(lam)} N m/rad)."))
     facts = quantity_table([
         ("largest equilibrium residual", Cell(res, "sig2", src=("max_equilibrium_residual_Nm",)), "N m",
          f"< {ROUND_OFF_NM:g} (round-off)"),
-        ("lowest tension", Cell(s["min_tension_N"], src=("min_tension_N",)), "N", f">= t_min = {sig(s['t_min_N'])}"),
-        ("highest tension", Cell(s["max_tension_N"], src=("max_tension_N",)), "N", f"<= t_max = {sig(s['t_max_N'])}"),
+        ("lowest tension", Cell(s["min_tension_N"], src=("min_tension_N",)), "N", f">= t_min = {s['t_min_N']:g}"),
+        ("highest tension", Cell(s["max_tension_N"], src=("max_tension_N",)), "N", f"<= t_max = {s['t_max_N']:g}"),
         ("smallest eigenvalue of K", Cell(lam, src=("min_eigenvalue_Nm_per_rad",)), "N m/rad", "> 0 (stable)"),
     ], expectation=True)
     cols = [Column("pose"), Column("tilt", "deg", "fix0"), Column("azimuth", "deg", "fix0"),

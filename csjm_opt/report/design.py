@@ -18,7 +18,7 @@ import numpy as np
 from .. import _plotting as plots
 from .._fileio import atomic_write_json
 from ..design.geometry import design_holes
-from ..design.store import read_records
+from ..design.store import read_records, unique_records
 from ..errors import CsjmError, DesignError
 from .document import Cell, Column, Document, Figure, Link, Paragraph, Section, Table, quantity_table, sig
 from .render import write_document
@@ -118,7 +118,7 @@ def load_study(results: str | Path, sweep: str | Path | None = None) -> DesignSt
     DesignError
         No result file, no valid design, or a sweep file whose settings differ from the results'.
     """
-    records, _ = read_records(results)
+    records = list(unique_records(read_records(results)[0])[0].values())  # repeated lines count once
     if not records:
         raise DesignError("no designs in the result file (run csjm sweep first)", "RESULTS", str(results))
     ok = [r for r in records if r.get("status") == "ok" and r.get(X_KEY) is not None and r.get(Y_KEY) is not None]

@@ -71,7 +71,7 @@ def step(ctx: DemoContext) -> StepOutput:
 def section(s: dict) -> Section:
     """The report section of :func:`run_demo`'s summary (paths relative to its folder)."""
     g = s["gap"]
-    verdict = (f"Injected `{s['injected']}` (severity {sig(s['severity'])}) into a simulated log of "
+    verdict = (f"Injected `{s['injected']}` (severity {s['severity']:g}) into a simulated log of "
                f"{s.get('n_cycles', '?')} cycles ({s['rows']} rows); the diagnosis selected `{s['selected']}`: "
                + ("correct, as expected" if s["correct"] else "NOT the injected effect")
                + (f" (confounded with {', '.join(s['confounded_with'])})" if s["confounded_with"] else "")

@@ -27,6 +27,11 @@ _UNITS = (("_rad_per_Nm", "rad/(N m)", 1.0, "sig3"), ("_per_m", "1/m", 1.0, "sig
           ("_N", "N", 1.0, "sig3"), ("_kg", "kg", 1.0, "sig3"))
 
 
+def _cell(d: dict, key: str, where: tuple, fmt: str | None = None, scale: float | None = None) -> Cell:
+    """A number of ``d`` with its JSON source ``where + (key,)``; "n/a" without a source when absent."""
+    return Cell(d[key], fmt, scale, where + (key,)) if key in d else Cell(None, fmt, scale)
+
+
 def unit_of(name: str) -> tuple[str, float]:
     """(unit shown, display scale) of a parameter from the unit suffix of its name ("" for none)."""
     for suffix, unit, scale, _ in _UNITS:
@@ -133,7 +138,7 @@ def _gap_table(j: dict) -> Table:
     body = [[name, Cell(g.get(key), scale=1e3, src=("gap", key)), "mrad"] for name, key in rows if key in g]
     body.append(["noise floor", Cell(j["noise_floor_rad"], scale=1e3, src=("noise_floor_rad",)), "mrad"])
     body.append(["share of the systematic gap closed",
-                 Cell(g.get("fraction_explained"), "fix1", 100.0, ("gap", "fraction_explained")), "%"])
+                 _cell(g, "fraction_explained", ("gap",), "fix1", 100.0), "%"])
     return Table([Column("gap"), Column("value"), Column("unit")], body)
 
 
@@ -150,8 +155,7 @@ def _candidates(j: dict) -> Section:
 
     def fixed(name: str, key: str, share: Any, rank: str) -> list[Any]:
         m = j.get(key) or {}
-        row = [name, Cell(m.get("heldout_rms_rad"), src=(key, "heldout_rms_rad")),
-               Cell(m.get("train_rms_rad"), src=(key, "train_rms_rad"))]
+        row = [name, _cell(m, "heldout_rms_rad", (key,)), _cell(m, "train_rms_rad", (key,))]
         row += [None] if improve else []
         row += [None, None, Cell(m["bic"], src=(key, "bic")) if "bic" in m else None, ""]
         row += [""] if plaus else []
@@ -160,8 +164,9 @@ def _candidates(j: dict) -> Section:
     rows = [fixed("nominal (rig file)", "baseline", 0.0, "0")]
     if j.get("nominal_refit"):
         rows.append(fixed("nominal_refit", "nominal_refit",
-                          Cell(j["gap"].get("fraction_explained_by_nominal_refit"),
-                               src=("gap", "fraction_explained_by_nominal_refit")),
+                          Cell(j["gap"]["fraction_explained_by_nominal_refit"],
+                               src=("gap", "fraction_explained_by_nominal_refit"))
+                          if "fraction_explained_by_nominal_refit" in j["gap"] else None,
                           str(len(j["nominal_refit"].get("params", {})))))
     for i, c in enumerate(cands):
         name = c["effect"] + (" (selected)" if c["effect"] == j["selected"] else "")
@@ -281,12 +286,12 @@ def _secondary_and_pairs(j: dict) -> Section | None:
     if steps:
         out.add(Table([Column("model"), Column("held-out RMS", "mrad", scale=1e3),
                        Column("share closed", "%", "fix0", 100.0)],
-                      [[st.get("model", ""), Cell(st.get("heldout_rms_rad"), src=("steps", i, "heldout_rms_rad")),
-                        Cell(st.get("fraction_explained"), src=("steps", i, "fraction_explained"))]
+                      [[st.get("model", ""), _cell(st, "heldout_rms_rad", ("steps", i)),
+                        _cell(st, "fraction_explained", ("steps", i))]
                        for i, st in enumerate(steps)], "The path of the selection, one model after the other"))
     if sec.get("tried"):                                  # older diagnoses: every second effect tried
-        rows = [[t["effect"], Cell(t.get("heldout_rms_rad"), src=("secondary", "tried", i, "heldout_rms_rad")),
-                 Cell(t.get("p_value"), "sig2", src=("secondary", "tried", i, "p_value")),
+        rows = [[t["effect"], _cell(t, "heldout_rms_rad", ("secondary", "tried", i)),
+                 _cell(t, "p_value", ("secondary", "tried", i), "sig2"),
                  bool(t.get("significant")) if "error" not in t else t["error"]]
                 for i, t in enumerate(sec["tried"]) if "p_value" in t or "error" in t]
         out.add(Table([Column("added effect"), Column("held-out RMS", "mrad", scale=1e3), Column("p"),

@@ -27,7 +27,8 @@ from ..identification.stiffness_fits import n_parameters
 from ._step import DemoContext, StepOutput
 from .document import Cell, Column, Document, Figure, Link, Section, Table, sig
 from .render import write_document
-from ..identification.verify import plot_verification, verify_log
+from ..identification.figures import plot_verification
+from ..identification.verify import verify_log
 from ..measurement.instruments import InstrumentNoise
 
 #: Rows per cycle from which the quadratic (order 2) fit is used.

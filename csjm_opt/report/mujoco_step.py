@@ -54,11 +54,11 @@ def controllers(rig: Rig, plant: str) -> dict[str, Callable[[], Controller]]:
     """Controller factories by name. Feedback gains depend on the plant: on the quasi-static plant
     feedback through the tension plan is a one-step algebraic loop, stable only for ``kp`` below the
     cable stiffness and without derivative action."""
-    gains = dict(kp=20.0, kd=0.3, ki=200.0) if plant == "mujoco" else dict(kp=5.0, kd=0.0, ki=100.0)
+    kp, kd, ki = (20.0, 0.3, 200.0) if plant == "mujoco" else (5.0, 0.0, 100.0)
     ref = tilt_and_torsion
     return {"pose only": lambda: InverseDynamicsController(rig, ref, feedforward=False, use_measured_load=False),
             "inverse dynamics": lambda: InverseDynamicsController(rig, ref, use_measured_load=False),
-            "ID + PID": lambda: SO3FeedbackController(rig, ref, use_measured_load=False, **gains),
+            "ID + PID": lambda: SO3FeedbackController(rig, ref, kp, kd, ki, use_measured_load=False),
             "stiffness shaping": lambda: StiffnessShapingController(rig, ref, K_STIFF_TARGET,
                                                                    use_measured_load=False),
             "shaping + ID": lambda: StiffnessShapingController(rig, ref, K_STIFF_TARGET, feedforward=True,
@@ -145,10 +145,12 @@ def stiffness_switch(rig: Rig, R: np.ndarray | None = None, tau_ext_A_Nm: np.nda
             state = plant.step(cmd, load, k * dt, (k + 1) * dt)
             k += 1
         K_meas, K_raw = plant.perturbation_stiffness()
-        scale = float(np.abs(cmd.K_planned).max())
-        out[phase] = {"K_commanded": cmd.K_planned.tolist(), "K_measured_mujoco": K_meas.tolist(),
-                      "relative_error": float(np.abs(K_meas - cmd.K_planned).max() / scale),
-                      "uncorrected_relative_error": float(np.abs(K_raw - cmd.K_planned).max() / scale),
+        K_cmd = np.asarray(cmd.K_planned, float)
+        scale = float(np.abs(K_cmd).max())
+        out[phase] = {"K_commanded": K_cmd.tolist(), "K_measured_mujoco": K_meas.tolist(),
+                      "relative_error": float(np.abs(K_meas - K_cmd).max() / scale),
+                      "target_relative_error": float(np.abs(K_meas - K_target).max() / scale),
+                      "uncorrected_relative_error": float(np.abs(K_raw - K_cmd).max() / scale),
                       "eigenvalues_Nm_per_rad": np.linalg.eigvalsh(K_meas).tolist()}
     return out
 

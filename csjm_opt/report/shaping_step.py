@@ -17,14 +17,15 @@ from ..control.controllers import StiffnessShapingController
 from .._fileio import atomic_write_json
 from ..control.load_profiles import Constant, Sinusoid, Step
 from ..model.numeric import Model
-from ..shaping.reachable import _lp, plot_reachable_set, reachable_set
+from ..shaping.figures import plot_reachable_set
+from ..shaping.reachable import _lp, reachable_set
 from ..model.rig import Rig
 from ..shaping.shaper import shape_stiffness, stiffness_basis
 from .._validate import as_rotation
 from ._step import DemoContext, StepOutput
 from .document import Cell, Column, Figure, Section, Table, quantity_table, sig
 
-#: Table 3's original pose R0 with ERRATA item 3 applied (element (3,2) = -0.300).
+#: Table 3's original pose R0 with erratum 3 applied (element (3,2) = -0.300).
 PAPER_R0 = np.array([[0.992, -0.060, -0.111], [0.090, 0.952, 0.292], [0.088, -0.300, 0.950]])
 #: A moderate external moment for the demo (N m, in {A}).
 DEMO_TAU_EXT = np.array([0.2, -0.5, 0.1])
@@ -202,9 +203,9 @@ def _closed_loop_section(s: dict, figs: dict) -> Section:
     period_us = 1e6 * s["closed_loop_dt_s"]
     ok = err <= 1.5 * est and s["closed_loop_median_step_us"] < period_us
     verdict = (f"Held the pose for {s['closed_loop']['duration_s']:.2f} s ({s['closed_loop_steps']} steps) under a "
-               f"{sig(d['step_Nm'])} N m step and a {sig(d['sinusoid_amplitude_Nm'])} N m, {sig(d['sinusoid_Hz'])} Hz "
+               f"{d['step_Nm']:g} N m step and a {d['sinusoid_amplitude_Nm']:g} N m, {d['sinusoid_Hz']:g} Hz "
                f"disturbance about x, switching from soft (K_xx {sig(s['soft_Kxx_Nm_per_rad'])}) to stiff "
-               f"(K_xx {sig(s['stiff_Kxx_Nm_per_rad'])} N m/rad) at {sig(s['closed_loop_switch_s'])} s. Largest "
+               f"(K_xx {sig(s['stiff_Kxx_Nm_per_rad'])} N m/rad) at {s['closed_loop_switch_s']:g} s. Largest "
                f"pose error {sig(err, 3, 1e3)} mrad against the static estimate (step + amplitude) / K_xx,soft = "
                f"{sig(est, 3, 1e3)} mrad; final stiffness error "
                f"{sig(s['closed_loop_final_stiffness_error_Nm_per_rad'], 2)}"

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..errors import InvalidInput
 from .._validate import as_array
+from .._limits import check_array
 
 OBJECTIVES = ("frobenius", "eigen", "directional")
 
@@ -48,6 +49,7 @@ def make_objective(K_target: np.ndarray, weights: np.ndarray | None = None, obje
     if objective not in OBJECTIVES:
         raise InvalidInput(f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}", "objective")
     Kt = as_array(K_target, (3, 3), "K_target")
+    check_array(Kt, "stiffness_Nm_per_rad", "K_target", lambda msg: InvalidInput(msg, "K_target"))
     Kt = 0.5 * (Kt + Kt.T)
     if objective == "frobenius":
         W = np.ones((3, 3)) if weights is None else as_array(weights, (3, 3), "weights")

@@ -20,15 +20,14 @@ T_i G_i`` is affine in T (:mod:`csjm_opt.shaping.shaper`). Methods, by quantity:
   is an *inner* estimate from the vertices, ``n_samples`` random points of F
   and the cutting-plane iterates (the true range can be slightly wider).
 
-:func:`plot_reachable_set` draws the eigenvalue ranges and the directional
-stiffness range for directions in the {A} x-y plane.
+:func:`csjm_opt.shaping.figures.plot_reachable_set` draws the eigenvalue ranges and
+the directional stiffness range for directions in the {A} x-y plane.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import itertools
-from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
@@ -40,9 +39,6 @@ from ..model.rig import Rig
 from .shaper import StiffnessBasis, stiffness_basis
 from .._validate import as_array, as_rotation, as_vector3
 
-if TYPE_CHECKING:
-    from matplotlib.axes import Axes
-    from matplotlib.figure import Figure
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -59,10 +55,30 @@ class ReachableSet:
     tau_load_A_Nm: np.ndarray
 
     def directional_range(self, directions: np.ndarray, t_min_N: float, t_max_N: float) -> np.ndarray:
-        """``[min, max]`` of ``u^T K u`` for each direction (n, 3) -> (n, 2); exact LPs."""
+        """Exact range of ``u^T K u`` over the feasible tensions, per direction (two LPs each).
+
+        Parameters
+        ----------
+        directions : array_like, shape (n, 3)
+            Directions ``u`` in {A} (normalised; non-zero).
+        t_min_N, t_max_N : float
+            Tension bounds (N).
+
+        Returns
+        -------
+        ndarray, shape (n, 2)
+            ``[min, max]`` per direction (N m/rad).
+        """
         return directional_range(self.basis, self.tau_load_A_Nm, directions, t_min_N, t_max_N)
 
     def as_dict(self) -> dict:
+        """The reachable set as a JSON-able dict.
+
+        Returns
+        -------
+        dict
+            Eigenvalue ranges with their methods, cutting-plane gap, trace range, vertex count.
+        """
         return {"eigen_ranges_Nm_per_rad": self.eigen_ranges.tolist(),
                 "eigen_method": [list(m) for m in self.eigen_method],
                 "cutting_plane_gap_Nm_per_rad": self.cutting_plane_gap,
@@ -117,7 +133,35 @@ def directional_range(basis: StiffnessBasis, tau_load: np.ndarray, directions: n
 
 def directional_stiffness_range(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray,
                                 directions: np.ndarray) -> np.ndarray:
-    """``[min, max]`` of ``u^T K u`` (N m/rad) over all feasible tensions at ``R``, per direction (n, 2)."""
+    """Exact range of the directional stiffness ``u^T K u`` over all tensions that hold the load.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig.
+    R : ndarray, shape (3, 3)
+        Orientation of {A} in {B}.
+    tau_ext_A_Nm : array_like, shape (3,)
+        External moment in {A} (N m), platform weight excluded.
+    directions : array_like, shape (n, 3)
+        Directions ``u`` in {A} (normalised here; must be non-zero).
+
+    Returns
+    -------
+    ndarray, shape (n, 2)
+        ``[min, max]`` of ``u^T K u`` (N m/rad) per direction, from two LPs each.
+
+    Raises
+    ------
+    NotARotation
+        If ``R`` is not a rotation.
+    InvalidInput
+        If a direction is zero or a shape is wrong.
+    InfeasibleLoad
+        If no tensions within the bounds hold the load.
+    SolverError
+        If an LP fails.
+    """
     R = as_rotation(R)
     tau_ext = as_vector3(tau_ext_A_Nm, "tau_ext")
     U = as_array(np.atleast_2d(directions), (None, 3), "directions")
@@ -225,65 +269,3 @@ def reachable_set(rig: Rig, R: np.ndarray, tau_ext_A_Nm: npt.ArrayLike = (0.0, 0
     trace_range = (tr0 + tr @ _lp(tr, basis.J, tau_load, lo, hi), tr0 + tr @ _lp(-tr, basis.J, tau_load, lo, hi))
     method = (("vertex", "cutting-plane"), ("sampled", "sampled"), ("cutting-plane", "vertex"))
     return ReachableSet(ranges, method, float(max(gap1, gap3)), trace_range, V, lams[nv:], basis, tau_load)
-
-
-def plot_reachable_set(rs: ReachableSet, t_min_N: float, t_max_N: float,
-                       K_marks: dict[str, np.ndarray] | None = None, n_directions: int = 72, *,
-                       fig: Figure | None = None) -> tuple[Axes, Axes]:
-    """Eigenvalue ranges (left) and directional stiffness range in the {A} x-y plane (right, polar).
-
-    Parameters
-    ----------
-    rs : ReachableSet
-        From :func:`reachable_set`.
-    t_min_N, t_max_N : float
-        Tension bounds (N) of the rig, for the directional ranges.
-    K_marks : dict of str to ndarray (3, 3), optional
-        Stiffness matrices (N m/rad) to mark, by label (e.g. shaped results).
-    n_directions : int, optional
-        Number of directions in the x-y plane for the polar plot.
-    fig : matplotlib.figure.Figure, optional
-        Empty figure to draw the two panels in; a new one is made when omitted.
-
-    Returns
-    -------
-    tuple of matplotlib.axes.Axes
-        The eigenvalue axes and the polar axes.
-    """
-    if fig is None:
-        import matplotlib.pyplot as plt
-
-        fig = plt.figure(figsize=(12, 4.4), layout="constrained")
-    ax = fig.add_subplot(1, 2, 1)
-    for i in range(3):
-        lo, hi = rs.eigen_ranges[i]
-        ax.plot([lo, hi], [i, i], lw=8, color="C0", alpha=0.35, solid_capstyle="butt")
-        if len(rs.sample_eigenvalues):
-            ys = i + 0.15 * (np.random.default_rng(i).random(len(rs.sample_eigenvalues)) - 0.5)
-            ax.scatter(rs.sample_eigenvalues[:, i], ys, s=2, color="C0", alpha=0.3)
-        ax.text(hi, i + 0.22, f"[{lo:.2f}, {hi:.2f}]  ({rs.eigen_method[i][0]}/{rs.eigen_method[i][1]})",
-                ha="right", fontsize=7)
-    for j, (name, K) in enumerate((K_marks or {}).items()):
-        lam = np.linalg.eigvalsh(0.5 * (K + K.T))
-        ax.scatter(lam, range(3), marker="x|+"[j % 3], s=60, color=f"C{j + 1}", label=name, zorder=3)
-    ax.set_ylim(-0.5, 2.7)
-    ax.set_yticks(range(3), [r"$\lambda_1$", r"$\lambda_2$", r"$\lambda_3$"])
-    ax.set_xlabel("stiffness eigenvalue (N m/rad)")
-    ax.set_title("reachable eigenvalues of K")
-    if K_marks:
-        ax.legend(fontsize=7, loc="lower right")
-    ax2: Any = fig.add_subplot(1, 2, 2, projection="polar")
-    phi = np.linspace(0, 2 * np.pi, n_directions + 1)
-    dirs = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=1)
-    rng_ = directional_range(rs.basis, rs.tau_load_A_Nm, dirs[:-1], t_min_N, t_max_N)
-    rng_ = np.vstack([rng_, rng_[:1]])
-    ax2.fill_between(phi, rng_[:, 0], rng_[:, 1], alpha=0.35, color="C0", label="reachable")
-    ax2.plot(phi, rng_[:, 0], color="C0", lw=0.8)
-    ax2.plot(phi, rng_[:, 1], color="C0", lw=0.8)
-    for j, (name, K) in enumerate((K_marks or {}).items()):
-        ax2.plot(phi, np.einsum("ni,ij,nj->n", dirs, K, dirs), color=f"C{j + 1}", lw=1.2, label=name)
-    ax2.set_rmin(0.0)
-    ax2.set_title(r"$u^T K u$ for $u$ in the {A} x-y plane (N m/rad)", fontsize=9)
-    ax2.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.08, 1.0))
-    return ax, ax2
-

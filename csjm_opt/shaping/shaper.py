@@ -13,7 +13,8 @@ of ``J^T``). Shaping solves the QP (build, then solve)::
                 t_min <= T <= t_max
 
 Objectives (:mod:`csjm_opt.shaping.objectives`; each a set of linear
-functionals ``L_k`` of K with targets ``s_k``): ``"frobenius"`` (entries of K, elementwise weights ``W`` (3, 3):
+functionals ``L_k`` of K with targets ``s_k``; the basis ``K0, G`` and the dense QP are in
+:mod:`csjm_opt.shaping.basis`): ``"frobenius"`` (entries of K, elementwise weights ``W`` (3, 3):
 ``||K - K_target||_W^2 = sum W_ab (K_ab - K_target_ab)^2``), ``"eigen"``
 (``u_k^T K u_k`` along the eigenvectors ``u_k`` of ``K_target``, targets its
 eigenvalues: shapes the principal stiffnesses, ignores coupling), and
@@ -31,8 +32,6 @@ basis reused while the pose does not change, active set warm-started).
 
 from __future__ import annotations
 
-import dataclasses
-import functools
 import warnings
 from typing import Any
 
@@ -41,129 +40,40 @@ import qpsolvers
 from scipy import sparse
 
 from ..planning import _dense_qp as dense_qp
-from ..model.cable_terms import CableTerms, point_force_terms
+from ..model.cable_terms import point_force_terms
 from ..errors import InfeasibleLoad, InvalidInput, SolverError
 from ..model.numeric import Model
 from ..planning.planner import feasibility_distance_Nm
 from ..model.rig import Rig
 from .objectives import OBJECTIVES, StiffnessObjective, make_objective  # noqa: F401 (re-export)
+from .basis import REGULARIZATION, StiffnessBasis, _terms, qp_matrices, stiffness_basis  # noqa: F401 (re-export)
+from .result import ShapingResult
 from .._validate import as_array, as_rotation, as_vector3
-
-#: Default tie-breaking regulariser, relative to the mean curvature of the objective.
-REGULARIZATION = 1e-10
-
-
-@dataclasses.dataclass(frozen=True, eq=False)
-class StiffnessBasis:
-    """``K(T) = K0 + sum_i T_i G_i`` at one pose, with J and the weight moment there."""
-
-    R: np.ndarray             # (3, 3)
-    J: np.ndarray             # (6, 3)
-    K0: np.ndarray            # (3, 3) N m/rad, J^T diag(k) J
-    G: np.ndarray             # (6, 3, 3) m, dK/dt_i
-    tau_weight_A_Nm: np.ndarray  # (3,)
-
-    def K(self, tensions_N: np.ndarray) -> np.ndarray:
-        return self.K0 + np.einsum("i,ijk->jk", tensions_N, self.G)
-
-
-@dataclasses.dataclass(frozen=True, eq=False)
-class ShapingResult:
-    """Shaped tensions for one pose and load; checks itself."""
-
-    tensions_N: np.ndarray       # (6,)
-    K: np.ndarray                # (3, 3) achieved stiffness, N m/rad (CasADi model)
-    K_target: np.ndarray         # (3, 3)
-    objective: StiffnessObjective
-    R: np.ndarray
-    tau_ext_A_Nm: np.ndarray
-    tau_weight_A_Nm: np.ndarray
-    J: np.ndarray
-    t_min_N: float
-    t_max_N: float
-    solver: str
-    exact_tol: float             # residual (N m/rad) below which the target counts as reached
-    kkt_error: float             # of the QP solution (exact active-set check)
-
-    @property
-    def tensions(self) -> np.ndarray:
-        """Alias of ``tensions_N`` (docs/conventions.md name)."""
-        return self.tensions_N
-
-    @property
-    def residual(self) -> float:
-        """Weighted residual of the objective (weighted Frobenius by default), N m/rad."""
-        return self.objective.residual(self.K)
-
-    @property
-    def frobenius_error(self) -> float:
-        """Unweighted ``||K - K_target||_F`` (N m/rad)."""
-        return float(np.linalg.norm(self.K - self.K_target))
-
-    @property
-    def exact(self) -> bool:
-        """The target is reached (residual below ``exact_tol``)."""
-        return self.residual <= self.exact_tol
-
-    @property
-    def equilibrium_residual_Nm(self) -> float:
-        """``||J^T T + tau_load||`` (N m)."""
-        return float(np.linalg.norm(self.J.T @ self.tensions_N + self.tau_ext_A_Nm + self.tau_weight_A_Nm))
-
-    @property
-    def bound_violation_N(self) -> float:
-        return float(max(0.0, np.max(self.t_min_N - self.tensions_N), np.max(self.tensions_N - self.t_max_N)))
-
-    @property
-    def active_bounds(self) -> list[str]:
-        """Cables at a bound, e.g. ``["t3=t_min", "t5=t_max"]``."""
-        tol = 1e-7 * max(1.0, self.t_max_N)
-        return ([f"t{i + 1}=t_min" for i in np.flatnonzero(self.tensions_N <= self.t_min_N + tol)]
-                + [f"t{i + 1}=t_max" for i in np.flatnonzero(self.tensions_N >= self.t_max_N - tol)])
-
-    def is_valid(self, eq_tol_Nm: float = 1e-8, bound_tol_N: float = 1e-9) -> bool:
-        return self.equilibrium_residual_Nm <= eq_tol_Nm and self.bound_violation_N <= bound_tol_N
-
-    def as_dict(self) -> dict:
-        """JSON-able summary."""
-        return {"tensions_N": self.tensions_N.tolist(), "K": self.K.tolist(), "K_target": self.K_target.tolist(),
-                "objective": self.objective.name, "residual": self.residual, "exact": self.exact,
-                "frobenius_error": self.frobenius_error, "active_bounds": self.active_bounds,
-                "equilibrium_residual_Nm": self.equilibrium_residual_Nm, "solver": self.solver}
-
-
-# --------------------------------------------------------------------- build
-@functools.lru_cache(maxsize=64)
-def _terms(rig: Rig) -> CableTerms:
-    return CableTerms.from_rig(rig)
-
-
-def stiffness_basis(rig: Rig, R: np.ndarray) -> StiffnessBasis:
-    """``J, K0, G`` and the weight moment at ``R`` (closed form; trusted ``R``)."""
-    J, K0, G = _terms(rig).stiffness_basis(R)
-    tau_w, _ = point_force_terms(R, rig.weight_B_N[None], np.asarray(rig.com_A_m)[None])
-    return StiffnessBasis(R, J, K0, G, tau_w)
-
-
-def qp_matrices(basis: StiffnessBasis, tau_ext: np.ndarray, objective: StiffnessObjective,
-                t_mid: np.ndarray, regularization: float = REGULARIZATION):
-    """Dense ``P, q, A, b`` of the shaping QP (``1/2 x^T P x + q^T x``, ``A x = b``)."""
-    M = objective.L @ basis.G.reshape(6, 9).T                     # (m, 6)
-    d = objective.s - objective.L @ basis.K0.reshape(9)
-    MW = M.T * objective.w
-    H = MW @ M
-    curvature = float(np.trace(H)) / 6.0
-    rho = regularization * (curvature if curvature > 1e-300 else 1.0)   # all-zero weights: regulariser only
-    P = 2.0 * (H + rho * np.eye(6))
-    q = -2.0 * (MW @ d + rho * t_mid)
-    return P, q, basis.J.T, -(tau_ext + basis.tau_weight_A_Nm)
-
 
 def build_shaping_qp(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray, K_target: np.ndarray,
                      weights: np.ndarray | None = None, objective: str = "frobenius",
                      directions: np.ndarray | None = None,
                      regularization: float = REGULARIZATION) -> qpsolvers.Problem:
-    """The shaping QP at ``R`` under ``tau_ext`` as a :class:`qpsolvers.Problem` (solver-free)."""
+    """The shaping QP at ``R`` under ``tau_ext`` as a :class:`qpsolvers.Problem`, without solving it.
+
+    Parameters
+    ----------
+    rig, R, tau_ext_A_Nm, K_target, weights, objective, directions, regularization
+        As in :func:`shape_stiffness`.
+
+    Returns
+    -------
+    qpsolvers.Problem
+        ``min 1/2 T^T P T + q^T T`` subject to ``J^T T = -tau_load`` and
+        ``t_min <= T <= t_max``; inspect it or solve it with any qpsolvers backend.
+
+    Raises
+    ------
+    NotARotation
+        If ``R`` is not a rotation.
+    InvalidInput
+        If an argument has the wrong shape, is not finite, or names an unknown objective.
+    """
     R = as_rotation(R)
     tau_ext = as_vector3(tau_ext_A_Nm, "tau_ext")
     obj = make_objective(K_target, weights, objective, directions)
@@ -196,6 +106,18 @@ class Shaper:
         self._weight = (rig.weight_B_N[None], np.asarray(rig.com_A_m, float)[None])
 
     def basis(self, R: np.ndarray) -> StiffnessBasis:
+        """The stiffness basis ``K(T) = K0 + sum_i T_i G_i`` at ``R`` (cached for the last pose).
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3)
+            Orientation of {A} in {B} (trusted: validate user input first).
+
+        Returns
+        -------
+        StiffnessBasis
+            ``K0``, ``G``, ``J`` and the weight moment at ``R``.
+        """
         if self._basis is None or not np.array_equal(self._basis.R, R):
             R = np.array(R, float)
             if self.compiled:
@@ -209,7 +131,35 @@ class Shaper:
 
     def solve(self, R: np.ndarray, tau_ext: np.ndarray, objective: StiffnessObjective,
               x0: np.ndarray | None = None) -> tuple[np.ndarray, StiffnessBasis, dense_qp.DenseQPResult]:
-        """Tensions (6,), the basis used and the QP result; raises InfeasibleLoad/SolverError."""
+        """Solve the shaping QP at ``R`` under ``tau_ext`` (the fast path of a control loop).
+
+        Parameters
+        ----------
+        R : ndarray, shape (3, 3)
+            Orientation of {A} in {B} (trusted).
+        tau_ext : ndarray, shape (3,)
+            External moment in {A} (N m).
+        objective : StiffnessObjective
+            From :func:`~csjm_opt.shaping.objectives.make_objective`.
+        x0 : ndarray, shape (6,), optional
+            Tensions whose active bounds start the active-set method (warm start).
+
+        Returns
+        -------
+        T : ndarray, shape (6,)
+            Shaped tensions (N).
+        basis : StiffnessBasis
+            The basis used.
+        result : DenseQPResult
+            The QP solution with its active set and KKT data.
+
+        Raises
+        ------
+        InfeasibleLoad
+            If no tensions within the bounds hold the load.
+        SolverError
+            If the active-set method does not settle.
+        """
         basis = self.basis(R)
         if x0 is not None:
             tol = 1e-5 * max(1.0, self.rig.t_max_N)
@@ -245,13 +195,51 @@ def shape_stiffness(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray, K_target:
                     directions: np.ndarray | None = None, solver: str = "osqp",
                     regularization: float = REGULARIZATION, exact_tol: float = 1e-6,
                     model: Model | None = None) -> ShapingResult:
-    """Tensions within bounds that hold ``tau_ext`` (N m, {A}) at ``R`` with K closest to ``K_target``.
+    """Tensions within the bounds that hold the load at ``R`` and bring K closest to ``K_target``.
 
-    ``solver``: a qpsolvers backend (``"osqp"``, ``"clarabel"``, ...) whose
-    answer is polished exactly by the active-set method, or ``"active_set"``
-    alone. The result reports the achieved K (CasADi model), the weighted
-    residual, whether the target was reached (``exact``: residual below
-    ``exact_tol`` N m/rad) and the active bounds.
+    Parameters
+    ----------
+    rig : Rig
+        The rig.
+    R : ndarray, shape (3, 3)
+        Orientation of {A} in {B}.
+    tau_ext_A_Nm : array_like, shape (3,)
+        External moment in {A} (N m), platform weight excluded.
+    K_target : array_like, shape (3, 3)
+        Target stiffness (N m/rad, load convention); symmetrised.
+    weights : array_like, optional
+        ``"frobenius"``: (3, 3) elementwise weights; ``"eigen"``: 3 weights of the principal
+        stiffnesses; ``"directional"``: one weight per direction.
+    objective : {"frobenius", "eigen", "directional"}, optional
+        What "closest" means (see :mod:`csjm_opt.shaping.objectives`).
+    directions : array_like, shape (m, 3), optional
+        Directions in {A} for ``objective="directional"``.
+    solver : str, optional
+        A qpsolvers backend (``"osqp"``, ``"clarabel"``, ...) whose answer is polished exactly by
+        the active-set method, or ``"active_set"`` alone.
+    regularization : float, optional
+        Weight of a small pull toward mid-range tensions (makes the QP strictly convex).
+    exact_tol : float, optional
+        Residual (N m/rad) below which the target counts as reached.
+    model : Model, optional
+        A numeric model of ``rig`` to reuse.
+
+    Returns
+    -------
+    ShapingResult
+        Tensions, achieved K (CasADi model), weighted residual, ``exact`` (target reached) and the
+        active bounds; the result checks its equilibrium and bounds (``is_valid()``).
+
+    Raises
+    ------
+    NotARotation
+        If ``R`` is not a rotation.
+    InvalidInput
+        If an argument has the wrong shape, is not finite, or names an unknown objective or solver.
+    InfeasibleLoad
+        If no tensions within the bounds hold the load.
+    SolverError
+        If the QP solver fails or its polished answer fails the checks.
     """
     model = model or Model(rig)
     R = as_rotation(R)

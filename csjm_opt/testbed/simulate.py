@@ -23,7 +23,7 @@ def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
     """A log of ``n_cycles`` load cycles (``2 * steps + 1`` rows each) on ``rig``.
 
     ``effect``: ``None``/``"none"`` (nominal plant), an effect name from the
-    SPEC vocabulary, several names, or a ready :class:`Plant`. Rest lengths are
+    documented vocabulary, several names, or a ready :class:`Plant`. Rest lengths are
     commanded with the *nominal* rig (as an experimenter would); the plant
     responds; the F/T reading (plus any bias) and the tracked pose get the
     instrument noise (``InstrumentNoise.paper()`` by default).

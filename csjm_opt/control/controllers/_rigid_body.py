@@ -29,7 +29,8 @@ class RigidBody:
 
     def moment(self, R: np.ndarray, omega: np.ndarray, omega_dot: np.ndarray) -> np.ndarray:
         """``I_O omega_dot + omega x I_O omega + D omega`` (N m, {A}) at pose ``R``."""
-        tau = self.I_O @ omega_dot + np.cross(omega, self.I_O @ omega) + self.c_joint * omega
+        Iw = self.I_O @ omega
+        tau = self.I_O @ omega_dot + _cross3(omega, Iw) + self.c_joint * omega
         if np.any(self.b_cable):
             J = self._terms.geometry(R)[2]
             tau = tau + J.T @ (self.b_cable * (J @ omega))
@@ -40,3 +41,8 @@ class RigidBody:
         if not callable(R_ref):
             return np.zeros(3)
         return self.moment(*reference_rates(R_ref, t_s))
+
+
+def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a x b`` for two 3-vectors (np.cross costs ~20x more for one pair)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])

@@ -2,8 +2,8 @@
 
 ``min ||T - t_ref||^2`` subject to ``J^T T + tau_weight + tau = 0`` and
 ``t_min <= T <= t_max``, solved by the compiled primal-dual active set of
-:mod:`csjm_opt.planning._kernels` with the closed-form J of
-:mod:`csjm_opt.model.cable_terms` (about 15x cheaper per call than the
+:mod:`csjm_opt.planning._kernels` with J and the weight moment from the
+model layer's kernels (:meth:`csjm_opt.model.Model.pose_terms`; about 15x cheaper per call than the
 validated ``plan_tensions``, which is the fallback: it raises
 :class:`~csjm_opt.errors.InfeasibleLoad` when no tensions hold the load).
 """
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _loop_kernels as loop_kernels
+from ...model.numeric import model_for
 from ...model.rig import Rig
 from ...planning import _kernels as qp_kernels
 from ...planning.planner import plan_tensions
@@ -24,18 +24,14 @@ class TensionQP:
     def __init__(self, rig: Rig, t_ref_N: np.ndarray | None = None):
         self.rig = rig
         self.t_ref = (rig.t_mid_N if t_ref_N is None else np.broadcast_to(np.asarray(t_ref_N, float), (6,))).copy()
-        self._A = np.ascontiguousarray(rig.platform_holes_A_m, dtype=np.float64)
-        self._B = np.ascontiguousarray(rig.base_holes_B_m, dtype=np.float64)
-        self._mr = rig.platform_mass_kg * np.asarray(rig.com_A_m, float)      # first moment (kg m)
-        self._g = np.asarray(rig.gravity_B_m_per_s2, float)
+        self._model = model_for(rig)
         self._lower = np.zeros(6, np.bool_)
         self._upper = np.zeros(6, np.bool_)
 
     def __call__(self, R: np.ndarray, tau_ext_A_Nm: np.ndarray) -> np.ndarray:
         """Tensions (6,) N that hold ``tau_ext_A_Nm`` (plus the weight) at ``R``."""
         R = np.ascontiguousarray(R, dtype=np.float64)
-        J = loop_kernels.geometry(self._A, self._B, R)[2]
-        tau_w = np.cross(self._mr, R.T @ self._g)                             # (m r) x (R^T g)
+        _, J, tau_w = self._model.pose_terms(R)
         T = np.zeros(6)
         b = -(tau_w + np.asarray(tau_ext_A_Nm, float))
         status = qp_kernels.solve_one(J, b, self.t_ref, self.rig.t_min_N, self.rig.t_max_N, self._lower,

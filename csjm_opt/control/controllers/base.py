@@ -13,7 +13,7 @@ from typing import Callable, Union
 import numpy as np
 
 from ... import so3
-from ...model.cable_terms import CableTerms
+from ...model.numeric import model_for
 from ...model.rig import Rig
 from ..._validate import as_rotation
 
@@ -82,7 +82,7 @@ class PoseHoldingController(Controller):
         self.rig = rig
         self._R_ref = R_ref if callable(R_ref) else as_rotation(R_ref, "R_ref")
         self.integral_gain = float(integral_gain)
-        self._terms = CableTerms.from_rig(rig)
+        self._model = model_for(rig)   # compiled model-layer kernels
         self._z = np.zeros(3)
 
     def reset(self) -> None:
@@ -100,7 +100,7 @@ class PoseHoldingController(Controller):
 
     def rest_lengths(self, R_cmd: np.ndarray, tensions_N: np.ndarray) -> np.ndarray:
         """``l = c(R_cmd) - T / k`` (m), closed form."""
-        return self._terms.geometry(R_cmd)[0] - tensions_N / self._terms.k
+        return self._model.geometry(R_cmd)[0] - tensions_N / self._model.k
 
     @abc.abstractmethod
     def tensions(self, R_cmd: np.ndarray, observation: Observation) -> tuple[np.ndarray, np.ndarray | None,

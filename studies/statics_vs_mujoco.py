@@ -1,0 +1,138 @@
+"""Study: forward statics against MuJoCo when one cable is lengthened (10-50 mm).
+
+For ``--cases`` random poses (rotation vectors within +-0.25 rad) and loads
+(+-0.3 N m per axis) of the paper rig, tensions are planned, one random
+cable is lengthened by 10-50 mm, and:
+
+* MuJoCo (``csjm_opt.model.mjcf``, ball-joint damping ``--damping``, default
+  1 N m s/rad: overdamped; RK4 at 1 ms) settles from the planned pose (then a
+  few Newton steps on MuJoCo's own net moment polish it to round-off), or the
+  platform falls over (more than 90 deg away);
+* ``solve_equilibrium`` from the planned pose, with and without the energy
+  descent (``globalise``).
+
+Counts: cases MuJoCo settles, found by the statics (same pose to 1e-6 rad),
+found by plain Newton alone; cases that fall over, refused. Also the median
+time of a solve on the normal path (all taut, warm start at the answer) with
+and without globalisation enabled (it must not slow that path).
+
+Run: ``python studies/statics_vs_mujoco.py [--cases N] [--seed S] [--damping C]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+import mujoco
+import numpy as np
+
+import csjm_opt as co
+from csjm_opt import so3
+from csjm_opt.model.mjcf import rig_to_mjcf
+
+
+def _rot(q):
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, q)
+    return R.reshape(3, 3)
+
+
+def _net_moment(m, d, q0, z):
+    d.qpos[:] = q0
+    mujoco.mj_integratePos(m, d.qpos, z, 1.0)
+    d.qvel[:] = 0.0
+    mujoco.mj_forward(m, d)
+    return d.qfrc_smooth.copy()
+
+
+def settle(rig, l, R0, tau, damping=1.0, seconds=30.0, dt=1e-3):
+    """Damped simulation until still (or > 90 deg away: fell), then Newton on MuJoCo's net moment."""
+    m = mujoco.MjModel.from_xml_string(rig_to_mjcf(rig, l, R0, tau, joint_damping_Nms_per_rad=damping,
+                                                   timestep_s=dt))
+    d = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d, 0)
+    for _ in range(int(seconds / dt / 250)):
+        for _ in range(250):
+            mujoco.mj_step(m, d)
+        if np.linalg.norm(d.qvel) < 1e-6 or np.trace(R0.T @ _rot(d.qpos)) < 1.0:
+            break
+    if np.trace(R0.T @ _rot(d.qpos)) < 1.0:
+        return _rot(d.qpos)
+    for _ in range(20):
+        q0 = d.qpos.copy()
+        Q = _net_moment(m, d, q0, np.zeros(3))
+        if np.abs(Q).max() < 1e-12:
+            break
+        D = np.column_stack([(_net_moment(m, d, q0, 1e-7 * e) - _net_moment(m, d, q0, -1e-7 * e)) / 2e-7
+                             for e in np.eye(3)])
+        d.qpos[:] = q0
+        mujoco.mj_integratePos(m, d.qpos, -np.linalg.solve(D, Q), 1.0)
+    return _rot(d.qpos)
+
+
+def angle(Ra, Rb):
+    return float(np.linalg.norm(so3.log(Ra.T @ Rb)))
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cases", type=int, default=200)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--damping", type=float, default=1.0, help="ball-joint damping in MuJoCo (N m s/rad)")
+    args = ap.parse_args(argv)
+    rig, rng = co.paper_rig(), np.random.default_rng(args.seed)
+    counts = dict(settled=0, found=0, plain_found=0, plain_wrong_pose=0, fell=0, refused=0)
+    angles = []
+    for _ in range(args.cases):
+        R, tau = so3.exp(rng.uniform(-0.25, 0.25, 3)), rng.uniform(-0.3, 0.3, 3)
+        l = co.rest_lengths_for(rig, R, co.plan_tensions(rig, R, tau).tensions_N)
+        l[rng.integers(6)] += rng.uniform(0.010, 0.050)
+        R_mj = settle(rig, l, R, tau, args.damping)
+        if angle(R, R_mj) < 0.5 * np.pi:
+            counts["settled"] += 1
+            angles.append(np.degrees(angle(R, R_mj)))
+            try:
+                counts["found"] += angle(co.solve_equilibrium(rig, l, tau, R_init=R).R, R_mj) <= 1e-6
+            except co.NoEquilibrium:
+                pass
+            try:
+                ok = angle(co.solve_equilibrium(rig, l, tau, R_init=R, globalise=False).R, R_mj) <= 1e-6
+                counts["plain_found"] += ok
+                counts["plain_wrong_pose"] += not ok
+            except co.NoEquilibrium:
+                pass
+        else:
+            counts["fell"] += 1
+            try:
+                co.solve_equilibrium(rig, l, tau, R_init=R)
+            except co.NoEquilibrium:
+                counts["refused"] += 1
+    print(f"{args.cases} cases: MuJoCo settles in {counts['settled']} (0-{max(angles):.0f} deg from the start), "
+          f"falls over in {counts['fell']}")
+    print(f"settled: forward statics finds the same pose in {counts['found']}/{counts['settled']}; plain Newton "
+          f"alone in {counts['plain_found']} (wrong pose in {counts['plain_wrong_pose']}, refused in "
+          f"{counts['settled'] - counts['plain_found'] - counts['plain_wrong_pose']})")
+    print(f"fell over: refused (NoEquilibrium) in {counts['refused']}/{counts['fell']}")
+    # the normal path: all taut, warm start near the answer
+    R, tau = so3.exp([0.1, -0.05, 0.08]), np.array([0.2, -0.1, 0.05])
+    l = co.rest_lengths_for(rig, R, co.plan_tensions(rig, R, tau).tensions_N)
+    R0 = R @ so3.exp([1e-3, -2e-3, 1e-3])
+    times = {}
+    for g in (False, True):
+        solver = co.model.EquilibriumSolver(rig, globalise=g)
+        solver.solve(l, tau, R0)
+        ts = []
+        for _ in range(2000):
+            t0 = time.perf_counter()
+            solver.solve(l, tau, R0)
+            ts.append(time.perf_counter() - t0)
+        times[g] = float(np.median(ts))
+    print(f"normal path (EquilibriumSolver.solve, warm start 2.4 mrad away): {1e6 * times[True]:.1f} us with "
+          f"globalisation enabled, {1e6 * times[False]:.1f} us without (ratio {times[True] / times[False]:.2f})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
