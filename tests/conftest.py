@@ -20,7 +20,11 @@ import csjm_opt as co  # noqa: E402
 _WARM_UP = (
     "import csjm_opt as co, numpy as np\n"
     "rig = co.paper_rig(); R = co.so3.exp([0.1, 0.0, 0.0])\n"
-    "co.plan_tensions(rig, R, [0.1, 0.0, 0.0]); co.plan_tensions_batch(rig, np.stack([R, R]))\n",
+    "co.plan_tensions(rig, R, [0.1, 0.0, 0.0]); co.plan_tensions_batch(rig, np.stack([R, R]))\n"
+    "Rs = co.so3.random_rotations(5000, np.random.default_rng(0), max_angle=0.2)\n"  # parallel kernels
+    "co.stiffness_batch(rig, Rs, co.plan_tensions_batch(rig, Rs).tensions_N)\n"
+    "from csjm_opt.design.feasibility import wrench_margin_Nm\n"
+    "wrench_margin_Nm(co.Model(rig).jacobian(Rs[:2]), np.zeros((2, 3)), 5.0, 150.0)\n",
     "import csjm_opt as co, numpy as np\n"
     "from csjm_opt.control.closed_loop import simulate\n"
     "from csjm_opt.control.controllers import StiffnessShapingController\n"

@@ -62,3 +62,22 @@ def test_compiled_margin_equals_numpy_reference():
     assert np.array_equal(np.isinf(a), np.isinf(b)) and np.all(a[0] == -np.inf)
     assert np.abs(a[1:] - b[1:]).max() <= 1e-12 * np.abs(b[1:]).max()
     assert np.allclose(wrench_margin_Nm(J, tau[:, 0], 5.0, 150.0), a[:, 0])
+
+
+def test_compiled_shaping_range_equals_numpy_reference():
+    from csjm_opt.design import shaping_range
+
+    rig = co.paper_rig()
+    model = co.Model(rig)
+    rng = np.random.default_rng(9)
+    Rs = co.so3.random_rotations(100, rng, max_angle=0.8)
+    J = model.jacobian(Rs)
+    tau = model.weight_moment(Rs) + rng.normal(size=(100, 3)) * 2.0      # some poses infeasible
+    K0, G = model.stiffness_basis(Rs)
+    D = np.array(list(shaping_range.AXES.values()) + [[0.6, 0.8, 0.0]])
+    lo, hi = shaping_range.directional_stiffness_range(J, tau, K0, G, rig.t_min_N, rig.t_max_N, D)
+    lo_r, hi_r = shaping_range.directional_stiffness_range_reference(J, tau, K0, G, rig.t_min_N, rig.t_max_N, D)
+    empty = np.isnan(lo_r[:, 0])
+    assert 0 < empty.sum() < 100 and np.array_equal(np.isnan(lo), np.isnan(lo_r))
+    np.testing.assert_allclose(lo[~empty], lo_r[~empty], rtol=1e-12)
+    np.testing.assert_allclose(hi[~empty], hi_r[~empty], rtol=1e-12)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 import numpy as np
 
@@ -61,6 +62,8 @@ def run(args: argparse.Namespace) -> int:
                           directions=np.array(args.direction) if args.direction else None, solver=args.solver,
                           model=Model(rig))
     out = {"rotvec": rotvec.tolist(), "tau_ext": tau.tolist(), **res.as_dict()}
+    lam_min = float(np.linalg.eigvalsh(0.5 * (res.K + res.K.T))[0])
+    out["stable"] = lam_min > 0
     if args.reachable:
         from ..shaping.reachable import reachable_set
 
@@ -81,4 +84,7 @@ def run(args: argparse.Namespace) -> int:
         if args.reachable:
             for i, (lo, hi) in enumerate(out["reachable"]["eigen_ranges_Nm_per_rad"]):
                 print(f"  lambda_{i + 1} reachable in [{lo:.3f}, {hi:.3f}] N m/rad")
+    if lam_min <= 0:
+        print(f"csjm: warning: the achieved K is not positive definite (smallest eigenvalue {lam_min:.4g} "
+              "N m/rad): the pose is unstable under this load", file=sys.stderr)
     return 0

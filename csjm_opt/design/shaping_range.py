@@ -24,6 +24,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+from numba import njit
 
 _BASES = np.array(list(itertools.combinations(range(6), 3)))          # (20, 3)
 _NONBASIC = np.array([[i for i in range(6) if i not in b] for b in _BASES])  # (20, 3)
@@ -66,6 +67,20 @@ def directional_stiffness_range(J: np.ndarray, tau_load_A_Nm: np.ndarray, K0: np
     Returns ``(lo, hi)``, each (n, d), N m/rad; NaN where P is empty.
     """
     U = np.asarray(directions, float)
+    c0 = np.einsum("dj,njk,dk->nd", U, K0, U)
+    ci = np.ascontiguousarray(np.einsum("dj,nijk,dk->nid", U, K_per_N, U))
+    lo = np.empty(c0.shape)
+    hi = np.empty(c0.shape)
+    _range_kernel(np.ascontiguousarray(J, dtype=np.float64), -np.ascontiguousarray(tau_load_A_Nm, dtype=np.float64),
+                  float(t_min_N), float(t_max_N), 1e-9, _BASES, _NONBASIC, _PATTERNS, c0, ci, lo, hi)
+    return lo, hi
+
+
+def directional_stiffness_range_reference(J: np.ndarray, tau_load_A_Nm: np.ndarray, K0: np.ndarray,
+                                          K_per_N: np.ndarray, t_min_N: float, t_max_N: float,
+                                          directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`directional_stiffness_range` from :func:`vertices` in numpy (the kernel's test reference)."""
+    U = np.asarray(directions, float)
     T, ok = vertices(J, tau_load_A_Nm, t_min_N, t_max_N)
     c0 = np.einsum("dj,njk,dk->nd", U, K0, U)
     ci = np.einsum("dj,nijk,dk->nid", U, K_per_N, U)
@@ -76,3 +91,77 @@ def directional_stiffness_range(J: np.ndarray, tau_load_A_Nm: np.ndarray, K0: np
     lo[empty] = np.nan
     hi[empty] = np.nan
     return lo, hi
+
+
+@njit(cache=True)
+def _range_kernel(J, w, t_min, t_max, tol, bases, nonbasic, patterns, c0, ci, lo, hi):
+    """Per pose: every basic solution (3 basic tensions by LU with partial pivoting), min/max of c0 + T.ci."""
+    n_dir = c0.shape[1]
+    M = np.empty((3, 3))
+    r = np.empty(3)
+    T = np.empty(6)
+    for n in range(J.shape[0]):
+        for d in range(n_dir):
+            lo[n, d] = np.inf
+            hi[n, d] = -np.inf
+        found = False
+        for b in range(bases.shape[0]):
+            scale = 1.0
+            for k in range(3):
+                i = bases[b, k]
+                scale *= np.sqrt(J[n, i, 0] ** 2 + J[n, i, 1] ** 2 + J[n, i, 2] ** 2)
+            for p in range(3):
+                for k in range(3):
+                    M[p, k] = J[n, bases[b, k], p]
+            det = (M[0, 0] * (M[1, 1] * M[2, 2] - M[1, 2] * M[2, 1])
+                   - M[0, 1] * (M[1, 0] * M[2, 2] - M[1, 2] * M[2, 0])
+                   + M[0, 2] * (M[1, 0] * M[2, 1] - M[1, 1] * M[2, 0]))
+            if not abs(det) > 1e-10 * max(scale, 1e-300):
+                continue
+            for q in range(patterns.shape[0]):
+                for p in range(3):
+                    s = w[n, p]
+                    for k in range(3):
+                        t_nb = t_min + patterns[q, k] * (t_max - t_min)
+                        T[nonbasic[b, k]] = t_nb
+                        s -= J[n, nonbasic[b, k], p] * t_nb
+                    r[p] = s
+                A = M.copy()
+                x = r.copy()
+                for col in range(3):                      # LU with partial pivoting
+                    piv = col
+                    for row in range(col + 1, 3):
+                        if abs(A[row, col]) > abs(A[piv, col]):
+                            piv = row
+                    if piv != col:
+                        for k in range(3):
+                            A[col, k], A[piv, k] = A[piv, k], A[col, k]
+                        x[col], x[piv] = x[piv], x[col]
+                    for row in range(col + 1, 3):
+                        f = A[row, col] / A[col, col]
+                        for k in range(col, 3):
+                            A[row, k] -= f * A[col, k]
+                        x[row] -= f * x[col]
+                for col in range(2, -1, -1):
+                    s = x[col]
+                    for k in range(col + 1, 3):
+                        s -= A[col, k] * x[k]
+                    x[col] = s / A[col, col]
+                ok = True
+                for k in range(3):
+                    if not (x[k] >= t_min - tol and x[k] <= t_max + tol):
+                        ok = False
+                    T[bases[b, k]] = x[k]
+                if not ok:
+                    continue
+                found = True
+                for d in range(n_dir):
+                    v = c0[n, d]
+                    for i in range(6):
+                        v += T[i] * ci[n, i, d]
+                    lo[n, d] = min(lo[n, d], v)
+                    hi[n, d] = max(hi[n, d], v)
+        if not found:
+            for d in range(n_dir):
+                lo[n, d] = np.nan
+                hi[n, d] = np.nan

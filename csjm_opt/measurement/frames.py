@@ -7,6 +7,7 @@ import numpy as np
 
 from ..errors import IllConditionedData, InvalidInput
 from .._validate import as_array
+from ..model.cable_terms import weight_moment
 from ..model.rig import Rig
 
 
@@ -65,6 +66,8 @@ def wrench_to_A(f_S_N: np.ndarray, tau_S_Nm: np.ndarray, R_AS: np.ndarray,
 
 
 def weight_moment_A(rig: Rig, R_BA: np.ndarray) -> np.ndarray:
-    """(56) with coincident origins: ``r_G x (R^T m g)`` in {A} (N m); batched."""
-    f_A = (rig.platform_mass_kg * rig.gravity_B_m_per_s2) @ R_BA  # rows: R^T f for each R
-    return np.cross(rig.com_A_m, f_A)
+    """(56) with coincident origins: ``r_G x (R^T m g)`` in {A} (N m); batched.
+
+    The physics is :func:`csjm_opt.model.cable_terms.weight_moment` (the numpy reference).
+    """
+    return weight_moment(R_BA, rig.platform_mass_kg * np.asarray(rig.com_A_m), rig.gravity_B_m_per_s2)

@@ -103,10 +103,17 @@ class Model:
 
     # ------------------------------------------------------- single-pose fast path
     def pose_terms(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Cable lengths (6,), J (6, 3) and weight moment (3,) at one pose, one kernel call.
+        """Cable lengths, J and weight moment at one pose, in one kernel call (~1 us).
 
-        The per-step call of a controller: no validation (``R`` must be a
-        float64 (3, 3) rotation).
+        The per-step call of a controller: no validation.
+
+        Parameters
+        ----------
+        R : (3, 3) float64 rotation of {A} in {B} (trusted).
+
+        Returns
+        -------
+        c : (6,) cable lengths (m); J : (6, 3) Jacobian (38); tau_weight : (3,) weight moment in {A} (N m).
         """
         c, J, tau_w = np.empty(6), np.empty((6, 3)), np.empty(3)
         kernels.pose_terms_into(self.A, self.B, self.first_moment_A_kgm, self.g, R, c, J, tau_w)
@@ -204,7 +211,18 @@ class Model:
         return K
 
     def stiffness_rest(self, R: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any]:
-        """K, tensions T, cable moment and cable energy for rest lengths ``l`` (m)."""
+        """K, tensions, cable moment and cable energy for rest lengths, slack cables found.
+
+        Parameters
+        ----------
+        R : (3, 3) or (n, 3, 3) rotations (trusted).
+        l : (6,) or (n, 6) rest lengths (m).
+
+        Returns
+        -------
+        K : (..., 3, 3); T : (..., 6) tensions ``k (c - l)``, 0 when ``c <= l``;
+        tau : (..., 3) cables' moment ``J^T T`` in {A}; energy : float or (n,) cable energy (J).
+        """
         if R.ndim == 2:
             K, T, tau = np.empty((3, 3)), np.empty(6), np.empty(3)
             kernels.rest_terms_into(self.A, self.B, self.k, R, _f64(l), K, T, tau)

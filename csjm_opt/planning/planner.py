@@ -23,9 +23,8 @@ tension box; a load within that tolerance always gets a plan.
 
 from __future__ import annotations
 
-from typing import Any
-
 import warnings
+from typing import Any
 
 import numba
 import numpy as np

@@ -76,7 +76,7 @@ class TensionPlanBatch:
     """Tensions for many poses: arrays with a leading axis ``n``."""
 
     tensions_N: np.ndarray          # (n, 6)
-    R: np.ndarray                   # (n, 3, 3)
+    R: np.ndarray                   # (n, 3, 3) the input poses (exact rotations are not copied)
     tau_ext_A_Nm: np.ndarray        # (n, 3)
     tau_weight_A_Nm: np.ndarray     # (n, 3)
     J: np.ndarray                   # (n, 6, 3)
