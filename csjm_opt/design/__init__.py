@@ -4,8 +4,10 @@ Modules: :mod:`.geometry` (design parameters -> validated Rig), :mod:`.sampling`
 (uniform SO(3) samples in a tilt/torsion range), :mod:`.feasibility` (exact
 zonotope wrench-feasibility test and margin), :mod:`.shaping_range` (batched
 exact LPs for the reachable directional stiffness), :mod:`.metrics` (per
-design), :mod:`.sweep_file` (TOML description), :mod:`.store` (crash-safe
-JSON Lines results), :mod:`.sweep` (parallel, resumable runner; processes or Dask).
+design), :mod:`.sweep_file` (TOML description; its axes in :mod:`.sweep_axes`, its
+settings in :mod:`.evaluation_settings`), :mod:`.store` (crash-safe JSON Lines results),
+:mod:`.design_evaluation` (one design's record), :mod:`.sweep` (parallel, resumable runner;
+processes or Dask, result in :mod:`.sweep_result`).
 """
 
 from .geometry import (
