@@ -5,7 +5,12 @@ result file (:class:`ResultStore`) does not already hold, appends each
 finished design as it arrives, and shows a progress bar. Designs run on
 
 * local processes (``concurrent.futures.ProcessPoolExecutor``, ``workers``
-  of them, 2 by default; ``workers=1`` runs in this process), or
+  of them; ``workers=1`` runs in this process). By default (``workers=None``)
+  the sweep times its first designs in this process and starts
+  :data:`AUTO_WORKERS` worker processes only if the rest would take longer
+  than twice :data:`POOL_STARTUP_S` there: starting the workers (fork server,
+  imports, loading the compiled kernels) costs about a second, more than a
+  few hundred designs take in one process; or
 * a Dask cluster: ``scheduler="tcp://host:8786"`` connects to a running
   ``distributed`` scheduler, ``dask=True`` without an address starts a
   ``LocalCluster``. The same function evaluates each design on every
@@ -31,20 +36,32 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
+from collections.abc import Iterator
 from typing import Any
+
+import numpy as np
 
 from ..errors import DesignError
 from ._dask_backend import _run_dask, dask_stream
 from ._worker_processes import _run_processes
 from .design_evaluation import TIMING_KEYS, design_id, evaluate_design
 from .store import ResultStore
+from .evaluation_settings import EvaluationSettings
 from .sweep_file import SweepSpec
 from .sweep_result import SweepResult
 
 __all__ = ["SweepResult", "TIMING_KEYS", "dask_stream", "design_id", "evaluate_design", "run_sweep"]
 
 
-def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str | None = None,
+#: Worker processes of an automatic local run (``workers=None``).
+AUTO_WORKERS = 2
+#: Time (s) taken as the cost of starting the worker processes, in the automatic choice.
+POOL_STARTUP_S = 1.0
+#: Designs timed in this process before the automatic choice.
+_TIMED_DESIGNS = 8
+
+
+def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None, scheduler: str | None = None,
               dask: bool = False, progress: bool | None = None,
               stop_after: int | None = None, connect_timeout_s: float = 10.0) -> SweepResult:
     """Evaluate the designs of ``spec`` missing from ``out`` and return all of them.
@@ -60,6 +77,8 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
         Result file; created, or resumed when it exists with the same settings.
     workers : int, optional
         Local worker processes (1 runs in this process); with ``dask``, the local cluster size.
+        ``None`` (default): :data:`AUTO_WORKERS` processes when the sweep is long enough to
+        repay starting them, else this process (2 for a Dask cluster).
     scheduler : str, optional
         Address of a running Dask scheduler (``tcp://host:8786``).
     dask : bool, optional
@@ -84,7 +103,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
     SolverError
         If a worker process dies.
     """
-    if workers < 1:
+    if workers is not None and workers < 1:
         raise DesignError(f"workers must be >= 1, got {workers}", "workers")
     settings = spec.settings
     digest = settings.digest()
@@ -99,7 +118,9 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
         bar = _progress(len(designs), skipped, progress)
         try:
             if dask or scheduler:
-                stream = _run_dask(todo, settings, scheduler, workers, connect_timeout_s)
+                stream = _run_dask(todo, settings, scheduler, workers or AUTO_WORKERS, connect_timeout_s)
+            elif workers is None:
+                stream = _run_auto(todo, settings)
             elif workers == 1 or len(todo) <= 1:
                 stream = ((i, evaluate_design(p, settings)) for i, p in todo)
             else:
@@ -118,6 +139,24 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int = 2, scheduler: str
     return SweepResult(records=records, computed=computed, skipped=skipped,
                        seconds=time.perf_counter() - start, complete=len(records) == len(designs),
                        duplicates=store.duplicates)
+
+
+def _run_auto(todo: list[tuple[int, dict]], settings: EvaluationSettings) -> Iterator[tuple[int, dict[str, Any]]]:
+    """The first designs here, timed; the rest here too unless worker processes repay their start-up."""
+    seconds = []
+    for i, p in todo[:_TIMED_DESIGNS]:
+        t0 = time.perf_counter()
+        yield i, evaluate_design(p, settings)
+        seconds.append(time.perf_counter() - t0)
+    rest = todo[_TIMED_DESIGNS:]
+    if not rest:
+        return
+    # the first design also loads the compiled kernels: the median of the others is the estimate
+    per_design_s = float(np.median(seconds[1:]))
+    if len(rest) * per_design_s * (1.0 - 1.0 / AUTO_WORKERS) < POOL_STARTUP_S:
+        yield from ((i, evaluate_design(p, settings)) for i, p in rest)
+    else:
+        yield from _run_processes(rest, settings, AUTO_WORKERS)
 
 
 def _progress(total: int, done: int, show: bool | None) -> Any:
