@@ -23,9 +23,9 @@ from .sampling import OrientationSampling, tilt_torsion_angles, tilt_torsion_rot
 from .sweep import SweepResult, evaluate_design, run_sweep
 from .sweep_file import EvaluationSettings, SweepSpec
 
-__all__ = sorted([
+__all__ = [
     "DesignMetrics", "EvaluationSettings", "GeometryLimits", "LoadSet", "MetricOptions",
     "OrientationSampling", "PAPER_DESIGN", "PARAMETERS", "PoseMetrics", "SweepResult", "SweepSpec",
     "check_holes", "design_holes", "design_rig", "evaluate", "evaluate_design", "evaluate_poses",
     "run_sweep", "tilt_torsion_angles", "tilt_torsion_rotations",
-])
+]
