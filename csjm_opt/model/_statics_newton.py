@@ -7,6 +7,7 @@ The compiled twin is :func:`csjm_opt.control._loop_kernels.newton`; the method i
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 
@@ -45,14 +46,17 @@ class _Evaluator:
 
 
 def _stable(K_t: np.ndarray) -> bool:
-    """All eigenvalues of the 3x3 ``K_t`` have positive real part (Routh-Hurwitz on ``det(s I + K_t)``)."""
-    if not np.all(np.isfinite(K_t)):
+    """All eigenvalues of the 3x3 ``K_t`` have positive real part (Routh-Hurwitz on ``det(s I + K_t)``).
+
+    Plain float arithmetic on the nine entries (one call per equilibrium, on the 1 kHz loop's path).
+    """
+    (a, b, c), (d, e, f), (g, h, i) = K_t.tolist()
+    if not all(math.isfinite(x) for x in (a, b, c, d, e, f, g, h, i)):
         return False
-    tr = K_t[0, 0] + K_t[1, 1] + K_t[2, 2]
-    m2 = (K_t[0, 0] * K_t[1, 1] - K_t[0, 1] * K_t[1, 0] + K_t[0, 0] * K_t[2, 2] - K_t[0, 2] * K_t[2, 0]
-          + K_t[1, 1] * K_t[2, 2] - K_t[1, 2] * K_t[2, 1])
-    det = float(np.linalg.det(K_t))
-    return bool(tr > 0 and det > 0 and tr * m2 > det)
+    tr = a + e + i
+    m2 = a * e - b * d + a * i - c * g + e * i - f * h
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    return tr > 0 and det > 0 and tr * m2 > det
 
 
 def _newton(evaluate: _Evaluator, l: np.ndarray, R0: np.ndarray, tau_ext: np.ndarray, tol_Nm: float,
