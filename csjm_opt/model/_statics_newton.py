@@ -1,6 +1,6 @@
 """Damped Newton on SO(3) for forward statics, numpy reference: closed-form terms, step, stability test.
 
-The compiled twin is :func:`csjm_opt.control._loop_kernels.newton`; the method is described in
+The compiled twin is :func:`csjm_opt.model._statics_kernels.newton`; the method is described in
 :mod:`csjm_opt.model.statics`.
 """
 
