@@ -69,14 +69,7 @@ def stiffness_basis(A, B, k, R):
 def terms(A, B, k, F, P, R, l, tau_ext):
     """Residual g, cable K, tangent K_t, tensions T, cable and point-force moments (see statics)."""
     c, U, J = geometry(A, B, R)
-    G = length_hessians(A, c, U, J)
-    T = np.zeros(6)
-    K = np.zeros((3, 3))
-    for i in range(6):
-        s = c[i] - l[i]
-        if s > 0:
-            T[i] = k[i] * s
-            K += k[i] * np.outer(J[i], J[i]) + T[i] * G[i]
+    T, K = _rest_from_geometry(A, k, c, U, J, l)
     tau_c = J.T @ T
     tau_p = np.zeros(3)
     H = np.zeros((3, 3))
@@ -155,6 +148,12 @@ def log_so3(R):
 def rest_state(A, B, k, R, l):
     """Tensions T (6,) and cable stiffness K (3, 3) for rest lengths ``l`` at ``R`` (slack: nothing)."""
     c, U, J = geometry(A, B, R)
+    return _rest_from_geometry(A, k, c, U, J, l)
+
+
+@njit(cache=True)
+def _rest_from_geometry(A, k, c, U, J, l):
+    """Tensions T (6,) and cable stiffness K (3, 3) from the cable geometry (slack cables: nothing)."""
     G = length_hessians(A, c, U, J)
     T = np.zeros(6)
     K = np.zeros((3, 3))
