@@ -42,13 +42,12 @@ from .shaping.shaper import ShapingResult, shape_stiffness
 
 __version__ = "0.1.0"
 
-__all__ = sorted([
+__all__ = [
     "CsjmError", "DataFileError", "DesignError", "Diagnosis", "Equilibrium", "IllConditionedData",
-    "InconsistentTensions", "InfeasibleLoad", "InvalidInput", "MeasurementLog", "Model", "NoEquilibrium",
-    "NotARotation",
-    "Rig", "RigFileError", "ShapingResult", "SolverError", "StiffnessEstimate", "TensionPlan",
-    "TensionPlanBatch", "UsageError", "__version__", "diagnose_log", "identify_log",
-    "identify_stiffness", "load_rig", "paper_rig", "plan_tensions", "plan_tensions_batch",
-    "rest_lengths_for", "shape_stiffness", "so3", "solve_equilibrium", "stiffness",
-    "stiffness_batch",
-])
+    "InconsistentTensions", "InfeasibleLoad", "InvalidInput", "MeasurementLog", "Model",
+    "NoEquilibrium", "NotARotation", "Rig", "RigFileError", "ShapingResult", "SolverError",
+    "StiffnessEstimate", "TensionPlan", "TensionPlanBatch", "UsageError", "__version__",
+    "diagnose_log", "identify_log", "identify_stiffness", "load_rig", "paper_rig", "plan_tensions",
+    "plan_tensions_batch", "rest_lengths_for", "shape_stiffness", "so3", "solve_equilibrium",
+    "stiffness", "stiffness_batch",
+]

@@ -216,3 +216,25 @@ def test_study_script_makes_figures_and_places_the_paper(tmp_path):
     # Pareto mask law: nothing on the front is dominated, everything off it is
     x, y = np.array([1.0, 2.0, 2.0, 0.5]), np.array([3.0, 1.0, 2.0, 0.5])
     np.testing.assert_array_equal(study.pareto_mask(x, y), [True, False, True, False])
+
+
+@pytest.mark.parametrize("startup_s, uses_pool", [(0.0, True), (1e9, False)])
+def test_automatic_workers_choose_the_pool_only_when_it_pays(tmp_path, monkeypatch, startup_s, uses_pool):
+    """``workers=None``: designs timed here first; the pool only if the rest outlasts its start-up."""
+    from csjm_opt.design import sweep as sweep_module
+
+    calls = []
+    real = sweep_module._run_processes
+
+    def spy(todo, settings, workers):
+        calls.append(len(todo))
+        yield from real(todo, settings, workers)
+
+    monkeypatch.setattr(sweep_module, "_TIMED_DESIGNS", 2)
+    monkeypatch.setattr(sweep_module, "POOL_STARTUP_S", startup_s)
+    monkeypatch.setattr(sweep_module, "_run_processes", spy)
+    spec = _spec()
+    auto = run_sweep(spec, tmp_path / "auto.jsonl", progress=False)
+    serial = run_sweep(spec, tmp_path / "serial.jsonl", workers=1, progress=False)
+    assert calls == ([4] if uses_pool else [])
+    assert auto.computed == 6 and _strip(auto.records) == _strip(serial.records)

@@ -27,9 +27,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("sweep", metavar="SWEEP.toml", help="sweep description")
     p.add_argument("--out", required=True, metavar="RESULTS",
                    help="result file (JSON Lines; created, or resumed when it exists)")
-    p.add_argument("--workers", type=int_in(1, MAX_WORKERS), default=2,
-                   help="local worker processes (default 2; 1 = run in this process); "
-                   "with --dask, the size of the local cluster")
+    p.add_argument("--workers", type=int_in(1, MAX_WORKERS), default=None,
+                   help="local worker processes (1 = run in this process; default: 2 when the sweep "
+                   "is long enough to repay starting them); with --dask, the size of the local cluster")
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,
                    help="run on the Dask distributed scheduler at ADDRESS (e.g. tcp://host:8786)")
     p.add_argument("--dask", action="store_true",
@@ -45,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
     check_outputs([args.sweep], {"--out": args.out})
     check_outputs([args.sweep, args.out], {"--json": args.json})
     spec = SweepSpec.from_toml(args.sweep)
-    if args.workers < 1:
+    if args.workers is not None and args.workers < 1:
         raise DesignError(f"expected an integer >= 1, got {args.workers}", "--workers")
     if args.limit is not None and args.limit < 1:
         raise DesignError(f"expected an integer >= 1, got {args.limit}", "--limit")

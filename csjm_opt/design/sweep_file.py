@@ -42,9 +42,7 @@ moments within the bound of :mod:`csjm_opt._limits`.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import itertools
-import json
 import math
 import tomllib
 from pathlib import Path
@@ -55,24 +53,23 @@ from scipy.stats import qmc
 
 from ..errors import DesignError
 from .._fileio import read_text
-from .._limits import LIMITS
-from .geometry import PARAMETERS, SCALAR_PARAMETERS, GeometryLimits, design_rig
-from .metrics import LoadSet, MetricOptions
-from .sampling import OrientationSampling
+from ._sweep_limits import (
+    MAX_DESIGNS,
+    MAX_LOADS,
+    MAX_ORIENTATIONS,
+    MAX_SEED,
+    MAX_SHAPING_POSES,
+    MAX_VALUE,
+)
+from ._sweep_numbers import _check_base_value, _int
+from .evaluation_settings import EvaluationSettings, _settings
+from .geometry import PARAMETERS, SCALAR_PARAMETERS, design_rig
+from .sweep_axes import ParameterAxis, _axis, _axis_size
+
+__all__ = ["EvaluationSettings", "MAX_DESIGNS", "MAX_LOADS", "MAX_ORIENTATIONS", "MAX_SEED", "MAX_SHAPING_POSES",
+           "MAX_VALUE", "METHODS", "ParameterAxis", "SweepSpec"]
 
 METHODS = ("grid", "random", "lhs")
-#: Most designs in one sweep (a 1e6-design sweep takes days on a workstation).
-MAX_DESIGNS = 1_000_000
-#: Most orientations sampled per design (the metrics hold a few arrays of this length per load).
-MAX_ORIENTATIONS = 100_000
-#: Most shaping poses per design (each solves a QP family).
-MAX_SHAPING_POSES = 10_000
-#: Most rows of ``loads.tau_ext``.
-MAX_LOADS = 100
-#: Largest magnitude of any number in a sweep file (parameters are m, deg, N, N/m, kg).
-MAX_VALUE = 1e9
-#: Largest seed (numpy's generators take any integer; this keeps it a 63-bit integer).
-MAX_SEED = 2 ** 63 - 1
 _SECTIONS = {
     "sweep": {"method", "designs", "seed"},
     "base": set(PARAMETERS),
@@ -81,41 +78,6 @@ _SECTIONS = {
     "loads": {"tau_ext"},
     "metrics": {"shaping_poses", "feasibility_tol_Nm", "min_hole_spacing_m", "min_cable_clearance_m"},
 }
-
-
-@dataclasses.dataclass(frozen=True)
-class ParameterAxis:
-    """One swept parameter: explicit ``values`` (grid) or a ``[low, high]`` range."""
-
-    name: str
-    values: tuple[float, ...] = ()
-    low: float = math.nan
-    high: float = math.nan
-    log: bool = False
-
-
-@dataclasses.dataclass(frozen=True, eq=False)
-class EvaluationSettings:
-    """Everything that decides a design's metrics apart from its swept parameters."""
-
-    base: dict[str, Any]
-    sampling: OrientationSampling
-    loads: LoadSet
-    options: MetricOptions
-    limits: GeometryLimits
-
-    def digest(self) -> str:
-        """Fingerprint of the settings; a result file made with other settings is refused.
-
-        Returns
-        -------
-        str
-            Hex digest of the base design, sampling, loads and metric options.
-        """
-        data = {"base": self.base, "sampling": dataclasses.asdict(self.sampling),
-                "loads": self.loads.taus_ext_A_Nm.tolist(), "options": dataclasses.asdict(self.options),
-                "limits": dataclasses.asdict(self.limits)}
-        return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -253,52 +215,6 @@ class SweepSpec:
         return spec
 
 
-def _settings(data: dict[str, Any], base: dict[str, Any], fail: Any) -> EvaluationSettings:
-    s = data.get("sampling", {})
-    m = data.get("metrics", {})
-    for key, value in list(s.items()) + list(m.items()):
-        section = "sampling" if key in s else "metrics"
-        if key == "method":
-            if not isinstance(value, str):
-                raise fail(f"expected a string, got {value!r}", "sampling.method")
-        elif key in ("orientations", "seed", "shaping_poses"):
-            top = {"orientations": MAX_ORIENTATIONS, "seed": MAX_SEED, "shaping_poses": MAX_SHAPING_POSES}[key]
-            _int(value, f"{section}.{key}", fail, minimum=1 if key == "orientations" else 0, maximum=top)
-        else:
-            _float(value, f"{section}.{key}", fail)
-    try:
-        sampling = OrientationSampling(n=s.get("orientations", 1000), max_tilt_deg=float(s.get("max_tilt_deg", 30.0)),
-                                       max_torsion_deg=float(s.get("max_torsion_deg", 30.0)),
-                                       seed=s.get("seed", 0), method=s.get("method", "halton"))
-    except DesignError as exc:
-        raise fail(str(exc).split("] ", 1)[-1], f"sampling.{exc.key}") from exc
-    tau_ext = data.get("loads", {}).get("tau_ext", [[0.0, 0.0, 0.0]])
-    if isinstance(tau_ext, list) and len(tau_ext) > MAX_LOADS:
-        raise fail(f"{len(tau_ext)} load rows, more than MAX_LOADS = {MAX_LOADS}", "loads.tau_ext")
-    _check_base_value(tau_ext, "loads.tau_ext", fail)
-    moment = LIMITS["moment_Nm"]
-    try:
-        arr = np.asarray(tau_ext, dtype=float)
-    except (ValueError, TypeError) as exc:
-        raise fail(f"expected rows of three numbers: {exc}", "loads.tau_ext") from exc
-    if arr.size and not moment.contains(arr).all():
-        raise fail(f"moments must lie in {moment.describe()}", "loads.tau_ext")
-    try:
-        loads = LoadSet(arr)
-    except (ValueError, TypeError) as exc:
-        raise fail(f"expected rows of three numbers: {exc}", "loads.tau_ext") from exc
-    except DesignError as exc:
-        raise fail(str(exc).split("] ", 1)[-1], "loads.tau_ext") from exc
-    try:
-        options = MetricOptions(shaping_poses=m.get("shaping_poses", 16),
-                                feasibility_tol_Nm=float(m.get("feasibility_tol_Nm", 1e-9)))
-        limits = GeometryLimits(float(m.get("min_hole_spacing_m", 1e-3)),
-                                float(m.get("min_cable_clearance_m", 5e-3)))
-    except DesignError as exc:
-        raise fail(str(exc).split("] ", 1)[-1], f"metrics.{exc.key}") from exc
-    return EvaluationSettings(base=base, sampling=sampling, loads=loads, options=options, limits=limits)
-
-
 def _check_typical_design(spec: "SweepSpec", fail: Any) -> None:
     """Build one design (first grid values, or range midpoints): catches misspelt or clashing keys early.
 
@@ -316,86 +232,3 @@ def _check_typical_design(spec: "SweepSpec", fail: Any) -> None:
         else:
             return  # a property of this one design (e.g. holes too close), not of the file
         raise fail(str(exc).split("] ", 1)[-1], f"{section}.{exc.key}") from exc
-
-
-def _axis(name: str, spec: Any, method: str, fail: Any) -> ParameterAxis:
-    key = f"parameters.{name}"
-    if not isinstance(spec, dict):
-        raise fail("expected a table: {values = [...]} or {min = .., max = ..}", key)
-    allowed = {"values", "min", "max", "num", "log"}
-    for k in spec:
-        if k not in allowed:
-            raise fail(f"unknown key (expected one of {sorted(allowed)})", f"{key}.{k}")
-    if "values" in spec:
-        if method != "grid":
-            raise fail("explicit values need method = 'grid'; give min and max", f"{key}.values")
-        if {"min", "max", "num"} & set(spec):
-            raise fail("give values or min/max/num, not both", f"{key}.values")
-        values = spec["values"]
-        if not isinstance(values, list) or not values:
-            raise fail("expected a non-empty list of numbers", f"{key}.values")
-        return ParameterAxis(name, tuple(_float(v, f"{key}.values", fail) for v in values))
-    for k in ("min", "max"):
-        if k not in spec:
-            raise fail("missing key (or give values)", f"{key}.{k}")
-    low, high = _float(spec["min"], f"{key}.min", fail), _float(spec["max"], f"{key}.max", fail)
-    if not low < high:
-        raise fail(f"min must be < max, got {low} and {high}", f"{key}.min")
-    log = spec.get("log", False)
-    if not isinstance(log, bool):
-        raise fail(f"expected true or false, got {log!r}", f"{key}.log")
-    if log and low <= 0:
-        raise fail("log = true needs min > 0", f"{key}.min")
-    if method == "grid":
-        if "num" not in spec:
-            raise fail("missing key (grid over min..max needs num)", f"{key}.num")
-        num = _int(spec["num"], f"{key}.num", fail, minimum=1, maximum=MAX_DESIGNS)
-        grid = np.geomspace(low, high, num) if log else np.linspace(low, high, num)
-        return ParameterAxis(name, tuple(float(v) for v in grid))
-    if "num" in spec:
-        raise fail("num is for method = 'grid'; use sweep.designs", f"{key}.num")
-    return ParameterAxis(name, (), low, high, log)
-
-
-def _axis_size(name: str, spec: Any, fail: Any) -> int:
-    """Number of grid values of one axis, read before any array is built."""
-    key = f"parameters.{name}"
-    if not isinstance(spec, dict):
-        raise fail("expected a table: {values = [...]} or {min = .., max = ..}", key)
-    if isinstance(spec.get("values"), list):
-        return max(1, len(spec["values"]))
-    if "num" in spec:
-        return _int(spec["num"], f"{key}.num", fail, minimum=1, maximum=MAX_DESIGNS)
-    return 1
-
-
-def _check_base_value(value: Any, key: str, fail: Any) -> None:
-    """A number, or nested lists of numbers (hole rows), finite and within ``+-MAX_VALUE``."""
-    if isinstance(value, list):
-        if len(value) > 1000:
-            raise fail(f"expected a short list, got {len(value)} entries", key)
-        for v in value:
-            _check_base_value(v, key, fail)
-    elif not isinstance(value, str):
-        _float(value, key, fail)
-
-
-def _float(value: Any, key: str, fail: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise fail(f"expected a finite number, got {value!r:.40}", key)
-    if isinstance(value, int) and abs(value) > MAX_VALUE:
-        raise fail(f"expected a number within +-{MAX_VALUE:g}, got an integer of {len(str(abs(value)))} digits", key)
-    if not math.isfinite(value):
-        raise fail(f"expected a finite number, got {value!r:.40}", key)
-    if abs(value) > MAX_VALUE:
-        raise fail(f"expected a number within +-{MAX_VALUE:g}, got {value:.6g}", key)
-    return float(value)
-
-
-def _int(value: Any, key: str, fail: Any, minimum: int, maximum: int = MAX_DESIGNS) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        raise fail(f"expected an integer >= {minimum}, got {value!r:.40}", key)
-    if value > maximum:
-        shown = f"{value:.3g}" if value < 10 ** 30 else f"an integer of {len(str(value))} digits"
-        raise fail(f"expected an integer <= {maximum:,}, got {shown}", key)
-    return value

@@ -41,9 +41,6 @@ Processing
 
 from __future__ import annotations
 
-import csv
-import io
-import math
 from pathlib import Path
 from typing import Any
 
@@ -51,148 +48,18 @@ import numpy as np
 
 from .. import so3
 from ..errors import DataFileError, IllConditionedData, InvalidInput
-from .._validate import as_array
 from .._fileio import read_text
-from .._limits import LIMITS, ROTVEC_MAX_NORM_RAD
-from .logfile import MeasurementLog, parse_number
-from ..model.cable_terms import weight_moment
+from .frames import fit_rigid_transform, weight_moment_A, wrench_to_A
+from .logfile import MeasurementLog
+from .raw_file import RAW_COLUMNS, parse_raw
 from ..model.rig import Rig
 
-RAW_COLUMNS = ("record", "sample", "cycle", "name", "x", "y", "z", "rx", "ry", "rz", "px", "py", "pz",
-               "fx", "fy", "fz", "mx", "my", "mz", "l1", "l2", "l3", "l4", "l5", "l6")
-_NUMERIC = RAW_COLUMNS[4:]
-_POSE = ("x", "y", "z", "rx", "ry", "rz")
-_REQUIRED = {
-    "base_point": ("name", "x", "y", "z", "px", "py", "pz"),
-    "sensor": _POSE,
-    "sample": ("sample", "cycle", "fx", "fy", "fz", "mx", "my", "mz", "l1", "l2", "l3", "l4", "l5", "l6"),
-    "platform_point": ("sample", "name", "x", "y", "z", "px", "py", "pz"),
-}
-_OPTIONAL = {"sample": _POSE}
+__all__ = ["DEFAULT_ORIGIN_TOL_M", "MAX_ORIGIN_TOL_M", "RAW_COLUMNS", "fit_rigid_transform", "parse_raw",
+           "preprocess_file", "preprocess_text", "weight_moment_A", "wrench_to_A"]
+
 DEFAULT_ORIGIN_TOL_M = 2e-3
 #: Largest accepted ``origin_tol_m`` (m): beyond it (54) checks nothing on a bench-top rig.
 MAX_ORIGIN_TOL_M = 1.0
-_QUANTITY = {**{c: "position_m" for c in ("x", "y", "z", "px", "py", "pz")},
-             **{c: "force_N" for c in ("fx", "fy", "fz")}, **{c: "moment_Nm" for c in ("mx", "my", "mz")},
-             **{f"l{i}": "rest_length_m" for i in range(1, 7)}}
-
-
-def fit_rigid_transform(P_src: np.ndarray, P_dst: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-    """Least-squares rigid transform between two point sets (Kabsch/Umeyama, no scale).
-
-    Replaces the 4 x 4 inverse of the paper's (52), exact only for noise-free points (erratum 6).
-
-    Parameters
-    ----------
-    P_src : array_like, shape (n, 3)
-        Points in the source frame (n >= 3, not collinear).
-    P_dst : array_like, shape (n, 3)
-        The same points measured in the destination frame.
-
-    Returns
-    -------
-    R : ndarray, shape (3, 3)
-        Rotation with ``P_dst ~ P_src R^T + p``.
-    p : ndarray, shape (3,)
-        Translation.
-    rms_m : float
-        RMS residual of the fit.
-
-    Raises
-    ------
-    InvalidInput
-        If the shapes differ or a value is not finite.
-    IllConditionedData
-        If there are fewer than 3 points or they are collinear.
-    """
-    P_src, P_dst = as_array(P_src, (None, 3), "P_src"), as_array(P_dst, (None, 3), "P_dst")
-    if P_src.shape != P_dst.shape:
-        raise InvalidInput(f"P_src {P_src.shape} and P_dst {P_dst.shape}: expected the same points", "P_dst")
-    if len(P_src) < 3:
-        raise IllConditionedData(f"a rigid fit needs at least 3 points, got {len(P_src)}", float("inf"), len(P_src))
-    a, b = P_src.mean(axis=0), P_dst.mean(axis=0)
-    A, B = P_src - a, P_dst - b
-    s = np.linalg.svd(A, compute_uv=False)
-    if s[1] <= 1e-9 * max(s[0], 1e-300):
-        raise IllConditionedData("points for the rigid fit are collinear", float("inf"), 1)
-    U, _, Vt = np.linalg.svd(B.T @ A)
-    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])
-    R = U @ D @ Vt
-    p = b - R @ a
-    rms = float(np.sqrt(np.mean(np.sum((P_src @ R.T + p - P_dst) ** 2, axis=1))))
-    return R, p, rms
-
-
-def wrench_to_A(f_S_N: np.ndarray, tau_S_Nm: np.ndarray, R_AS: np.ndarray,
-                p_AS_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(55): force and moment about O in {A} from an F/T reading in {S}; batched over rows."""
-    f_A = np.asarray(f_S_N) @ R_AS.T
-    tau_A = np.asarray(tau_S_Nm) @ R_AS.T + np.cross(p_AS_m, f_A)
-    return f_A, tau_A
-
-
-def weight_moment_A(rig: Rig, R_BA: np.ndarray) -> np.ndarray:
-    """(56) with coincident origins: ``r_G x (R^T m g)`` in {A} (N m); batched.
-
-    The physics is :func:`csjm_opt.model.cable_terms.weight_moment` (the numpy reference).
-    """
-    return weight_moment(R_BA, rig.platform_mass_kg * np.asarray(rig.com_A_m), rig.gravity_B_m_per_s2)
-
-
-def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int, dict[str, Any]]]]:
-    """Strict parse: records by kind, each ``(line, {column: value})``; errors name the line."""
-    reader = csv.reader(io.StringIO(text))
-    try:
-        header = [h.strip() for h in next(reader)]
-    except StopIteration:
-        raise DataFileError("empty file: expected the raw header " + ",".join(RAW_COLUMNS), source, 1) from None
-    unknown = [h for h in header if h not in RAW_COLUMNS and h != "note"]
-    missing = [c for c in RAW_COLUMNS if c not in header]
-    if unknown or missing or len(set(header)) != len(header):
-        raise DataFileError(f"raw header must hold the columns {','.join(RAW_COLUMNS)} (any order, "
-                            f"plus 'note'); missing {missing}, unknown {unknown}", source, 1)
-    records: dict[str, list] = {k: [] for k in _REQUIRED}
-    for row in reader:
-        line = reader.line_num
-        if not row or all(not c.strip() for c in row):
-            continue
-        if len(row) != len(header):
-            raise DataFileError(f"expected {len(header)} values, got {len(row)}", source, line)
-        cells = {h: c.strip() for h, c in zip(header, row)}
-        kind = cells["record"]
-        if kind not in _REQUIRED:
-            raise DataFileError(f"unknown record {kind!r} (expected one of {sorted(_REQUIRED)})",
-                                source, line, "record")
-        allowed = set(_REQUIRED[kind]) | set(_OPTIONAL.get(kind, ())) | {"record", "note"}
-        values: dict[str, Any] = {}
-        for col in RAW_COLUMNS[1:]:
-            cell = cells[col]
-            if col not in allowed:
-                if cell:
-                    raise DataFileError(f"a {kind} record has no {col!r} value (got {cell!r})", source, line, col)
-                continue
-            if not cell:
-                if col in _REQUIRED[kind]:
-                    raise DataFileError(f"missing value for a {kind} record", source, line, col)
-                continue
-            values[col] = cell if col == "name" else parse_number(cell, col, source, line,
-                                                                     integer=col in ("sample", "cycle"))
-            lim = LIMITS.get(_QUANTITY.get(col, ""))
-            if lim is not None and not lim.contains(np.array(values[col])):
-                raise DataFileError(f"{values[col]:.6g} outside {lim.describe()} ({lim.why.split(';')[0]})",
-                                    source, line, col)
-        if "rx" in values and "ry" in values and "rz" in values:
-            norm = math.hypot(values["rx"], values["ry"], values["rz"])  # no overflow warning
-            if not norm <= ROTVEC_MAX_NORM_RAD:
-                raise DataFileError(f"rotation vector of norm {norm:.6g} rad; expected a principal rotation "
-                                    "vector (norm <= pi; degrees written as radians?)", source, line, "rx..rz")
-        if kind == "sample":
-            given = [c for c in _POSE if c in values]
-            if given and len(given) != 6:
-                raise DataFileError("a sample's pose needs all of x,y,z,rx,ry,rz or none", source, line,
-                                    [c for c in _POSE if c not in values][0])
-        records[kind].append((line, values))
-    return records
 
 
 def preprocess_text(text: str, rig: Rig, source: str | None = None, origin_tol_m: float = DEFAULT_ORIGIN_TOL_M,

@@ -29,97 +29,34 @@ cables taut; an unstable one with slack cables counts as ``"slack"``).
 
 The Newton terms are evaluated in closed form (:mod:`csjm_opt.model.cable_terms`,
 checked against the CasADi model in the tests); by default the Newton loop
-runs compiled (:mod:`csjm_opt.control._loop_kernels`, numba), ``compiled=False``
+runs compiled (:mod:`csjm_opt.model._statics_kernels`, numba), ``compiled=False``
 runs the numpy reference. Cheap enough for a 1 kHz simulation loop.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import functools
 from typing import Sequence
 
 import numpy as np
 import numpy.typing as npt
 
-from .. import so3
-from .cable_terms import CableTerms, point_force_terms
 from ..errors import InvalidInput, NoEquilibrium
+from . import _statics_kernels
+from ._statics_newton import (
+    MAX_EXCURSION_RAD,
+    PointForce,
+    _Evaluator,
+    _newton,
+    _stable,
+    cable_terms_for,
+)
+from .equilibrium import Equilibrium
 from .numeric import Model
 from .rig import Rig
 from .._validate import as_array, as_rotation, as_vector3
 
-PointForce = tuple[np.ndarray, np.ndarray]  # (force in {B}, N; point in {A}, m)
-
-#: Largest rotation (rad) away from the start before a Newton run is called diverged.
-MAX_EXCURSION_RAD = 2.5
-
-
-@dataclasses.dataclass(frozen=True, eq=False)
-class Equilibrium:
-    """A static equilibrium found by :func:`solve_equilibrium` (checks itself)."""
-
-    R: np.ndarray                   # (3, 3) orientation of {A} in {B}
-    rest_lengths_m: np.ndarray      # (6,)
-    tensions_N: np.ndarray          # (6,)
-    tau_ext_A_Nm: np.ndarray        # (3,) external moment fixed in {A}
-    tau_cable_A_Nm: np.ndarray      # (3,) J^T T
-    tau_points_A_Nm: np.ndarray     # (3,) weight plus dead-weight forces
-    K: np.ndarray                   # (3, 3) cable stiffness (convention of docs/conventions.md) at R
-    K_tangent: np.ndarray           # (3, 3) tangent stiffness of the whole loaded system
-    iterations: int
-
-    @property
-    def tensions(self) -> np.ndarray:
-        """Alias of ``tensions_N`` (docs/conventions.md name)."""
-        return self.tensions_N
-
-    @property
-    def tau_load_A_Nm(self) -> np.ndarray:
-        """Total load on the platform (external plus weight/point forces), {A}."""
-        return self.tau_ext_A_Nm + self.tau_points_A_Nm
-
-    @property
-    def residual_Nm(self) -> float:
-        """``||J^T T + tau_load||`` (N m)."""
-        return float(np.linalg.norm(self.tau_cable_A_Nm + self.tau_load_A_Nm))
-
-    @property
-    def slack(self) -> np.ndarray:
-        """Mask of slack cables (zero tension)."""
-        return self.tensions_N <= 0.0
-
-    @property
-    def stable(self) -> bool:
-        """All eigenvalues of the tangent stiffness have positive real part."""
-        return bool(np.all(np.linalg.eigvals(self.K_tangent).real > 0))
-
-    def is_valid(self, tol_Nm: float = 1e-9) -> bool:
-        """Residual within ``tol_Nm`` and stable."""
-        return self.residual_Nm <= tol_Nm and self.stable
-
-
-# ------------------------------------------------------------------ terms
-@functools.lru_cache(maxsize=64)
-def cable_terms_for(rig: Rig) -> CableTerms:
-    """Closed-form cable terms of ``rig`` (cached per rig object)."""
-    return CableTerms.from_rig(rig)
-
-
-class _Evaluator:
-    """All Newton terms at a pose, closed form (checked against the CasADi model in the tests)."""
-
-    def __init__(self, rig: Rig, forces: list[PointForce]):
-        self._terms = cable_terms_for(rig)
-        self._F = np.array([f for f, _ in forces], float).reshape(-1, 3)
-        self._P = np.array([p for _, p in forces], float).reshape(-1, 3)
-
-    def __call__(self, R: np.ndarray, l: np.ndarray, tau_ext: np.ndarray):
-        T, tau_c, K = self._terms.rest_terms(R, l)
-        tau_p, H_p = point_force_terms(R, self._F, self._P)
-        g = tau_c + tau_p + tau_ext
-        K_t = K + H_p - 0.5 * so3.hat(tau_c + tau_p)
-        return g, K, K_t, T, tau_c, tau_p
+__all__ = ["Equilibrium", "EquilibriumSolver", "MAX_EXCURSION_RAD", "PointForce", "cable_terms_for",
+           "rest_lengths_for", "solve_equilibrium"]
 
 
 # ------------------------------------------------------------------ solver
@@ -149,9 +86,7 @@ class EquilibriumSolver:
     def _newton(self, l: np.ndarray, R0: np.ndarray, tau_ext: np.ndarray):
         if not self.compiled:
             return _newton(self._evaluate, l, R0, tau_ext, self.tol_Nm, self.max_iter, self.max_step_rad)
-        from ..control import _loop_kernels as loop_kernels
-
-        R, *terms, it, ok = loop_kernels.newton(
+        R, *terms, it, ok = _statics_kernels.newton(
             *self._kernel_args, np.ascontiguousarray(R0, dtype=np.float64), np.ascontiguousarray(l, dtype=np.float64),
             np.ascontiguousarray(tau_ext, dtype=np.float64), self.tol_Nm, self.max_iter, self.max_step_rad,
             MAX_EXCURSION_RAD)
@@ -201,17 +136,6 @@ class EquilibriumSolver:
         return eq
 
 
-def _stable(K_t: np.ndarray) -> bool:
-    """All eigenvalues of the 3x3 ``K_t`` have positive real part (Routh-Hurwitz on ``det(s I + K_t)``)."""
-    if not np.all(np.isfinite(K_t)):
-        return False
-    tr = K_t[0, 0] + K_t[1, 1] + K_t[2, 2]
-    m2 = (K_t[0, 0] * K_t[1, 1] - K_t[0, 1] * K_t[1, 0] + K_t[0, 0] * K_t[2, 2] - K_t[0, 2] * K_t[2, 0]
-          + K_t[1, 1] * K_t[2, 2] - K_t[1, 2] * K_t[2, 1])
-    det = float(np.linalg.det(K_t))
-    return bool(tr > 0 and det > 0 and tr * m2 > det)
-
-
 def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: npt.ArrayLike = (0.0, 0.0, 0.0),
                       point_forces: Sequence[PointForce] = (), R_init: np.ndarray | None = None,
                       include_weight: bool = True, model: Model | None = None, tol_Nm: float = 1e-11,
@@ -256,54 +180,6 @@ def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: npt.Ar
         raise NoEquilibrium(f"equilibrium residual {residual:.3g} N m (CasADi model) exceeds "
                             f"{verify_tol_Nm:g} N m", "diverged", residual)
     return eq
-
-
-def _newton(evaluate: _Evaluator, l: np.ndarray, R0: np.ndarray, tau_ext: np.ndarray, tol_Nm: float,
-            max_iter: int, max_step_rad: float):
-    """Damped Newton from ``R0``; returns ``((R, terms, iterations), converged)``."""
-    R = R0
-    terms = evaluate(R, l, tau_ext)
-    best = float(np.linalg.norm(terms[0]))
-    it = 0
-    for it in range(1, max_iter + 1):
-        if best <= tol_Nm:
-            it -= 1
-            break
-        g, _, K_t = terms[0], terms[1], terms[2]
-        if not (np.all(np.isfinite(g)) and np.all(np.isfinite(K_t))):
-            return (R, terms, it), False
-        step = _newton_step(K_t, g, max_step_rad)
-        alpha, improved = 1.0, False
-        for _ in range(30):
-            R_try = R @ so3.exp(alpha * step)
-            out = evaluate(R_try, l, tau_ext)
-            norm = float(np.linalg.norm(out[0]))
-            if norm < best or norm <= tol_Nm:
-                R, terms, best, improved = R_try, out, norm, True
-                break
-            alpha *= 0.5
-        if not improved or _angle(R0, R) > MAX_EXCURSION_RAD:
-            return (R, terms, it), False
-    return (R, terms, it), best <= tol_Nm
-
-
-def _angle(R0: np.ndarray, R: np.ndarray) -> float:
-    """Rotation angle of ``R0^T R`` (rad), from the trace."""
-    return float(np.arccos(np.clip(0.5 * (np.sum(R0 * R) - 1.0), -1.0, 1.0)))
-
-
-def _newton_step(K_t: np.ndarray, g: np.ndarray, max_step_rad: float) -> np.ndarray:
-    """Solve ``K_t step = g`` (g + dg/dzeta step = 0, dg/dzeta = -K_t), regularised and capped."""
-    try:
-        step = np.linalg.solve(K_t, g)
-        if not np.all(np.isfinite(step)) or (np.dot(step, g) <= 0 and np.linalg.cond(K_t) > 1e10):
-            raise np.linalg.LinAlgError
-    except np.linalg.LinAlgError:
-        S = 0.5 * (K_t + K_t.T)
-        mu = max(0.0, -np.min(np.linalg.eigvalsh(S))) + 1e-3 * max(1.0, np.abs(S).max())
-        step = np.linalg.solve(S + mu * np.eye(3), g)
-    norm = np.linalg.norm(step)
-    return step if norm <= max_step_rad else step * (max_step_rad / norm)
 
 
 def rest_lengths_for(rig: Rig, R: np.ndarray, tensions_N: np.ndarray, model: Model | None = None) -> np.ndarray:

@@ -39,7 +39,10 @@ import numpy as np
 import qpsolvers
 from scipy import sparse
 
+from ..model import _statics_kernels
 from ..planning import _dense_qp as dense_qp
+from ..planning import _kernels as _qp_kernels
+from . import _shaping_kernels
 from ..model.cable_terms import point_force_terms
 from ..errors import InfeasibleLoad, InvalidInput, SolverError
 from ..model.numeric import Model
@@ -89,7 +92,7 @@ class Shaper:
     Keeps the stiffness basis while the pose is unchanged and warm-starts the
     exact active-set solver from the previous active set. Inputs are trusted.
     With ``compiled`` (default) the basis, the QP matrices and the primal-dual
-    active-set iterations run in :mod:`csjm_opt.control._loop_kernels` (numba); the
+    active-set iterations run in :mod:`csjm_opt.planning._kernels` (numba); the
     numpy solver of :mod:`csjm_opt.planning._dense_qp` (with its finite primal
     active-set fallback) takes over whenever they do not settle.
     """
@@ -121,9 +124,7 @@ class Shaper:
         if self._basis is None or not np.array_equal(self._basis.R, R):
             R = np.array(R, float)
             if self.compiled:
-                from ..control import _loop_kernels as loop_kernels
-
-                J, K0, G = loop_kernels.stiffness_basis(*self._geom, R)
+                J, K0, G = _statics_kernels.stiffness_basis(*self._geom, R)
                 self._basis = StiffnessBasis(R, J, K0, G, point_force_terms(R, *self._weight)[0])
             else:
                 self._basis = stiffness_basis(self.rig, R)
@@ -165,12 +166,10 @@ class Shaper:
             tol = 1e-5 * max(1.0, self.rig.t_max_N)
             self._active = (x0 <= self.rig.t_min_N + tol, x0 >= self.rig.t_max_N - tol)
         if self.compiled:
-            from ..control import _loop_kernels as loop_kernels
-
-            P, q, A, b = loop_kernels.shaping_qp(basis.G, basis.K0, objective.L, objective.s, objective.w, basis.J,
+            P, q, A, b = _shaping_kernels.shaping_qp(basis.G, basis.K0, objective.L, objective.s, objective.w, basis.J,
                                                  tau_ext + basis.tau_weight_A_Nm, self.rig.t_mid_N,
                                                  self.regularization)
-            x, nu, z, lower, upper, it, status = loop_kernels.pdas(P, q, A, b, self._lo, self._hi,
+            x, nu, z, lower, upper, it, status = _qp_kernels.pdas(P, q, A, b, self._lo, self._hi,
                                                                    self._active[0].copy(), self._active[1].copy(),
                                                                    8, 1e-10)
             if status == 0:

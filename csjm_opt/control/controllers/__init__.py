@@ -15,5 +15,7 @@ from .so3_feedback import SO3FeedbackController
 from .stiffness_shaping import StiffnessShapingController
 from .tension_planning import TensionPlanningController
 
-__all__ = sorted(["Command", "Controller", "InverseDynamicsController", "Observation", "PoseHoldingController",
-                  "SO3FeedbackController", "StiffnessShapingController", "TensionPlanningController"])
+__all__ = [
+    "Command", "Controller", "InverseDynamicsController", "Observation", "PoseHoldingController",
+    "SO3FeedbackController", "StiffnessShapingController", "TensionPlanningController",
+]

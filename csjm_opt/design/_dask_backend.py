@@ -1,0 +1,50 @@
+"""Running a sweep's designs on a Dask cluster (a running scheduler or a local cluster)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from typing import Any
+
+from ..errors import DesignError
+from .design_evaluation import evaluate_design
+from .evaluation_settings import EvaluationSettings
+
+
+def _run_dask(todo: list[tuple[int, dict]], settings: EvaluationSettings, scheduler: str | None,
+              workers: int, timeout_s: float) -> Iterator[tuple[int, dict[str, Any]]]:
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError as exc:  # pragma: no cover - dask[distributed] is a dependency
+        raise DesignError("the Dask option needs dask[distributed] installed", "--scheduler") from exc
+    cluster = None
+    try:
+        if scheduler:
+            client = Client(scheduler, timeout=f"{timeout_s}s")
+        else:
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
+            client = Client(cluster)
+    except (OSError, TimeoutError, ValueError) as exc:
+        if cluster is not None:
+            cluster.close()
+        raise DesignError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}", "--scheduler") from exc
+    try:
+        yield from dask_stream(client, todo, settings, as_completed)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def dask_stream(client: Any, todo: list[tuple[int, dict]], settings: EvaluationSettings,
+                as_completed: Callable) -> Iterator[tuple[int, dict[str, Any]]]:
+    """Evaluate ``todo`` on a Dask ``client``; yields (index, record) as designs finish."""
+    futures = {}
+    try:
+        shared = client.scatter(settings, broadcast=True)
+        for i, p in todo:
+            futures[client.submit(evaluate_design, p, shared, pure=False)] = i
+        for future in as_completed(futures):
+            yield futures[future], future.result()
+    finally:
+        client.cancel(list(futures))

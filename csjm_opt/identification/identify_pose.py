@@ -1,0 +1,156 @@
+"""Identify K at one reference pose from one cycle's orientations and loads (Section III, (46)-(50)).
+
+The method and the refusal rule are described in :mod:`csjm_opt.identification.identify`.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+from scipy import stats
+
+from .. import so3
+from ..errors import IllConditionedData, InvalidInput
+from ..measurement.instruments import InstrumentNoise
+from ..model.numeric import Model
+from .estimate import StiffnessEstimate
+from .excitation import (
+    MAX_CONDITION,
+    MAX_RELATIVE_HALF_WIDTH,
+    _check_rows,
+    _missing,
+    excitation,
+    weakest_load_direction,
+)
+from .stiffness_fits import (
+    affine_fit,
+    bootstrap_interval,
+    n_parameters,
+    paper_estimate,
+    symmetric_fit,
+)
+from .._limits import MAX_BOOTSTRAP
+from .._validate import as_array, as_rotations
+
+
+# --------------------------------------------------------------- estimators
+@functools.lru_cache(maxsize=256)
+def _quantile(ci_level: float, dof: int) -> float:
+    """Two-sided quantile: Student t with ``dof`` degrees of freedom, normal for ``dof = 0`` (cached)."""
+    a = 0.5 + ci_level / 2
+    return float(stats.norm.ppf(a) if dof == 0 else stats.t.ppf(a, dof))
+
+
+def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | None = None,
+                       tau_weight_A_Nm: np.ndarray | None = None, *, noise: InstrumentNoise | None = None,
+                       order: int = 1, ci_level: float = 0.95, bootstrap: int = 0,
+                       rng: np.random.Generator | None = None, max_condition: float = MAX_CONDITION,
+                       cycle: int | None = None, allow_ill_conditioned: bool = False) -> StiffnessEstimate:
+    """Identify K at ``R[0]`` from one cycle's orientations (n, 3, 3) and external moments (n, 3).
+
+    Parameters
+    ----------
+    R : array (n, 3, 3)
+        Measured orientations of {A} in {B}; row 0 is the reference.
+    tau_ext_A_Nm : array (n, 3)
+        External moments about O in {A} (N m), platform weight excluded.
+    model : Model, optional
+        Gives the weight moment at each measured pose when ``tau_weight_A_Nm`` is not given.
+    tau_weight_A_Nm : array (n, 3), optional
+        Weight moments (zeros for a weightless platform).
+    noise : InstrumentNoise, optional
+        Instrument model: errors-in-variables correction and normal intervals.
+    order : {1, 2, 3}
+        Degree of the fit in dzeta.
+    ci_level : float
+        Confidence level in (0, 1).
+    bootstrap : int
+        Pairs-bootstrap resamples, 0 to :data:`~csjm_opt._limits.MAX_BOOTSTRAP`.
+    rng : numpy.random.Generator, optional
+        Bootstrap generator.
+    max_condition : float
+        Largest accepted condition number of the displacements (>= 1; ``inf``: no limit).
+    cycle : int, optional
+        Cycle id stored in the result.
+    allow_ill_conditioned : bool
+        Return an estimate that fails the precision rule (or the condition
+        limit) anyway, marked ``ill_conditioned``; rank-deficient data still raise.
+
+    Returns
+    -------
+    StiffnessEstimate
+
+    Raises
+    ------
+    InvalidInput
+        Bad shapes, values or options.
+    IllConditionedData
+        The cycle does not determine K (module docstring: rank, condition,
+        relative precision); ``direction`` is the weakest load direction in {A}.
+    """
+    R = as_rotations(R, "R")
+    n = R.shape[0]
+    tau_ext = as_array(tau_ext_A_Nm, (n, 3), "tau_ext")
+    if tau_weight_A_Nm is None:
+        if model is None:
+            raise InvalidInput("give a model (for the weight moment) or tau_weight_A_Nm", "model")
+        tau_weight_A_Nm = model.weight_moment(R)
+    if order not in (1, 2, 3):
+        raise InvalidInput(f"order: expected 1, 2 or 3, got {order!r}", "order")
+    if isinstance(bootstrap, bool) or not isinstance(bootstrap, (int, np.integer)) \
+            or not 0 <= bootstrap <= MAX_BOOTSTRAP:
+        raise InvalidInput(f"bootstrap: expected an integer in [0, {MAX_BOOTSTRAP}], got {bootstrap!r}", "bootstrap")
+    if not (isinstance(ci_level, (int, float)) and 0 < ci_level < 1):
+        raise InvalidInput(f"ci_level: expected a number in (0, 1), got {ci_level!r}", "ci_level")
+    if not (isinstance(max_condition, (int, float)) and 1 <= max_condition):
+        raise InvalidInput(f"max_condition: expected a number >= 1 (inf: no limit), got {max_condition!r}",
+                           "max_condition")
+    tau_load = tau_ext + as_array(tau_weight_A_Nm, (n, 3), "tau_weight")
+    dzeta = so3.log(np.swapaxes(R[0], -1, -2)[None] @ R)
+    p = n_parameters(order)
+    _check_rows(n, p)
+    u, _ = weakest_load_direction(tau_load)
+    ill = False
+    try:
+        cond, s = excitation(dzeta, noise, max_condition)
+    except IllConditionedData as exc:
+        if not allow_ill_conditioned or exc.rank is None or exc.rank < 3:
+            raise IllConditionedData(f"{exc}; {_missing(u)}", exc.condition, exc.rank, u) from exc
+        cond, ill = exc.condition, True
+        s = np.linalg.svd(dzeta - dzeta.mean(axis=0), compute_uv=False)[:3]
+
+    K_D_paper = paper_estimate(dzeta, tau_load)
+    fit = affine_fit(dzeta, tau_load, order, noise)
+    sym = symmetric_fit(dzeta, tau_load, order, fit["Sigma"])
+    if noise is not None:
+        q = _quantile(ci_level, 0)
+        Y_std = np.sqrt(np.asarray(noise.tau_sigma_Nm) ** 2
+                        + noise.angle_sigma_rad ** 2 * np.sum(fit["K_D"] ** 2, axis=1))
+        chi2 = float(np.sum((fit["resid"] / Y_std) ** 2) / (3 * (n - p)))
+    else:
+        q = _quantile(ci_level, n - p)
+        chi2 = float("nan")
+    half = q * np.sqrt(np.maximum(np.diag(fit["cov_K"]), 0.0))
+    scale = float(np.linalg.norm(fit["K"], 2))
+    rel = float(half.max() / scale) if scale > 0 else float("inf")
+    if not rel <= MAX_RELATIVE_HALF_WIDTH:
+        if not allow_ill_conditioned:
+            raise IllConditionedData(
+                f"K is not determined to {MAX_RELATIVE_HALF_WIDTH:.0%}: {int(round(ci_level * 100))} % "
+                f"half-widths up to {half.max():.3g} N m/rad against ||K|| = {scale:.3g} N m/rad "
+                f"({rel:.0%}); {_missing(u)}", cond, 3, u)
+        ill = True
+    boot = None
+    if bootstrap:
+        boot = bootstrap_interval(dzeta, tau_load, order, noise, bootstrap, ci_level,
+                                  rng or np.random.default_rng(0))
+    return StiffnessEstimate(
+        cycle=cycle, n_rows=n, order=order, R_ref=R[0], tau_load_ref_A_Nm=fit["c"],
+        K_D=fit["K_D"], K_L=-0.5 * so3.hat(fit["c"]), K=fit["K"], K_sym=sym["K"],
+        K_D_paper=K_D_paper, K_paper=K_D_paper - 0.5 * so3.hat(tau_load[0]),
+        cov_K=fit["cov_K"], cov_K_sym=sym["cov_K"], ci_level=ci_level, ci_quantile=q,
+        condition=cond, singular_values_rad=s,
+        residual_rms_Nm=float(np.sqrt(np.mean(np.sum(fit["resid"] ** 2, axis=1)))),
+        chi2_per_dof=chi2, bootstrap_K_ci=boot, design_condition=float(fit["design_condition"]),
+        weakest_load_direction_A=u, ill_conditioned=ill)
