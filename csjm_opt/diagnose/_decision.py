@@ -1,0 +1,81 @@
+"""The decision rule's thresholds and the state one diagnosis shares across its candidate models.
+
+The rule itself is stated in :mod:`csjm_opt.diagnose.selection`.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from ..model.rig import Rig
+from .augmented import AugmentedModel
+from .localisation import remaining_signature
+from .noise import noise_floor, systematic
+from .residuals import ResidualTable
+from .scoring import CandidateScore, folds_by_cycle, improvement_rad, nested_f_test, paired_heldout_test, score
+
+ALPHA = 0.01
+IMPROVE_MULT = 1.0
+CLOSE_FRACTION = 0.8
+NEAR_FLOOR = 0.5
+HELDOUT_ALPHA = 0.10
+
+
+def combine_scales(s1: float, dof1: float, s2: float, dof2: float) -> float:
+    """Noise level from two estimates (relative sd ``sqrt(2/dof)`` each in variance): pooled when they
+    agree within 2.5 sd, else the smaller one (a misfit only inflates an estimate)."""
+    if not np.isfinite(s1) or dof1 <= 0:
+        return s2
+    v1, v2 = s1 ** 2, s2 ** 2
+    sd = np.hypot(v1 * np.sqrt(2 / dof1), v2 * np.sqrt(2 / max(dof2, 1)))
+    if abs(v1 - v2) <= 2.5 * sd:
+        return float(np.sqrt((v1 * dof1 + v2 * dof2) / (dof1 + dof2)))
+    return float(min(s1, s2))
+
+
+class _Context:
+    """Rows, held-out design and noise estimates shared by every model of one diagnosis."""
+
+    def __init__(self, rig: Rig, train: ResidualTable, test: ResidualTable | None):
+        self.rig, self.train, self.test = rig, train, test
+        self.folds = None if test is not None else folds_by_cycle(train.cycle)
+        self.held = test if test is not None else train
+        self.local, self.local_dof = noise_floor(train)
+        self.instrument = train.instrument_floor_rad
+
+    def score(self, effects: Sequence) -> CandidateScore:
+        return score(AugmentedModel(self.rig, effects), self.train, self.test, self.folds)
+
+    def scale(self, sc: CandidateScore) -> float:
+        """Noise scale (relative to the instrument model) with ``sc`` as the model."""
+        local = self.local / self.instrument if np.isfinite(self.local) else float("nan")
+        return combine_scales(local, 3 * self.local_dof, float(np.sqrt(sc.noise_ratio2)),
+                              3 * len(self.train) - sc.fit.p_eff)
+
+    def floor(self, sc: CandidateScore, scale: float | None = None) -> float:
+        return (self.scale(sc) if scale is None else scale) * sc.instrument_floor_rad
+
+    def fraction(self, sc: CandidateScore) -> float:
+        s = self.scale(sc)
+        before = systematic(self.held.rms_rad, s * self.instrument)
+        after = systematic(sc.heldout_rms_rad, s * sc.instrument_floor_rad)
+        return float(1 - after / before) if before > 0 else 0.0
+
+    def signature(self, sc: CandidateScore) -> dict:
+        return remaining_signature(self.held, sc.heldout_zeta_rad, self.floor(sc), ALPHA)
+
+    def closes(self, sc: CandidateScore) -> bool:
+        sig = self.signature(sc)
+        near = sig["systematic_rad"] <= NEAR_FLOOR * self.floor(sc) and not sig["significant"]
+        return bool(self.fraction(sc) >= CLOSE_FRACTION or near)
+
+    def compare(self, base: CandidateScore, sc: CandidateScore, level: float, floor: float) -> dict:
+        F, p_f = nested_f_test(base.fit, sc.fit)
+        p = paired_heldout_test(base, sc)
+        imp = improvement_rad(base, sc)
+        bad = sc.implausible()
+        return {"p_value": p, "f_stat": F, "f_p_value": p_f, "improvement_rad": imp, "level": level,
+                "significant": bool(p < level and imp >= IMPROVE_MULT * floor),
+                "plausible": not bad, "implausible_params": bad}
