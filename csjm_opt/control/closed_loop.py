@@ -141,6 +141,7 @@ def simulate(rig: Rig, controller: Controller, load: LoadProfile, duration_s: fl
     noise = noise or InstrumentNoise.none()
     rng = rng or np.random.default_rng(0)
     sigma_tau = np.asarray(noise.tau_sigma_Nm, float)
+    tau_noise = bool(np.any(sigma_tau > 0))
     if reset:
         controller.reset()
     R = np.array(controller.reference(0.0) if R_init is None else R_init, float)
@@ -161,7 +162,7 @@ def simulate(rig: Rig, controller: Controller, load: LoadProfile, duration_s: fl
         R_meas = R
         if noise.angle_sigma_rad > 0:
             R_meas = R @ so3.exp(noise.angle_sigma_rad * rng.standard_normal(3))
-        if np.any(sigma_tau > 0):
+        if tau_noise:
             tau_meas = tau_meas + sigma_tau * rng.standard_normal(3)
         # 2. control, 3. command
         try:
