@@ -44,7 +44,8 @@ def vertices(J: np.ndarray, tau_load_A_Nm: np.ndarray, t_min_N: float, t_max_N: 
     A_b = np.swapaxes(J[:, _BASES, :], -1, -2)                              # (n, 20, 3, 3)
     A_nb = np.swapaxes(J[:, _NONBASIC, :], -1, -2)                          # (n, 20, 3, 3)
     rhs = w[:, None, None, :] - np.einsum("nbij,pj->nbpi", A_nb, t_nb)      # (n, 20, 8, 3)
-    det = np.linalg.det(A_b)
+    with np.errstate(divide="ignore", invalid="ignore"):   # singular bases are masked just below
+        det = np.linalg.det(A_b)
     scale = np.prod(np.linalg.norm(A_b, axis=-2), axis=-1)
     regular = np.abs(det) > 1e-10 * np.maximum(scale, 1e-300)
     A_safe = np.where(regular[..., None, None], A_b, np.eye(3))
