@@ -55,16 +55,17 @@ class _Context:
                               3 * len(self.train) - sc.fit.p_eff)
 
     def floor(self, sc: CandidateScore, scale: float | None = None) -> float:
-        return (self.scale(sc) if scale is None else scale) * sc.instrument_floor_rad
+        """Held-out noise floor of ``sc``: noise plus its parameters' estimation error (rad)."""
+        return (self.scale(sc) if scale is None else scale) * sc.heldout_floor_rad
 
     def fraction(self, sc: CandidateScore) -> float:
         s = self.scale(sc)
         before = systematic(self.held.rms_rad, s * self.instrument)
-        after = systematic(sc.heldout_rms_rad, s * sc.instrument_floor_rad)
+        after = systematic(sc.heldout_rms_rad, s * sc.heldout_floor_rad)
         return float(1 - after / before) if before > 0 else 0.0
 
     def signature(self, sc: CandidateScore) -> dict:
-        return remaining_signature(self.held, sc.heldout_zeta_rad, self.floor(sc), ALPHA)
+        return remaining_signature(self.held, sc.heldout_zeta_rad, self.floor(sc), ALPHA, sc.heldout_blocks)
 
     def closes(self, sc: CandidateScore) -> bool:
         sig = self.signature(sc)

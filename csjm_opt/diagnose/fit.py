@@ -61,6 +61,26 @@ class FitResult:
         x = np.clip(self.theta / scales + dx, self.model.lower_bounds / scales, self.model.upper_bounds / scales)
         return x * scales
 
+    def prediction_cov(self, keep: np.ndarray | None, J_held: np.ndarray) -> np.ndarray:
+        """Covariance (per unit noise variance) of the whitened linearised predictions ``J_held`` makes
+        with parameters fitted to rows ``keep`` (``None``: all rows): ``J_h (J_k^T J_k)^+ J_h^T``.
+
+        ``J_held`` has the columns of :attr:`jac_x` (scaled parameters); parameters at a bound are
+        held fixed. A held-out residual of a correctly specified model is noise plus this."""
+        if self.jac_x is None or self.free is None:
+            raise SolverError("this fit carries no Jacobian for a prediction covariance", "diagnose")
+        J = self.jac_x[:, self.free]
+        if keep is not None:
+            n = self.n_obs
+            J = J[np.r_[(3 * np.asarray(keep)[:, None] + np.arange(3)).ravel(), np.arange(n, len(J))]]
+        Jh = J_held[:, self.free]
+        return Jh @ np.linalg.pinv(J.T @ J) @ Jh.T
+
+    def held_rows_jacobian(self, held: np.ndarray) -> np.ndarray:
+        """Rows of :attr:`jac_x` that belong to the data rows ``held`` (3 per row)."""
+        assert self.jac_x is not None
+        return self.jac_x[(3 * np.asarray(held)[:, None] + np.arange(3)).ravel()]
+
     @property
     def sigma2(self) -> float:
         return self.rss / max(self.n_obs - self.p_eff, 1.0)

@@ -105,7 +105,8 @@ def cycle_features(table: ResidualTable) -> list[tuple[np.ndarray, np.ndarray]]:
     return out
 
 
-def remaining_signature(table: ResidualTable, zeta: np.ndarray, floor: float, alpha: float = 0.01) -> dict:
+def remaining_signature(table: ResidualTable, zeta: np.ndarray, floor: float, alpha: float = 0.01,
+                        blocks=()) -> dict:
     """Does a residual still hold structure within cycles (a level, a trend with the load, a branch step)?
 
     The residuals are whitened with the instrument model (``table.whiten``); in each cycle they are
@@ -114,6 +115,12 @@ def remaining_signature(table: ResidualTable, zeta: np.ndarray, floor: float, al
     model the test rejects at about rate ``alpha`` (a test that can come out false); a leftover
     effect that shifts cycles or follows the load within them makes it reject.
 
+    Held-out residuals of a fitted model also carry its parameters' estimation error, common to
+    the rows a fold predicts (it shifts whole cycles). ``blocks`` (``(row indices, covariance)``
+    per fold, whitened units per unit noise variance; see
+    :attr:`~csjm_opt.diagnose.scoring.CandidateScore.heldout_blocks`) adds that covariance to the
+    noise's: the regression is then generalised least squares, fold by fold.
+
     Returns
     -------
     dict
@@ -121,21 +128,36 @@ def remaining_signature(table: ResidualTable, zeta: np.ndarray, floor: float, al
         ``test``; ``p_value`` is NaN (not significant) when there are too few rows.
     """
     r = np.einsum("nij,nj->ni", table.whiten, np.asarray(zeta))
-    rss1, p = 0.0, 0
-    for idx, X in cycle_features(table):
-        rank = np.linalg.matrix_rank(X)
-        if len(idx) - rank < 1:
-            rss1 += 0.0
-            p += 3 * len(idx)
-            continue
-        coef, *_ = np.linalg.lstsq(X, r[idx], rcond=None)
-        rss1 += float(np.sum((r[idx] - X @ coef) ** 2))
-        p += 3 * rank
-    rss0 = float(np.sum(r ** 2))
-    N = r.size
+    feats = cycle_features(table)
+    groups = list(blocks) or [(np.arange(len(r)), None)]
+    rss0 = rss1 = 0.0
+    p = N = 0
+    for idx, P in groups:
+        idx = np.asarray(idx)
+        pos = {int(i): k for k, i in enumerate(idx)}
+        cols = []
+        for rows, X in feats:
+            sel = [pos[int(i)] for i in rows if int(i) in pos]
+            if not sel:
+                continue
+            for a in range(3):
+                block = np.zeros((3 * len(idx), X.shape[1]))
+                block[3 * np.asarray(sel) + a] = X[[k for k, i in enumerate(rows) if int(i) in pos]]
+                cols.append(block)
+        y = r[idx].ravel()
+        X = np.hstack(cols) if cols else np.zeros((y.size, 0))
+        if P is not None:
+            L = np.linalg.cholesky(np.eye(y.size) + P + 1e-12 * np.eye(y.size))
+            y, X = np.linalg.solve(L, y), np.linalg.solve(L, X)
+        rank = np.linalg.matrix_rank(X) if X.size else 0
+        fit = X @ np.linalg.lstsq(X, y, rcond=None)[0] if rank else np.zeros_like(y)
+        rss0 += float(y @ y)
+        rss1 += float(np.sum((y - fit) ** 2))
+        p += rank
+        N += y.size
     out = {"alpha": alpha, "systematic_rad": systematic(rms(zeta), floor), "rms_rad": rms(zeta),
            "test": "F-test of whitened held-out residuals on per-cycle [1, load phase, unloading] regressors "
-                   "(row order only) against zero-mean noise"}
+                   "(row order only) against zero-mean noise plus the fit's prediction error (GLS per fold)"}
     if N - p < 3 or rss1 <= 0:
         return {**out, "p_value": float("nan"), "significant": False, "f_stat": float("nan"), "dof": [p, N - p]}
     F = (rss0 - rss1) / p / (rss1 / (N - p))

@@ -92,7 +92,7 @@ class Diagnosis:
         """Noise floor of a model: the data's noise level propagated through the model's own tangent."""
         if sc is None:
             return self.noise_floor_rad
-        return self.noise_estimates["noise_scale"] * sc.instrument_floor_rad
+        return self.noise_estimates["noise_scale"] * sc.heldout_floor_rad
 
     def fraction(self, sc: CandidateScore) -> float:
         """``1 - systematic(after) / systematic(before)``, each against its own model's noise floor."""

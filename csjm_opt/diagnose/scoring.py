@@ -21,7 +21,7 @@ from scipy import stats
 from ..errors import InvalidInput
 from ..model import kinematics as kin
 from .augmented import AugmentedModel
-from .fit import FitResult, fit_model
+from .fit import FitResult, data_jacobian, fit_model
 from .residuals import ResidualTable, pose_noise_cov, pose_residuals, rms
 
 
@@ -37,6 +37,9 @@ class CandidateScore:
     failed_rows: int                # forward solves that did not converge
     instrument_floor_rad: float     # instrument noise propagated through this model's own tangent
     noise_ratio2: float             # whitened (own tangent) training residual variance, RSS / (N - p_eff)
+    heldout_floor_rad: float = float("nan")   # RMS held-out error of this model if it were right: noise
+                                    # plus its parameters' estimation error (per unit noise scale)
+    heldout_blocks: tuple = ()      # ((held-out row indices, whitened prediction covariance), ...) per fold
 
     @property
     def heldout_rms_rad(self) -> float:
@@ -56,9 +59,10 @@ class CandidateScore:
         return {int(c): float(sq[self.heldout_cycle == c].mean()) for c in np.unique(self.heldout_cycle)}
 
     def implausible(self) -> list[str]:
-        """Names of fitted effect parameters outside their prior ranges."""
+        """Names of fitted effect parameters outside their prior ranges by more than their uncertainty."""
         m = self.fit.model
-        return [n for e, p in zip(m.effects, m.effect_params(self.fit.theta)) for n in e.implausible(p)]
+        return [n for e, p, sd in zip(m.effects, m.effect_params(self.fit.theta), m.effect_params(self.fit.stderr))
+                for n in e.implausible(p, sd)]
 
 
 def folds_by_cycle(cycle: np.ndarray, k: int = 5) -> list[np.ndarray]:
@@ -83,10 +87,12 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
     sol = model.predict_poses(train.rows, full.theta, train.R_meas)
     train_zeta = pose_residuals(sol.R, train.R_meas)
     failed = int(np.sum(~sol.converged(1e-6)))
+    blocks: list[tuple[np.ndarray, np.ndarray]] = []
     if test is not None:
         ho = model.predict_poses(test.rows, full.theta, test.R_meas)
         zeta, cyc = pose_residuals(ho.R, test.R_meas), test.cycle
         failed += int(np.sum(~ho.converged(1e-6)))
+        blocks.append((np.arange(len(test)), full.prediction_cov(None, data_jacobian(model, test, full.theta))))
     else:
         zeta, cyc = np.empty((len(train), 3)), train.cycle
         for held in folds or []:
@@ -96,6 +102,7 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
             ho = model.predict_poses(part.rows, theta, part.R_meas)
             zeta[held] = pose_residuals(ho.R, part.R_meas)
             failed += int(np.sum(~ho.converged(1e-6)))
+            blocks.append((held, full.prediction_cov(keep, full.held_rows_jacobian(held))))
 
     # the model's own noise propagation: a softer model turns the same moment noise into more pose noise
     def g(R: np.ndarray) -> np.ndarray:
@@ -105,7 +112,22 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
     instrument = float(np.sqrt(np.mean(np.trace(cov, axis1=1, axis2=2))))
     r = np.linalg.solve(np.linalg.cholesky(cov), train_zeta[..., None])[..., 0]
     ratio2 = float(np.sum(r ** 2) / max(r.size - full.p_eff, 1.0))
-    return CandidateScore(model.name, full, zeta, cyc, train_zeta, failed, instrument, ratio2)
+    held = test if test is not None else train
+    return CandidateScore(model.name, full, zeta, cyc, train_zeta, failed, instrument, ratio2,
+                          heldout_floor(held, instrument, blocks), tuple(blocks))
+
+
+def heldout_floor(held: ResidualTable, instrument_floor_rad: float, blocks) -> float:
+    """``sqrt(floor^2 + mean prediction variance)`` (rad, per unit noise scale): the held-out RMS a
+    correctly specified model still shows (a many-parameter model pays for its estimation error)."""
+    Linv = np.linalg.inv(held.whiten)           # whitened -> rad
+    extra, n = 0.0, 0
+    for idx, P in blocks:
+        h = len(idx)
+        Pii = P.reshape(h, 3, h, 3)[np.arange(h), :, np.arange(h), :]      # (h, 3, 3) diagonal blocks
+        extra += float(np.einsum("nij,njk,nlk->", Linv[idx], Pii, Linv[idx]))
+        n += h
+    return float(np.sqrt(instrument_floor_rad ** 2 + (extra / n if n else 0.0)))
 
 
 def nested_f_test(base: FitResult, cand: FitResult) -> tuple[float, float]:

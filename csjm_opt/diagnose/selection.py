@@ -19,8 +19,10 @@ Rule (constants below; ``m`` candidates tried):
 2. *Plausible*: its fitted parameters lie inside the effect's prior ranges
    (:meth:`~csjm_opt.diagnose.effects.base.Effect.default_ranges`,
    overridable per rig through ``ranges``).
-3. The first effect is the detected, plausible one with the lowest BIC (the
-   detected one with the lowest held-out error if none is plausible). A
+3. The first effect is the detected, plausible one with the lowest BIC among
+   those that close the gap (rule 4), else among all detected plausible ones
+   (the detected one with the lowest held-out error if none is plausible): a
+   model that explains the gap beats a simpler one that does not. A
    second effect is detected on top of it by the same test against the
    first single (at ``ALPHA / (m - 1)``), the plausible pair with lowest BIC.
 4. A model *closes the gap* when it explains at least ``CLOSE_FRACTION`` of
@@ -33,7 +35,9 @@ Rule (constants below; ``m`` candidates tried):
    the null's residual holds significant structure of at least
    ``IMPROVE_MULT`` floors, but no plausible single or pair closes the gap;
    ``none`` otherwise. Pairs whose parameter blocks are not separable on this
-   log (:mod:`.pairs`) are reported as such.
+   log (:mod:`.pairs`) are reported as such. A named verdict whose remaining
+   residual still fails the signature test carries a warning that it may
+   stand in for an effect outside the vocabulary.
 6. *Masked pairs*: when no single effect is detected but the null's residual
    holds significant structure of at least ``IMPROVE_MULT`` floors, two
    effects may hide each other: the single with the lowest held-out error is
@@ -142,12 +146,13 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     floor0 = ctx.floor(baseline)
     tests = {n: ctx.compare(baseline, sc, ALPHA / m, floor0) for n, sc in singles.items()}
     detected = [n for n in singles if tests[n]["significant"]]
-    plausible = [n for n in detected if tests[n]["plausible"]]
-    first = (min(plausible, key=lambda n: singles[n].fit.bic) if plausible
-             else min(detected, key=lambda n: singles[n].heldout_mse) if detected else None)
     for n, sc in singles.items():
         tests[n]["closes_gap"] = ctx.closes(sc)
         tests[n]["residual_signature_p"] = ctx.signature(sc)["p_value"]
+    plausible = [n for n in detected if tests[n]["plausible"]]
+    closers = [n for n in plausible if tests[n]["closes_gap"]]
+    first = (min(closers or plausible, key=lambda n: singles[n].fit.bic) if plausible
+             else min(detected, key=lambda n: singles[n].heldout_mse) if detected else None)
 
     gap_sig = ctx.signature(baseline)
     gap_there = bool(gap_sig["significant"]) and systematic(baseline.heldout_rms_rad, floor0) >= IMPROVE_MULT * floor0
@@ -164,6 +169,12 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
         bar.close()
     selected, second, final, verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_there,
                                                 seed)
+    remaining = ctx.signature(final)
+    if selected not in ("none", "unexplained") and remaining["significant"]:
+        verdict["warnings"].append(
+            f"the residual left by {final.name} still holds structure within cycles (signature test p = "
+            f"{remaining['p_value']:.1e}): the named effect may be a stand-in for one outside the vocabulary; "
+            "see localisation for where the residual lies")
     scale = ctx.scale(final)
     floor = scale * ctx.instrument
     estimates = {"within_cycle_rad": ctx.local, "within_cycle_dof": ctx.local_dof,
@@ -195,7 +206,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
                     "candidates) and systematic improvement sqrt(MSE_null - MSE) >= improve_mult noise floors"}
     d = Diagnosis(ctx.train, ctx.test, baseline, singles, floor, estimates, tests, selected, confounded,
                   localise(ctx.held, ctx.held.zeta_rad, final.heldout_zeta_rad, floor),
-                  ctx.signature(final), second, failed, pairs, steps, verdict, gap_sig, final, rule)
+                  remaining, second, failed, pairs, steps, verdict, gap_sig, final, rule)
     for s in d.steps:
         sc = final if "+" in s["model"] else singles.get(s["model"], baseline)
         s["fraction_explained"] = d.fraction(sc)

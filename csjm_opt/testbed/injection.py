@@ -15,6 +15,16 @@ registration      axis (``marker=True`` in :func:`inject`: also the markers)
 stiffness_scale   every stiffness times exp(+-0.03 severity)
 ================  ===========================================================
 
+:data:`PLAUSIBLE_SEVERITY` is the largest severity of each effect whose injected
+magnitudes stay inside the diagnosis's default prior ranges
+(:meth:`csjm_opt.diagnose.effects.base.Effect.default_ranges`): hole
+coordinates within 4 mm (3.3 sd at 1.2), capstan factors within 0.3,
+hardening within 300 /m, compliance entries within 0.05 rad/(N m), a bias
+within 0.5 N m, ``|d(m r)|`` within 0.1 x mass per axis (com z up to
+120 mm), registration within 0.05 rad, a stiffness factor within [0.5, 2].
+A study that wants an effect larger than that against the noise floor lowers
+the noise instead (a better instrument), not the plausibility of the effect.
+
 Outside the diagnosis's vocabulary (:data:`~csjm_opt.testbed.plant.OUTSIDE_NAMES`):
 
 ================  ===========================================================
@@ -37,6 +47,12 @@ from .. import so3
 from ..errors import InvalidInput
 from ..model.rig import Rig
 from .plant import EFFECT_NAMES, OUTSIDE_NAMES, Plant
+
+
+#: Largest severity whose injected magnitudes stay within the diagnosis's default priors (see above).
+PLAUSIBLE_SEVERITY = {"hole_offsets": 1.2, "friction": 7.0, "cable_hardening": 15.0, "link_compliance": 8.0,
+                      "sensor_bias": 4.0, "mass_com": 2.5, "tracker_registration": 15.0,
+                      "stiffness_scale": 15.0}
 
 
 def _unit(rng: np.random.Generator) -> np.ndarray:

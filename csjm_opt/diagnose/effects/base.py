@@ -33,6 +33,10 @@ from typing import ClassVar, Mapping
 import numpy as np
 
 
+#: Standard errors by which a fitted parameter must leave its prior range to be implausible.
+PLAUSIBLE_Z = 2.0
+
+
 class Effect(abc.ABC):
     """One unmodelled effect with named, SI-unit parameters (all zero = nominal)."""
 
@@ -62,10 +66,16 @@ class Effect(abc.ABC):
                     out[n] = rng
         return out
 
-    def implausible(self, p: np.ndarray) -> list[str]:
-        """Names of the parameters outside their prior ranges."""
-        return [n for (n, (lo, hi)), v in zip(self.ranges().items(), np.asarray(p, float))
-                if not (lo <= v <= hi)]
+    def implausible(self, p: np.ndarray, sd: np.ndarray | None = None, z: float = PLAUSIBLE_Z) -> list[str]:
+        """Names of the parameters outside their prior ranges.
+
+        With standard errors ``sd`` only those the data put outside: beyond a bound by more
+        than ``z`` standard errors (a weakly determined parameter that wanders past a bound
+        within its uncertainty is not evidence against the effect)."""
+        p = np.asarray(p, float)
+        slack = np.zeros_like(p) if sd is None else z * np.nan_to_num(np.asarray(sd, float), nan=0.0)
+        return [n for (n, (lo, hi)), v, e in zip(self.ranges().items(), p, slack)
+                if not (lo - e <= v <= hi + e)]
 
     @property
     @abc.abstractmethod
