@@ -21,6 +21,8 @@ IMPROVE_MULT = 1.0
 CLOSE_FRACTION = 0.8
 NEAR_FLOOR = 0.5
 HELDOUT_ALPHA = 0.10
+#: Singles a pair search starts from (the first effect, then the lowest held-out errors).
+PAIR_SEEDS = 3
 
 
 def combine_scales(s1: float, dof1: float, s2: float, dof2: float) -> float:

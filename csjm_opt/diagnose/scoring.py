@@ -112,9 +112,9 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
     instrument = float(np.sqrt(np.mean(np.trace(cov, axis1=1, axis2=2))))
     r = np.linalg.solve(np.linalg.cholesky(cov), train_zeta[..., None])[..., 0]
     ratio2 = float(np.sum(r ** 2) / max(r.size - full.p_eff, 1.0))
-    held = test if test is not None else train
+    held_table = test if test is not None else train
     return CandidateScore(model.name, full, zeta, cyc, train_zeta, failed, instrument, ratio2,
-                          heldout_floor(held, instrument, blocks), tuple(blocks))
+                          heldout_floor(held_table, instrument, blocks), tuple(blocks))
 
 
 def heldout_floor(held: ResidualTable, instrument_floor_rad: float, blocks) -> float:

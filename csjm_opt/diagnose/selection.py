@@ -1,8 +1,8 @@
 """The decision: which effect (or pair, or none, or unexplained) the log supports.
 
 Models: the *null* ``nominal_refit`` (nominal + common rest-length offset),
-each single effect on top of it, and pairs (the best single + each other
-effect). Every model is scored on held-out cycles (:mod:`.scoring`). The
+each single effect on top of it, and pairs (each of ``PAIR_SEEDS`` seed
+singles + each other effect). Every model is scored on held-out cycles (:mod:`.scoring`). The
 noise floor combines a model-free within-cycle estimate (:mod:`.noise`) with
 the model's own whitened training residual (:func:`combine_scales`).
 
@@ -22,16 +22,19 @@ Rule (constants below; ``m`` candidates tried):
 3. The first effect is the detected, plausible one with the lowest BIC among
    those that close the gap (rule 4), else among all detected plausible ones
    (the detected one with the lowest held-out error if none is plausible): a
-   model that explains the gap beats a simpler one that does not. A
-   second effect is detected on top of it by the same test against the
-   first single (at ``ALPHA / (m - 1)``), the plausible pair with lowest BIC.
+   model that explains the gap beats a simpler one that does not.
+   *Pairs*: the seeds are the first effect and the singles with the lowest
+   held-out errors (``PAIR_SEEDS`` in all; one wrong first pick does not hide
+   the right pair); each seed is paired with every other effect, and a pair is
+   detected by the same test against the better of its two singles, at
+   ``ALPHA`` over the number of pairs fitted.
 4. A model *closes the gap* when it explains at least ``CLOSE_FRACTION`` of
    the systematic held-out gap, or its residual signature test
    (:func:`~csjm_opt.diagnose.localisation.remaining_signature`) is not
    significant and its systematic residual is below ``NEAR_FLOOR`` floors.
-5. Verdict: the pair (``selected`` = first, ``secondary`` = second) when it
-   is detected, plausible and closes the gap; else the first effect when it
-   is plausible and closes; ``unexplained`` when something was detected, or
+5. Verdict: the detected, plausible pair that closes the gap with the lowest
+   BIC (``selected`` = its seed, ``secondary`` = the other); else the first
+   effect when it is plausible and closes; ``unexplained`` when something was detected, or
    the null's residual holds significant structure of at least
    ``IMPROVE_MULT`` floors, but no plausible single or pair closes the gap;
    ``none`` otherwise. Pairs whose parameter blocks are not separable on this
@@ -40,10 +43,10 @@ Rule (constants below; ``m`` candidates tried):
    stand in for an effect outside the vocabulary.
 6. *Masked pairs*: when no single effect is detected but the null's residual
    holds significant structure of at least ``IMPROVE_MULT`` floors, two
-   effects may hide each other: the single with the lowest held-out error is
-   paired with each other effect, and a pair is named when it beats the
-   null model at ``ALPHA`` over the number of possible pairs (Bonferroni),
-   is plausible and closes the gap.
+   effects may hide each other: the seeds are the singles with the lowest
+   held-out errors, and a pair is named when it beats the null model at
+   ``ALPHA`` over the number of possible pairs (Bonferroni), is plausible and
+   closes the gap.
 """
 
 from __future__ import annotations
@@ -66,6 +69,7 @@ from .result import Diagnosis
 from .scoring import CandidateScore, paired_heldout_test
 from ._decision import (  # noqa: F401 (ALPHA and the thresholds are re-exported)
     ALPHA,
+    PAIR_SEEDS,
     CLOSE_FRACTION,
     HELDOUT_ALPHA,
     IMPROVE_MULT,
@@ -129,7 +133,8 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
         make_effect(n, rig)                        # unknown names fail here, before any fitting
     ctx = _Context(rig, compute_residuals(rig, log, noise),
                    compute_residuals(rig, test, noise) if test is not None else None)
-    total = 1 + len(names) + (max(len(names) - 1, 0) if secondary else 0)
+    n_seeds = min(PAIR_SEEDS, len(names))
+    total = 1 + len(names) + ((n_seeds * (len(names) - 1) - n_seeds * (n_seeds - 1) // 2) if secondary else 0)
     bar = progress(total=total, desc="diagnose: fitting models") if progress else None
     tick = bar.update if bar else (lambda n=1: None)
     baseline = ctx.score([])
@@ -157,18 +162,14 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     gap_sig = ctx.signature(baseline)
     gap_there = bool(gap_sig["significant"]) and systematic(baseline.heldout_rms_rad, floor0) >= IMPROVE_MULT * floor0
     masked = first is None and gap_there and len(singles) > 1     # two effects may hide each other: rule 6
-    seed = min(singles, key=lambda n: singles[n].heldout_mse) if masked else first
-    if seed is None:
-        pair_base, level = baseline, 1.0
-    elif masked:
-        pair_base, level = baseline, ALPHA / max(m * (m - 1) // 2, 1)
-    else:
-        pair_base, level = singles[seed], ALPHA / max(m - 1, 1)
-    pairs, pair_scores = _pairs(ctx, rig, names, singles, seed, secondary, ranges, tick, pair_base, level)
+    by_error = sorted(singles, key=lambda n: singles[n].heldout_mse)
+    seeds = ([] if first is None and not masked else
+             ([first] if first is not None else []) + [n for n in by_error if n != first])[:PAIR_SEEDS]
+    pairs, pair_scores = _pairs(ctx, rig, names, singles, seeds, secondary, ranges, tick,
+                                baseline if masked else None)
     if bar:
         bar.close()
-    selected, second, final, verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_there,
-                                                seed)
+    selected, second, final, verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_there)
     remaining = ctx.signature(final)
     if selected not in ("none", "unexplained") and remaining["significant"]:
         verdict["warnings"].append(
@@ -196,10 +197,11 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
         verdict["warnings"].append(f"{selected} is not separable on this log from {', '.join(alternatives)} "
                                    "(detected too; Fisher block correlation above the separability limit)")
     steps = [{"model": "nominal_refit", "heldout_rms_rad": baseline.heldout_rms_rad}]
-    if first is not None:
-        steps.append({"model": first, "heldout_rms_rad": singles[first].heldout_rms_rad})
+    lead = selected if selected in singles else first
+    if lead is not None:
+        steps.append({"model": lead, "heldout_rms_rad": singles[lead].heldout_rms_rad})
     if second.get("effect", "none") != "none":
-        steps.append({"model": f"{first}+{second['effect']}", "heldout_rms_rad": final.heldout_rms_rad})
+        steps.append({"model": f"{lead}+{second['effect']}", "heldout_rms_rad": final.heldout_rms_rad})
     rule = {"alpha": ALPHA, "per_candidate_alpha": ALPHA / m, "improve_mult": IMPROVE_MULT,
             "close_fraction": CLOSE_FRACTION, "near_floor": NEAR_FLOOR,
             "test": "one-sided paired t-test of per-cycle held-out MSE against nominal_refit (Bonferroni over "
@@ -213,59 +215,72 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     return d
 
 
-def _pairs(ctx: _Context, rig: Rig, names, singles, first, secondary, ranges, tick, base: CandidateScore,
-           level: float) -> tuple[list, dict]:
-    """Every pair's separability; the first effect + each other one fitted and tested against ``base``."""
+def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, tick,
+           masked_base: CandidateScore | None) -> tuple[list, dict]:
+    """Every pair's separability; each seed + each other effect fitted and tested (rule 3 / rule 6).
+
+    A pair is tested against the better of its two singles (``masked_base``, the null model, when
+    neither single was detected), at ``ALPHA`` over the number of pairs fitted (Bonferroni)."""
     pairs: list[dict] = []
-    scores: dict[str, CandidateScore] = {}
+    scores: dict[tuple[str, str], CandidateScore] = {}
     if not secondary:
         return pairs, scores
     seps = all_separabilities(rig, ctx.train, singles, names) if len(singles) > 1 else {}
     for (a, b), sep in seps.items():
         pairs.append({"effects": [a, b], **sep, "fitted": False})
-    if first is None:
-        tick(max(len(names) - 1, 0))
+    todo: list[tuple[str, str]] = []
+    for a in seeds:
+        todo += [(a, b) for b in singles if b != a and (a, b) not in todo and (b, a) not in todo]
+    n_total = len(seeds) * (len(names) - 1) - len(seeds) * (len(seeds) - 1) // 2
+    if not todo:
+        tick(max(n_total, 0))
         return pairs, scores
-    rest = [n for n in singles if n != first]
-    for name in rest:
-        entry = next(p for p in pairs if set(p["effects"]) == {first, name})
+    m = len(singles)
+    level = ALPHA / max(m * (m - 1) // 2 if masked_base is not None else len(todo), 1)
+    for a, b in todo:
+        entry = next(p for p in pairs if set(p["effects"]) == {a, b})
         try:
-            sc = ctx.score([make_effect(first, rig, ranges), make_effect(name, rig, ranges)])
+            sc = ctx.score([make_effect(a, rig, ranges), make_effect(b, rig, ranges)])
         except (np.linalg.LinAlgError, CsjmError, FloatingPointError) as exc:
             entry["error"] = f"fit failed: {exc}"
             tick(1)
             continue
         tick(1)
-        scores[name] = sc
+        scores[(a, b)] = sc
+        base = masked_base or min(singles[a], singles[b], key=lambda c: c.heldout_mse)
         t = ctx.compare(base, sc, level, ctx.floor(base))
-        entry.update({"fitted": True, "effects": [first, name], "heldout_rms_rad": sc.heldout_rms_rad,
+        entry.update({"fitted": True, "effects": [a, b], "heldout_rms_rad": sc.heldout_rms_rad,
                       "fraction_explained": ctx.fraction(sc), "bic": sc.fit.bic, "closes_gap": ctx.closes(sc),
-                      "p_value_vs_first": t["p_value"], **{k: t[k] for k in
-                      ("improvement_rad", "significant", "plausible", "implausible_params")}})
+                      "tested_against": base.name, "p_value_vs_first": t["p_value"],
+                      **{k: t[k] for k in ("improvement_rad", "significant", "plausible", "implausible_params")}})
+    tick(max(n_total - len(todo), 0))
     return pairs, scores
 
 
-def _verdict(ctx: _Context, baseline, singles, tests, first, pairs, pair_scores, gap_there, seed):
+def _second(ctx: _Context, singles, first: str, best: dict, sc: CandidateScore) -> dict:
+    """The ``secondary`` entry of a pair verdict."""
+    return {"effect": best["effects"][1], "heldout_rms_rad": sc.heldout_rms_rad,
+            "params": {k: v for k, v in sc.fit.params().items() if k not in singles[first].fit.params()},
+            "fraction_explained": ctx.fraction(sc), "p_value": best["p_value_vs_first"],
+            **{k: best[k] for k in ("improvement_rad", "separable", "max_correlation", "plausible",
+                                    "implausible_params")}}
+
+
+def _verdict(ctx: _Context, baseline, singles, tests, first, pairs, pair_scores, gap_there):
     """``(selected, secondary, final score, verdict dict)`` by rules 5 and 6 of the module doc."""
     warnings: list[str] = []
     none2 = {"effect": "none"}
-    if first is None and seed is not None:         # masked pair (rule 6)
-        ok = [p for p in pairs if p.get("fitted") and p["significant"] and p["plausible"] and p["closes_gap"]]
-        if ok:
-            best = min(ok, key=lambda p: p["bic"])
-            name = best["effects"][1]
-            if not best["separable"]:
-                warnings.append(f"{seed} and {name} are not separable on this log "
-                                f"(Fisher block correlation {best['max_correlation']:.3f})")
-            sc = pair_scores[name]
-            second = {"effect": name, "heldout_rms_rad": sc.heldout_rms_rad,
-                      "params": {k: v for k, v in sc.fit.params().items() if k not in singles[seed].fit.params()},
-                      "fraction_explained": ctx.fraction(sc), "p_value": best["p_value_vs_first"],
-                      **{k: best[k] for k in ("improvement_rad", "separable", "max_correlation", "plausible",
-                                              "implausible_params")}}
-            return seed, second, sc, {"selected": seed, "warnings": warnings,
-                                      "reason": f"neither alone, but {seed} and {name} together close the gap "
-                                                "on held-out cycles (each hides the other)"}
+    ok = [p for p in pairs if p.get("fitted") and p["significant"] and p["plausible"] and p["closes_gap"]]
+    best = min(ok, key=lambda p: p["bic"]) if ok else None
+    if best is not None:                           # a pair (rule 5), or a masked pair (rule 6)
+        a, b = best["effects"]
+        sc = pair_scores[(a, b)]
+        if not best["separable"]:
+            warnings.append(f"{a} and {b} are not separable on this log "
+                            f"(Fisher block correlation {best['max_correlation']:.3f})")
+        reason = (f"{a} and {b} together close the gap on held-out cycles" if first is not None else
+                  f"neither alone, but {a} and {b} together close the gap on held-out cycles (each hides the other)")
+        return a, _second(ctx, singles, a, best, sc), sc, {"selected": a, "warnings": warnings, "reason": reason}
     if first is None:
         if gap_there:
             return "unexplained", none2, baseline, {
@@ -277,28 +292,14 @@ def _verdict(ctx: _Context, baseline, singles, tests, first, pairs, pair_scores,
     t1 = tests[first]
     if not t1["plausible"]:
         warnings.append(f"{first} needs implausible parameters: {', '.join(t1['implausible_params'])}")
-    fitted = [p for p in pairs if p.get("fitted") and p["significant"] and p["plausible"] and t1["plausible"]]
-    best = min(fitted, key=lambda p: p["bic"]) if fitted else None
-    if best is not None and best["closes_gap"]:
-        name = best["effects"][1]
-        sc = pair_scores[name]
-        if not best["separable"]:
-            warnings.append(f"{first} and {name} are not separable on this log "
-                            f"(Fisher block correlation {best['max_correlation']:.3f})")
-        second = {"effect": name, "heldout_rms_rad": sc.heldout_rms_rad,
-                  "params": {k: v for k, v in sc.fit.params().items()
-                             if k not in singles[first].fit.params()},
-                  "fraction_explained": ctx.fraction(sc), "p_value": best["p_value_vs_first"],
-                  **{k: best[k] for k in ("improvement_rad", "separable", "max_correlation", "plausible",
-                                          "implausible_params")}}
-        return first, second, sc, {"selected": first, "warnings": warnings,
-                                   "reason": f"{first} and {name} together close the gap on held-out cycles"}
     if t1["plausible"] and t1["closes_gap"]:
         return first, none2, singles[first], {"selected": first, "warnings": warnings,
                                               "reason": f"{first} closes the gap on held-out cycles"}
-    if best is not None:
-        warnings.append(f"best pair {'+'.join(best['effects'])} leaves "
-                        f"{1 - best['fraction_explained']:.0%} of the systematic gap")
+    tried = [p for p in pairs if p.get("fitted") and p["significant"] and p["plausible"]]
+    if tried:
+        near = max(tried, key=lambda p: p["fraction_explained"])
+        warnings.append(f"best pair {'+'.join(near['effects'])} leaves "
+                        f"{1 - near['fraction_explained']:.0%} of the systematic gap")
     warnings.append(f"best single {first} leaves {1 - ctx.fraction(singles[first]):.0%} of the systematic gap")
     return "unexplained", none2, baseline, {
         "selected": "unexplained", "warnings": warnings,
