@@ -23,6 +23,8 @@ NEAR_FLOOR = 0.5
 HELDOUT_ALPHA = 0.10
 #: Singles a pair search starts from (the first effect, then the lowest held-out errors).
 PAIR_SEEDS = 3
+#: A named model with more effective parameters than this share of 3 x cycles gets a short-log warning.
+SHORT_LOG_SHARE = 0.5
 
 
 def combine_scales(s1: float, dof1: float, s2: float, dof2: float) -> float:

@@ -40,7 +40,9 @@ Rule (constants below; ``m`` candidates tried):
    ``none`` otherwise. Pairs whose parameter blocks are not separable on this
    log (:mod:`.pairs`) are reported as such. A named verdict whose remaining
    residual still fails the signature test carries a warning that it may
-   stand in for an effect outside the vocabulary.
+   stand in for an effect outside the vocabulary; so does one whose model has
+   more effective parameters than ``SHORT_LOG_SHARE`` of the log's cycle-level
+   pose offsets (3 per cycle: such a model can follow any smooth pose error).
 6. *Masked pairs*: when no single effect is detected but the null's residual
    holds significant structure of at least ``IMPROVE_MULT`` floors, two
    effects may hide each other: the seeds are the singles with the lowest
@@ -70,6 +72,7 @@ from .scoring import CandidateScore, paired_heldout_test
 from ._decision import (  # noqa: F401 (ALPHA and the thresholds are re-exported)
     ALPHA,
     PAIR_SEEDS,
+    SHORT_LOG_SHARE,
     CLOSE_FRACTION,
     HELDOUT_ALPHA,
     IMPROVE_MULT,
@@ -171,6 +174,12 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
         bar.close()
     selected, second, final, verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_there)
     remaining = ctx.signature(final)
+    n_cycles = len(np.unique(ctx.held.cycle))
+    if selected not in ("none", "unexplained") and final.fit.p_eff > SHORT_LOG_SHARE * 3 * n_cycles:
+        verdict["warnings"].append(
+            f"{final.name} has {final.fit.p_eff:.0f} effective parameters against {3 * n_cycles} cycle-level "
+            f"pose offsets in this log ({n_cycles} cycles): flexible enough to stand in for an effect outside the "
+            "vocabulary; confirm with a longer log (more cycles at other poses)")
     if selected not in ("none", "unexplained") and remaining["significant"]:
         verdict["warnings"].append(
             f"the residual left by {final.name} still holds structure within cycles (signature test p = "
