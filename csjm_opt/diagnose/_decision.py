@@ -58,6 +58,10 @@ class _Context:
         return combine_scales(local, 3 * self.local_dof, float(np.sqrt(sc.noise_ratio2)),
                               3 * len(self.train) - sc.fit.p_eff)
 
+    def noise_floor(self, sc: CandidateScore) -> float:
+        """Noise floor of ``sc`` (rad): the noise alone, the yardstick of an improvement."""
+        return self.scale(sc) * sc.instrument_floor_rad
+
     def floor(self, sc: CandidateScore, scale: float | None = None) -> float:
         """Held-out noise floor of ``sc``: noise plus its parameters' estimation error (rad)."""
         return (self.scale(sc) if scale is None else scale) * sc.heldout_floor_rad

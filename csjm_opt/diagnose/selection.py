@@ -151,7 +151,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
             failed[name] = f"fit failed: {exc}"
         tick(1)
     m = max(len(singles), 1)
-    floor0 = ctx.floor(baseline)
+    floor0 = ctx.noise_floor(baseline)
     tests = {n: ctx.compare(baseline, sc, ALPHA / m, floor0) for n, sc in singles.items()}
     detected = [n for n in singles if tests[n]["significant"]]
     for n, sc in singles.items():
@@ -257,7 +257,7 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
         tick(1)
         scores[(a, b)] = sc
         base = masked_base or min(singles[a], singles[b], key=lambda c: c.heldout_mse)
-        t = ctx.compare(base, sc, level, ctx.floor(base))
+        t = ctx.compare(base, sc, level, ctx.noise_floor(base))
         entry.update({"fitted": True, "effects": [a, b], "heldout_rms_rad": sc.heldout_rms_rad,
                       "fraction_explained": ctx.fraction(sc), "bic": sc.fit.bic, "closes_gap": ctx.closes(sc),
                       "tested_against": base.name, "p_value_vs_first": t["p_value"],
