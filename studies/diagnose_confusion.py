@@ -259,6 +259,11 @@ def summarise(records: list[dict]) -> str:
         lines += ["", "Pairs at 3x each:", "", "| pair | separable | verdict |", "|---|---|---|"]
         for r in sorted(pairs, key=lambda r: r["id"]):
             lines.append(f"| {'+'.join(r['effects'])} | {r['pair_separable']} | {r['selected']} + {r['secondary']} |")
+    lowered = [r["noise_factor"] for r in records if r.get("noise_factor", 1.0) < 1.0]
+    if lowered:
+        lines += ["", f"{len(lowered)} logs reached their multiple with the instrument noise lowered (the effect "
+                      f"capped at its plausible size): median noise factor {np.median(lowered):.2f}, "
+                      f"smallest {min(lowered):.2f}."]
     secs = [r["seconds_diagnose"] for r in records]
     lines += ["", f"Median diagnosis time per log (all singles and pairs): {np.median(secs):.1f} s."]
     return "\n".join(lines) + "\n"
