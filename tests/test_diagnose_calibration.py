@@ -103,7 +103,8 @@ def _true_params(effect: str, rig, plant: Plant) -> np.ndarray:
     if effect == "sensor_bias":
         return plant.sensor_bias_A_Nm
     if effect == "mass_com":
-        return plant.rig.platform_mass_kg * np.asarray(plant.rig.com_A_m) - rig.platform_mass_kg * np.asarray(rig.com_A_m)
+        true_mr = plant.rig.platform_mass_kg * np.asarray(plant.rig.com_A_m)
+        return true_mr - rig.platform_mass_kg * np.asarray(rig.com_A_m)
     if effect == "tracker_registration":
         return so3.log(plant.tracker_rotation_B)
     if effect == "stiffness_scale":
