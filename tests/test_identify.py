@@ -234,7 +234,10 @@ def test_identify_cli_skips_cycles_that_cannot_determine_K(tmp_path, capsys):
         np.vstack([good.rotvec_rad, one_direction.rotvec_rad]))
     path = tmp_path / "mixed.csv"
     mixed.to_csv(path)
-    assert cli.main(["identify", str(path), "--json", str(tmp_path / "out.json")]) == 0
+    capsys.readouterr()
+    assert cli.main(["identify", str(path), "--json", str(tmp_path / "out.json"), "--no-progress"]) == 0
+    warned = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert len(warned) == 1 and "1 of 2 cycles skipped" in warned[0] and "7" in warned[0]
     out = json.loads((tmp_path / "out.json").read_text())
     assert [c["cycle"] for c in out["cycles"]] == [0]
     assert [s["cycle"] for s in out["skipped"]] == [7]

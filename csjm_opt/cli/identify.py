@@ -157,6 +157,10 @@ def run_identify(args: argparse.Namespace) -> int:
             print(f"  K_sym =\n{e.K_sym}")
             for problem in e.problems():
                 print(f"  warning: {problem}")
+    if skipped:       # partial results are kept; the refusal is said where a script watching stderr sees it
+        print(f"warning: {len(skipped)} of {len(skipped) + len(estimates)} cycles skipped as ill-conditioned "
+              f"(cycles {', '.join(str(s['cycle']) for s in skipped[:10])}{' ...' if len(skipped) > 10 else ''}); "
+              "--allow-ill-conditioned returns them marked", file=sys.stderr)
     if args.json != "-":
         for s in skipped:
             print(f"cycle {s['cycle']}: skipped: {s['reason']}")
