@@ -19,7 +19,6 @@ from .scoring import CandidateScore, folds_by_cycle, improvement_rad, nested_f_t
 ALPHA = 0.01
 IMPROVE_MULT = 1.0
 CLOSE_FRACTION = 0.8
-NEAR_FLOOR = 0.5
 HELDOUT_ALPHA = 0.10
 #: Singles a pair search starts from (the first effect, then the lowest held-out errors).
 PAIR_SEEDS = 3
@@ -76,9 +75,8 @@ class _Context:
         return remaining_signature(self.held, sc.heldout_zeta_rad, self.floor(sc), ALPHA, sc.heldout_blocks)
 
     def closes(self, sc: CandidateScore) -> bool:
-        sig = self.signature(sc)
-        near = sig["systematic_rad"] <= NEAR_FLOOR * self.floor(sc) and not sig["significant"]
-        return bool(self.fraction(sc) >= CLOSE_FRACTION or near)
+        """Whether ``sc`` explains at least ``CLOSE_FRACTION`` of the systematic held-out gap."""
+        return bool(self.fraction(sc) >= CLOSE_FRACTION)
 
     def compare(self, base: CandidateScore, sc: CandidateScore, level: float, floor: float) -> dict:
         F, p_f = nested_f_test(base.fit, sc.fit)

@@ -29,9 +29,9 @@ Rule (constants below; ``m`` candidates tried):
    detected by the same test against the better of its two singles, at
    ``ALPHA`` over the number of pairs fitted.
 4. A model *closes the gap* when it explains at least ``CLOSE_FRACTION`` of
-   the systematic held-out gap, or its residual signature test
-   (:func:`~csjm_opt.diagnose.localisation.remaining_signature`) is not
-   significant and its systematic residual is below ``NEAR_FLOOR`` floors.
+   the systematic held-out gap, measured against its held-out floor (noise
+   plus its refits' estimation error). Nothing else counts: a named verdict
+   always closes at least that share.
 5. Verdict: the detected, plausible pair that closes the gap with the lowest
    BIC (``selected`` = its seed, ``secondary`` = the other); else the first
    effect when it is plausible and closes; ``unexplained`` when something was detected, or
@@ -76,7 +76,6 @@ from ._decision import (  # noqa: F401 (ALPHA and the thresholds are re-exported
     CLOSE_FRACTION,
     HELDOUT_ALPHA,
     IMPROVE_MULT,
-    NEAR_FLOOR,
     _Context,
     combine_scales,
 )
@@ -212,7 +211,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     if second.get("effect", "none") != "none":
         steps.append({"model": f"{lead}+{second['effect']}", "heldout_rms_rad": final.heldout_rms_rad})
     rule = {"alpha": ALPHA, "per_candidate_alpha": ALPHA / m, "improve_mult": IMPROVE_MULT,
-            "close_fraction": CLOSE_FRACTION, "near_floor": NEAR_FLOOR,
+            "close_fraction": CLOSE_FRACTION,
             "test": "one-sided paired t-test of per-cycle held-out MSE against nominal_refit (Bonferroni over "
                     "candidates) and systematic improvement sqrt(MSE_null - MSE) >= improve_mult noise floors"}
     d = Diagnosis(ctx.train, ctx.test, baseline, singles, floor, estimates, tests, selected, confounded,
