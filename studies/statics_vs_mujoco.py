@@ -4,10 +4,11 @@ For ``--cases`` random poses (rotation vectors within +-0.25 rad) and loads
 (+-0.3 N m per axis) of the paper rig, tensions are planned, one random
 cable is lengthened by 10-50 mm, and:
 
-* MuJoCo (``csjm_opt.model.mjcf``, ball-joint damping ``--damping``, default
-  1 N m s/rad: overdamped; RK4 at 1 ms) settles from the planned pose (then a
-  few Newton steps on MuJoCo's own net moment polish it to round-off), or the
-  platform falls over (more than 90 deg away);
+* MuJoCo settles from the planned pose, or the platform falls over (more than
+  90 deg away): :func:`csjm_opt.testbed.mujoco_reference.settle`, the tests'
+  reference (ball-joint damping ``--damping``, default 1 N m s/rad:
+  overdamped; RK4 at 1 ms; then Newton steps on MuJoCo's own net moment
+  polish the pose to round-off, and a settled pose must be a stable one);
 * ``solve_equilibrium`` from the planned pose, with and without the energy
   descent (``globalise``).
 
@@ -25,51 +26,11 @@ import argparse
 import sys
 import time
 
-import mujoco
 import numpy as np
 
 import csjm_opt as co
 from csjm_opt import so3
-from csjm_opt.model.mjcf import rig_to_mjcf
-
-
-def _rot(q):
-    R = np.zeros(9)
-    mujoco.mju_quat2Mat(R, q)
-    return R.reshape(3, 3)
-
-
-def _net_moment(m, d, q0, z):
-    d.qpos[:] = q0
-    mujoco.mj_integratePos(m, d.qpos, z, 1.0)
-    d.qvel[:] = 0.0
-    mujoco.mj_forward(m, d)
-    return d.qfrc_smooth.copy()
-
-
-def settle(rig, l, R0, tau, damping=1.0, seconds=30.0, dt=1e-3):
-    """Damped simulation until still (or > 90 deg away: fell), then Newton on MuJoCo's net moment."""
-    m = mujoco.MjModel.from_xml_string(rig_to_mjcf(rig, l, R0, tau, joint_damping_Nms_per_rad=damping,
-                                                   timestep_s=dt))
-    d = mujoco.MjData(m)
-    mujoco.mj_resetDataKeyframe(m, d, 0)
-    for _ in range(int(seconds / dt / 250)):
-        for _ in range(250):
-            mujoco.mj_step(m, d)
-        if np.linalg.norm(d.qvel) < 1e-6 or np.trace(R0.T @ _rot(d.qpos)) < 1.0:
-            break
-    if np.trace(R0.T @ _rot(d.qpos)) < 1.0:
-        return _rot(d.qpos)
-    for _ in range(20):
-        q0 = d.qpos.copy()
-        Q = _net_moment(m, d, q0, np.zeros(3))
-        if np.abs(Q).max() < 1e-12:
-            break
-        D = np.column_stack([(_net_moment(m, d, q0, 1e-7 * e) - _net_moment(m, d, q0, -1e-7 * e)) / 2e-7
-                             for e in np.eye(3)])
-        d.qpos[:] = q0
-        mujoco.mj_integratePos(m, d.qpos, -np.linalg.solve(D, Q), 1.0)
-    return _rot(d.qpos)
+from csjm_opt.testbed.mujoco_reference import settle
 
 
 def angle(Ra, Rb):
@@ -89,8 +50,8 @@ def main(argv=None) -> int:
         R, tau = so3.exp(rng.uniform(-0.25, 0.25, 3)), rng.uniform(-0.3, 0.3, 3)
         l = co.rest_lengths_for(rig, R, co.plan_tensions(rig, R, tau).tensions_N)
         l[rng.integers(6)] += rng.uniform(0.010, 0.050)
-        R_mj = settle(rig, l, R, tau, args.damping)
-        if angle(R, R_mj) < 0.5 * np.pi:
+        R_mj, _, settled = settle(rig, l, R, tau, damping=args.damping)
+        if settled:
             counts["settled"] += 1
             angles.append(np.degrees(angle(R, R_mj)))
             try:
@@ -110,7 +71,7 @@ def main(argv=None) -> int:
             except co.NoEquilibrium:
                 counts["refused"] += 1
     print(f"{args.cases} cases: MuJoCo settles in {counts['settled']} (0-{max(angles):.0f} deg from the start), "
-          f"falls over in {counts['fell']}")
+          f"falls over (or finds no stable rest) in {counts['fell']}")
     print(f"settled: forward statics finds the same pose in {counts['found']}/{counts['settled']}; plain Newton "
           f"alone in {counts['plain_found']} (wrong pose in {counts['plain_wrong_pose']}, refused in "
           f"{counts['settled'] - counts['plain_found'] - counts['plain_wrong_pose']})")

@@ -1,4 +1,4 @@
-"""Statics and stiffness against MuJoCo (an independent engine model of the rig, tests/mujoco_reference.py)."""
+"""Statics and stiffness against MuJoCo (an independent engine model of the rig: csjm_opt.testbed.mujoco_reference)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import csjm_opt as co
 from csjm_opt import so3
 from csjm_opt.model.perturbation import stiffness_from_engine
 
-import mujoco_reference as ref
+import csjm_opt.testbed.mujoco_reference as ref
 
 
 def _angle(Ra, Rb):

@@ -1,4 +1,4 @@
-"""MuJoCo as the independent reference for the statics and stiffness tests.
+"""MuJoCo as the independent reference for the statics and stiffness (tests and studies).
 
 The engine model comes from :func:`csjm_opt.model.mjcf.rig_to_mjcf`, which uses
 only the rig's geometry, stiffness, mass, COM and gravity (no statics). Poses
@@ -15,7 +15,8 @@ round-off; it has settled when that polish stays within 1 mrad and finds a
 stable equilibrium. The damping is heavy (overdamped: the platform
 creeps, like the gradient flow the forward statics follows); with light
 damping a platform released far from equilibrium can overshoot into another
-stable equilibrium (studies/statics_vs_mujoco.py).
+stable equilibrium (``studies/statics_vs_mujoco.py``, which uses this module
+with ``damping`` lowered to show it).
 """
 
 from __future__ import annotations
@@ -23,13 +24,14 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from csjm_opt.model.mjcf import rig_to_mjcf
+from ..model.mjcf import rig_to_mjcf
 
 SETTLE_DAMPING = 1.0
 SETTLE_S = 30.0
 
 
 def build(rig, rest_lengths, R, tau_ext, damping=SETTLE_DAMPING, timestep=1e-3):
+    """MuJoCo model and data of ``rig`` at its keyframe (rest lengths, pose ``R``, load ``tau_ext``)."""
     xml = rig_to_mjcf(rig, rest_lengths, R, tau_ext, joint_damping_Nms_per_rad=damping, timestep_s=timestep)
     m = mujoco.MjModel.from_xml_string(xml)
     d = mujoco.MjData(m)
@@ -39,12 +41,14 @@ def build(rig, rest_lengths, R, tau_ext, damping=SETTLE_DAMPING, timestep=1e-3):
 
 
 def rotation(qpos: np.ndarray) -> np.ndarray:
+    """The platform's rotation matrix from the ball joint's quaternion (MuJoCo's own conversion)."""
     R = np.zeros(9)
     mujoco.mju_quat2Mat(R, np.asarray(qpos, float))
     return R.reshape(3, 3)
 
 
 def tensions(rig, d, rest_lengths) -> np.ndarray:
+    """Cable tensions from MuJoCo's tendon lengths (N; slack cables 0)."""
     return np.asarray(rig.cable_stiffness_N_per_m) * np.maximum(d.ten_length - rest_lengths, 0.0)
 
 
@@ -76,7 +80,7 @@ def polish(m, d, max_iter=20, h=1e-7):
     return float(np.linalg.norm(rotation(q_start) - rotation(d.qpos))) if moved else 0.0, stable
 
 
-def settle(rig, rest_lengths, R0, tau_ext, seconds=SETTLE_S, nudge=None):
+def settle(rig, rest_lengths, R0, tau_ext, seconds=SETTLE_S, nudge=None, damping=SETTLE_DAMPING):
     """Settle from ``R0`` (optionally nudged by a body-frame rotation vector): (R, tensions, settled).
 
     Heavily damped simulation until the motion has (nearly) died out (or the
@@ -84,7 +88,7 @@ def settle(rig, rest_lengths, R0, tau_ext, seconds=SETTLE_S, nudge=None):
     :func:`polish` to round-off; ``settled`` when the polish moved less than
     1 mrad (the same basin), the result is stable and the net moment vanishes.
     """
-    m, d = build(rig, rest_lengths, R0, tau_ext)
+    m, d = build(rig, rest_lengths, R0, tau_ext, damping)
     if nudge is not None:
         mujoco.mj_integratePos(m, d.qpos, np.asarray(nudge, float), 1.0)
     R_start = rotation(d.qpos)
