@@ -26,8 +26,9 @@ Rule (constants below; ``m`` candidates tried):
    *Pairs*: the seeds are the first effect and the singles with the lowest
    held-out errors (``PAIR_SEEDS`` in all; one wrong first pick does not hide
    the right pair); each seed is paired with every other effect, and a pair is
-   detected by the same test against the better of its two singles, at
-   ``ALPHA`` over the number of pairs fitted.
+   detected by the same test against the best of its two singles and the
+   first effect, at ``ALPHA`` over the number of pairs fitted (two wrong
+   effects that together mimic the right one do not beat it).
 4. A model *closes the gap* when it explains at least ``CLOSE_FRACTION`` of
    the systematic held-out gap, measured against its held-out floor (noise
    plus its refits' estimation error). Nothing else counts: a named verdict
@@ -168,7 +169,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     seeds = ([] if first is None and not masked else
              ([first] if first is not None else []) + [n for n in by_error if n != first])[:PAIR_SEEDS]
     pairs, pair_scores = _pairs(ctx, rig, names, singles, seeds, secondary, ranges, tick,
-                                baseline if masked else None)
+                                baseline if masked else None, first)
     if bar:
         bar.close()
     selected, second, final, verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_there)
@@ -224,11 +225,12 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
 
 
 def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, tick,
-           masked_base: CandidateScore | None) -> tuple[list, dict]:
+           masked_base: CandidateScore | None, first: str | None) -> tuple[list, dict]:
     """Every pair's separability; each seed + each other effect fitted and tested (rule 3 / rule 6).
 
-    A pair is tested against the better of its two singles (``masked_base``, the null model, when
-    neither single was detected), at ``ALPHA`` over the number of pairs fitted (Bonferroni)."""
+    A pair is tested against the best of its two singles and the first effect (``masked_base``,
+    the null model, when no single was detected), at ``ALPHA`` over the number of pairs fitted
+    (Bonferroni): two wrong effects that together mimic the right one do not beat it."""
     pairs: list[dict] = []
     scores: dict[tuple[str, str], CandidateScore] = {}
     if not secondary:
@@ -255,7 +257,8 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
             continue
         tick(1)
         scores[(a, b)] = sc
-        base = masked_base or min(singles[a], singles[b], key=lambda c: c.heldout_mse)
+        rivals = [singles[a], singles[b]] + ([singles[first]] if first is not None else [])
+        base = masked_base or min(rivals, key=lambda c: c.heldout_mse)
         t = ctx.compare(base, sc, level, ctx.noise_floor(base))
         entry.update({"fitted": True, "effects": [a, b], "heldout_rms_rad": sc.heldout_rms_rad,
                       "fraction_explained": ctx.fraction(sc), "bic": sc.fit.bic, "closes_gap": ctx.closes(sc),
