@@ -136,8 +136,8 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
         make_effect(n, rig)                        # unknown names fail here, before any fitting
     ctx = _Context(rig, compute_residuals(rig, log, noise),
                    compute_residuals(rig, test, noise) if test is not None else None)
-    n_seeds = min(PAIR_SEEDS, len(names))
-    total = 1 + len(names) + ((n_seeds * (len(names) - 1) - n_seeds * (n_seeds - 1) // 2) if secondary else 0)
+    planned_pairs = _n_pair_fits(min(PAIR_SEEDS, len(names)), len(names)) if secondary else 0
+    total = 1 + len(names) + planned_pairs
     bar = progress(total=total, desc="diagnose: fitting models") if progress else None
     tick = bar.update if bar else (lambda n=1: None)
     baseline = ctx.score([])
@@ -168,7 +168,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     by_error = sorted(singles, key=lambda n: singles[n].heldout_mse)
     seeds = ([] if first is None and not masked else
              ([first] if first is not None else []) + [n for n in by_error if n != first])[:PAIR_SEEDS]
-    pairs, pair_scores = _pairs(ctx, rig, names, singles, seeds, secondary, ranges, tick,
+    pairs, pair_scores = _pairs(ctx, rig, names, singles, seeds, secondary, ranges, tick, planned_pairs,
                                 baseline if masked else None, first)
     if bar:
         bar.close()
@@ -224,13 +224,14 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     return d
 
 
-def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, tick,
+def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, tick, planned: int,
            masked_base: CandidateScore | None, first: str | None) -> tuple[list, dict]:
     """Every pair's separability; each seed + each other effect fitted and tested (rule 3 / rule 6).
 
     A pair is tested against the best of its two singles and the first effect (``masked_base``,
     the null model, when no single was detected), at ``ALPHA`` over the number of pairs fitted
-    (Bonferroni): two wrong effects that together mimic the right one do not beat it."""
+    (Bonferroni): two wrong effects that together mimic the right one do not beat it. The progress
+    bar advances by ``planned`` in all (fits that are not needed count as done)."""
     pairs: list[dict] = []
     scores: dict[tuple[str, str], CandidateScore] = {}
     if not secondary:
@@ -241,10 +242,7 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
     todo: list[tuple[str, str]] = []
     for a in seeds:
         todo += [(a, b) for b in singles if b != a and (a, b) not in todo and (b, a) not in todo]
-    n_total = len(seeds) * (len(names) - 1) - len(seeds) * (len(seeds) - 1) // 2
-    if not todo:
-        tick(max(n_total, 0))
-        return pairs, scores
+    tick(max(planned - len(todo), 0))
     m = len(singles)
     level = ALPHA / max(m * (m - 1) // 2 if masked_base is not None else len(todo), 1)
     for a, b in todo:
@@ -264,8 +262,12 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
                       "fraction_explained": ctx.fraction(sc), "bic": sc.fit.bic, "closes_gap": ctx.closes(sc),
                       "tested_against": base.name, "p_value_vs_first": t["p_value"],
                       **{k: t[k] for k in ("improvement_rad", "significant", "plausible", "implausible_params")}})
-    tick(max(n_total - len(todo), 0))
     return pairs, scores
+
+
+def _n_pair_fits(n_seeds: int, n: int) -> int:
+    """Pairs fitted from ``n_seeds`` seeds among ``n`` effects (each seed with every other, once)."""
+    return n_seeds * (n - 1) - n_seeds * (n_seeds - 1) // 2
 
 
 def _second(ctx: _Context, singles, first: str, best: dict, sc: CandidateScore) -> dict:
