@@ -61,9 +61,9 @@ class _Context:
         """Noise floor of ``sc`` (rad): the noise alone, the yardstick of an improvement."""
         return self.scale(sc) * sc.instrument_floor_rad
 
-    def floor(self, sc: CandidateScore, scale: float | None = None) -> float:
+    def floor(self, sc: CandidateScore) -> float:
         """Held-out noise floor of ``sc``: noise plus its parameters' estimation error (rad)."""
-        return (self.scale(sc) if scale is None else scale) * sc.heldout_floor_rad
+        return self.scale(sc) * sc.heldout_floor_rad
 
     def fraction(self, sc: CandidateScore) -> float:
         s = self.scale(sc)

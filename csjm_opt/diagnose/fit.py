@@ -52,8 +52,7 @@ class FitResult:
         moves the parameters by the same step to first order); used for the held-out folds."""
         if self.jac_x is None or self.res_x is None or self.free is None:
             raise SolverError("this fit carries no Jacobian for a fold refit", "diagnose")
-        n = self.n_obs
-        idx = np.r_[(3 * np.asarray(keep)[:, None] + np.arange(3)).ravel(), np.arange(n, len(self.res_x))]
+        idx = self._problem_rows(keep)
         J, r = self.jac_x[idx][:, self.free], self.res_x[idx]
         scales = self.model.scales
         dx = np.zeros(len(scales))
@@ -69,17 +68,19 @@ class FitResult:
         held fixed. A held-out residual of a correctly specified model is noise plus this."""
         if self.jac_x is None or self.free is None:
             raise SolverError("this fit carries no Jacobian for a prediction covariance", "diagnose")
-        J = self.jac_x[:, self.free]
-        if keep is not None:
-            n = self.n_obs
-            J = J[np.r_[(3 * np.asarray(keep)[:, None] + np.arange(3)).ravel(), np.arange(n, len(J))]]
+        J = self.jac_x[:, self.free] if keep is None else self.jac_x[self._problem_rows(keep)][:, self.free]
         Jh = J_held[:, self.free]
         return Jh @ np.linalg.pinv(J.T @ J) @ Jh.T
 
     def held_rows_jacobian(self, held: np.ndarray) -> np.ndarray:
         """Rows of :attr:`jac_x` that belong to the data rows ``held`` (3 per row)."""
         assert self.jac_x is not None
-        return self.jac_x[(3 * np.asarray(held)[:, None] + np.arange(3)).ravel()]
+        return self.jac_x[_components(held)]
+
+    def _problem_rows(self, keep: np.ndarray) -> np.ndarray:
+        """Rows of :attr:`jac_x` / :attr:`res_x` of a fit to data rows ``keep``: theirs and the priors'."""
+        assert self.jac_x is not None
+        return np.r_[_components(keep), np.arange(self.n_obs, len(self.jac_x))]
 
     @property
     def sigma2(self) -> float:
@@ -165,6 +166,11 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     theta = x * scales
     zeta = linearised_zeta(model, table, theta)
     return FitResult(model, theta, cov, rss, N, p_eff, rank, cond, zeta, Jfull, res(x), free)
+
+
+def _components(rows: np.ndarray) -> np.ndarray:
+    """Indices of the 3 residual components of each data row in ``rows`` (rows are row-major)."""
+    return (3 * np.asarray(rows)[:, None] + np.arange(3)).ravel()
 
 
 def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray) -> np.ndarray:

@@ -134,15 +134,14 @@ def remaining_signature(table: ResidualTable, zeta: np.ndarray, floor: float, al
     p = N = 0
     for idx, P in groups:
         idx = np.asarray(idx)
-        pos = {int(i): k for k, i in enumerate(idx)}
+        pos = np.full(len(r), -1)
+        pos[idx] = np.arange(len(idx))               # row -> its place in this group (-1: not in it)
         cols = []
         for rows, X in feats:
-            sel = [pos[int(i)] for i in rows if int(i) in pos]
-            if not sel:
-                continue
-            for a in range(3):
+            inside = pos[rows] >= 0
+            for a in range(3) if inside.any() else ():
                 block = np.zeros((3 * len(idx), X.shape[1]))
-                block[3 * np.asarray(sel) + a] = X[[k for k, i in enumerate(rows) if int(i) in pos]]
+                block[3 * pos[rows[inside]] + a] = X[inside]
                 cols.append(block)
         y = r[idx].ravel()
         X = np.hstack(cols) if cols else np.zeros((y.size, 0))
