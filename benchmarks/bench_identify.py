@@ -10,18 +10,13 @@ Run: ``python benchmarks/bench_identify.py``; prints medians and ratios.
 
 from __future__ import annotations
 
-import sys
-import time
-from pathlib import Path
 
 import numpy as np
 from scipy.optimize import least_squares
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import median_time  # noqa: E402
 
-from identify_sim import add_noise, load_directions, simulate_log  # noqa: E402
+from csjm_opt.testbed.scripted import add_noise, load_directions, simulate_log
 
 from csjm_opt import paper_rig, so3  # noqa: E402
 from csjm_opt.identification.identify import identify_stiffness  # noqa: E402

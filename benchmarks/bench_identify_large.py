@@ -19,15 +19,13 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from identify_sim import add_noise, load_directions, simulate_log  # noqa: E402
+from csjm_opt.testbed.scripted import add_noise, load_directions, simulate_log
 
 from csjm_opt import cli, paper_rig  # noqa: E402
 from csjm_opt.identification.identify import identify_cycles, identify_stiffness  # noqa: E402

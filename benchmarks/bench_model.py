@@ -11,14 +11,10 @@ none), and checks they agree.
 from __future__ import annotations
 
 import argparse
-import sys
-import time
-from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 import csjm_opt as co  # noqa: E402
 from csjm_opt.model.casadi_model import build_functions  # noqa: E402
 from _common import median_time, row  # noqa: E402
@@ -72,7 +68,7 @@ def main() -> None:
     results = {}
     K_ref = model.stiffness(Rs, T)
     for name, fm in variants.items():
-        t = median_time(lambda: fm.call([R_h, T.T, *consts]), 7, 1)
+        t = median_time(lambda fm=fm: fm.call([R_h, T.T, *consts]), 7, 1)
         K = np.array(fm.call([R_h, T.T, *consts])[0]).reshape(3, n, 3).transpose(1, 0, 2)
         assert np.allclose(K, K_ref, atol=1e-9)
         results[name] = t

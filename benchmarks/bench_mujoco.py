@@ -25,12 +25,11 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 from csjm_opt import so3  # noqa: E402
 from csjm_opt.control import simulate  # noqa: E402
 from csjm_opt.control.controllers import (InverseDynamicsController, SO3FeedbackController,  # noqa: E402
                                           StiffnessShapingController)
-from csjm_opt.control.controllers._reference import reference_rates  # noqa: E402
+from csjm_opt.control.controllers.reference import reference_rates  # noqa: E402
 from csjm_opt.control.load_profiles import Step  # noqa: E402
 from csjm_opt.control.plants import MujocoPlant, QuasiStaticPlant  # noqa: E402
 from csjm_opt.model.rig import paper_rig  # noqa: E402

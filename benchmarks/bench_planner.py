@@ -8,13 +8,10 @@ sample of poses and scaled to 10,000 (said in the output).
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 import csjm_opt as co  # noqa: E402
 from _common import median_time, row, slsqp_plan  # noqa: E402
 
@@ -61,7 +58,7 @@ def main() -> None:
 
 def shared_qp_comparison(rig) -> None:
     """The tension QP solved by the specialised kernel and by the general dense PDAS kernel."""
-    from csjm_opt.planning import _kernels as kernels
+    from csjm_opt.planning import kernels as kernels
 
     model = co.Model(rig)
     R = co.so3.exp([0.2, -0.1, 0.05])

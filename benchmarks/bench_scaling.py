@@ -23,7 +23,6 @@ import argparse
 import json
 import resource
 import statistics
-import sys
 import tempfile
 import time
 import tracemalloc
@@ -31,7 +30,6 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 import csjm_opt as co  # noqa: E402
 from _common import median_time, slsqp_plan  # noqa: E402
 from csjm_opt.design.sweep import run_sweep  # noqa: E402

@@ -81,8 +81,8 @@ def slsqp_seconds_per_design(n_orientations: int) -> tuple[float, int]:
             res = minimize(lambda t: 0.5 * np.sum((t - rig.t_mid_N) ** 2), rig.t_mid_N,
                            jac=lambda t: t - rig.t_mid_N, method="SLSQP",
                            bounds=[(rig.t_min_N, rig.t_max_N)] * 6,
-                           constraints=[{"type": "eq", "fun": lambda t, tl=tau_load: J.T @ t + tl,
-                                         "jac": lambda t: J.T}], options={"ftol": 1e-12, "maxiter": 200})
+                           constraints=[{"type": "eq", "fun": lambda t, tl=tau_load, J=J: J.T @ t + tl,
+                                         "jac": lambda t, J=J: J.T}], options={"ftol": 1e-12, "maxiter": 200})
             if not (res.success and np.linalg.norm(J.T @ res.x + tau_load) < 1e-6):
                 ok = False
                 break

@@ -1,8 +1,9 @@
-"""Figures of the core quantities: tension bars and stiffness ellipsoids.
+"""Figures of the core quantities (tension bars, stiffness ellipsoids) and the one way figures are saved.
 
-The backend is chosen by the caller (the CLI selects Agg in
-:func:`csjm_opt.cli.app.main`); every figure is written to a file atomically
-by :func:`save` and closed.
+Plot functions draw into a figure or axes passed in (a new one when ``None``)
+and return it; the caller saves with :func:`save` (atomic, then closed). The
+backend is chosen by the caller (the CLI selects Agg in
+:func:`csjm_opt.cli.app.main`).
 """
 
 from __future__ import annotations
@@ -55,17 +56,36 @@ def save(fig, path: str | Path) -> Path:
 
 
 def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.ndarray,
-                            t_min_N: float, t_max_N: float, path: str | Path,
-                            show: tuple[int, ...] | None = None) -> Path:
+                            t_min_N: float, t_max_N: float, show: tuple[int, ...] | None = None, fig=None):
     """Tension bars per pose (top), stiffness ellipsoids of a few poses and K's eigenvalues (bottom).
 
     An ellipsoid's semi-axes are K's eigenvectors scaled by the eigenvalues
     (N m/rad): a long axis is a stiff direction, drawn in {A}.
+
+    Parameters
+    ----------
+    labels : list of str
+        One label per pose.
+    tensions_N : (n, 6) array
+        Tensions per pose (N).
+    K : (n, 3, 3) array
+        Stiffness per pose (N m/rad).
+    t_min_N, t_max_N : float
+        Tension bounds drawn as dashed lines (N).
+    show : tuple of int, optional
+        Poses whose ellipsoids are drawn (first, middle and last by default).
+    fig : matplotlib Figure, optional
+        Figure to draw into (a new one when ``None``).
+
+    Returns
+    -------
+    matplotlib Figure
+        The figure drawn.
     """
-    plt = figure()
     n = len(labels)
     show = tuple(show if show is not None else sorted({0, n // 2, n - 1}))
-    fig = plt.figure(figsize=(14, 9), layout="constrained")
+    if fig is None:
+        fig = figure().figure(figsize=(14, 9), layout="constrained")
     fig.get_layout_engine().set(wspace=0.1)                  # room for the 3-D z labels, which the layout ignores
     grid = fig.add_gridspec(2, len(show) + 1, height_ratios=(1, 1.1), width_ratios=(1,) * len(show) + (1.3,))
     ax = fig.add_subplot(grid[0, :])
@@ -108,4 +128,4 @@ def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.nda
     ae.set_title("Eigenvalues of K per pose")
     ae.legend(fontsize=7, loc="best")
     fig.suptitle("Tensions and stiffness under the platform's weight (ellipsoid semi-axes: eigenvalues, N m/rad)")
-    return save(fig, path)
+    return fig

@@ -6,7 +6,7 @@ plus a sinusoid) acts on it; the stiffness-shaping controller reads the
 (noisy) pose and moment at 1 kHz, shapes the tensions toward the current
 target and commands rest lengths; the target alternates between the softest
 and the stiffest reachable K along x (exact LPs, see
-``csjm_opt.report.shaping_step.soft_stiff_targets``). Because the controller acts
+``csjm_opt.demo.shaping_step.soft_stiff_targets``). Because the controller acts
 one step after the load changes, every disturbance step deflects the pose
 once by about ``K^-1 dtau`` before the pose is restored: the deflection is
 larger in the soft phases, which is what a compliant joint is for.
@@ -28,7 +28,7 @@ from csjm_opt import so3
 from csjm_opt._plotting import save
 from csjm_opt.control.closed_loop import plot_closed_loop, plot_closed_loop_stiffness, simulate
 from csjm_opt.control.controllers import StiffnessShapingController
-from csjm_opt.report.shaping_step import DEMO_TAU_EXT, PAPER_R0, soft_stiff_targets
+from csjm_opt.demo.shaping_step import DEMO_TAU_EXT, PAPER_R0, soft_stiff_targets
 from csjm_opt._fileio import atomic_write_json
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.control.load_profiles import Constant, Sinusoid, Step

@@ -77,7 +77,7 @@ def test_one_cycle_without_test_file_is_refused(tmp_path, rig, capsys):
 
 
 def test_demo_step_contract(rig, tmp_path):
-    from csjm_opt.report.diagnose_step import run_demo
+    from csjm_opt.demo.diagnose_step import run_demo
 
     out = run_demo(rig, tmp_path / "diagnosis", np.random.default_rng(42), effect="sensor_bias",
                    severity=1.5, n_cycles=6)

@@ -4,9 +4,9 @@ import json
 
 import numpy as np
 
-from csjm_opt.report.identify_step import run_demo
+from csjm_opt.demo.identify_step import run_demo
 from csjm_opt.measurement.instruments import InstrumentNoise
-from identify_sim import add_noise, load_directions, simulate_log
+from csjm_opt.testbed.scripted import add_noise, load_directions, simulate_log
 
 
 def test_run_demo_summary(rig, model, tmp_path):

@@ -12,7 +12,7 @@ import shutil
 import pytest
 
 from csjm_opt.cli import main
-from csjm_opt.report.demo import STEPS
+from csjm_opt.demo.pipeline import STEPS
 
 from report_figures import problems, record_figures
 from report_html import mismatches, parse, unresolved

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from csjm_opt.report.shaping_step import DEMO_TAU_EXT, PAPER_R0, run_demo, soft_stiff_targets
+from csjm_opt.demo.shaping_step import DEMO_TAU_EXT, PAPER_R0, run_demo, soft_stiff_targets
 from csjm_opt.shaping.reachable import reachable_set
 from csjm_opt._validate import as_rotation
 

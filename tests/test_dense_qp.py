@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize
 
-from csjm_opt.planning import _dense_qp as dense_qp
+from csjm_opt.planning import dense_qp as dense_qp
 
 
 def _random_qp(rng, n=6, m=3):

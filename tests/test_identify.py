@@ -1,4 +1,4 @@
-"""Stiffness identification on data from the project's own simulator (identify_sim)."""
+"""Stiffness identification on data from the project's own simulator (csjm_opt.testbed.scripted)."""
 
 import json
 
@@ -13,7 +13,7 @@ from csjm_opt.errors import IllConditionedData
 from csjm_opt.identification.identify import identify_log, identify_stiffness
 from csjm_opt.identification.figures import convergence_curve, plot_convergence
 from csjm_opt.measurement.instruments import InstrumentNoise
-from identify_sim import add_noise, load_directions, simulate_cycle, simulate_log
+from csjm_opt.testbed.scripted import add_noise, load_directions, simulate_cycle, simulate_log
 
 ROTVEC_REF = np.array([0.12, -0.06, 0.03])
 TAU_PRE = np.array([0.2, -0.5, 0.3])

@@ -1,6 +1,6 @@
 """Identification refuses what it cannot identify (loads spanning a plane), naming the missing direction.
 
-Logs come from the project's forward statics (``identify_sim``) with the
+Logs come from the project's forward statics (``csjm_opt.testbed.scripted``) with the
 paper's instrument noise. The missing direction is known by construction (the
 normal of the plane the load increments span), so the check does not rely on
 the code under test; the well-excited estimate is compared with the true K of
@@ -14,7 +14,7 @@ import json
 import numpy as np
 import pytest
 
-from identify_sim import add_noise, load_directions, simulate_log
+from csjm_opt.testbed.scripted import add_noise, load_directions, simulate_log
 
 from csjm_opt import cli
 from csjm_opt.errors import IllConditionedData

@@ -4,8 +4,8 @@ import numpy as np
 
 import csjm_opt as co
 from csjm_opt import so3
-from csjm_opt.planning import _active_set as active_set
-from csjm_opt.planning import _kernels as kernels
+from csjm_opt.planning import active_set as active_set
+from csjm_opt.planning import kernels as kernels
 
 
 def test_planner_kernel_matches_casadi_model(rig, model):

@@ -13,6 +13,7 @@ from csjm_opt import so3
 from csjm_opt.cli.app import main
 from csjm_opt.model.dynamics import Dynamics, estimate_inertia, rig_dynamics
 from csjm_opt.model.mjcf import quat_wxyz, rig_to_mjcf
+from csjm_opt.planning import export_mjcf
 
 R_EXPORT = so3.exp([0.1, -0.2, 0.15])
 TAU_EXPORT = np.array([0.2, 0.1, -0.1])
@@ -45,7 +46,7 @@ def test_quaternion_convention():
 @pytest.mark.parametrize("actuation", ["spring", "winch", "tension"])
 def test_export_is_an_equilibrium_in_mujoco(rig, actuation):
     """The keyframe of every actuation mode is a static equilibrium at the planned pose."""
-    m, d = _load(rig.to_mjcf(R_EXPORT, TAU_EXPORT, actuation=actuation))
+    m, d = _load(export_mjcf(rig, R_EXPORT, TAU_EXPORT, actuation=actuation))
     assert np.allclose(_R(d), R_EXPORT, atol=1e-12)
     assert np.abs(d.qfrc_smooth).max() < 1e-10
     names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, i) for i in range(m.nu)]
@@ -62,7 +63,7 @@ def test_winch_settles_like_the_springs(rig):
     """Winch actuation (forcerange clamp) and dead-band springs settle at the same pose from a nudge."""
     poses = []
     for actuation in ("spring", "winch"):
-        m, d = _load(rig.to_mjcf(R_EXPORT, TAU_EXPORT, actuation=actuation, joint_damping_Nms_per_rad=0.3,
+        m, d = _load(export_mjcf(rig, R_EXPORT, TAU_EXPORT, actuation=actuation, joint_damping_Nms_per_rad=0.3,
                                  timestep_s=2e-3))
         mujoco.mj_integratePos(m, d.qpos, np.array([0.03, 0.0, -0.02]), 1.0)
         for _ in range(3000):

@@ -11,7 +11,7 @@ from csjm_opt.cli import main
 from csjm_opt.errors import DataFileError, IllConditionedData
 from csjm_opt.measurement.logfile import MeasurementLog
 from csjm_opt.measurement.preprocess import fit_rigid_transform, preprocess_text, weight_moment_A, wrench_to_A
-from identify_sim import raw_text_from_log
+from csjm_opt.testbed.raw_instruments import raw_text_from_log
 
 R_LB = so3.exp(np.array([0.3, -1.2, 2.0]))
 P_LB = np.array([2.5, -0.7, 0.4])

@@ -11,7 +11,7 @@ from csjm_opt.identification.identify import identify_log, identify_stiffness
 from csjm_opt.identification.figures import plot_verification
 from csjm_opt.identification.verify import (estimation_error, predict_pose, predict_pose_external,
                              verify_increments, verify_log)
-from identify_sim import load_directions, simulate_cycle, simulate_log
+from csjm_opt.testbed.scripted import load_directions, simulate_cycle, simulate_log
 
 ROTVEC_REF = np.array([0.1, 0.05, -0.08])
 TAU_PRE = np.array([0.4, -1.2, 0.5])     # a sizeable pre-load: K and K_D differ by 1/2 hat(tau_load)

@@ -26,7 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..report import demo
+    from ..demo import pipeline as demo
 
     check_outputs([], {"--json": args.json}, {"--out": args.out})  # before the work, not after it
     if args.json and args.json != "-" and Path(args.json).resolve().parent == Path(args.out).resolve() \

@@ -42,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..diagnose import diagnose
-    from ..diagnose.report import write_report
+    from ..report.diagnosis import write_report
 
     inputs = [args.data, args.test, args.rig]
     check_outputs(inputs, {"--json": args.json}, {"--report": args.report})

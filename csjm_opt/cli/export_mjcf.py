@@ -9,7 +9,8 @@ import numpy as np
 from .. import so3
 from .._fileio import atomic_write_json, atomic_write_text
 from .._validate import as_vector3
-from ..model.mjcf import ACTUATIONS, export_mjcf
+from ..model.mjcf import ACTUATIONS
+from ..planning.mjcf_export import export_mjcf
 from ..model.rig import load_rig
 from ._options import check_outputs, check_rotvec, float_in, quantity, rotvec_component
 

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from ..model import hexagon
+from ..model.cable_terms import cable_lengths
 from ..errors import DesignError, InvalidInput
 from ..model.rig import PAPER_CABLE_STIFFNESS_N_PER_M, PAPER_COM_A_M, PAPER_MASS_KG, Rig, paper_rig
 
@@ -182,7 +183,7 @@ def check_holes(platform_A_m: np.ndarray, base_B_m: np.ndarray,
             raise DesignError(f"holes {i + 1} and {j + 1} are {gaps[i, j] * 1e3:.3g} mm apart "
                               f"(minimum {limits.min_hole_spacing_m * 1e3:g} mm)", name)
     clearance = cable_clearance_m(platform_A_m, base_B_m)
-    lengths = np.linalg.norm(base_B_m - platform_A_m, axis=1)
+    lengths = cable_lengths(np.eye(3), platform_A_m, base_B_m)
     if np.min(lengths) < limits.min_hole_spacing_m:
         k = int(np.argmin(lengths))
         raise DesignError(f"cable {k + 1} has length {lengths[k]:.3g} m at the home pose", "holes")

@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from ..planning import _active_set as active_set
+from ..planning import active_set as active_set
 from ..errors import InfeasibleLoad
 from ..model.numeric import Model
 from ..planning.planner import plan_tensions

@@ -4,7 +4,7 @@ Each ``*_many`` loops the one-pose kernels of :mod:`csjm_opt.model._pose_kernels
 over poses; each ``*_many_par`` runs its serial twin on chunks of poses in
 parallel (``prange``), for large batches called from the main thread (see
 :func:`csjm_opt.model.numeric.parallel_ok`). Re-exported by
-:mod:`csjm_opt.model._kernels`. Compiled on first use and cached on disk
+:mod:`csjm_opt.model.kernels`. Compiled on first use and cached on disk
 (``cache=True``).
 """
 

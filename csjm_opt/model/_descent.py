@@ -110,7 +110,7 @@ def descend(evaluate, terms, F: np.ndarray, P: np.ndarray, l: np.ndarray, R0: np
         inv_h = inv_h * min(4.0, max(0.1, norm_new / max(norm_g, 1e-300))) if alpha == 1.0 else inv_h * 4.0
         inv_h = min(max(inv_h, 1e-12 * K_scale), 1e6 * K_scale)
         R, out, E = R_try, out_new, E_try
-        if _angle(R0, R) > fall_angle_rad:
+        if rotation_angle(R0, R) > fall_angle_rad:
             return (R, out, it), "fell"
     return (R, out, it), "stalled"
 
@@ -128,5 +128,6 @@ def _regularised_step(K_t: np.ndarray, g: np.ndarray, inv_h: float) -> np.ndarra
     return g / max(inv_h, 1e-6)
 
 
-def _angle(R0: np.ndarray, R: np.ndarray) -> float:
+def rotation_angle(R0: np.ndarray, R: np.ndarray) -> float:
+    """Rotation angle of ``R0^T R`` (rad), from the trace."""
     return float(np.arccos(np.clip(0.5 * (np.sum(R0 * R) - 1.0), -1.0, 1.0)))

@@ -1,7 +1,7 @@
 """Compiled (numba) cable physics at one pose: geometry, J (38), weight moment, K, checks.
 
 The ``*_into`` functions write into arrays the caller owns (~1 us a call).
-Re-exported by :mod:`csjm_opt.model._kernels`, whose docstring describes the conventions and
+Re-exported by :mod:`csjm_opt.model.kernels`, whose docstring describes the conventions and
 argument names; the stacked and parallel twins are in
 :mod:`csjm_opt.model._batch_kernels`. Compiled on first use and cached on disk
 (``cache=True``).

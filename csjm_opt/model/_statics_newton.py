@@ -1,6 +1,6 @@
 """Damped Newton on SO(3) for forward statics, numpy reference: closed-form terms, step, stability test.
 
-The compiled twin is :func:`csjm_opt.model._statics_kernels.newton`; the method is described in
+The compiled twin is :func:`csjm_opt.model.statics_kernels.newton`; the method is described in
 :mod:`csjm_opt.model.statics`.
 """
 
@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from .. import so3
+from ._descent import rotation_angle as _angle
 from .cable_terms import CableTerms, point_force_terms
 from .rig import Rig
 
@@ -86,11 +87,6 @@ def _newton(evaluate: _Evaluator, l: np.ndarray, R0: np.ndarray, tau_ext: np.nda
         if not improved or _angle(R0, R) > MAX_EXCURSION_RAD:
             return (R, terms, it), False
     return (R, terms, it), best <= tol_Nm
-
-
-def _angle(R0: np.ndarray, R: np.ndarray) -> float:
-    """Rotation angle of ``R0^T R`` (rad), from the trace."""
-    return float(np.arccos(np.clip(0.5 * (np.sum(R0 * R) - 1.0), -1.0, 1.0)))
 
 
 def _newton_step(K_t: np.ndarray, g: np.ndarray, max_step_rad: float) -> np.ndarray:

@@ -1,7 +1,7 @@
 """The batched numpy reference of the cable physics: geometry, J (38), weight moment, K.
 
 This is the one place the closed-form physics is written in numpy. The
-compiled fast paths (:mod:`csjm_opt.model._kernels`, numba) compute the same
+compiled fast paths (:mod:`csjm_opt.model.kernels`, numba) compute the same
 quantities and are tested against these functions and against the CasADi
 model (:mod:`csjm_opt.model.casadi_model`, the symbolic reference and the
 code-generation path); ``tests/test_cable_terms.py`` and

@@ -44,6 +44,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from ..errors import InvalidInput
+from .cable_terms import cable_lengths
 from .dynamics import rig_dynamics
 from .rig import Rig
 
@@ -124,7 +125,7 @@ def rig_to_mjcf(rig: Rig, rest_lengths_m: np.ndarray | None = None, R: np.ndarra
     A, B = rig.platform_holes_A_m, rig.base_holes_B_m
     k, dyn = rig.cable_stiffness_N_per_m, rig_dynamics(rig)
     R = np.eye(3) if R is None else np.asarray(R, float)
-    c = np.linalg.norm(B - A @ R.T, axis=1)               # |b_i - R a_i|
+    c = cable_lengths(R, A, B)
     l = c if rest_lengths_m is None else np.asarray(rest_lengths_m, float).reshape(6)
     tau = np.zeros(3) if tau_ext_A_Nm is None else np.asarray(tau_ext_A_Nm, float).reshape(3)
     T = np.full(6, rig.t_min_N) if tensions_N is None else np.asarray(tensions_N, float).reshape(6)
@@ -179,45 +180,3 @@ def rig_to_mjcf(rig: Rig, rest_lengths_m: np.ndarray | None = None, R: np.ndarra
             "  </keyframe>", "</mujoco>"]
     return "\n".join(out) + "\n"
 
-
-def export_mjcf(rig: Rig, R: np.ndarray | None = None, tau_ext_A_Nm: np.ndarray | None = None,
-                actuation: str = "spring", **options) -> str:
-    """MJCF of ``rig`` with rest lengths (or tensions) planned for pose ``R`` and load ``tau_ext_A_Nm``.
-
-    Plans the tensions with :func:`csjm_opt.plan_tensions` (mid-range
-    reference), converts them to rest lengths ``l = c(R) - T/k`` and calls
-    :func:`rig_to_mjcf`.
-
-    Parameters
-    ----------
-    rig : Rig
-    R : (3, 3) array, optional
-        Pose (identity by default).
-    tau_ext_A_Nm : (3,) array, optional
-        External moment fixed in {A} (N m), weight excluded.
-    actuation : {"spring", "winch", "tension"}
-    **options
-        Passed to :func:`rig_to_mjcf` (``timestep_s``, ``integrator``, ``joint_damping_Nms_per_rad``, ...).
-
-    Returns
-    -------
-    str
-        The MJCF document; at its keyframe MuJoCo is in equilibrium at ``R``.
-
-    Raises
-    ------
-    InfeasibleLoad
-        No tensions within the bounds hold the load at ``R``.
-    NotARotation, InvalidInput
-        Bad ``R`` or ``tau_ext_A_Nm``.
-    """
-    from .._validate import as_rotation, as_vector3
-    from ..planning.planner import plan_tensions
-
-    R = np.eye(3) if R is None else as_rotation(R, "R")
-    tau = np.zeros(3) if tau_ext_A_Nm is None else as_vector3(tau_ext_A_Nm, "tau_ext")
-    from .statics import rest_lengths_for
-
-    plan = plan_tensions(rig, R, tau)
-    l = rest_lengths_for(rig, R, plan.tensions_N)
-    return rig_to_mjcf(rig, l, R, tau, plan.tensions_N, actuation, **options)

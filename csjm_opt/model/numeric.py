@@ -1,7 +1,7 @@
 """Numeric model of a rig: the compiled kernels, with the CasADi model as reference.
 
 :class:`Model` binds a :class:`~csjm_opt.model.rig.Rig` to the compiled cable
-physics of :mod:`csjm_opt.model._kernels` (numba; same closed forms as the
+physics of :mod:`csjm_opt.model.kernels` (numba; same closed forms as the
 numpy reference :mod:`csjm_opt.model.cable_terms`). Every method takes one
 pose ``R`` (3, 3) or a stack ``Rs`` (n, 3, 3); stacks run in parallel.
 Inputs are trusted here (float64 rotations of the right shape); the public
@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from .._validate import as_rotations
-from . import _kernels as kernels
+from . import kernels as kernels
 from ._casadi_eval import CasadiReference, _jit, _mapped, _squeeze, _stack_h, _unstack_h  # noqa: F401
 from .rig import Rig
 

@@ -232,16 +232,6 @@ class Rig:
         return text
 
 
-    def to_mjcf(self, R: np.ndarray | None = None, tau_ext_A_Nm: np.ndarray | None = None, **options: Any) -> str:
-        """MuJoCo model (MJCF text) of this rig, rest lengths planned for ``R`` and ``tau_ext_A_Nm``.
-
-        See :func:`csjm_opt.model.mjcf.export_mjcf` (frames, actuation, options).
-        """
-        from .mjcf import export_mjcf
-
-        return export_mjcf(self, R, tau_ext_A_Nm, **options)
-
-
 def paper_rig(cable_stiffness_N_per_m: float = PAPER_CABLE_STIFFNESS_N_PER_M) -> Rig:
     """The rig of the paper's Section IV-A (holes paired as the paper labels them).
 

@@ -29,7 +29,7 @@ cables taut; an unstable one with slack cables counts as ``"slack"``).
 
 The Newton terms are evaluated in closed form (:mod:`csjm_opt.model.cable_terms`,
 checked against the CasADi model in the tests); by default the Newton loop
-runs compiled (:mod:`csjm_opt.model._statics_kernels`, numba), ``compiled=False``
+runs compiled (:mod:`csjm_opt.model.statics_kernels`, numba), ``compiled=False``
 runs the numpy reference. Cheap enough for a 1 kHz simulation loop.
 """
 
@@ -41,7 +41,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..errors import InvalidInput, NoEquilibrium
-from . import _statics_kernels
+from . import statics_kernels
 from ._statics_newton import (
     MAX_EXCURSION_RAD,
     PointForce,
@@ -86,7 +86,7 @@ class EquilibriumSolver:
     def _newton(self, l: np.ndarray, R0: np.ndarray, tau_ext: np.ndarray):
         if not self.compiled:
             return _newton(self._evaluate, l, R0, tau_ext, self.tol_Nm, self.max_iter, self.max_step_rad)
-        R, *terms, it, ok = _statics_kernels.newton(
+        R, *terms, it, ok = statics_kernels.newton(
             *self._kernel_args, np.ascontiguousarray(R0, dtype=np.float64), np.ascontiguousarray(l, dtype=np.float64),
             np.ascontiguousarray(tau_ext, dtype=np.float64), self.tol_Nm, self.max_iter, self.max_step_rad,
             MAX_EXCURSION_RAD)

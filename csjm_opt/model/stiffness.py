@@ -4,7 +4,7 @@ K is the load-convention (docs/conventions.md) stiffness ``K = dtau_load/dzeta -
 hat(tau_load)``, the Levi-Civita Hessian of the cable energy
 ``sum 1/2 k_i (c_i - l_i)^2`` (minus the paper's (45) with corrected
 structure constants (31)), computed in closed form by the compiled kernels
-of :mod:`csjm_opt.model._kernels`::
+of :mod:`csjm_opt.model.kernels`::
 
     K = sum_{i taut} k_i j_i j_i^T + sum_i t_i Hess(c_i)
 
@@ -28,7 +28,7 @@ import numpy as np
 
 from .._validate import ROTATION_TOL, as_array, as_rotation, as_vector3
 from ..errors import InconsistentTensions, InvalidInput
-from . import _kernels as kernels
+from . import kernels as kernels
 from .numeric import Model, as_rotations_fast, model_for
 from .rig import Rig
 

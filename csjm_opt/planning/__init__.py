@@ -1,5 +1,6 @@
 """Tension planning: the bounded QP that holds a pose under a load, one pose or many."""
 
+from .mjcf_export import export_mjcf
 from .planner import (
     TensionPlan,
     TensionPlanBatch,
@@ -11,4 +12,4 @@ from .planner import (
 )
 
 __all__ = ["TensionPlan", "TensionPlanBatch", "build_tension_qp", "build_tension_qp_for",
-           "feasibility_distance_Nm", "plan_tensions", "plan_tensions_batch"]
+           "export_mjcf", "feasibility_distance_Nm", "plan_tensions", "plan_tensions_batch"]

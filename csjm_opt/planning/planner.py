@@ -5,8 +5,8 @@ Build, then solve (pink's ``build_ik``/``solve_ik``):
 inspect without a solver; :func:`plan_tensions` solves it and returns a
 self-checking :class:`TensionPlan` (:mod:`csjm_opt.planning.plans`) that also
 carries the cable and rest lengths. By default the QP is solved exactly by the
-compiled primal-dual active set method (:mod:`csjm_opt.planning._kernels`), with
-a finite primal active-set method (:mod:`csjm_opt.planning._dense_qp`) as the
+compiled primal-dual active set method (:mod:`csjm_opt.planning.kernels`), with
+a finite primal active-set method (:mod:`csjm_opt.planning.dense_qp`) as the
 fallback near the boundary of the feasible set; any qpsolvers backend can be
 chosen, and its answer is then polished to round-off from its active set and
 checked. (OSQP alone is not exact: it refuses loads up to ~1e-3 N m inside
@@ -37,8 +37,8 @@ from .._validate import as_array, as_rotation, as_vector3
 from ..errors import InfeasibleLoad, InvalidInput, SolverError
 from ..model.numeric import Model, as_rotations_fast, model_for, parallel_ok
 from ..model.rig import Rig
-from . import _dense_qp as dense_qp
-from . import _kernels as kernels
+from . import dense_qp as dense_qp
+from . import kernels as kernels
 from .plans import TensionPlan, TensionPlanBatch
 
 __all__ = ["FEASIBILITY_TOL_NM", "SOLVERS", "TensionPlan", "TensionPlanBatch", "build_tension_qp",

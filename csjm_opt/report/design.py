@@ -12,9 +12,11 @@ from __future__ import annotations
 from pathlib import Path
 
 from .._fileio import atomic_write_json
+from .. import _plotting as plots
 from ..errors import DesignError
 from .design_figures import geometry_figure, pareto_figure
 from .design_page import document
+from .folder import prepare_out_dir
 from .design_study import X_KEY, Y_KEY, DesignStudy, load_study, paper_value
 from .document import sig
 from .pareto import pareto_layers, pareto_mask
@@ -43,7 +45,6 @@ def write_design_report(results: str | Path, out_dir: str | Path, sweep: str | P
     -------
     Path
     """
-    from .demo import prepare_out_dir
 
     if top < 1:
         raise DesignError(f"expected an integer >= 1, got {top}", "--top")
@@ -51,10 +52,13 @@ def write_design_report(results: str | Path, out_dir: str | Path, sweep: str | P
     out = prepare_out_dir(Path(out_dir), "csjm design study")
     s = study.summary(top)
     atomic_write_json(out / "design_report.json", s)
-    pareto_figure(study, s["best"], out / "pareto.png")
+    plots.save(pareto_figure(study, s["best"]).figure, out / "pareto.png")
     shown = [(f"design {k + 1}: workspace {sig(d[X_KEY])}, min K {sig(d[Y_KEY])} N m/rad",
               {**study.base, **d["params"]}) for k, d in enumerate(s["best"][:5])]
     if study.paper is not None:
         shown.append(("paper's design", {} if sweep is not None else study.paper["params"]))
-    geometry = geometry_figure(shown, out / "geometry.png") is not None
+    geometry_fig = geometry_figure(shown)
+    geometry = geometry_fig is not None
+    if geometry_fig is not None:
+        plots.save(geometry_fig, out / "geometry.png")
     return write_document(document(s, geometry), out)

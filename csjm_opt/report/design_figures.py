@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 from .. import _plotting as plots
@@ -12,12 +10,25 @@ from ..errors import CsjmError
 from .design_study import X_KEY, Y_KEY, DesignStudy
 
 
-def pareto_figure(study: DesignStudy, best: list[dict], path: Path, ax=None):
-    """Workspace against minimum stiffness: every design, the front, the best numbered, the paper starred."""
-    plt = plots.figure()
-    fig = None
+def pareto_figure(study: DesignStudy, best: list[dict], ax=None):
+    """Workspace against minimum stiffness: every design, the front, the best numbered, the paper starred.
+
+    Parameters
+    ----------
+    study : DesignStudy
+        The sweep's valid designs, front and the paper's design.
+    best : list of dict
+        Designs numbered on the plot (the report table's best).
+    ax : matplotlib Axes, optional
+        Axes to draw into (a new figure when ``None``).
+
+    Returns
+    -------
+    matplotlib Axes
+        The axes drawn.
+    """
     if ax is None:
-        fig, ax = plt.subplots(figsize=(7.5, 5.5), constrained_layout=True)
+        ax = plots.figure().figure(figsize=(7.5, 5.5), layout="constrained").subplots()
     x = np.array([r[X_KEY] for r in study.ok])
     y = np.array([r[Y_KEY] for r in study.ok])
     ax.scatter(x, y, s=14, color="0.6", label=f"designs ({len(study.ok)} valid)")
@@ -32,15 +43,23 @@ def pareto_figure(study: DesignStudy, best: list[dict], path: Path, ax=None):
     ax.set_ylabel("minimum stiffness over the workspace (N m/rad)")
     ax.set_title("Workspace against minimum stiffness (numbers: the table's best designs)")
     ax.legend(loc="best", fontsize=8)
-    if fig is not None:
-        plots.save(fig, path)
     return ax
 
 
-def geometry_figure(designs: list[tuple[str, dict]], path: Path) -> Path | None:
+def geometry_figure(designs: list[tuple[str, dict]], fig=None):
     """Top view (x-y, mm) of each design's holes on the platform and base circles, cables as lines.
 
-    ``designs``: (label, complete design parameters) pairs; designs whose geometry cannot be built are skipped.
+    Parameters
+    ----------
+    designs : list of (str, dict)
+        (label, complete design parameters) pairs; designs whose geometry cannot be built are skipped.
+    fig : matplotlib Figure, optional
+        Figure to draw into (a new one when ``None``).
+
+    Returns
+    -------
+    matplotlib Figure or None
+        The figure drawn, or ``None`` when no design could be drawn.
     """
     drawn = []
     for label, params in designs:
@@ -50,11 +69,12 @@ def geometry_figure(designs: list[tuple[str, dict]], path: Path) -> Path | None:
             continue
     if not drawn:
         return None
-    plt = plots.figure()
     n = len(drawn)
     cols = min(n, 3)
     rows = (n + cols - 1) // cols
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 4.3 * rows), squeeze=False, constrained_layout=True)
+    if fig is None:
+        fig = plots.figure().figure(figsize=(4.2 * cols, 4.3 * rows), layout="constrained")
+    axes = fig.subplots(rows, cols, squeeze=False)
     t = np.linspace(0, 2 * np.pi, 200)
     for ax, (label, A, B) in zip(axes.flat, drawn):
         for holes, name, marker, color in ((A, "platform holes A_i", "o", "tab:blue"),
@@ -75,4 +95,4 @@ def geometry_figure(designs: list[tuple[str, dict]], path: Path) -> Path | None:
     handles, labels = axes.flat[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncol=2, fontsize=9)
     fig.suptitle("Hole positions seen from above (home pose; grey: cables A_i B_i)")
-    return plots.save(fig, path)
+    return fig

@@ -10,12 +10,19 @@ the verdict ``unexplained``) are shown when present.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
+from .. import _plotting as plots
+from .._fileio import atomic_write_json
+from ..diagnose import Diagnosis
+from ..diagnose.selection import ALPHA
+from .diagnosis_figures import before_after, candidate_errors, hysteresis_loops, residual_map
 from .diagnosis_sections import _candidates, _gap_table, _parameters, _secondary_and_pairs, _where
 from .diagnosis_units import unit_of
 from .diagnosis_verdict import headline
 from .document import Document, Figure, Link, Paragraph, Section, format_number, sig
+from .render import write_document
 
 FIGURES = (("residual_map.png", "Held-out residual over the pose (tilt and azimuth), nominal model and selected "
                                 "model, same colour scale."),
@@ -65,3 +72,31 @@ def document(j: dict[str, Any], data_name: str, alpha: float = 0.01) -> Document
 
 
 __all__ = ["document", "headline", "unit_of"]
+
+
+def write_report(d: Diagnosis, out_dir: str | Path, data_name: str = "log") -> Path:
+    """Write ``index.html``, ``index.md``, ``diagnosis.json`` and four figures into ``out_dir``.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        The diagnosis to report.
+    out_dir : str or Path
+        Report folder (created).
+    data_name : str
+        How the page names the measurement log.
+
+    Returns
+    -------
+    Path
+        ``index.md`` (the HTML page is beside it).
+    """
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    plots.save(residual_map(d), out_dir / "residual_map.png")
+    plots.save(hysteresis_loops(d), out_dir / "hysteresis.png")
+    plots.save(candidate_errors(d).figure, out_dir / "candidates.png")
+    plots.save(before_after(d), out_dir / "before_after.png")
+    atomic_write_json(out_dir / "diagnosis.json", d.as_json())
+    write_document(document(d.as_json(), data_name, alpha=ALPHA), out_dir)
+    return out_dir / "index.md"

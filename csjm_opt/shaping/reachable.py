@@ -106,9 +106,35 @@ def feasible_vertices(J: np.ndarray, tau_load: np.ndarray, t_min: float, t_max: 
     return V[np.sort(idx)]
 
 
-def _lp(c: np.ndarray, J: np.ndarray, tau_load: np.ndarray, t_min: float, t_max: float,
-        A_ub: np.ndarray | None = None, b_ub: np.ndarray | None = None, extra: int = 0) -> np.ndarray:
-    """``min c . x`` over the tension polytope (plus ``extra`` free variables and cuts)."""
+def tension_lp(c: np.ndarray, J: np.ndarray, tau_load: np.ndarray, t_min: float, t_max: float,
+               A_ub: np.ndarray | None = None, b_ub: np.ndarray | None = None, extra: int = 0) -> np.ndarray:
+    """Minimise ``c . x`` over the tension polytope, plus ``extra`` free variables and cuts.
+
+    Parameters
+    ----------
+    c : (6 + extra,) array
+        Cost vector.
+    J : (6, 3) array
+        Structure matrix at the pose (row i is ``cross(A_i, u_i)``).
+    tau_load : (3,) array
+        Total load moment (N m, in {A}); the tensions satisfy ``J^T T + tau_load = 0``.
+    t_min, t_max : float
+        Tension bounds (N).
+    A_ub, b_ub : array, optional
+        Extra inequality cuts ``A_ub x <= b_ub``.
+    extra : int
+        Number of free variables appended after the six tensions.
+
+    Returns
+    -------
+    (6 + extra,) array
+        The minimiser (tensions first, N).
+
+    Raises
+    ------
+    SolverError
+        HiGHS found no solution (empty polytope or numerical failure).
+    """
     A_eq = np.hstack([J.T, np.zeros((3, extra))])
     bounds = [(t_min, t_max)] * 6 + [(None, None)] * extra
     res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=-tau_load, bounds=bounds, method="highs")
@@ -126,8 +152,8 @@ def directional_range(basis: StiffnessBasis, tau_load: np.ndarray, directions: n
     for k, u in enumerate(U):
         g = np.einsum("j,ijk,k->i", u, basis.G, u)
         c0 = float(u @ basis.K0 @ u)
-        out[k, 0] = c0 + g @ _lp(g, basis.J, tau_load, t_min, t_max)
-        out[k, 1] = c0 + g @ _lp(-g, basis.J, tau_load, t_min, t_max)
+        out[k, 0] = c0 + g @ tension_lp(g, basis.J, tau_load, t_min, t_max)
+        out[k, 1] = c0 + g @ tension_lp(-g, basis.J, tau_load, t_min, t_max)
     return out
 
 
@@ -187,7 +213,7 @@ def _cutting_plane(basis: StiffnessBasis, tau_load: np.ndarray, t_min: float, t_
         # maximise s with sign*(u^T K0 u + g_u . T) >= sign*s ... written as sign*s - sign*g.T <= sign*c0
         A_ub = np.array([np.concatenate([-sign * np.einsum("a,b,iab->i", u, u, basis.G), [sign]]) for u in cuts])
         b_ub = np.array([sign * (u @ basis.K0 @ u) for u in cuts])
-        x = _lp(np.concatenate([np.zeros(6), [-sign]]), basis.J, tau_load, t_min, t_max, A_ub, b_ub, extra=1)
+        x = tension_lp(np.concatenate([np.zeros(6), [-sign]]), basis.J, tau_load, t_min, t_max, A_ub, b_ub, extra=1)
         T, s = x[:6], x[6]
         K = basis.K0 + (T @ Gf).reshape(3, 3)
         lam, vec = np.linalg.eigh(0.5 * (K + K.T))
@@ -266,6 +292,7 @@ def reachable_set(rig: Rig, R: np.ndarray, tau_ext_A_Nm: npt.ArrayLike = (0.0, 0
                        [lam_min3, lams[:nv, 2].max()]])
     tr = np.einsum("iaa->i", basis.G)
     tr0 = float(np.trace(basis.K0))
-    trace_range = (tr0 + tr @ _lp(tr, basis.J, tau_load, lo, hi), tr0 + tr @ _lp(-tr, basis.J, tau_load, lo, hi))
+    trace_range = (tr0 + tr @ tension_lp(tr, basis.J, tau_load, lo, hi),
+                   tr0 + tr @ tension_lp(-tr, basis.J, tau_load, lo, hi))
     method = (("vertex", "cutting-plane"), ("sampled", "sampled"), ("cutting-plane", "vertex"))
     return ReachableSet(ranges, method, float(max(gap1, gap3)), trace_range, V, lams[nv:], basis, tau_load)

@@ -24,7 +24,7 @@ the mean curvature) toward mid-range tensions, which only breaks ties.
 
 :func:`build_shaping_qp` returns the :class:`qpsolvers.Problem`;
 :func:`shape_stiffness` solves it (OSQP by default, polished to round-off by
-the exact active-set solver of :mod:`csjm_opt.planning._dense_qp`, or ``"active_set"``
+the exact active-set solver of :mod:`csjm_opt.planning.dense_qp`, or ``"active_set"``
 alone) and returns a self-checking :class:`ShapingResult`. :class:`Shaper`
 is the allocation-light form for control loops (no qpsolvers round trip,
 basis reused while the pose does not change, active set warm-started).
@@ -39,10 +39,10 @@ import numpy as np
 import qpsolvers
 from scipy import sparse
 
-from ..model import _statics_kernels
-from ..planning import _dense_qp as dense_qp
-from ..planning import _kernels as _qp_kernels
-from . import _shaping_kernels
+from ..model import statics_kernels
+from ..planning import dense_qp as dense_qp
+from ..planning import kernels as _qp_kernels
+from . import shaping_kernels
 from ..model.cable_terms import point_force_terms
 from ..errors import InfeasibleLoad, InvalidInput, SolverError
 from ..model.numeric import Model
@@ -92,8 +92,8 @@ class Shaper:
     Keeps the stiffness basis while the pose is unchanged and warm-starts the
     exact active-set solver from the previous active set. Inputs are trusted.
     With ``compiled`` (default) the basis, the QP matrices and the primal-dual
-    active-set iterations run in :mod:`csjm_opt.planning._kernels` (numba); the
-    numpy solver of :mod:`csjm_opt.planning._dense_qp` (with its finite primal
+    active-set iterations run in :mod:`csjm_opt.planning.kernels` (numba); the
+    numpy solver of :mod:`csjm_opt.planning.dense_qp` (with its finite primal
     active-set fallback) takes over whenever they do not settle.
     """
 
@@ -124,7 +124,7 @@ class Shaper:
         if self._basis is None or not np.array_equal(self._basis.R, R):
             R = np.array(R, float)
             if self.compiled:
-                J, K0, G = _statics_kernels.stiffness_basis(*self._geom, R)
+                J, K0, G = statics_kernels.stiffness_basis(*self._geom, R)
                 self._basis = StiffnessBasis(R, J, K0, G, point_force_terms(R, *self._weight)[0])
             else:
                 self._basis = stiffness_basis(self.rig, R)
@@ -166,7 +166,7 @@ class Shaper:
             tol = 1e-5 * max(1.0, self.rig.t_max_N)
             self._active = (x0 <= self.rig.t_min_N + tol, x0 >= self.rig.t_max_N - tol)
         if self.compiled:
-            P, q, A, b = _shaping_kernels.shaping_qp(basis.G, basis.K0, objective.L, objective.s, objective.w, basis.J,
+            P, q, A, b = shaping_kernels.shaping_qp(basis.G, basis.K0, objective.L, objective.s, objective.w, basis.J,
                                                  tau_ext + basis.tau_weight_A_Nm, self.rig.t_mid_N,
                                                  self.regularization)
             x, nu, z, lower, upper, it, status = _qp_kernels.pdas(P, q, A, b, self._lo, self._hi,

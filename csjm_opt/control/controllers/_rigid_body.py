@@ -9,7 +9,7 @@ import numpy as np
 from ...model.cable_terms import CableTerms
 from ...model.dynamics import Dynamics, rig_dynamics
 from ...model.rig import Rig
-from ._reference import reference_rates
+from .reference import reference_rates
 
 
 class RigidBody:

@@ -2,7 +2,7 @@
 
 ``min ||T - t_ref||^2`` subject to ``J^T T + tau_weight + tau = 0`` and
 ``t_min <= T <= t_max``, solved by the compiled primal-dual active set of
-:mod:`csjm_opt.planning._kernels` with J and the weight moment from the
+:mod:`csjm_opt.planning.kernels` with J and the weight moment from the
 model layer's kernels (:meth:`csjm_opt.model.Model.pose_terms`; about 15x cheaper per call than the
 validated ``plan_tensions``, which is the fallback: it raises
 :class:`~csjm_opt.errors.InfeasibleLoad` when no tensions hold the load).
@@ -14,7 +14,7 @@ import numpy as np
 
 from ...model.numeric import model_for
 from ...model.rig import Rig
-from ...planning import _kernels as qp_kernels
+from ...planning import kernels as qp_kernels
 from ...planning.planner import plan_tensions
 
 

@@ -6,7 +6,7 @@ import numpy as np
 
 from ...model.dynamics import Dynamics
 from ...model.rig import Rig
-from ._reference import MemoReference
+from .reference import MemoReference
 from ._rigid_body import RigidBody
 from ._tensions import TensionQP
 from .base import Observation, PoseHoldingController, PoseReference

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._loop_kernels import log_so3
+from ..loop_kernels import log_so3
 from ...model.dynamics import Dynamics
 from ...model.rig import Rig
-from ._reference import reference_rates
+from .reference import reference_rates
 from .base import Observation, PoseReference
 from .inverse_dynamics import InverseDynamicsController
 

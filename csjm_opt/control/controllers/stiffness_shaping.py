@@ -10,7 +10,7 @@ from ...model.dynamics import Dynamics
 from ...model.rig import Rig
 from ...shaping.shaper import REGULARIZATION, Shaper, StiffnessObjective, make_objective
 from ..._validate import as_array
-from ._reference import MemoReference
+from .reference import MemoReference
 from ._rigid_body import RigidBody
 from .base import Observation, PoseHoldingController, PoseReference
 

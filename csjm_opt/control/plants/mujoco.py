@@ -26,7 +26,7 @@ import mujoco
 import numpy as np
 
 from ...errors import InvalidInput
-from .. import _loop_kernels as loop_kernels
+from .. import loop_kernels as loop_kernels
 from ...model.cable_terms import CableTerms
 from ...model.mjcf import quat_wxyz, rig_to_mjcf
 from ...model.perturbation import LOAD_FRAMES, stiffness_from_engine

@@ -12,7 +12,7 @@ constrained KKT system exactly, update the guess from primal violations and
 multiplier signs, repeat until the guess is stable. The answer is exact to
 round-off, so it also polishes the output of OSQP. Rows that do not settle
 (``converged`` False) are left to the caller. The loops run compiled in
-:mod:`csjm_opt.planning._kernels`.
+:mod:`csjm_opt.planning.kernels`.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import dataclasses
 
 import numpy as np
 
-from . import _kernels as kernels
+from . import kernels as kernels
 
 
 @dataclasses.dataclass

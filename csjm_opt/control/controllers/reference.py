@@ -15,7 +15,7 @@ from typing import Callable
 
 import numpy as np
 
-from .._loop_kernels import log_so3
+from ..loop_kernels import log_so3
 
 
 def reference_rates(R_ref: Callable[[float], np.ndarray] | np.ndarray, t_s: float,

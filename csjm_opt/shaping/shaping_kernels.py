@@ -1,6 +1,6 @@
 """Compiled (numba) matrices of the shaping QP (see :func:`csjm_opt.shaping.shaper.qp_matrices`).
 
-Solved by the dense active-set QP :func:`csjm_opt.planning._kernels.pdas`.
+Solved by the dense active-set QP :func:`csjm_opt.planning.kernels.pdas`.
 Compiled on first use and cached on disk (``cache=True``).
 """
 

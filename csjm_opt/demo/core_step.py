@@ -8,7 +8,7 @@ from .. import _plotting as plots, so3
 from ..model.numeric import Model
 from ..planning.planner import plan_tensions_batch
 from ._step import DemoContext, StepOutput
-from .document import Cell, Column, Figure, Section, Table, quantity_table, sig
+from ..report.document import Cell, Column, Figure, Section, Table, quantity_table, sig
 
 NAME = "plan tensions and stiffness"
 TILTS_DEG = (5.0, 10.0, 15.0, 20.0)
@@ -28,7 +28,8 @@ def step(ctx: DemoContext) -> StepOutput:
     T = plans.tensions_N
     K = model.stiffness(Rs, T)
     eig = np.linalg.eigvalsh(K)
-    plots.tensions_and_ellipsoids(labels, T, K, rig.t_min_N, rig.t_max_N, ctx.out_dir / "tensions_and_stiffness.png")
+    plots.save(plots.tensions_and_ellipsoids(labels, T, K, rig.t_min_N, rig.t_max_N),
+               ctx.out_dir / "tensions_and_stiffness.png")
     rows = [{"pose": lab, "rotvec": rv.tolist(), "tilt_deg": t, "azimuth_deg": a, "tensions_N": ti.tolist(),
              "min_tension_N": float(ti.min()), "max_tension_N": float(ti.max()), "K": k.tolist(),
              "eigenvalues_Nm_per_rad": e.tolist()}

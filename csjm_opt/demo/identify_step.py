@@ -25,8 +25,8 @@ from ..identification.param_fit import check_fit, fit_parameters
 from ..model.rig import Rig
 from ..identification.stiffness_fits import n_parameters
 from ._step import DemoContext, StepOutput
-from .document import Cell, Column, Document, Figure, Link, Section, Table, sig
-from .render import write_document
+from ..report.document import Cell, Column, Document, Figure, Link, Section, Table, sig
+from ..report.render import write_document
 from ..identification.figures import plot_verification
 from ..identification.verify import verify_log
 from ..measurement.instruments import InstrumentNoise

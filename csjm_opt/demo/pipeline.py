@@ -4,7 +4,7 @@ Steps (:data:`STEPS`, in order): plan tensions and compute K over a set of
 poses; shape the stiffness and run a short closed loop; simulate an
 experiment, identify K and verify it on held-out loads; diagnose a model-rig
 gap; controllers with dynamics in a closed loop on MuJoCo. Each step is a
-function ``step(ctx) -> StepOutput`` (see :mod:`csjm_opt.report._step`)
+function ``step(ctx) -> StepOutput`` (see :mod:`csjm_opt.demo._step`)
 returning its summary and its report section; adding a step is adding one
 entry to :data:`STEPS`. Everything lands in one
 report folder: ``index.html`` (open it in a browser) and its Markdown twin
@@ -21,14 +21,12 @@ from typing import Callable
 import numpy as np
 
 from .._fileio import atomic_write_json
-from ..errors import InvalidInput
 from ..model.rig import Rig, paper_rig
 from . import core_step, diagnose_step, identify_step, mujoco_step, shaping_step
 from ._step import DemoContext, StepOutput
-from .document import Document, Link
-from .render import write_document
-
-MARKER = ".csjm_report"
+from ..report.document import Document, Link
+from ..report.folder import prepare_out_dir
+from ..report.render import write_document
 
 #: The demo's steps: (name = key in summary.json, step function), in order.
 STEPS: list[tuple[str, Callable[[DemoContext], StepOutput]]] = [
@@ -39,37 +37,7 @@ STEPS: list[tuple[str, Callable[[DemoContext], StepOutput]]] = [
     (mujoco_step.NAME, mujoco_step.step),
 ]
 
-__all__ = ["MARKER", "STEPS", "DemoContext", "StepOutput", "prepare_out_dir", "run"]
-
-
-def prepare_out_dir(out_dir: Path, what: str = "csjm demo") -> Path:
-    """Create a report folder; refuse a non-empty folder that is not a previous report.
-
-    Parameters
-    ----------
-    out_dir : Path
-    what : str
-        Written into the marker file that identifies a report folder.
-
-    Returns
-    -------
-    Path
-
-    Raises
-    ------
-    InvalidInput
-        ``out_dir`` is a file, or a non-empty folder without the marker.
-    """
-    out_dir = Path(out_dir)
-    if out_dir.exists():
-        if not out_dir.is_dir():
-            raise InvalidInput(f"{out_dir} exists and is not a folder", "--out")
-        if any(out_dir.iterdir()) and not (out_dir / MARKER).exists():
-            raise InvalidInput(f"{out_dir} is a non-empty folder that is not a csjm report; "
-                               "refusing to write into it (choose another --out)", "--out")
-    out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / MARKER).write_text(f"{what} report folder\n")
-    return out_dir
+__all__ = ["STEPS", "DemoContext", "StepOutput", "run"]
 
 
 def run(out_dir: str | Path = "csjm_report", seed: int = 0, quick: bool = False,

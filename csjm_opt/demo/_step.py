@@ -4,7 +4,7 @@ A step is a function ``step(ctx: DemoContext) -> StepOutput``: it does its
 work, writes its files under ``ctx.out_dir`` and returns its JSON-able summary
 (stored in ``summary.json`` under the step's name) and its report section
 (cell sources relative to that summary; figure paths relative to the report
-folder). :data:`csjm_opt.report.demo.STEPS` lists the steps in order.
+folder). :data:`csjm_opt.demo.pipeline.STEPS` lists the steps in order.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..model.rig import Rig
-from .document import Section
+from ..report.document import Section
 
 
 @dataclasses.dataclass

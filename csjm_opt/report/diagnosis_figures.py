@@ -1,30 +1,40 @@
-"""``--report DIR``: the diagnosis as a report (``index.html`` + ``index.md``) with figures.
+"""Figures of a diagnosis report: where the model misses, and how much the selected effect closes.
 
-Figures (PNG, matplotlib Agg, written atomically): residual maps over the
-pose (before/after), hysteresis loops of a few cycles, the candidates'
-held-out errors against the noise floor, and per-axis before/after. The page
-itself is built from ``diagnosis.json`` by :mod:`csjm_opt.report.diagnosis`.
+Each function draws into ``fig`` (a new figure when ``None``) and returns it;
+saving is the caller's one line (:func:`csjm_opt.report.diagnosis.write_report`
+saves them as PNG next to the page).
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 from .. import _plotting as plots
-from .._fileio import atomic_write_json
-from .selection import ALPHA, Diagnosis
+from ..diagnose import Diagnosis
 
 
-def residual_map(d: Diagnosis, path: Path) -> Path:
-    plt = plots.figure()
+def residual_map(d: Diagnosis, fig=None):
+    """Held-out residual over the pose, before (nominal model) and after (selected effect): two panels.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        The diagnosis to draw.
+    fig : matplotlib Figure, optional
+        Figure to draw into (a new one when ``None``).
+
+    Returns
+    -------
+    matplotlib Figure
+        The figure drawn.
+    """
+    fig = fig if fig is not None else plots.figure().figure(figsize=(10, 4.2), layout="constrained")
     t = d.heldout_table
     x, y = t.tilt_rad * np.cos(t.azimuth_rad), t.tilt_rad * np.sin(t.azimuth_rad)
     before = 1e3 * np.linalg.norm(t.zeta_rad, axis=1)
     after = 1e3 * np.linalg.norm(d.selected_score.heldout_zeta_rad, axis=1)
     vmax = float(np.percentile(before, 98)) or 1.0
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2), sharex=True, sharey=True, layout="constrained")
+    axes = fig.subplots(1, 2, sharex=True, sharey=True)
     for ax, val, title in ((axes[0], before, "nominal model (rig file)"),
                            (axes[1], after, f"selected: {d.selected}")):
         sc = ax.scatter(x, y, c=val, s=18, cmap="viridis", vmin=0, vmax=vmax)
@@ -34,15 +44,31 @@ def residual_map(d: Diagnosis, path: Path) -> Path:
     axes[0].set_ylabel("tilt sin(azimuth) (rad)")
     fig.colorbar(sc, ax=axes, label="||log(R_pred^T R_meas)|| (mrad)")
     fig.suptitle("Held-out residual over the pose (colour: size of the residual)")
-    return plots.save(fig, path)
+    return fig
 
 
-def hysteresis_loops(d: Diagnosis, path: Path, n_cycles: int = 4) -> Path:
-    plt = plots.figure()
+def hysteresis_loops(d: Diagnosis, fig=None, n_cycles: int = 4):
+    """Residual against the load along each cycle's main direction, for the first ``n_cycles`` held-out cycles.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        The diagnosis to draw.
+    fig : matplotlib Figure, optional
+        Figure to draw into (a new one when ``None``).
+    n_cycles : int
+        Number of cycles drawn, one panel each.
+
+    Returns
+    -------
+    matplotlib Figure
+        The figure drawn.
+    """
     t = d.heldout_table
     ids = list(dict.fromkeys(t.cycle.tolist()))[:n_cycles]
     n = max(len(ids), 1)
-    fig, axes = plt.subplots(1, n, figsize=(3.2 * n, 3.4), squeeze=False, sharey=True, layout="constrained")
+    fig = fig if fig is not None else plots.figure().figure(figsize=(3.2 * n, 3.4), layout="constrained")
+    axes = fig.subplots(1, n, squeeze=False, sharey=True)
     after = d.selected_score.heldout_zeta_rad
     for ax, c in zip(axes[0], ids):
         idx = np.flatnonzero(t.cycle == c)
@@ -62,15 +88,29 @@ def hysteresis_loops(d: Diagnosis, path: Path, n_cycles: int = 4) -> Path:
     axes[0][0].legend(fontsize=8, loc="best")
     fig.suptitle("Hysteresis: residual against the load along each cycle's main direction, loading and "
                  "unloading branches")
-    return plots.save(fig, path)
+    return fig
 
 
-def candidate_errors(d: Diagnosis, path: Path) -> Path:
-    plt = plots.figure()
+def candidate_errors(d: Diagnosis, ax=None):
+    """Held-out RMS error of every candidate model against the noise floor (selected in green).
+
+    Parameters
+    ----------
+    d : Diagnosis
+        The diagnosis to draw.
+    ax : matplotlib Axes, optional
+        Axes to draw into (a new figure when ``None``).
+
+    Returns
+    -------
+    matplotlib Axes
+        The axes drawn.
+    """
     names = ["nominal", "nominal_refit"] + list(d.candidates)
     vals = [d.nominal_heldout_rms_rad, d.baseline.heldout_rms_rad] + [c.heldout_rms_rad for c in d.candidates.values()]
     colors = ["grey", "silver"] + ["tab:green" if n == d.selected else "tab:blue" for n in d.candidates]
-    fig, ax = plt.subplots(figsize=(8, 3.6), layout="constrained")
+    if ax is None:
+        ax = plots.figure().figure(figsize=(8, 3.6), layout="constrained").subplots()
     ax.bar(range(len(names)), 1e3 * np.asarray(vals), color=colors)
     ax.axhline(1e3 * d.noise_floor_rad, color="k", ls=":", label=f"noise floor {1e3 * d.noise_floor_rad:.2f} mrad")
     ax.set_xticks(range(len(names)), names, rotation=30, ha="right")
@@ -78,13 +118,27 @@ def candidate_errors(d: Diagnosis, path: Path) -> Path:
     ax.set_xlabel("candidate model")
     ax.set_title("Held-out error of each candidate model (green: selected)")
     ax.legend(loc="best")
-    return plots.save(fig, path)
+    return ax
 
 
-def before_after(d: Diagnosis, path: Path) -> Path:
-    plt = plots.figure()
+def before_after(d: Diagnosis, fig=None):
+    """Held-out residual before and after the selected effect: RMS per axis of {A}, and its distribution.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        The diagnosis to draw.
+    fig : matplotlib Figure, optional
+        Figure to draw into (a new one when ``None``).
+
+    Returns
+    -------
+    matplotlib Figure
+        The figure drawn.
+    """
+    fig = fig if fig is not None else plots.figure().figure(figsize=(9, 3.4), layout="constrained")
     zb, za = d.heldout_table.zeta_rad, d.selected_score.heldout_zeta_rad
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), layout="constrained")
+    axes = fig.subplots(1, 2)
     w = 0.38
     axes[0].bar(np.arange(3) - w / 2, 1e3 * np.sqrt(np.mean(zb ** 2, axis=0)), w, label="before")
     axes[0].bar(np.arange(3) + w / 2, 1e3 * np.sqrt(np.mean(za ** 2, axis=0)), w, label="after")
@@ -101,35 +155,5 @@ def before_after(d: Diagnosis, path: Path) -> Path:
     axes[1].set_title("distribution")
     axes[1].legend(loc="best")
     fig.suptitle(f"Held-out residual before (nominal model) and after ({d.selected})")
-    return plots.save(fig, path)
+    return fig
 
-
-def write_report(d: Diagnosis, out_dir: str | Path, data_name: str = "log") -> Path:
-    """Write ``index.html``, ``index.md``, ``diagnosis.json`` and four figures into ``out_dir``.
-
-    Parameters
-    ----------
-    d : Diagnosis
-    out_dir : str or Path
-        Report folder (created).
-    data_name : str
-        How the page names the measurement log.
-
-    Returns
-    -------
-    Path
-        ``index.md`` (the HTML page is beside it).
-    """
-    from ..report.diagnosis import document
-    from ..report.render import write_document
-
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    j = d.as_json()
-    residual_map(d, out_dir / "residual_map.png")
-    hysteresis_loops(d, out_dir / "hysteresis.png")
-    candidate_errors(d, out_dir / "candidates.png")
-    before_after(d, out_dir / "before_after.png")
-    atomic_write_json(out_dir / "diagnosis.json", j)
-    write_document(document(j, data_name, alpha=ALPHA), out_dir)
-    return out_dir / "index.md"

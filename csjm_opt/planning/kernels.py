@@ -1,18 +1,18 @@
 """Compiled (numba) active-set QP kernels of the planner, one pose or many.
 
 The physics (cable geometry, J (38), weight moment) comes from the model
-layer's kernels (:mod:`csjm_opt.model._kernels`); this module holds the
+layer's kernels (:mod:`csjm_opt.model.kernels`); this module holds the
 solvers:
 
 * :func:`solve_one`: the tension QP ``min 1/2||t - t_ref||^2, J^T t = b,
   lo <= t <= hi`` by the primal-dual active set method (see
-  :mod:`csjm_opt.planning._active_set`), specialised to the identity Hessian
+  :mod:`csjm_opt.planning.active_set`), specialised to the identity Hessian
   and three equality rows (3x3 Cramer solves, no allocation);
 * :func:`plan_one` / :func:`plan_batch`: geometry + weight + QP + rest lengths
   for one pose, or for many in order, each warm-started from the previous
   pose's active set;
 * :func:`pdas`: the same method for a general dense QP (symmetric positive
-  definite ``P``), used by stiffness shaping (:mod:`csjm_opt.planning._dense_qp`
+  definite ``P``), used by stiffness shaping (:mod:`csjm_opt.planning.dense_qp`
   adds a finite primal active-set fallback). It is not used for the tension QP:
   the specialised solver is ~4x faster there (benchmarks/bench_planner.py).
 
@@ -25,8 +25,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ..model._kernels import det3 as _det3
-from ..model._kernels import geometry_into, rotation_error, weight_moment_into
+from ..model.kernels import det3 as _det3
+from ..model.kernels import geometry_into, rotation_error, weight_moment_into
 
 #: Status codes of :func:`solve_one`.
 OK, SINGULAR, NOT_CONVERGED, BAD_INPUT = 0, 1, 2, 3
@@ -192,7 +192,7 @@ def pdas(P, q, A, b, lo, hi, lower, upper, max_iter, tol):
     """Primal-dual active set for a dense QP ``min 1/2 x^T P x + q^T x, A x = b, lo <= x <= hi``.
 
     Returns ``(x, nu, z, lower, upper, iterations, status)``; status 0 settled,
-    1 singular KKT, 2 not settled (callers fall back to :mod:`csjm_opt.planning._dense_qp`).
+    1 singular KKT, 2 not settled (callers fall back to :mod:`csjm_opt.planning.dense_qp`).
     """
     n = q.size
     m = A.shape[0]

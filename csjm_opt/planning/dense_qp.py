@@ -12,7 +12,7 @@ of an iterative solver such as OSQP). Two methods:
 
 1. Primal-dual active set (Hintermueller, Ito & Kunisch 2002), warm-started
    from a guessed active set (the previous solution along a trajectory):
-   usually one or two KKT solves, compiled (:func:`csjm_opt.planning._kernels.pdas`).
+   usually one or two KKT solves, compiled (:func:`csjm_opt.planning.kernels.pdas`).
    It can cycle for a general ``P``, so
 2. if it does not settle in a few iterations, the primal active-set method
    (Nocedal & Wright, Numerical Optimization, Alg. 16.3) from a feasible
@@ -28,8 +28,8 @@ import dataclasses
 import numpy as np
 from scipy.optimize import linprog
 
-from . import _kernels as kernels
-from ._active_set import solve as _project_box_eq
+from . import kernels as kernels
+from .active_set import solve as _project_box_eq
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

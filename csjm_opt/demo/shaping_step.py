@@ -18,12 +18,12 @@ from .._fileio import atomic_write_json
 from ..control.load_profiles import Constant, Sinusoid, Step
 from ..model.numeric import Model
 from ..shaping.figures import plot_reachable_set
-from ..shaping.reachable import _lp, reachable_set
+from ..shaping.reachable import tension_lp, reachable_set
 from ..model.rig import Rig
 from ..shaping.shaper import shape_stiffness, stiffness_basis
 from .._validate import as_rotation
 from ._step import DemoContext, StepOutput
-from .document import Cell, Column, Figure, Section, Table, quantity_table, sig
+from ..report.document import Cell, Column, Figure, Section, Table, quantity_table, sig
 
 #: Table 3's original pose R0 with erratum 3 applied (element (3,2) = -0.300).
 PAPER_R0 = np.array([[0.992, -0.060, -0.111], [0.090, 0.952, 0.292], [0.088, -0.300, 0.950]])
@@ -47,8 +47,8 @@ def soft_stiff_targets(rig: Rig, R: np.ndarray, tau_ext: np.ndarray, direction: 
     u = np.asarray(direction, float) / np.linalg.norm(direction)
     g = np.einsum("j,ijk,k->i", u, basis.G, u)
     T_mid = plan_tensions(rig, R, tau_ext).tensions_N
-    T_soft = _lp(g, basis.J, tau_load, rig.t_min_N, rig.t_max_N)
-    T_stiff = _lp(-g, basis.J, tau_load, rig.t_min_N, rig.t_max_N)
+    T_soft = tension_lp(g, basis.J, tau_load, rig.t_min_N, rig.t_max_N)
+    T_stiff = tension_lp(-g, basis.J, tau_load, rig.t_min_N, rig.t_max_N)
     return (basis.K((1 - margin) * T_soft + margin * T_mid), basis.K((1 - margin) * T_stiff + margin * T_mid))
 
 

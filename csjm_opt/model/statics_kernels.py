@@ -2,7 +2,7 @@
 
 The compiled twin of the numpy reference in :mod:`csjm_opt.model._statics_newton`
 (the method is described in :mod:`csjm_opt.model.statics`). The cable geometry
-and stiffness come from :mod:`csjm_opt.model._kernels` (tested against the
+and stiffness come from :mod:`csjm_opt.model.kernels` (tested against the
 numpy reference :mod:`csjm_opt.model.cable_terms`); ``tests/test_loop_kernels.py``
 checks these against those and the CasADi model. Compiled on first use and
 cached on disk (``cache=True``).
@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._kernels import geometry_into, stiffness_from_geometry_into
+from .kernels import geometry_into, stiffness_from_geometry_into
 
 
 @njit(cache=True)
