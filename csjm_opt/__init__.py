@@ -14,9 +14,9 @@ in its layer: :mod:`csjm_opt.model`, :mod:`csjm_opt.planning`,
 :mod:`csjm_opt.testbed`, :mod:`csjm_opt.design`, :mod:`csjm_opt.report`.
 """
 
+from typing import TYPE_CHECKING, Any
+
 from . import so3
-from .diagnose import Diagnosis
-from .diagnose import diagnose as diagnose_log
 from .errors import (
     CsjmError,
     DataFileError,
@@ -31,16 +31,64 @@ from .errors import (
     SolverError,
     UsageError,
 )
-from .identification.identify import StiffnessEstimate, identify_log, identify_stiffness
-from .measurement.logfile import MeasurementLog
-from .model.numeric import Model
-from .model.rig import Rig, load_rig, paper_rig
-from .model.statics import Equilibrium, rest_lengths_for, solve_equilibrium
-from .model.stiffness import stiffness, stiffness_batch
-from .planning.planner import TensionPlan, TensionPlanBatch, plan_tensions, plan_tensions_batch
-from .shaping.shaper import ShapingResult, shape_stiffness
+
+if TYPE_CHECKING:
+    from .diagnose import Diagnosis
+    from .diagnose import diagnose as diagnose_log
+    from .identification.identify import StiffnessEstimate, identify_log, identify_stiffness
+    from .measurement.logfile import MeasurementLog
+    from .model.numeric import Model
+    from .model.rig import Rig, load_rig, paper_rig
+    from .model.statics import Equilibrium, rest_lengths_for, solve_equilibrium
+    from .model.stiffness import stiffness, stiffness_batch
+    from .planning.planner import TensionPlan, TensionPlanBatch, plan_tensions, plan_tensions_batch
+    from .shaping.shaper import ShapingResult, shape_stiffness
 
 __version__ = "0.1.0"
+
+#: Top-level name -> (module, attribute): imported on first use (PEP 562), so ``import csjm_opt``
+#: loads neither CasADi, numba, SciPy, qpsolvers, MuJoCo, matplotlib nor Dask.
+_LAZY: dict[str, tuple[str, str]] = {
+    "Diagnosis": (".diagnose", "Diagnosis"),
+    "diagnose_log": (".diagnose", "diagnose"),
+    "StiffnessEstimate": (".identification.identify", "StiffnessEstimate"),
+    "identify_log": (".identification.identify", "identify_log"),
+    "identify_stiffness": (".identification.identify", "identify_stiffness"),
+    "MeasurementLog": (".measurement.logfile", "MeasurementLog"),
+    "Model": (".model.numeric", "Model"),
+    "Rig": (".model.rig", "Rig"),
+    "load_rig": (".model.rig", "load_rig"),
+    "paper_rig": (".model.rig", "paper_rig"),
+    "Equilibrium": (".model.statics", "Equilibrium"),
+    "rest_lengths_for": (".model.statics", "rest_lengths_for"),
+    "solve_equilibrium": (".model.statics", "solve_equilibrium"),
+    "stiffness": (".model.stiffness", "stiffness"),
+    "stiffness_batch": (".model.stiffness", "stiffness_batch"),
+    "TensionPlan": (".planning.planner", "TensionPlan"),
+    "TensionPlanBatch": (".planning.planner", "TensionPlanBatch"),
+    "plan_tensions": (".planning.planner", "plan_tensions"),
+    "plan_tensions_batch": (".planning.planner", "plan_tensions_batch"),
+    "ShapingResult": (".shaping.shaper", "ShapingResult"),
+    "shape_stiffness": (".shaping.shaper", "shape_stiffness"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """Import a top-level name's module on first use and cache the name here."""
+    if name in _LAZY:
+        import importlib
+
+        module, attr = _LAZY[name]
+        value = getattr(importlib.import_module(module, __name__), attr)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    """Every public name, the lazy ones included."""
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "CsjmError", "DataFileError", "DesignError", "Diagnosis", "Equilibrium", "IllConditionedData",

@@ -9,9 +9,9 @@ is accurate near pi.
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
-import casadi as ca
 import numpy as np
 
 from .errors import InvalidInput
@@ -42,8 +42,12 @@ def _matrices(M: Any, name: str) -> np.ndarray:
 
 
 def _symbolic(x: Any) -> bool:
-    """True for CasADi SX/MX/DM (a plain bool: static types stay ``Any``)."""
-    return isinstance(x, (ca.SX, ca.MX, ca.DM))
+    """True for CasADi SX/MX/DM (a plain bool: static types stay ``Any``).
+
+    CasADi is not imported here: an object can only be a CasADi symbol if the caller imported CasADi.
+    """
+    ca = sys.modules.get("casadi")
+    return ca is not None and isinstance(x, (ca.SX, ca.MX, ca.DM))
 
 
 def hat(w: Any) -> Any:
@@ -65,6 +69,7 @@ def hat(w: Any) -> Any:
         If a numpy input does not have shape (..., 3).
     """
     if _symbolic(w):
+        import casadi as ca
         return ca.vertcat(ca.horzcat(0, -w[2], w[1]),
                           ca.horzcat(w[2], 0, -w[0]),
                           ca.horzcat(-w[1], w[0], 0))
@@ -95,6 +100,7 @@ def vee(W: Any) -> Any:
         If a numpy input does not have shape (..., 3, 3).
     """
     if _symbolic(W):
+        import casadi as ca
         return 0.5 * ca.vertcat(W[2, 1] - W[1, 2], W[0, 2] - W[2, 0], W[1, 0] - W[0, 1])
     W = _matrices(W, "W")
     return 0.5 * np.stack([W[..., 2, 1] - W[..., 1, 2],
@@ -121,6 +127,7 @@ def exp(w: Any) -> Any:
         If a numpy input does not have shape (..., 3).
     """
     if _symbolic(w):
+        import casadi as ca
         th2 = ca.dot(w, w)
         th = ca.sqrt(th2 + 1e-300)
         a = ca.if_else(th2 < _SMALL**2, 1 - th2 / 6, ca.sin(th) / th)
@@ -183,6 +190,8 @@ def log(R: Any) -> Any:
 
 def _log_casadi(R: Any) -> Any:
     """Symbolic log with the same three branches as the numpy version."""
+    import casadi as ca
+
     v = vee(R)
     sin = ca.sqrt(ca.dot(v, v))
     cos = (R[0, 0] + R[1, 1] + R[2, 2] - 1) / 2

@@ -118,3 +118,35 @@ def test_identification_plots_draw_on_the_given_axes(plot):
         v = identification.verify_increments(np.eye(3), np.eye(3), np.zeros((3, 3)), R)
         returned = identification.plot_verification([v], ax=ax)
     assert returned is ax and (ax.lines or ax.patches)
+
+
+def test_top_level_import_loads_no_heavy_library_and_changes_no_setting():
+    """``import csjm_opt`` stays light (PEP 562 lazy names); the heavy libraries load on first use."""
+    heavy = ("scipy", "numba", "casadi", "mujoco", "matplotlib", "dask", "qpsolvers")
+    code = ("import sys, os; import csjm_opt; "
+            f"print(sorted(m for m in {heavy!r} if m in sys.modules)); "
+            "print(sorted(k for k in os.environ if k.startswith('NUMBA'))); "
+            "csjm_opt.plan_tensions; print('numba' in sys.modules and 'casadi' in sys.modules)")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA")}
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
+                         env={**env, "PYTHONPATH": str(ROOT)}, check=True).stdout.split("\n")
+    assert out[0] == "[]" and out[1] == "[]" and out[2] == "True"
+
+
+def test_importing_the_model_leaves_numbas_threading_layer_alone():
+    code = ("import numba, csjm_opt; import csjm_opt.model, csjm_opt.planning; "
+            "print(numba.config.THREADING_LAYER)")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA")}
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
+                         env={**env, "PYTHONPATH": str(ROOT), "CSJM_NO_WARM_UP": "1"}, check=True).stdout
+    assert out.strip() == "default"
+
+
+def test_lazy_top_level_names_resolve_and_are_listed():
+    import csjm_opt
+
+    assert set(csjm_opt.__all__) <= set(dir(csjm_opt))
+    for name in csjm_opt.__all__:
+        assert getattr(csjm_opt, name) is not None
+    with pytest.raises(AttributeError):
+        csjm_opt.no_such_name  # noqa: B018

@@ -10,18 +10,10 @@ parallel (``prange``), for large batches called from the main thread (see
 
 from __future__ import annotations
 
-import os
-
-import numba
 import numpy as np
 from numba import njit, prange
 
 from ._pose_kernels import geometry_into, rest_terms_into, stiffness_from_geometry_into, weight_moment_into
-
-# The parallel kernels run in processes that a sweep may fork; GNU OpenMP aborts
-# on fork(), the workqueue layer does not (set NUMBA_THREADING_LAYER to override).
-if "NUMBA_THREADING_LAYER" not in os.environ:
-    numba.config.THREADING_LAYER = "workqueue"  # type: ignore[attr-defined]
 
 
 # ------------------------------------------------------------------ many poses

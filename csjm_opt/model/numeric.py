@@ -15,6 +15,8 @@ symbolic reference the kernels are tested against (evaluated by a CasADi
 
 from __future__ import annotations
 
+import functools
+import os
 import threading
 import weakref
 from typing import Any
@@ -40,9 +42,39 @@ def parallel_ok(n: int) -> bool:
 
     numba's workqueue threading layer (chosen because it survives ``fork()``)
     must not be entered from two threads at once, so calls from other threads
-    (a threaded Dask worker, a GUI) run the serial kernels.
+    (a threaded Dask worker, a GUI) run the serial kernels. The layer is chosen
+    here, before the first parallel call, not at import (see
+    :func:`_choose_threading_layer`).
+
+    Parameters
+    ----------
+    n : int
+        Number of poses of the batch.
+
+    Returns
+    -------
+    bool
+        True when the batch goes to the ``*_par`` kernels.
     """
-    return n >= PARALLEL_MIN_POSES and threading.current_thread() is threading.main_thread()
+    ok = n >= PARALLEL_MIN_POSES and threading.current_thread() is threading.main_thread()
+    if ok:
+        _choose_threading_layer()
+    return ok
+
+
+@functools.cache
+def _choose_threading_layer() -> None:
+    """Pick numba's ``workqueue`` layer before the first parallel kernel runs, unless the user chose one.
+
+    GNU OpenMP aborts a process that forks after using it (a sweep's process pool
+    did); workqueue does not. A layer set through ``NUMBA_THREADING_LAYER`` or
+    ``numba.config.THREADING_LAYER`` is left alone. Nothing is changed by
+    importing the package: only a process that runs a parallel kernel gets here.
+    """
+    import numba
+
+    if "NUMBA_THREADING_LAYER" not in os.environ and numba.config.THREADING_LAYER == "default":  # type: ignore[attr-defined]
+        numba.config.THREADING_LAYER = "workqueue"  # type: ignore[attr-defined]
 
 
 def as_rotations_fast(Rs: Any, name: str = "Rs") -> np.ndarray:
