@@ -11,11 +11,10 @@ column of a fault, or accepts what only it can read, such as quoted cells,
 
 Numbers: a cell must match ``[+-]digits[.digits][(e|E)[+-]digits]`` (at least
 one digit before the exponent). Its value is exactly the one ``float(cell)``
-gives: decimal significands of at most 15 digits with a power of ten of at
-most 22 are computed exactly in one rounded operation (Clinger's fast path);
-the others go to the C library's ``strtod``, correctly rounded on glibc, musl
-and macOS. Where no such ``strtod`` is found, :data:`AVAILABLE` is false and
-the caller uses its strict parser throughout.
+gives: :func:`csjm_opt.measurement._decimal_float.decimal_to_float` for
+significands of up to 19 digits, else the C library's ``strtod``, correctly
+rounded on glibc, musl and macOS. Where no such ``strtod`` is found,
+:data:`AVAILABLE` is false and the caller uses its strict parser throughout.
 """
 
 from __future__ import annotations
@@ -31,13 +30,13 @@ from numba.core import cgutils, types
 from numba.extending import intrinsic
 
 from .._limits import MAX_EXACT_INT
+from ._decimal_float import decimal_to_float
 
 #: Status of :func:`scan_rows`: the end of the data was reached, or a line that is not plain.
 END, NOT_PLAIN = 0, 1
 
 _COMMA, _LF, _CR, _QUOTE, _NUL, _SPACE, _TAB = 44, 10, 13, 34, 0, 32, 9
 _MAX_TOKEN = 62          # longer numbers go to the strict parser
-_EXACT_POW10 = np.array([10.0 ** k for k in range(23)])   # exact in float64
 
 
 def _find_strtod() -> int | None:
@@ -73,7 +72,7 @@ def _strtod(typingctx, text_address, end_address):
 
 
 @njit(cache=True, nogil=True)
-def _number(buf, p, scratch, end_slot, pow10):
+def _number(buf, p, scratch, end_slot):
     """Parse one numeric cell from ``buf[p]``: ``(position after it, value, ok)``.
 
     The position is that of the cell's terminator (spaces and tabs around the
@@ -135,10 +134,10 @@ def _number(buf, p, scratch, end_slot, pow10):
     stop = p
     while p < n and (buf[p] == _SPACE or buf[p] == _TAB):
         p += 1
-    if exact and digits <= 15 and -22 <= exp10 <= 22:   # Clinger: one correctly rounded operation
-        value = float(mantissa)
-        value = value * pow10[exp10] if exp10 >= 0 else value / pow10[-exp10]
-        return p, -value if negative else value, True
+    if exact:
+        value, ok = decimal_to_float(mantissa, digits, exp10)
+        if ok:
+            return p, -value if negative else value, True
     length = stop - start
     if length > _MAX_TOKEN:
         return p, 0.0, False
@@ -153,7 +152,7 @@ def _number(buf, p, scratch, end_slot, pow10):
 
 
 @njit(cache=True, nogil=True)
-def _scan(buf, pos, line, row, n_int, n_num, n_cells, values, lines, extra_lo, extra_hi, pow10, max_int):
+def _scan(buf, pos, line, row, n_int, n_num, n_cells, values, lines, extra_lo, extra_hi, max_int):
     n = buf.size
     scratch = np.zeros(_MAX_TOKEN + 2, np.uint8)
     end_slot = np.zeros(1, np.intp)
@@ -174,7 +173,7 @@ def _scan(buf, pos, line, row, n_int, n_num, n_cells, values, lines, extra_lo, e
         plain = True
         while True:
             if cell < n_num:
-                p, value, plain = _number(buf, p, scratch, end_slot, pow10)
+                p, value, plain = _number(buf, p, scratch, end_slot)
                 if not plain or not abs(value) < np.inf or (
                         cell < n_int and (value != np.floor(value) or abs(value) > max_int)):
                     plain = False
@@ -251,7 +250,7 @@ def scan_rows(buf: np.ndarray, pos: int, line: int, row: int, n_int: int, n_cell
         also left unread (``NOT_PLAIN``) when ``values`` is full.
     """
     return _scan(buf, pos, line, row, n_int, values.shape[1], n_cells, values, lines, extra_lo, extra_hi,
-                 _EXACT_POW10, float(MAX_EXACT_INT))
+                 float(MAX_EXACT_INT))
 
 
 @njit(cache=True, nogil=True)
