@@ -18,14 +18,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from llvmlite import ir
 from numba import njit
+from numba.core import types
+from numba.extending import intrinsic
 
 _Q_MIN, _Q_MAX = -348, 347
 _EXACT_POW10 = np.array([10.0 ** k for k in range(23)])   # exact in float64
-_LOW32 = np.uint64(0xFFFFFFFF)
 _LOW9 = np.uint64(0x1FF)
-_TOP = np.uint64(1 << 63)
-_U0, _U1, _U9, _U32, _U53 = np.uint64(0), np.uint64(1), np.uint64(9), np.uint64(32), np.uint64(53)
+_U0, _U1, _U9, _U53 = np.uint64(0), np.uint64(1), np.uint64(9), np.uint64(53)
 
 
 def _powers_of_ten_128() -> tuple[np.ndarray, np.ndarray]:
@@ -47,14 +48,30 @@ def _powers_of_ten_128() -> tuple[np.ndarray, np.ndarray]:
 _POW10_HI, _POW10_LO = _powers_of_ten_128()
 
 
-@njit(cache=True, nogil=True)
-def _mul_64x64(a, b):
-    """The 128-bit product of two uint64 as ``(high, low)`` words."""
-    a_lo, a_hi = a & _LOW32, a >> _U32
-    b_lo, b_hi = b & _LOW32, b >> _U32
-    p0, p1, p2, p3 = a_lo * b_lo, a_lo * b_hi, a_hi * b_lo, a_hi * b_hi
-    mid = (p0 >> _U32) + (p1 & _LOW32) + (p2 & _LOW32)
-    return p3 + (p1 >> _U32) + (p2 >> _U32) + (mid >> _U32), (mid << _U32) | (p0 & _LOW32)
+@intrinsic
+def _mul_64x64(typingctx, a, b):
+    """The 128-bit product of two uint64 as ``(high, low)`` words (one machine multiplication)."""
+    sig = types.UniTuple(types.uint64, 2)(types.uint64, types.uint64)
+
+    def codegen(context, builder, signature, args):
+        i128 = ir.IntType(128)
+        product = builder.mul(builder.zext(args[0], i128), builder.zext(args[1], i128))
+        high = builder.trunc(builder.lshr(product, ir.Constant(i128, 64)), ir.IntType(64))
+        low = builder.trunc(product, ir.IntType(64))
+        return context.make_tuple(builder, signature.return_type, [high, low])
+
+    return sig, codegen
+
+
+@intrinsic
+def _leading_zeros(typingctx, a):
+    """Number of leading zero bits of a non-zero uint64."""
+    sig = types.int64(types.uint64)
+
+    def codegen(context, builder, signature, args):
+        return builder.ctlz(args[0], ir.Constant(ir.IntType(1), 1))
+
+    return sig, codegen
 
 
 @njit(cache=True, nogil=True)
@@ -62,10 +79,8 @@ def _eisel_lemire(w, q, pow10_hi, pow10_lo):
     """``(value, ok)``: the double nearest ``w * 10**q`` for ``0 < w < 2**64``, or ``ok`` false."""
     if q < _Q_MIN or q > _Q_MAX:
         return 0.0, False
-    clz = 0
-    while w & _TOP == _U0:
-        w = w << _U1
-        clz += 1
+    clz = _leading_zeros(w)
+    w = w << np.uint64(clz)
     exp2 = ((217706 * q) >> 16) + 64 + 1023 - clz
     i = q - _Q_MIN
     x_hi, x_lo = _mul_64x64(w, pow10_hi[i])
