@@ -45,7 +45,7 @@ def _cells(rng, n):
     return out
 
 
-def _log_text(rng, n=300, extra=0, newline="\n", trailing=True, blank=False, quoted=False, note="x"):
+def _log_text(rng, n=300, extra=0, newline="\n", trailing=True, blank=False, quoted=0.0, note="x"):
     header = HEADER + "".join(f",note{j}" for j in range(extra))
     cycle = np.cumsum(rng.random(n) < 0.1)
     lines = [header]
@@ -53,7 +53,7 @@ def _log_text(rng, n=300, extra=0, newline="\n", trailing=True, blank=False, quo
         extras = [f"{note}{i}" if j % 2 == 0 else "" for j in range(extra)]
         if extra and rng.random() < 0.2:
             extras = extras[:int(rng.integers(0, extra))]      # short row: missing extras are empty
-        if quoted and rng.random() < 0.3:
+        if rng.random() < quoted:
             extras = [f'"a, ""{i}"""'] + extras[1:] if extras else extras
             cells[3] = f'"{cells[3]}"'
         lines.append(",".join([str(1000 + i), str(int(cycle[i]))] + cells + extras))
@@ -75,12 +75,25 @@ def _same(a: MeasurementLog, b: MeasurementLog) -> None:
 
 @pytest.mark.parametrize("kw", [
     {}, {"extra": 2}, {"extra": 3, "newline": "\r\n"}, {"trailing": False}, {"extra": 1, "trailing": False},
-    {"blank": True, "newline": "\r\n"}, {"quoted": True, "extra": 2}, {"extra": 1, "note": "café ✓"},
+    {"blank": True, "newline": "\r\n"}, {"quoted": 0.3, "extra": 2}, {"extra": 1, "note": "café ✓"},
 ])
 def test_fast_reader_equals_strict_reader(kw):
     rng = np.random.default_rng(len(str(kw)))
     text = _log_text(rng, **kw)
     _same(MeasurementLog.from_text(text, "g.csv"), strict_log(text, "g.csv"))
+
+
+def test_mostly_quoted_log_is_left_to_the_strict_parser(monkeypatch):
+    monkeypatch.setattr(_log_reader, "_STRICT_RUN", 5)
+    text = _log_text(np.random.default_rng(8), quoted=0.9, extra=2, blank=True)
+    _same(MeasurementLog.from_text(text, "q.csv"), strict_log(text, "q.csv"))
+    lines = text.split("\n")
+    lines[250] = lines[250].replace(",", ",,", 1)                   # an empty cycle cell near the end
+    with pytest.raises(DataFileError) as got:
+        MeasurementLog.from_text("\n".join(lines), "q.csv")
+    with pytest.raises(DataFileError) as ref:
+        strict_log("\n".join(lines), "q.csv")
+    assert (str(got.value), got.value.line) == (str(ref.value), ref.value.line)
 
 
 def test_file_and_text_agree(tmp_path):
@@ -92,8 +105,8 @@ def test_file_and_text_agree(tmp_path):
 
 def test_plain_rows_never_reach_the_strict_parser(monkeypatch):
     calls = []
-    real = _log_reader.strict_record
-    monkeypatch.setattr(_log_reader, "strict_record", lambda *a: calls.append(a[2]) or real(*a))
+    real = _log_reader.strict_records
+    monkeypatch.setattr(_log_reader, "strict_records", lambda *a: calls.append(a[2]) or real(*a))
     rng = np.random.default_rng(4)
     MeasurementLog.from_text(_log_text(rng, extra=2, newline="\r\n", blank=True), "p.csv")
     assert calls == []

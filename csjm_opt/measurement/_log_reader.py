@@ -2,8 +2,9 @@
 
 :func:`read_log_bytes` reads plain rows with
 :func:`csjm_opt.measurement._fast_csv.scan_rows` and hands every other line
-(one record at a time) to :func:`strict_record`, the row-by-row parser built
-on the ``csv`` module, then resumes the compiled pass after it. Both accept
+(one record at a time) to :func:`strict_records`, the row-by-row parser built
+on the ``csv`` module, then resumes the compiled pass after it (unless most
+rows so far needed the strict parser: then it reads the rest). Both accept
 exactly the same rows with the same values, so the result, and the first
 error with its line and column, are those of :func:`read_log_strict`, the
 row-by-row reading of the whole text (the reference, and the path used where
@@ -112,16 +113,16 @@ def _finish(V: np.ndarray, lines: np.ndarray, extra: dict, source: str | None) -
     return LogRows(V, lines, extra)
 
 
-def strict_record(data: bytes, pos: int, line: int, n_header: int,
-                  source: str | None) -> tuple[int, int, tuple[list, list] | None]:
-    """One record read by the strict parser from ``data[pos:]`` (``line`` is its first line).
+def strict_records(data: bytes, pos: int, line: int, n_header: int,
+                   source: str | None) -> Iterator[tuple[int, int, tuple[list, list] | None]]:
+    """Records read by the strict parser from ``data[pos:]`` (``line`` is its first line), one at a time.
 
     Parameters
     ----------
     data : bytes
         The log's UTF-8 bytes.
     pos : int
-        Offset of the record's first line.
+        Offset of the first record's first line.
     line : int
         That line's number.
     n_header : int
@@ -129,16 +130,16 @@ def strict_record(data: bytes, pos: int, line: int, n_header: int,
     source : str or None
         Names the log in errors.
 
-    Returns
-    -------
+    Yields
+    ------
     tuple
         ``(pos, line, parsed)``: the offset and number of the line after the
-        record, and :func:`strict_row`'s result (its line is ``line - 1``).
+        record, and :func:`strict_row`'s result (the record's line is ``line - 1``).
 
     Raises
     ------
     DataFileError
-        If the record is malformed, naming its line and column.
+        If a record is malformed, naming its line and column.
     """
     after = [pos]
 
@@ -152,12 +153,19 @@ def strict_record(data: bytes, pos: int, line: int, n_header: int,
             p = end
 
     reader = csv.reader(physical_lines())
-    try:
-        row = next(reader, [])
-    except csv.Error as exc:
-        raise DataFileError(f"not readable as CSV: {exc}", source, line + reader.line_num - 1) from None
-    last = line + reader.line_num - 1
-    return after[0], last + 1, strict_row(row, n_header, source, last)
+    while True:
+        try:
+            row = next(reader, None)
+        except csv.Error as exc:
+            raise DataFileError(f"not readable as CSV: {exc}", source, line + reader.line_num - 1) from None
+        if row is None:
+            return
+        last = line + reader.line_num - 1
+        yield after[0], last + 1, strict_row(row, n_header, source, last)
+
+
+#: After this many lines for the strict parser, if they are most of the rows so far, it reads the rest.
+_STRICT_RUN = 1000
 
 
 def read_log_bytes(data: bytes, source: str | None) -> LogRows:
@@ -204,13 +212,18 @@ def read_log_bytes(data: bytes, source: str | None) -> LogRows:
                                                      lo, hi)
         if status == _fast_csv.END:
             break
-        pos, line, parsed = strict_record(data, pos, line, n_header, source)
-        if parsed is not None:
-            values[row] = parsed[0]
-            lines[row] = line - 1
-            lo[row] = hi[row] = 0
-            strict_extras[row] = parsed[1]
-            row += 1
+        for after, next_line, parsed in strict_records(data, pos, line, n_header, source):
+            pos, line = after, next_line
+            if parsed is not None:
+                values[row] = parsed[0]
+                lines[row] = line - 1
+                lo[row] = hi[row] = 0
+                strict_extras[row] = parsed[1]
+                row += 1
+            if len(strict_extras) < _STRICT_RUN or 2 * len(strict_extras) < row:
+                break                      # back to the compiled pass
+        else:
+            break                          # the strict parser read to the end
     extra = {}
     for j, name in enumerate(header[n_num:]):
         column = _fast_csv.text_column(buf, lo[:row, j], hi[:row, j])
