@@ -5,7 +5,8 @@ Run: ``python benchmarks/bench_logread.py [--mb 1 20 200] [--repeat 3]``
 Writes logs of the given sizes to a temporary folder (never committed): rows
 as ``MeasurementLog.to_text`` writes them (17-digit ``repr`` numbers, unique
 sample ids, 20-row cycles), half of them with a ``note`` column. For each size
-it prints the median wall time over ``--repeat`` runs and the rate in MB/s of
+it prints the median wall time over ``--repeat`` runs, the rate in MB/s, the
+ratio to numpy.loadtxt and the median CPU time (the box is shared) of
 
 * ``from_csv``: the package's reader (all checks: header, every cell, bounds,
   unique ids, consecutive cycles; errors naming line and column);
@@ -60,13 +61,15 @@ def write_log(path: Path, megabytes: float, note: bool, seed: int = 0) -> int:
     return path.stat().st_size
 
 
-def median_time(fn, repeat: int) -> float:
+def median_time(fn, repeat: int) -> tuple[float, float]:
+    """Median wall and CPU seconds of ``fn()``."""
     times = []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
+        times.append((time.perf_counter() - t0, time.process_time() - c0))
+    wall, cpu = np.median(np.array(times), axis=0)
+    return float(wall), float(cpu)
 
 
 def csv_float(path: Path) -> None:
@@ -114,7 +117,8 @@ def main() -> None:
     ap.add_argument("--slow-mb", type=float, default=20, help="largest size for the csv and strict readers")
     args = ap.parse_args()
     MeasurementLog.from_text(",".join(COLUMNS) + "\n0,0,0.1,0.1,0.1,0.1,0.1,0.1,0,0,0,0,0,0\n")  # compile
-    print(f"{'size':>8s} {'note':>5s} {'reader':<14s} {'median s':>9s} {'MB/s':>8s} {'vs loadtxt':>11s}")
+    print(f"{'size':>8s} {'note':>5s} {'reader':<14s} {'median s':>9s} {'MB/s':>8s} {'vs loadtxt':>11s} "
+          f"{'CPU s':>7s} {'MB/CPU s':>9s}")
     with tempfile.TemporaryDirectory() as tmp:
         for mb in args.mb:
             for note in (False, True):
@@ -128,9 +132,9 @@ def main() -> None:
                     times["csv + float"] = median_time(lambda p=path: csv_float(p), args.repeat)
                     times["strict"] = median_time(lambda p=path: read_log_strict(p.read_text(), str(p)),
                                                   args.repeat)
-                for name, t in times.items():
+                for name, (t, cpu) in times.items():
                     print(f"{MB:7.1f}M {'yes' if note else 'no':>5s} {name:<14s} {t:9.3f} {MB / t:8.1f} "
-                          f"{times['numpy.loadtxt'] / t:10.2f}x", flush=True)
+                          f"{times['numpy.loadtxt'][0] / t:10.2f}x {cpu:7.3f} {MB / cpu:9.1f}", flush=True)
                 rss, traced = peak_ratios(path, size)
                 print(f"{'':>8s} {'':>5s} peak memory of from_csv: {rss:.2f} x the file size (resident set), "
                       f"{traced:.2f} x (tracemalloc)", flush=True)
