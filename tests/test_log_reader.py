@@ -96,6 +96,14 @@ def test_mostly_quoted_log_is_left_to_the_strict_parser(monkeypatch):
     assert (str(got.value), got.value.line) == (str(ref.value), ref.value.line)
 
 
+def test_without_the_compiled_pass_the_strict_parser_reads_everything(monkeypatch):
+    text = _log_text(np.random.default_rng(9), n=50, extra=1, newline="\r\n")
+    fast = MeasurementLog.from_text(text, "w.csv")
+    monkeypatch.setattr(_fast_csv, "AVAILABLE", False)
+    monkeypatch.setattr(_fast_csv, "scan_rows", None)     # would fail if called
+    _same(MeasurementLog.from_text(text, "w.csv"), fast)
+
+
 def test_file_and_text_agree(tmp_path):
     text = _log_text(np.random.default_rng(3), extra=1, newline="\r\n")
     path = tmp_path / "log.csv"

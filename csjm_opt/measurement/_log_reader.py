@@ -9,6 +9,11 @@ exactly the same rows with the same values, so the result, and the first
 error with its line and column, are those of :func:`read_log_strict`, the
 row-by-row reading of the whole text (the reference, and the path used where
 the compiled pass is unavailable).
+
+To accept a new kind of cell (say, empty measured columns in a protocol
+file), change :func:`strict_row`, the reference: the compiled pass already
+hands every line it does not accept to it, so the result stays right (only
+slower on those lines) until the pass learns the same rule.
 """
 
 from __future__ import annotations
