@@ -104,6 +104,11 @@ def test_without_the_compiled_pass_the_strict_parser_reads_everything(monkeypatc
     _same(MeasurementLog.from_text(text, "w.csv"), fast)
 
 
+def test_text_with_a_lone_surrogate_is_read_strictly():
+    text = _log_text(np.random.default_rng(10), n=5, extra=1, note="\udc80")
+    _same(MeasurementLog.from_text(text, "s.csv"), strict_log(text, "s.csv"))
+
+
 def test_file_and_text_agree(tmp_path):
     text = _log_text(np.random.default_rng(3), extra=1, newline="\r\n")
     path = tmp_path / "log.csv"

@@ -28,7 +28,7 @@ from .._fileio import atomic_write_text, decode_text, read_bytes
 from .._limits import MAX_EXACT_INT
 from ..errors import DataFileError, InvalidInput
 from ._log_checks import _check_rows, _rows, parse_number
-from ._log_reader import COLUMNS, LogRows, read_log_bytes
+from ._log_reader import COLUMNS, LogRows, read_log_bytes, read_log_strict
 
 __all__ = ["COLUMNS", "MeasurementLog", "parse_number"]
 
@@ -215,7 +215,11 @@ class MeasurementLog:
         DataFileError
             If the header is wrong or a row is malformed, naming the line.
         """
-        return cls._from_rows(read_log_bytes(text.encode("utf-8"), source), source)
+        try:
+            data = text.encode("utf-8")
+        except UnicodeEncodeError:        # lone surrogates: text no file holds; the strict parser reads it
+            return cls._from_rows(read_log_strict(text, source), source)
+        return cls._from_rows(read_log_bytes(data, source), source)
 
     @classmethod
     def _from_rows(cls, rows: LogRows, source: str | None) -> MeasurementLog:
