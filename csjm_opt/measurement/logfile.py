@@ -24,15 +24,13 @@ from pathlib import Path
 import numpy as np
 
 from .. import so3
-from ..errors import DataFileError, InvalidInput
-from .._fileio import atomic_write_text, read_text
+from .._fileio import atomic_write_text, decode_text, read_bytes
 from .._limits import MAX_EXACT_INT
+from ..errors import DataFileError, InvalidInput
 from ._log_checks import _check_rows, _rows, parse_number
+from ._log_reader import COLUMNS, LogRows, read_log_bytes, read_log_strict
 
 __all__ = ["COLUMNS", "MeasurementLog", "parse_number"]
-
-COLUMNS = ("sample", "cycle", "l1", "l2", "l3", "l4", "l5", "l6",
-           "tau_x", "tau_y", "tau_z", "rx", "ry", "rz")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -84,7 +82,7 @@ class MeasurementLog:
             raise DataFileError(f"no cycle {cycle} (cycles: {self.cycle_ids})", self.source)
         return rows
 
-    def subset(self, rows: np.ndarray) -> "MeasurementLog":
+    def subset(self, rows: np.ndarray) -> MeasurementLog:
         """The log restricted to ``rows`` (kept in the given order).
 
         Parameters
@@ -113,7 +111,7 @@ class MeasurementLog:
     # ------------------------------------------------------------ construction
     @classmethod
     def from_arrays(cls, cycle, rest_lengths_m, tau_ext_A_Nm, R_or_rotvec, sample=None,
-                    extra: dict | None = None) -> "MeasurementLog":
+                    extra: dict | None = None) -> MeasurementLog:
         """Build a log from arrays (one row per static equilibrium, in time order).
 
         Parameters
@@ -161,7 +159,7 @@ class MeasurementLog:
         return log
 
     @classmethod
-    def from_csv(cls, path: str | Path) -> "MeasurementLog":
+    def from_csv(cls, path: str | Path) -> MeasurementLog:
         """Read and validate a measurement log file (format in docs/conventions.md).
 
         Parameters
@@ -181,55 +179,54 @@ class MeasurementLog:
             non-numeric or non-finite value, duplicate sample id), naming the line.
         """
         path = Path(path)
-        text = read_text(path, lambda msg: DataFileError(msg, str(path)), "log file", encoding="utf-8-sig")
-        return cls.from_text(text, str(path))
+
+        def error(msg: str) -> DataFileError:
+            return DataFileError(msg, str(path))
+
+        data = read_bytes(path, error, "log file")
+        if not data.isascii() or b"\x00" in data[:4096]:   # what decode_text checks or changes
+            data = decode_text(data, error, "log file").encode("utf-8")
+        return cls._from_rows(read_log_bytes(data, str(path)), str(path))
 
     @classmethod
-    def from_text(cls, text: str, source: str | None = None) -> "MeasurementLog":
+    def from_text(cls, text: str, source: str | None = None) -> MeasurementLog:
         """Parse and validate log text; ``source`` names it in errors.
 
-        A vectorised path reads plain logs (exactly the 14 columns, no quotes);
-        anything it does not accept is read again by the strict row-by-row
-        parser, which raises the :class:`DataFileError` naming the line.
+        Plain rows (numbers only in the 14 standard columns, no quotes) are read
+        by a compiled pass over the bytes; any other line is read by the strict
+        row-by-row parser, which raises the :class:`DataFileError` naming the
+        line and column of a fault. Both accept the same rows with the same
+        values (see :mod:`csjm_opt.measurement._log_reader`).
+
+        Parameters
+        ----------
+        text : str
+            The log's text (a leading byte-order mark is dropped).
+        source : str, optional
+            Name of the log in errors (a file name).
+
+        Returns
+        -------
+        MeasurementLog
+            The log, rows in text order.
+
+        Raises
+        ------
+        DataFileError
+            If the header is wrong or a row is malformed, naming the line.
         """
-        fast = _fast_parse(text, source)
-        if fast is not None:
-            return fast
-        reader = csv.reader(io.StringIO(text))
         try:
-            header = [h.strip() for h in next(reader)]
-        except StopIteration:
-            raise DataFileError("empty file: expected a header " + ",".join(COLUMNS), source, 1) from None
-        if tuple(header[:len(COLUMNS)]) != COLUMNS:
-            missing = [c for c in COLUMNS if c not in header]
-            detail = f"missing {missing}" if missing else f"got {header[:len(COLUMNS)]}"
-            raise DataFileError(f"header must start with {','.join(COLUMNS)}; {detail}", source, 1)
-        extra_names = header[len(COLUMNS):]
-        values, extras, lines = [], [], []
-        for row in reader:
-            line = reader.line_num
-            if not row or all(not c.strip() for c in row):
-                continue  # blank line
-            if len(row) < len(COLUMNS):
-                raise DataFileError(f"expected {len(header)} values, got {len(row)}", source, line)
-            if len(row) > len(header):
-                raise DataFileError(f"expected {len(header)} values, got {len(row)}", source, line)
-            nums = []
-            for name, cell in zip(COLUMNS, row):
-                cell = cell.strip()
-                if cell == "":
-                    raise DataFileError("missing value", source, line, name)
-                nums.append(parse_number(cell, name, source, line, integer=name in ("sample", "cycle")))
-            values.append(nums)
-            extras.append(row[len(COLUMNS):] + [""] * (len(extra_names) - (len(row) - len(COLUMNS))))
-            lines.append(line)
-        if not values:
-            raise DataFileError("no data rows", source, 2)
-        V = np.asarray(values)
-        E = np.asarray(extras, dtype=str).reshape(len(values), len(extra_names))
-        log = cls(V[:, 0].astype(int), V[:, 1].astype(int), V[:, 2:8], V[:, 8:11], V[:, 11:14],
-                  {name: E[:, j] for j, name in enumerate(extra_names)}, source)
-        _check_rows(log, source, np.asarray(lines))
+            data = text.encode("utf-8")
+        except UnicodeEncodeError:        # lone surrogates: text no file holds; the strict parser reads it
+            return cls._from_rows(read_log_strict(text, source), source)
+        return cls._from_rows(read_log_bytes(data, source), source)
+
+    @classmethod
+    def _from_rows(cls, rows: LogRows, source: str | None) -> MeasurementLog:
+        V = rows.values
+        log = cls(V[:, 0].astype(np.int64), V[:, 1].astype(np.int64), V[:, 2:8], V[:, 8:11], V[:, 11:14],
+                  rows.extra, source)
+        _check_rows(log, source, rows.lines)
         return log
 
     def to_csv(self, path: str | Path, overwrite: bool = False) -> Path:
@@ -273,28 +270,3 @@ class MeasurementLog:
                        + [str(v[i]) for v in self.extra.values()])
         return buf.getvalue()
 
-
-def _fast_parse(text: str, source: str | None) -> "MeasurementLog | None":
-    """Vectorised reading of a plain log, or ``None`` to fall back to the strict parser."""
-    if '"' in text or "\r" in text:
-        return None
-    lines = text.split("\n")
-    if tuple(h.strip() for h in lines[0].lstrip("\ufeff").split(",")) != COLUMNS:
-        return None
-    keep = [i for i in range(1, len(lines)) if lines[i].strip()]   # blank lines are skipped
-    if not keep:
-        return None
-    body = [lines[i] for i in keep]
-    if any(line.count(",") != len(COLUMNS) - 1 for line in body):
-        return None
-    try:
-        V = np.array(",".join(body).split(","), dtype=float).reshape(len(body), len(COLUMNS))
-    except ValueError:
-        return None
-    ids = V[:, :2]
-    if not (np.all(np.isfinite(V)) and np.all(np.floor(ids) == ids) and np.all(np.abs(ids) <= MAX_EXACT_INT)):
-        return None
-    log = MeasurementLog(V[:, 0].astype(np.int64), V[:, 1].astype(np.int64), V[:, 2:8], V[:, 8:11], V[:, 11:14],
-                         {}, source)
-    _check_rows(log, source, np.asarray(keep) + 1)
-    return log
