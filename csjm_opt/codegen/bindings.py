@@ -198,9 +198,11 @@ class CPlanner:
             taut = T > 0
             bad = taut & ((T < self.t_min_N - bound_tol_N) | (T > self.t_max_N + bound_tol_N))
             if np.any(bad):
-                i = int(np.argmax(bad))
-                raise InconsistentTensions(f"tensions[{i}] = {T[i]:.6g} N is outside [{self.t_min_N:g}, "
-                                           f"{self.t_max_N:g}] N", "tensions")
+                viol = np.maximum(self.t_min_N - T, T - self.t_max_N)
+                i = int(np.argmax(np.where(bad, viol, -np.inf)))
+                raise InconsistentTensions(f"tensions[{i}] {T[i]:.6g} N leave [{self.t_min_N:g}, {self.t_max_N:g}] N "
+                                           f"by {viol[i]:.3g} N (pass check_bounds=False for states outside the "
+                                           "planner's bounds)", "bounds", float(viol[i]))
         K = np.empty(9)
         if self._lib.csjm_stiffness_R(_ptr(R_arr), _ptr(T), _ptr(K)) != SOLVED:
             as_rotation(R_arr)
