@@ -90,6 +90,9 @@ class CPlanner:
         lib.csjm_host_stiffness_batch.argtypes = [ctypes.c_int, _D, _D, _D, _I]
         lib.csjm_host_stiffness_batch.restype = None
         lib.csjm_host_time_plan.argtypes = [ctypes.c_int, _D, _D, ctypes.c_int, ctypes.c_int, _D, _D]
+        lib.csjm_rig_sha256.restype = ctypes.c_char_p
+        #: SHA-256 of the rig the library was generated from (:func:`csjm_opt.codegen.rig_fingerprint`).
+        self.rig_sha256 = lib.csjm_rig_sha256().decode()
         self.t_min_N = float(lib.csjm_t_min_N())
         self.t_max_N = float(lib.csjm_t_max_N())
         self._warm = _Warm()

@@ -89,9 +89,10 @@ int csjm_stiffness_q(const double q_wxyz[4], const double tensions_N[6], double 
 /* The rotation (row-major) of a quaternion (w, x, y, z) of norm 1 within CSJM_QUATERNION_TOL. */
 int csjm_rotation_from_quaternion(const double q_wxyz[4], double R[9]);
 
-/* The rig's tension bounds (N). */
+/* The rig's tension bounds (N), and the SHA-256 of the rig file text it was generated from. */
 double csjm_t_min_N(void);
 double csjm_t_max_N(void);
+const char *csjm_rig_sha256(void);
 
 #ifdef __cplusplus
 }

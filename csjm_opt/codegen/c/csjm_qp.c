@@ -161,12 +161,12 @@ static double clamp(double x, double lo, double hi)
     return x < lo ? lo : (x > hi ? hi : x);
 }
 
-/* |r0 + x gi + y gj| for (x, y) */
+/* |r0 + x gi + y gj|^2 for (x, y) */
 static double residual2(const double r0[3], const double gi[3], const double gj[3], double x, double y)
 {
     double e0 = r0[0] + x * gi[0] + y * gj[0], e1 = r0[1] + x * gi[1] + y * gj[1];
     double e2 = r0[2] + x * gi[2] + y * gj[2];
-    return sqrt(e0 * e0 + e1 * e1 + e2 * e2);
+    return e0 * e0 + e1 * e1 + e2 * e2;
 }
 
 double csjm_qp_distance(const double J[18], const double b[3], double lo, double hi, double t[6])
@@ -181,9 +181,11 @@ double csjm_qp_distance(const double J[18], const double b[3], double lo, double
             double c = gj[0] * gj[0] + gj[1] * gj[1] + gj[2] * gj[2];
             double bb = gi[0] * gj[0] + gi[1] * gj[1] + gi[2] * gj[2];
             double det = a * c - bb * bb;
+            double inv_a = a > 0.0 ? 1.0 / a : 0.0, inv_c = c > 0.0 ? 1.0 / c : 0.0;
+            double inv_det = det > 1e-12 * a * c ? 1.0 / det : 0.0;
             for (mask = 0; mask < 16; ++mask) {   /* the four other cables at lo (bit 0) or hi (bit 1) */
-                double r0[3] = {-b[0], -b[1], -b[2]}, p, q, xs[5], ys[5], d;
-                int bit = 0, e;
+                double r0[3] = {-b[0], -b[1], -b[2]}, p, q, xs[4], ys[4], d;
+                int bit = 0, e, n_cand;
                 for (k = 0; k < 6; ++k) {
                     double tk;
                     if (k == i || k == j) continue;
@@ -195,17 +197,18 @@ double csjm_qp_distance(const double J[18], const double b[3], double lo, double
                 }
                 p = gi[0] * r0[0] + gi[1] * r0[1] + gi[2] * r0[2];
                 q = gj[0] * r0[0] + gj[1] * r0[1] + gj[2] * r0[2];
-                /* candidates: the four edges (1-D clamped minimisers), then the interior point */
-                xs[0] = lo; ys[0] = c > 0.0 ? clamp(-(q + bb * lo) / c, lo, hi) : lo;
-                xs[1] = hi; ys[1] = c > 0.0 ? clamp(-(q + bb * hi) / c, lo, hi) : lo;
-                ys[2] = lo; xs[2] = a > 0.0 ? clamp(-(p + bb * lo) / a, lo, hi) : lo;
-                ys[3] = hi; xs[3] = a > 0.0 ? clamp(-(p + bb * hi) / a, lo, hi) : lo;
-                xs[4] = ys[4] = lo;
-                if (det > 1e-12 * a * c) {
-                    double x = (-p * c + q * bb) / det, y = (-q * a + p * bb) / det;
-                    if (x >= lo && x <= hi && y >= lo && y <= hi) { xs[4] = x; ys[4] = y; }
+                /* the interior minimiser if it lies in the box (then it is the face's minimum),
+                 * else the four edges' clamped 1-D minimisers */
+                n_cand = 4;
+                xs[0] = lo; ys[0] = clamp(-(q + bb * lo) * inv_c, lo, hi);
+                xs[1] = hi; ys[1] = clamp(-(q + bb * hi) * inv_c, lo, hi);
+                ys[2] = lo; xs[2] = clamp(-(p + bb * lo) * inv_a, lo, hi);
+                ys[3] = hi; xs[3] = clamp(-(p + bb * hi) * inv_a, lo, hi);
+                if (inv_det > 0.0) {
+                    double x = (-p * c + q * bb) * inv_det, y = (-q * a + p * bb) * inv_det;
+                    if (x >= lo && x <= hi && y >= lo && y <= hi) { xs[0] = x; ys[0] = y; n_cand = 1; }
                 }
-                for (e = 0; e < 5; ++e) {
+                for (e = 0; e < n_cand; ++e) {
                     d = residual2(r0, gi, gj, xs[e], ys[e]);
                     if (d < best) {
                         best = d;
@@ -220,5 +223,5 @@ double csjm_qp_distance(const double J[18], const double b[3], double lo, double
             }
         }
     }
-    return best;
+    return sqrt(best);
 }
