@@ -24,11 +24,17 @@ from csjm_opt.testbed.rigs import draw_rig
 pytestmark = pytest.mark.skipif(find_compiler() is None, reason="no C compiler (cc or $CC) on this machine")
 
 
+def paper_folder(tmp_path_factory):
+    """The paper rig's generated folder, shared by the codegen test modules of this session."""
+    out = tmp_path_factory.getbasetemp() / "codegen_paper"
+    if not (out / "csjm_rig.h").is_file():
+        generate_c(co.paper_rig(), out)
+    return out
+
+
 @pytest.fixture(scope="module")
 def paper_lib(tmp_path_factory):
-    out = tmp_path_factory.mktemp("codegen_paper")
-    generate_c(co.paper_rig(), out)
-    return load(out)
+    return load(paper_folder(tmp_path_factory))
 
 
 def load_scale_Nm(rig) -> float:
