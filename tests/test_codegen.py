@@ -14,8 +14,8 @@ from conftest import cable_energy, fd_hessian
 
 import csjm_opt as co
 from csjm_opt import so3
-from csjm_opt.codegen import INFEASIBLE, SOLVED, find_compiler, generate_c, load
-from csjm_opt.errors import InfeasibleLoad, InvalidInput, NotARotation
+from csjm_opt.codegen import INFEASIBLE, ITERATION_CAP, NO_FALLBACK, SOLVED, find_compiler, generate_c, load
+from csjm_opt.errors import InfeasibleLoad, InvalidInput, NotARotation, SolverError
 from csjm_opt.model.mjcf import quat_wxyz
 from csjm_opt.model.stiffness import stiffness_batch
 from csjm_opt.planning import feasibility_distance_Nm, plan_tensions_batch
@@ -195,3 +195,21 @@ def test_warm_start_along_a_trajectory(paper_lib):
     Rs2, taus2 = smooth_trajectory(rig, 5e-4)
     step_2k = np.abs(np.diff(paper_lib.plan_many(Rs2, taus2, warm_start=True).tensions_N, axis=0)).max()
     assert 1.8 <= step_1k / step_2k <= 2.2                  # Lipschitz in time: no jumps
+
+
+def test_exhaustive_fallback_and_the_iteration_cap(paper_lib):
+    """With one active-set iteration allowed, the rows it does not settle are solved by the exhaustive
+    KKT search to the Python planner's answer; with NO_FALLBACK they report the iteration cap instead."""
+    rig = co.paper_rig()
+    Rs, taus = random_cases(rig, 3000, 0, np.random.default_rng(8))
+    keep = paper_lib.plan_many(Rs, taus).status == SOLVED
+    Rs, taus = Rs[keep], taus[keep]
+    one = paper_lib.plan_many(Rs, taus, max_iter=1)
+    forced = one.fallback == 1
+    assert forced.sum() > 100 and np.all(one.status == SOLVED)
+    py = plan_tensions_batch(rig, Rs[forced], taus[forced])
+    assert np.abs(one.tensions_N[forced] - py.tensions_N).max() <= 1e-9
+    capped = paper_lib.plan_many(Rs, taus, max_iter=1 + NO_FALLBACK)
+    assert np.all(capped.status[forced] == ITERATION_CAP) and np.all(capped.status[~forced] == SOLVED)
+    with pytest.raises(SolverError):
+        paper_lib.plan_tensions(Rs[forced][0], taus[forced][0], max_iter=1 + NO_FALLBACK)
