@@ -70,6 +70,13 @@ def test_makefile_builds_the_example_and_its_1khz_loop_matches_python(paper_dir,
     ref = plan_tensions_batch(co.paper_rig(), Rs, traj[:, 5:8])
     assert np.abs(out[:, 2:8] - ref.tensions_N).max() <= 1e-9
     assert np.abs(out[:, 8:14] - ref.rest_lengths_m).max() <= 1e-12
+    if shutil.which("nm"):   # the library needs nothing but libm: no allocation, no I/O
+        undefined = subprocess.run(["nm", "-u", str(work / "libcsjm.a")], capture_output=True, text=True).stdout
+        defined = subprocess.run(["nm", "--defined-only", str(work / "libcsjm.a")], capture_output=True,
+                                 text=True).stdout
+        own = {ln.split()[-1] for ln in defined.splitlines() if len(ln.split()) == 3}
+        external = {ln.split()[-1] for ln in undefined.splitlines() if ln.strip().startswith("U")} - own
+        assert external <= {"sqrt", "fabs"}, external
 
 
 DRIVER = r"""
