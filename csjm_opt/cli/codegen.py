@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 
 from .._fileio import atomic_write_json
-from ..codegen import build_shared, generate_c
 from ..model.rig import load_rig
 from ._options import check_outputs
 
@@ -25,6 +24,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..codegen import build_shared, generate_c  # CasADi code generation: loaded only for this command
+
     check_outputs([args.rig], {"--json": args.json}, {"-o/--out": args.out})
     rig = load_rig(args.rig)
     code = generate_c(rig, args.out, rig_source=str(args.rig or "paper"))
