@@ -37,7 +37,7 @@ def load_scale_Nm(rig) -> float:
 def one_rig(rig, n: int, rng, label: str) -> dict:
     with tempfile.TemporaryDirectory() as d:
         generate_c(rig, d)
-        lib = load(d, name=f"lib_{label}.so")
+        lib = load(d)
         Rs = so3.random_rotations(n, rng, max_angle=0.8)
         taus = rng.normal(size=(n, 3))
         radius = np.where(rng.random(n) < 0.03, 1.5, 0.4) * load_scale_Nm(rig)

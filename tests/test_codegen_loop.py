@@ -15,7 +15,7 @@ from test_codegen import paper_folder
 import csjm_opt as co
 from csjm_opt import so3
 from csjm_opt.cli import main
-from csjm_opt.codegen import CTensionPlanningController, find_compiler, load
+from csjm_opt.codegen import CTensionPlanningController, find_compiler, generate_c, load
 from csjm_opt.codegen.build import CORE_SOURCES
 from csjm_opt.control import simulate
 from csjm_opt.control.controllers import TensionPlanningController
@@ -164,9 +164,15 @@ def test_cli_writes_and_builds(tmp_path, capsys):
     assert main(["codegen", "-o", str(out), "--build", "--json", str(tmp_path / "s.json")]) == 0
     summary = json.loads((tmp_path / "s.json").read_text())
     assert {"csjm.h", "csjm_model.c", "csjm_rig.h", "Makefile", "example.c"} <= set(summary["files"])
-    assert summary["library"] and (out / "libcsjm_py.so").is_file()
+    assert summary["library"] and len(list(out.glob("libcsjm_py-*.so"))) == 1
     assert "#define CSJM_T_MAX_N 150" in (out / "csjm_rig.h").read_text()
     assert "malloc" not in "".join((out / f).read_text() for f in ("csjm_api.c", "csjm_qp.c", "csjm_model.c"))
+    first = load(out)
+    other = co.paper_rig().replace(t_max_N=120.0)       # regenerated in the same process: the new code loads
+    generate_c(other, out)
+    second = load(out)
+    assert (first.t_max_N, second.t_max_N) == (150.0, 120.0) and len(list(out.glob("libcsjm_py-*.so"))) == 1
+    assert second.plan_tensions(np.eye(3), [1.0, 0.0, 0.0]).tensions_N.max() <= 120.0
 
 
 @pytest.mark.parametrize("args", [["--rig", "no_such_rig.toml"], ["-o", "FILE/sub"], ["-o", "FILE"]])

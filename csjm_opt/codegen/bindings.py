@@ -321,14 +321,13 @@ class CPlanner:
         return _f64(as_array(t, (6,), "t_ref"), (6,))
 
 
-def load(out_dir: str | Path, extra_cflags: Sequence[str] = (), name: str = "libcsjm_py.so") -> CPlanner:
+def load(out_dir: str | Path, extra_cflags: Sequence[str] = ()) -> CPlanner:
     """Build (if needed) and load the C planner in ``out_dir``.
 
     Parameters
     ----------
     out_dir : a folder written by :func:`csjm_opt.codegen.generate_c`.
-    extra_cflags : extra compiler flags (with another ``name``), e.g. for sanitizers.
-    name : file name of the shared library.
+    extra_cflags : extra compiler flags.
 
     Returns
     -------
@@ -339,4 +338,4 @@ def load(out_dir: str | Path, extra_cflags: Sequence[str] = (), name: str = "lib
     InvalidInput : not a generated folder.
     SolverError : no C compiler, or it failed.
     """
-    return CPlanner(build_shared(out_dir, extra_cflags, name))
+    return CPlanner(build_shared(out_dir, extra_cflags))

@@ -2,12 +2,13 @@
 
 ``build_shared(DIR)`` compiles the core sources of :func:`csjm_opt.codegen.generate_c` plus
 ``csjm_host.c`` (batch loops and timing) into one shared library in ``DIR``, with
-``-std=c99 -Wall -Wextra -Werror -O2``, and reuses it while it is newer than every source.
+``-std=c99 -Wall -Wextra -Werror -O2``, named for the hash of its sources and flags.
 The compiler is ``$CC`` or ``cc``.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 import shutil
 import subprocess
@@ -37,17 +38,18 @@ def find_compiler() -> str | None:
     return shutil.which(cc)
 
 
-def build_shared(out_dir: str | Path, extra_cflags: Sequence[str] = (), name: str = "libcsjm_py.so",
-                 force: bool = False) -> Path:
-    """Compile ``out_dir``'s C into a shared library (reused while newer than its sources).
+def build_shared(out_dir: str | Path, extra_cflags: Sequence[str] = (), force: bool = False) -> Path:
+    """Compile ``out_dir``'s C into a shared library named for its content (reused if it exists).
+
+    The name ``libcsjm_py-<hash>.so`` hashes the sources, headers and flags, so a regenerated
+    folder gets a new file (a process that loaded the old one keeps it, and ``ctypes`` does not
+    hand back a stale library for the same path); older builds in the folder are removed.
 
     Parameters
     ----------
     out_dir : a folder written by :func:`csjm_opt.codegen.generate_c`.
-    extra_cflags : more compiler flags (e.g. ``-fsanitize=address,undefined``); use another
-        ``name`` for such a build.
-    name : file name of the library in ``out_dir``.
-    force : rebuild even when the library is up to date.
+    extra_cflags : more compiler flags (e.g. ``-fsanitize=address,undefined``).
+    force : compile even when the library exists.
 
     Returns
     -------
@@ -60,13 +62,16 @@ def build_shared(out_dir: str | Path, extra_cflags: Sequence[str] = (), name: st
     """
     d = Path(out_dir)
     sources = [d / s for s in CORE_SOURCES + ("csjm_host.c",)]
-    missing = [p.name for p in sources + [d / h for h in HEADERS] if not p.is_file()]
+    inputs = sources + [d / h for h in HEADERS]
+    missing = [p.name for p in inputs if not p.is_file()]
     if missing:
         raise InvalidInput(f"{d}: not a generated folder (missing {', '.join(missing)}); "
                            "run `csjm codegen -o DIR` first", "out_dir")
-    lib = d / name
-    newest = max(p.stat().st_mtime for p in sources + [d / h for h in HEADERS])
-    if lib.is_file() and lib.stat().st_mtime >= newest and not force:
+    digest = hashlib.sha256(" ".join(CFLAGS + tuple(extra_cflags)).encode())
+    for p in inputs:
+        digest.update(p.name.encode() + b"\0" + p.read_bytes())
+    lib = d / f"libcsjm_py-{digest.hexdigest()[:16]}.so"
+    if lib.is_file() and not force:
         return lib
     cc = find_compiler()
     if cc is None:
@@ -83,4 +88,7 @@ def build_shared(out_dir: str | Path, extra_cflags: Sequence[str] = (), name: st
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+    for old in d.glob("libcsjm_py-*.so"):
+        if old != lib:
+            old.unlink(missing_ok=True)
     return lib
