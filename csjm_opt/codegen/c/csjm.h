@@ -73,7 +73,10 @@ int csjm_pose_terms_q(const double q_wxyz[4], double cable_lengths_m[6], double 
 
 /* The tension QP of csjm_opt.plan_tensions:
  *     minimise 1/2 |T - t_ref|^2  s.t.  J^T T + tau_ext + tau_weight = 0,  t_min <= T <= t_max.
- * t_ref_N: NULL for mid-range; warm: NULL for a cold start; max_iter <= 0 for the default. */
+ * t_ref_N: NULL for mid-range; warm: NULL for a cold start; max_iter <= 0 for the default.
+ * Work per call, bounded by the code (csjm_qp.c): at most max_iter active-set iterations (each a
+ * 3x3 solve), then, only if they do not settle, 30 support evaluations, at most 233 3x3 KKT
+ * solves and 240 two-variable box least squares. No loop depends on the data beyond these. */
 int csjm_plan_tensions_R(const double R[9], const double tau_ext_A_Nm[3], const double t_ref_N[6],
                          int max_iter, csjm_warm_start *warm, csjm_plan *out);
 int csjm_plan_tensions_q(const double q_wxyz[4], const double tau_ext_A_Nm[3], const double t_ref_N[6],
