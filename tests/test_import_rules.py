@@ -47,3 +47,18 @@ def test_the_rule_flags_a_cross_package_private_import(importer, imported, allow
     graph = grimp.ImportGraph()
     graph.add_import(importer=importer, imported=imported)
     assert (_violations(graph) == []) == allowed
+
+
+def test_every_subpackage_sits_in_a_layer_of_the_contract():
+    """A new subpackage outside the layers contract would be checked by nothing."""
+    import pathlib
+    import tomllib
+
+    root = pathlib.Path(__file__).resolve().parents[1]
+    config = tomllib.loads((root / "pyproject.toml").read_text())["tool"]["importlinter"]
+    layers = next(c for c in config["contracts"] if c["type"] == "layers")["layers"]
+    named = {m.strip() for layer in layers for m in layer.replace(":", "|").split("|")}
+    package = root / "csjm_opt"
+    children = {f"csjm_opt.{p.name}" for p in package.iterdir() if (p / "__init__.py").exists()}
+    children |= {f"csjm_opt.{p.stem}" for p in package.glob("*.py") if p.stem != "__init__"}
+    assert children - named == set()
