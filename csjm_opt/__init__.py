@@ -1,5 +1,7 @@
-"""csjm_opt: modelling, planning, identification, shaping, diagnosis and design of
-cable-driven spherical joint modules (CSJM).
+"""csjm_opt: modelling and control of cable-driven spherical joint modules (CSJM).
+
+Modelling, tension planning, identification, stiffness shaping, diagnosis and
+design of cable-driven spherical joint modules.
 
 Conventions (docs/conventions.md): ``R`` is the orientation of {A} in {B};
 ``zeta`` are body-frame canonical coordinates, ``R = R_ref @ exp(hat(zeta))``;

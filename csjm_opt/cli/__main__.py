@@ -1,3 +1,5 @@
+"""``python -m csjm_opt.cli``: run the ``csjm`` command line."""
+
 import sys
 
 from .app import main

@@ -37,13 +37,13 @@ def _number(text: str) -> float:
 
 
 def finite_float(text: str) -> float:
-    """argparse type: any finite float (refuses ``nan``, ``inf`` and overflowing text)."""
+    """Argparse type for any finite float (refuses ``nan``, ``inf`` and overflowing text)."""
     return _number(text)
 
 
 def float_in(low: float, high: float, low_open: bool = False, high_open: bool = False,
              unit: str = "") -> Callable[[str], float]:
-    """argparse type factory: a finite float in ``[low, high]`` (ends open as asked).
+    """Argparse type factory for a finite float in ``[low, high]`` (ends open as asked).
 
     Parameters
     ----------
@@ -72,13 +72,13 @@ def float_in(low: float, high: float, low_open: bool = False, high_open: bool = 
 
 
 def quantity(name: str) -> Callable[[str], float]:
-    """argparse type factory: a finite float within ``csjm_opt._limits.LIMITS[name]``."""
+    """Argparse type factory for a finite float within ``csjm_opt._limits.LIMITS[name]``."""
     lim = LIMITS[name]
     return float_in(lim.low, lim.high, low_open=lim.low_open, unit=lim.unit)
 
 
 def int_in(low: int, high: int) -> Callable[[str], int]:
-    """argparse type factory: an integer in ``[low, high]`` (decimal digits, optional sign)."""
+    """Argparse type factory for an integer in ``[low, high]`` (decimal digits, optional sign)."""
 
     def parse(text: str) -> int:
         t = text.strip()
@@ -94,7 +94,7 @@ def int_in(low: int, high: int) -> Callable[[str], int]:
 
 
 def rotvec_component(text: str) -> float:
-    """argparse type: one rotation-vector component, finite and within ``[-pi, pi]`` rad."""
+    """Argparse type for one rotation-vector component, finite and within ``[-pi, pi]`` rad."""
     value = _number(text)
     if abs(value) > ROTVEC_MAX_NORM_RAD:
         raise argparse.ArgumentTypeError(f"expected a component in [-pi, pi] rad (a principal rotation "

@@ -25,6 +25,14 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``csjm`` argument parser, every command of ``COMMAND_MODULES`` registered.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        A parser whose usage errors raise :class:`~csjm_opt.errors.UsageError`
+        instead of exiting.
+    """
     parser = _Parser(prog="csjm", description="Cable-driven spherical joint modules: model, plan, "
                      "identify, shape, diagnose, design.")
     parser.add_argument("--version", action="version", version=_version())

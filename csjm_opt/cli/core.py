@@ -38,6 +38,13 @@ def add_pose_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``plan`` and ``stiffness`` commands to the ``csjm`` parser.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``csjm`` subparsers the command is added to.
+    """
     p = sub.add_parser("plan", help="cable tensions that hold a pose under a load",
                        description="Plan the six cable tensions (QP, t_min <= t <= t_max) that hold "
                        "the platform at a pose under an external moment plus its own weight.")
@@ -78,6 +85,25 @@ def _print_plan(plan: TensionPlan) -> None:
 
 
 def run_plan(args: argparse.Namespace) -> int:
+    """``csjm plan``: plan the tensions at the pose and load, print them and write the JSON.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status (0 on success).
+
+    Raises
+    ------
+    InvalidInput
+        An output that cannot be written, or a rotation vector outside the principal ball.
+    InfeasibleLoad
+        No tensions within the bounds hold the pose under the load.
+    """
     plan, _, rotvec, tau = _plan(args)
     if args.json:
         atomic_write_json(args.json, _plan_json(plan, rotvec, tau))
@@ -87,6 +113,27 @@ def run_plan(args: argparse.Namespace) -> int:
 
 
 def run_stiffness(args: argparse.Namespace) -> int:
+    """``csjm stiffness``: plan the tensions, then K (N m/rad) and its eigenvalues.
+
+    Warns on stderr (exit status still 0) when K is not positive definite.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status (0 on success).
+
+    Raises
+    ------
+    InvalidInput
+        An output that cannot be written, or a rotation vector outside the principal ball.
+    InfeasibleLoad
+        No tensions within the bounds hold the pose under the load.
+    """
     plan, model, rotvec, tau = _plan(args)
     K = stiffness(model.rig, plan.R, plan.tensions_N, model=model, tau_ext_A_Nm=tau)
     eig = np.linalg.eigvalsh(K)

@@ -12,6 +12,13 @@ from ._options import check_outputs, int_in
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``demo`` command to the ``csjm`` parser.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``csjm`` subparsers the command is added to.
+    """
     p = sub.add_parser("demo", help="run the main job on the paper rig and write a report folder",
                        description="Plan tensions, compute and shape stiffness, simulate an "
                        "experiment, identify K, verify, diagnose; writes a report folder: index.html (open it "
@@ -26,6 +33,24 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """``csjm demo``: run the demo pipeline into ``--out`` and print the time of each step.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status (0 on success).
+
+    Raises
+    ------
+    InvalidInput
+        An output that cannot be written, or a ``--json`` path that is one of the
+        report's own files.
+    """
     from ..demo import pipeline as demo
 
     check_outputs([], {"--json": args.json}, {"--out": args.out})  # before the work, not after it

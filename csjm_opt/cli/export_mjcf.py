@@ -16,6 +16,13 @@ from ._options import check_outputs, check_rotvec, float_in, quantity, rotvec_co
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``export-mjcf`` command to the ``csjm`` parser.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``csjm`` subparsers the command is added to.
+    """
     p = sub.add_parser("export-mjcf", help="MuJoCo model (MJCF) of a rig",
                        description="Write a MuJoCo model of the rig: ball joint at O, six pull-only tendon "
                        "springs with rest lengths planned for the pose and load, the platform's mass and "
@@ -39,6 +46,25 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """``csjm export-mjcf``: write the rig's MJCF model, rest lengths planned for the pose and load.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status (0 on success).
+
+    Raises
+    ------
+    InvalidInput
+        An output that cannot be written, or a rotation vector outside the principal ball.
+    InfeasibleLoad
+        No tensions within the bounds hold the pose under the load.
+    """
     check_outputs([args.rig], {"-o/--output": args.output, "--json": args.json})
     rig = load_rig(args.rig)
     rotvec, tau = as_vector3(check_rotvec(args.rotvec), "--rotvec"), as_vector3(args.tau, "--tau")

@@ -10,6 +10,13 @@ from ._options import check_outputs, int_in
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``report`` command to the ``csjm`` parser.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``csjm`` subparsers the command is added to.
+    """
     p = sub.add_parser("report", help="design-study report (HTML + Markdown) of csjm sweep results",
                        description="Pareto front of workspace against minimum stiffness, the best designs in a "
                        "table and their hole geometry drawn, from a csjm sweep result file; writes index.html "
@@ -25,6 +32,24 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """``csjm report``: write the design-study report of a sweep result file.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status (0 on success).
+
+    Raises
+    ------
+    InvalidInput
+        No result file, an output that cannot be written, or a report file that
+        would overwrite an input.
+    """
     from ..errors import InvalidInput
     from ..report.design import write_design_report
 

@@ -19,6 +19,13 @@ from ._options import check_outputs, check_rotvec, finite_float, quantity
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``shape`` command to the ``csjm`` parser.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``csjm`` subparsers the command is added to.
+    """
     p = sub.add_parser("shape", help="shape the stiffness K toward a target at a pose",
                        description="Choose the six cable tensions (t_min <= t <= t_max) that hold the pose "
                        "under the load and bring the stiffness K (N m/rad, docs/conventions.md) closest to "
@@ -40,6 +47,28 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """``csjm shape``: shape K toward the target, print the tensions and achieved K, write the JSON.
+
+    Warns on stderr (exit status still 0) when the achieved K is not positive definite.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status (0 on success).
+
+    Raises
+    ------
+    InvalidInput
+        A zero or huge ``--direction``, a wrong number of ``--weights``, an output
+        that cannot be written, or a rotation vector outside the principal ball.
+    InfeasibleLoad
+        No tensions within the bounds hold the pose under the load.
+    """
     check_outputs([args.rig], {"--json": args.json})
     for d in args.direction or ():
         if not 1e-9 < float(np.linalg.norm(d)) < 1e9:

@@ -18,6 +18,13 @@ MAX_WORKERS = 256
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``sweep`` command to the ``csjm`` parser.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``csjm`` subparsers the command is added to.
+    """
     p = sub.add_parser(
         "sweep", help="hole-geometry design sweep (workspace, stiffness, margins)",
         description="Evaluate every design of a sweep description (TOML; see studies/paper_sweep.toml "
@@ -42,6 +49,25 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """``csjm sweep``: evaluate (or resume) the designs of a sweep file into ``--out``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status (0 on success).
+
+    Raises
+    ------
+    DesignError
+        An invalid sweep file, ``--workers`` or ``--limit``.
+    InvalidInput
+        An output that cannot be written or that names an input.
+    """
     check_outputs([args.sweep], {"--out": args.out})
     check_outputs([args.sweep, args.out], {"--json": args.json})
     spec = SweepSpec.from_toml(args.sweep)

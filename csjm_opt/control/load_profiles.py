@@ -34,12 +34,26 @@ class LoadProfile(abc.ABC):
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Constant(LoadProfile):
+    """The same moment ``moment_A_Nm`` (N m, in {A}) at every time."""
+
     moment_A_Nm: np.ndarray
 
     def __post_init__(self):
         object.__setattr__(self, "moment_A_Nm", _vec(self.moment_A_Nm))
 
     def __call__(self, t_s: float) -> np.ndarray:
+        """The constant moment, a fresh copy.
+
+        Parameters
+        ----------
+        t_s : float
+            Time (s).
+
+        Returns
+        -------
+        (3,) array
+            Moment (N m, in {A}).
+        """
         return self.moment_A_Nm.copy()
 
 
@@ -56,6 +70,18 @@ class Step(LoadProfile):
         object.__setattr__(self, "before_A_Nm", _vec(self.before_A_Nm))
 
     def __call__(self, t_s: float) -> np.ndarray:
+        """``before_A_Nm`` before ``t0_s``, ``after_A_Nm`` from ``t0_s`` on.
+
+        Parameters
+        ----------
+        t_s : float
+            Time (s).
+
+        Returns
+        -------
+        (3,) array
+            Moment (N m, in {A}).
+        """
         return (self.after_A_Nm if t_s >= self.t0_s else self.before_A_Nm).copy()
 
 
@@ -76,6 +102,18 @@ class Ramp(LoadProfile):
         object.__setattr__(self, "start_A_Nm", _vec(self.start_A_Nm))
 
     def __call__(self, t_s: float) -> np.ndarray:
+        """The ramp's moment at ``t_s`` (linear between ``t0_s`` and ``t1_s``, held outside).
+
+        Parameters
+        ----------
+        t_s : float
+            Time (s).
+
+        Returns
+        -------
+        (3,) array
+            Moment (N m, in {A}).
+        """
         s = min(1.0, max(0.0, (t_s - self.t0_s) / (self.t1_s - self.t0_s)))
         return self.start_A_Nm + s * (self.end_A_Nm - self.start_A_Nm)
 
@@ -93,6 +131,18 @@ class Sinusoid(LoadProfile):
         object.__setattr__(self, "amplitude_A_Nm", _vec(self.amplitude_A_Nm))
 
     def __call__(self, t_s: float) -> np.ndarray:
+        """The sinusoid's moment at ``t_s`` (zero before ``t0_s``).
+
+        Parameters
+        ----------
+        t_s : float
+            Time (s).
+
+        Returns
+        -------
+        (3,) array
+            Moment (N m, in {A}).
+        """
         if t_s < self.t0_s:
             return np.zeros(3)
         return self.amplitude_A_Nm * np.sin(2 * np.pi * self.frequency_hz * (t_s - self.t0_s) + self.phase_rad)
@@ -105,6 +155,18 @@ class LoadSum(LoadProfile):
     terms: Sequence[LoadProfile]
 
     def __call__(self, t_s: float) -> np.ndarray:
+        """The sum of the terms' moments at ``t_s``.
+
+        Parameters
+        ----------
+        t_s : float
+            Time (s).
+
+        Returns
+        -------
+        (3,) array
+            Moment (N m, in {A}).
+        """
         return sum((p(t_s) for p in self.terms), np.zeros(3))
 
     def __add__(self, other: LoadProfile) -> "LoadSum":

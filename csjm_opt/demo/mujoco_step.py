@@ -51,9 +51,25 @@ def tilt_and_torsion(t_s: float) -> np.ndarray:
 
 
 def controllers(rig: Rig, plant: str) -> dict[str, Callable[[], Controller]]:
-    """Controller factories by name. Feedback gains depend on the plant: on the quasi-static plant
-    feedback through the tension plan is a one-step algebraic loop, stable only for ``kp`` below the
-    cable stiffness and without derivative action."""
+    """Controller factories by name, with feedback gains chosen for the plant.
+
+    On the quasi-static plant feedback through the tension plan is a one-step
+    algebraic loop, stable only for ``kp`` below the cable stiffness and without
+    derivative action.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig the controllers plan for.
+    plant : str
+        ``"mujoco"`` (gains kp, kd, ki = 20, 0.3, 200) or any other name for the
+        quasi-static plant (5, 0, 100).
+
+    Returns
+    -------
+    dict
+        Name -> zero-argument factory of a fresh controller.
+    """
     kp, kd, ki = (20.0, 0.3, 200.0) if plant == "mujoco" else (5.0, 0.0, 100.0)
     ref = tilt_and_torsion
     return {"pose only": lambda: InverseDynamicsController(rig, ref, feedforward=False, use_measured_load=False),
@@ -117,6 +133,13 @@ def plot_errors(logs: dict, step_time_s: float, ax=None):
 
 
 def controllers_order() -> tuple[str, ...]:
+    """Names of the controllers of :func:`controllers`, in the order tables and plots show them.
+
+    Returns
+    -------
+    tuple of str
+        Controller names.
+    """
     return ("pose only", "inverse dynamics", "ID + PID", "stiffness shaping", "shaping + ID")
 
 

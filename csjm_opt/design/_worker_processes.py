@@ -1,5 +1,7 @@
-"""Local worker processes of a sweep: started by a fork server, they die with the sweep
-(see :mod:`csjm_opt.design.sweep`)."""
+"""Local worker processes of a sweep: started by a fork server, they die with the sweep.
+
+See :mod:`csjm_opt.design.sweep`.
+"""
 
 from __future__ import annotations
 

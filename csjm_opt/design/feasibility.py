@@ -1,4 +1,4 @@
-"""Exact, vectorised wrench feasibility: is a load inside the available moment set?
+"""Exact, vectorised wrench feasibility: whether a load lies inside the available moment set.
 
 At a pose with Jacobian ``J`` (6, 3), the moments the cables can exert with
 tensions in the box ``[t_min, t_max]^6`` form the zonotope::

@@ -161,6 +161,7 @@ class ResultStore:
         return self._fd
 
     def close(self) -> None:
+        """Flush the file to disk and close it, releasing the lock (a second call does nothing)."""
         if self._fd >= 0:
             os.fsync(self._fd)
             os.close(self._fd)  # also releases the lock

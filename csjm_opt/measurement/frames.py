@@ -1,5 +1,8 @@
-"""Frame changes of the preprocessing: rigid fit of point sets (erratum 6), wrench to {A} (55),
-weight moment in {A} (56)."""
+"""Frame changes of the preprocessing: point-set fit, wrench to {A}, weight moment in {A}.
+
+Rigid fit of point sets (erratum 6), wrench moved to {A} (55), weight moment
+in {A} (56).
+"""
 
 from __future__ import annotations
 

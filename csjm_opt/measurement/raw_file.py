@@ -1,5 +1,7 @@
-"""The raw instrument CSV file: its columns and record kinds, read strictly (format in
-:mod:`csjm_opt.measurement.preprocess`)."""
+"""The raw instrument CSV file: its columns and record kinds, read strictly.
+
+The format is described in :mod:`csjm_opt.measurement.preprocess`.
+"""
 
 from __future__ import annotations
 

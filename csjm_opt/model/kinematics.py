@@ -64,6 +64,18 @@ class PoseSolution:
     iterations: int
 
     def converged(self, tol_Nm: float = 1e-6) -> np.ndarray:
+        """Which rows converged.
+
+        Parameters
+        ----------
+        tol_Nm : float
+            Largest accepted residual ``||g||`` (N m).
+
+        Returns
+        -------
+        (n,) bool array
+            ``residual_Nm <= tol_Nm`` per row.
+        """
         return self.residual_Nm <= tol_Nm
 
 

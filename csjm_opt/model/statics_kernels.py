@@ -18,6 +18,7 @@ from .kernels import geometry_into, stiffness_from_geometry_into
 
 @njit(cache=True)
 def hat(w):
+    """The skew matrix ``hat(w)`` (3, 3) of a 3-vector: ``hat(w) @ v = w x v``."""
     return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
 
 

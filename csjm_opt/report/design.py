@@ -44,8 +44,14 @@ def write_design_report(results: str | Path, out_dir: str | Path, sweep: str | P
     Returns
     -------
     Path
-    """
+        The report's ``index.html``.
 
+    Raises
+    ------
+    DesignError
+        ``top`` below 1, no result file or no valid design in it, or a sweep file whose
+        settings differ from the results' (see :func:`load_study`).
+    """
     if top < 1:
         raise DesignError(f"expected an integer >= 1, got {top}", "--top")
     study = load_study(results, sweep)

@@ -1,5 +1,7 @@
-"""The detail sections of the diagnosis report: gap table, candidates, parameters, where the gap lies,
-second effects and pairs."""
+"""The detail sections of the diagnosis report.
+
+Gap table, candidates, parameters, where the gap lies, second effects and pairs.
+"""
 
 from __future__ import annotations
 

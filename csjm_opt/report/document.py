@@ -93,6 +93,7 @@ class Column:
 
     @property
     def header(self) -> str:
+        """The column heading: ``label (unit)``, or ``label`` alone without a unit."""
         return f"{self.label} ({self.unit})" if self.unit else self.label
 
 

@@ -27,6 +27,18 @@ class StiffnessBasis:
     tau_weight_A_Nm: np.ndarray  # (3,)
 
     def K(self, tensions_N: np.ndarray) -> np.ndarray:
+        """The stiffness at these tensions, ``K0 + sum_i T_i G_i`` (N m/rad).
+
+        Parameters
+        ----------
+        tensions_N : (6,) array
+            Cable tensions (N).
+
+        Returns
+        -------
+        (3, 3) array
+            K (N m/rad).
+        """
         return self.K0 + np.einsum("i,ijk->jk", tensions_N, self.G)
 
 

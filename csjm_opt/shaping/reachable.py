@@ -203,7 +203,7 @@ def directional_stiffness_range(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarra
 
 def _cutting_plane(basis: StiffnessBasis, tau_load: np.ndarray, t_min: float, t_max: float, which: str,
                    tol: float, max_iter: int) -> tuple[float, float, list[np.ndarray]]:
-    """max lambda_min (which="max_min") or min lambda_max ("min_max"): (value, gap, iterates)."""
+    """Cutting-plane bound: max lambda_min (which="max_min") or min lambda_max ("min_max"); (value, gap, iterates)."""
     sign = 1.0 if which == "max_min" else -1.0
     Gf = basis.G.reshape(6, 9)
     cuts = [np.eye(3)[i] for i in range(3)]

@@ -54,6 +54,7 @@ class ShapingResult:
 
     @property
     def bound_violation_N(self) -> float:
+        """Largest violation of the tension bounds ``[t_min, t_max]`` (N; 0 when inside)."""
         return float(max(0.0, np.max(self.t_min_N - self.tensions_N), np.max(self.tensions_N - self.t_max_N)))
 
     @property

@@ -49,6 +49,7 @@ class Command:
 
     @property
     def tensions(self) -> np.ndarray:
+        """Alias of ``tensions_N`` (N)."""
         return self.tensions_N
 
 
@@ -86,12 +87,39 @@ class PoseHoldingController(Controller):
         self._z = np.zeros(3)
 
     def reset(self) -> None:
+        """Forget the accumulated integral pose correction."""
         self._z = np.zeros(3)
 
     def reference(self, time_s: float) -> np.ndarray:
+        """The reference pose at ``time_s`` (the fixed pose, or the callable evaluated).
+
+        Parameters
+        ----------
+        time_s : float
+            Time (s).
+
+        Returns
+        -------
+        (3, 3) array
+            Reference orientation of {A} in {B}.
+        """
         return self._R_ref(time_s) if callable(self._R_ref) else self._R_ref
 
     def commanded_pose(self, observation: Observation) -> np.ndarray:
+        """The pose to plan for: the reference, corrected by the integral of the pose error.
+
+        Advances the integrator when ``integral_gain`` > 0.
+
+        Parameters
+        ----------
+        observation : Observation
+            The measurement of this step.
+
+        Returns
+        -------
+        (3, 3) array
+            Commanded pose of {A} in {B}.
+        """
         R_ref = self.reference(observation.time_s)
         if self.integral_gain:
             self._z = self._z + self.integral_gain * so3.log(observation.R.T @ R_ref)
@@ -108,6 +136,23 @@ class PoseHoldingController(Controller):
         """``(tensions, K_target, K_planned)`` holding the measured load at ``R_cmd``."""
 
     def __call__(self, observation: Observation) -> Command:
+        """The command for this step: commanded pose, planned tensions and rest lengths.
+
+        Parameters
+        ----------
+        observation : Observation
+            The measurement of this step.
+
+        Returns
+        -------
+        Command
+            Tensions, rest lengths and the pose they are planned for.
+
+        Raises
+        ------
+        InfeasibleLoad
+            No tensions within the bounds hold the load at the commanded pose.
+        """
         R_cmd = self.commanded_pose(observation)
         T, K_target, K_planned = self.tensions(R_cmd, observation)
         return Command(T, self.rest_lengths(R_cmd, T), R_cmd, K_target, K_planned)

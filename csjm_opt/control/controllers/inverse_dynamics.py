@@ -56,6 +56,7 @@ class InverseDynamicsController(PoseHoldingController):
         self._qp = TensionQP(rig, t_ref_N)
 
     def reset(self) -> None:
+        """Forget the integral correction and the QP's warm start."""
         super().reset()
         self._qp = TensionQP(self.rig, self._qp.t_ref)
 
@@ -64,6 +65,18 @@ class InverseDynamicsController(PoseHoldingController):
         return self.body.reference_moment(self._R_ref, t_s)
 
     def commanded_pose(self, observation: Observation) -> np.ndarray:
+        """The pose to plan for, taken ``lookahead_s`` ahead of the observation time.
+
+        Parameters
+        ----------
+        observation : Observation
+            The measurement of this step.
+
+        Returns
+        -------
+        (3, 3) array
+            Commanded pose of {A} in {B}.
+        """
         shifted = Observation(observation.time_s + self.lookahead_s, observation.R, observation.tau_ext_A_Nm,
                               observation.omega_A_rad_s)
         return super().commanded_pose(shifted)
@@ -76,4 +89,24 @@ class InverseDynamicsController(PoseHoldingController):
         return tau
 
     def tensions(self, R_cmd: np.ndarray, observation: Observation):
+        """The tensions holding the measured load at ``R_cmd`` (see :meth:`PoseHoldingController.tensions`).
+
+        Parameters
+        ----------
+        R_cmd : (3, 3) array
+            Commanded pose of {A} in {B}.
+        observation : Observation
+            The measurement of this step.
+
+        Returns
+        -------
+        tuple
+            ``(tensions_N, K_target, K_planned)``: (6,) tensions (N), then ``None, None``
+            (no stiffness shaping).
+
+        Raises
+        ------
+        InfeasibleLoad
+            No tensions within the bounds hold the load at ``R_cmd``.
+        """
         return self._qp(R_cmd, self.planned_load(observation)), None, None

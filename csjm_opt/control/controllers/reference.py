@@ -37,6 +37,18 @@ class MemoReference:
         self._memo: dict[int, np.ndarray] = {}
 
     def __call__(self, t_s: float) -> np.ndarray:
+        """The reference pose at ``t_s`` (remembered to the nanosecond).
+
+        Parameters
+        ----------
+        t_s : float
+            Time (s).
+
+        Returns
+        -------
+        (3, 3) array
+            Reference orientation of {A} in {B}.
+        """
         key = round(t_s * 1e9)                          # ns: t_k + dt and t_{k+1} are the same instant
         R = self._memo.get(key)
         if R is None:

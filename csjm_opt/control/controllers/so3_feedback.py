@@ -39,6 +39,7 @@ class SO3FeedbackController(InverseDynamicsController):
         self.reset()
 
     def reset(self) -> None:
+        """Forget the integral correction, the QP's warm start, the feedback integral and the last pose."""
         super().reset()
         self._integral = np.zeros(3)
         self._last: tuple[float, np.ndarray] | None = None
@@ -64,4 +65,18 @@ class SO3FeedbackController(InverseDynamicsController):
         return self.kp @ e + self.kd @ (w_ref - w) + self.ki @ self._integral
 
     def planned_load(self, observation: Observation) -> np.ndarray:
+        """External moment the tensions are planned for, minus the feedback moment (N m, {A}).
+
+        Advances the feedback integrator (see :meth:`feedback_moment`).
+
+        Parameters
+        ----------
+        observation : Observation
+            The measurement of this step.
+
+        Returns
+        -------
+        (3,) array
+            ``tau_planned - tau_fb`` (N m, in {A}).
+        """
         return super().planned_load(observation) - self.feedback_moment(observation)

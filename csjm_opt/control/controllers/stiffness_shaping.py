@@ -51,11 +51,24 @@ class StiffnessShapingController(PoseHoldingController):
         self._last_T: np.ndarray | None = None
 
     def reset(self) -> None:
+        """Forget the integral correction, the shaper's warm start and the last tensions."""
         super().reset()
         self._shaper = Shaper(self.rig, self._shaper.regularization)
         self._last_T = None
 
     def target(self, time_s: float) -> np.ndarray:
+        """The target stiffness at ``time_s`` (N m/rad; the fixed target, or the callable evaluated).
+
+        Parameters
+        ----------
+        time_s : float
+            Time (s).
+
+        Returns
+        -------
+        (3, 3) array
+            Target K (N m/rad).
+        """
         return self._K_target(time_s) if callable(self._K_target) else self._K_target
 
     def _objective(self, K_target: np.ndarray) -> StiffnessObjective:
@@ -64,12 +77,44 @@ class StiffnessShapingController(PoseHoldingController):
         return self._cache[1]
 
     def commanded_pose(self, observation: Observation) -> np.ndarray:
+        """The pose to plan for, taken ``lookahead_s`` ahead of the observation time when set.
+
+        Parameters
+        ----------
+        observation : Observation
+            The measurement of this step.
+
+        Returns
+        -------
+        (3, 3) array
+            Commanded pose of {A} in {B}.
+        """
         if not self.lookahead_s:
             return super().commanded_pose(observation)
         return super().commanded_pose(Observation(observation.time_s + self.lookahead_s, observation.R,
                                                   observation.tau_ext_A_Nm, observation.omega_A_rad_s))
 
     def tensions(self, R_cmd: np.ndarray, observation: Observation):
+        """The tensions holding the measured load at ``R_cmd`` (see :meth:`PoseHoldingController.tensions`).
+
+        Parameters
+        ----------
+        R_cmd : (3, 3) array
+            Commanded pose of {A} in {B}.
+        observation : Observation
+            The measurement of this step.
+
+        Returns
+        -------
+        tuple
+            ``(tensions_N, K_target, K_planned)``: (6,) tensions (N), then the target K and the
+            K the tensions give (N m/rad).
+
+        Raises
+        ------
+        InfeasibleLoad
+            No tensions within the bounds hold the load at ``R_cmd``.
+        """
         K_target = self.target(observation.time_s)
         tau = np.array(observation.tau_ext_A_Nm, float) if self.use_measured_load else np.zeros(3)
         if self.feedforward:

@@ -21,5 +21,25 @@ class TensionPlanningController(PoseHoldingController):
         self._model = Model(rig)
 
     def tensions(self, R_cmd: np.ndarray, observation: Observation):
+        """The tensions holding the measured load at ``R_cmd`` (see :meth:`PoseHoldingController.tensions`).
+
+        Parameters
+        ----------
+        R_cmd : (3, 3) array
+            Commanded pose of {A} in {B}.
+        observation : Observation
+            The measurement of this step.
+
+        Returns
+        -------
+        tuple
+            ``(tensions_N, K_target, K_planned)``: (6,) tensions (N), then ``None, None``
+            (no stiffness shaping).
+
+        Raises
+        ------
+        InfeasibleLoad
+            No tensions within the bounds hold the load at ``R_cmd``.
+        """
         plan = plan_tensions(self.rig, R_cmd, observation.tau_ext_A_Nm, self.t_ref_N, self.solver, self._model)
         return plan.tensions_N, None, None

@@ -107,6 +107,22 @@ class MujocoPlant(Plant):
 
     def reset(self, R0: np.ndarray, omega0_A_rad_s: np.ndarray | None = None,
               load: LoadFunction | None = None) -> PlantState:
+        """Reset the engine to pose ``R0`` (see :meth:`Plant.reset`); no rest lengths until the first step.
+
+        Parameters
+        ----------
+        R0 : (3, 3) array
+            Initial orientation of {A} in {B}.
+        omega0_A_rad_s : (3,) array, optional
+            Initial angular velocity (rad/s, in {A}); default zero.
+        load : callable, optional
+            Load function ``t -> moment`` (N m, fixed in the frame ``load_fixed_in``), read at t = 0.
+
+        Returns
+        -------
+        PlantState
+            The state at the start.
+        """
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[:] = quat_wxyz(np.asarray(R0, float))
         self.data.qvel[:] = 0.0 if omega0_A_rad_s is None else np.asarray(omega0_A_rad_s, float)
@@ -126,6 +142,25 @@ class MujocoPlant(Plant):
             self._tau_A = self.R.T @ tau
 
     def step(self, command, load: LoadFunction, t0_s: float, t1_s: float) -> PlantState:
+        """Run the engine from ``t0_s`` to ``t1_s`` under ``command`` (see :meth:`Plant.step`).
+
+        Rest-length actuation ramps the tendon rest lengths toward the command, at most
+        ``rate_m_per_s``; tension actuation applies the clipped tensions as motor controls.
+
+        Parameters
+        ----------
+        command : Command
+            The controller's command: ``rest_lengths_m`` or ``tensions_N`` by ``actuation``.
+        load : callable
+            Load function ``t -> moment`` (N m, fixed in the frame ``load_fixed_in``).
+        t0_s, t1_s : float
+            Start and end of the control period (s).
+
+        Returns
+        -------
+        PlantState
+            The state at ``t1_s``.
+        """
         dt = self.model.opt.timestep
         n = max(1, int(round((t1_s - t0_s) / dt)))
         if self.actuation == "rest_length":

@@ -34,6 +34,27 @@ class QuasiStaticPlant(Plant):
 
     def reset(self, R0: np.ndarray, omega0_A_rad_s: np.ndarray | None = None,
               load: LoadFunction | None = None) -> PlantState:
+        """Start at pose ``R0`` (see :meth:`Plant.reset`); tensions and K unknown (NaN) until the first step.
+
+        Parameters
+        ----------
+        R0 : (3, 3) array
+            Initial orientation of {A} in {B}.
+        omega0_A_rad_s : (3,) array, optional
+            Initial angular velocity (rad/s, in {A}); must be zero or ``None``.
+        load : callable, optional
+            Load function ``t -> moment`` (N m, fixed in the frame ``load_fixed_in``), read at t = 0.
+
+        Returns
+        -------
+        PlantState
+            The state at the start.
+
+        Raises
+        ------
+        InvalidInput
+            A non-zero ``omega0_A_rad_s``.
+        """
         if omega0_A_rad_s is not None and np.any(omega0_A_rad_s):
             raise InvalidInput("a quasi-static plant has no velocity; omega0 must be zero", "omega0_A_rad_s")
         self._R = np.array(R0, float)
@@ -42,12 +63,47 @@ class QuasiStaticPlant(Plant):
         return PlantState(self._R, np.zeros(3), nan, np.full((3, 3), np.nan), tau)
 
     def step(self, command, load: LoadFunction, t0_s: float, t1_s: float) -> PlantState:
+        """The equilibrium for the commanded rest lengths under the load at ``t1_s`` (see :meth:`Plant.step`).
+
+        Parameters
+        ----------
+        command : Command
+            The controller's command: its ``rest_lengths_m`` are used.
+        load : callable
+            Load function ``t -> moment`` (N m, fixed in the frame ``load_fixed_in``).
+        t0_s, t1_s : float
+            Start and end of the control period (s).
+
+        Returns
+        -------
+        PlantState
+            The state at ``t1_s``.
+
+        Raises
+        ------
+        NoEquilibrium
+            No stable equilibrium with all cables taut near the current pose.
+        """
         tau = self.external_moment_A(load, t1_s, self._R)
         eq = self._solver.solve(command.rest_lengths_m, tau, self._R)
         self._R = eq.R
         return PlantState(eq.R, np.zeros(3), eq.tensions_N, eq.K, tau)
 
     def measured_load_A(self, R: np.ndarray, tau_ext_A_Nm: np.ndarray) -> np.ndarray:
+        """What a force/torque sensor under the platform reads: the load plus the point forces' moments.
+
+        Parameters
+        ----------
+        R : (3, 3) array
+            Orientation of {A} in {B}.
+        tau_ext_A_Nm : (3,) array
+            External moment (N m, in {A}).
+
+        Returns
+        -------
+        (3,) array
+            Sensor moment (N m, in {A}), weight excluded.
+        """
         if len(self._F):
             return tau_ext_A_Nm + point_force_terms(R, self._F, self._P)[0]
         return np.asarray(tau_ext_A_Nm, float)
