@@ -1,0 +1,328 @@
+"""Identification experiments planned to make the Cramér-Rao bound of K small.
+
+For each reference pose and each candidate pretension (reference tensions of the planner,
+realised through rest lengths), every load of the load set (weight x attachment point x
+direction) is settled on the rig model (:class:`~csjm_opt.model.statics.EquilibriumSolver`,
+dead weight fixed in {B}); a load is *admissible* when the platform settles stably with every
+tension in ``[t_min, t_max]`` and turns at most ``max_rotation_rad`` from the reference (the
+tracker's range). Each admissible load adds its row information ``A^T V^-1 A``
+(:mod:`csjm_opt.identification.crlb`) at its predicted displacement. The budget is then spent
+greedily on the unit that lowers the criterion most (A: trace of the six entries' bound;
+D: log det), followed by exchange passes (a chosen unit swapped for a better one until none
+improves). With ``pairs=True`` (default) a unit is a ``+-`` pair of the same weight and point
+in opposite directions: the pair cancels the curvature of the moment-rotation relation to
+second order, so the estimate stays unbiased even without (or with a wrong) rig model.
+The best pretension is kept per pose; several poses (a K field) share the budget equally.
+
+:func:`paper_protocol` draws the paper's protocol for comparison: one pose, 25 N pretension,
+loads of U(3, 15) N in random directions at the four default points, redrawn until admissible.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .. import so3
+from ..errors import CsjmError, DesignError
+from ..measurement.instruments import InstrumentNoise
+from ..measurement.protocol import Protocol
+from ..model.numeric import Model
+from ..model.rig import Rig
+from ..model.statics import EquilibriumSolver, solve_equilibrium
+from ..planning.planner import plan_tensions
+from .candidates import Cycle, admissible, cycle_for, row_information
+from .load_set import LoadSet
+
+CRITERIA = ("A", "D")
+#: Exchange passes after the greedy selection.
+EXCHANGE_PASSES = 3
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ExperimentPlan:
+    """A planned (or drawn) identification experiment and its predicted precision."""
+
+    protocol: Protocol
+    crlb6: list[np.ndarray]          # per cycle (pose): (6, 6) predicted bound of K's entries
+    K_model: list[np.ndarray]        # per cycle: model K at the reference
+    pretension_N: list[float]        # per cycle: chosen reference tension
+    rotvec_ref: list[np.ndarray]     # per cycle: predicted reference pose
+    budget: int
+
+    def ci_half_width(self, level: float = 0.95) -> np.ndarray:
+        """(cycles, 6) predicted interval half-widths of K's entries (normal quantile).
+
+        Parameters
+        ----------
+        level : float, optional
+
+        Returns
+        -------
+        ndarray
+        """
+        from scipy import stats
+
+        q = float(stats.norm.ppf(0.5 + level / 2))
+        return np.array([q * np.sqrt(np.diag(c)) for c in self.crlb6])
+
+    def as_dict(self) -> dict:
+        """JSON-able summary.
+
+        Returns
+        -------
+        dict
+        """
+        return {"budget": self.budget, "rows": len(self.protocol), "pretension_N": self.pretension_N,
+                "rotvec_ref": [r.tolist() for r in self.rotvec_ref],
+                "K_model": [K.tolist() for K in self.K_model],
+                "crlb_std": [np.sqrt(np.diag(c)).tolist() for c in self.crlb6],
+                "ci95_half_width": self.ci_half_width().tolist()}
+
+
+def _criterion(M: np.ndarray, kind: str) -> np.ndarray:
+    """Criterion of information matrices (..., 9, 9): A = trace, D = log det of the entries' bound."""
+    s = np.sqrt(np.maximum(np.einsum("...ii->...i", M), 1e-300))
+    inv = np.linalg.inv(M / (s[..., :, None] * s[..., None, :])) / (s[..., :, None] * s[..., None, :])
+    B = inv[..., 3:, 3:]
+    if kind == "A":
+        return np.einsum("...ii->...", B)
+    sign, logdet = np.linalg.slogdet(B)
+    return np.where(sign > 0, logdet, np.inf)
+
+
+def _select(base: np.ndarray, units: np.ndarray, costs: np.ndarray, budget: int, kind: str,
+            pairs: bool) -> list[int]:
+    """Greedy then exchange selection of units (with repetition) spending exactly ``budget``."""
+    ridge = 1e-9 * np.trace(units.sum(0)) / 9 * np.eye(9)
+    chosen: list[int] = []
+    M = base.copy()
+    left = budget
+    while left > 0:
+        ok = costs <= left
+        if pairs and left >= 2 and np.any(ok & (costs == 2)):
+            ok &= costs == 2                     # singles only for an odd remainder
+        if not np.any(ok):
+            break
+        crit = _criterion(M[None] + ridge + units, kind)
+        crit[~ok] = np.inf
+        j = int(np.argmin(crit))
+        chosen.append(j)
+        M = M + units[j]
+        left -= int(costs[j])
+    for _ in range(EXCHANGE_PASSES):
+        improved = False
+        for k in range(len(chosen)):
+            rest = M - units[chosen[k]]
+            crit = _criterion(rest[None] + units, kind)
+            crit[costs != costs[chosen[k]]] = np.inf
+            j = int(np.argmin(crit))
+            if crit[j] < _criterion(M, kind) * (1 - 1e-9):
+                chosen[k], M, improved = j, rest + units[j], True
+        if not improved:
+            break
+    return chosen
+
+
+def plan_experiment(rig: Rig, budget: int, loads: LoadSet | None = None, poses: np.ndarray | None = None,
+                    noise: InstrumentNoise | None = None, criterion: str = "A", pairs: bool = True,
+                    model: Model | None = None) -> ExperimentPlan:
+    """Plan an identification experiment of ``budget`` loads minimising the A- or D-criterion of K.
+
+    Parameters
+    ----------
+    rig : Rig
+    budget : int
+        Number of loaded rows (the unloaded reference row of each pose comes on top).
+    loads : LoadSet, optional
+        Weights, points, directions, pretensions and tracker range (default :meth:`LoadSet.default`).
+    poses : array (p, 3), optional
+        Reference poses as rotation vectors (rad); one cycle each, budget split equally
+        (a K field). Default: the home pose (identity).
+    noise : InstrumentNoise, optional
+        Instrument noise of the bound (the paper's by default).
+    criterion : {"A", "D"}
+    pairs : bool
+        Spend the budget on +- pairs of loads (curvature cancels; robust to a wrong rig model).
+    model : Model, optional
+
+    Returns
+    -------
+    ExperimentPlan
+
+    Raises
+    ------
+    DesignError
+        Bad budget or criterion, or the rig cannot hold enough of the load set to identify K.
+    """
+    if criterion not in CRITERIA:
+        raise DesignError(f"criterion: expected 'A' or 'D', got {criterion!r}", "criterion")
+    poses_arr = np.zeros((1, 3)) if poses is None else np.asarray(poses, float).reshape(-1, 3)
+    if isinstance(budget, bool) or not isinstance(budget, (int, np.integer)) or budget < 3 * len(poses_arr):
+        raise DesignError(f"budget: need at least 3 loads per pose ({3 * len(poses_arr)}), got {budget!r}",
+                          "budget")
+    loads = loads or LoadSet.default(rig)
+    noise = noise or InstrumentNoise.paper()
+    model = model or Model(rig)
+    shares = np.full(len(poses_arr), budget // len(poses_arr))
+    shares[: budget % len(poses_arr)] += 1
+    rows: list[Protocol] = []
+    out: dict[str, list] = {"crlb6": [], "K_model": [], "pretension_N": [], "rotvec_ref": []}
+    for c, (rv, share) in enumerate(zip(poses_arr, shares)):
+        best = None
+        for t in loads.pretensions_N:
+            cyc = cycle_for(rig, model, so3.exp(rv), float(t), loads, noise)
+            if cyc is None or len(cyc.info) < 3:
+                continue
+            units, costs, members = _units(cyc, pairs)
+            if len(units) == 0:
+                continue
+            chosen = _select(cyc.ref_info, units, costs, int(share), criterion, pairs)
+            M = cyc.ref_info + sum(units[j] for j in chosen)
+            value = float(_criterion(M, criterion))
+            if np.isfinite(value) and (best is None or value < best[0]):
+                best = (value, cyc, [i for j in chosen for i in members[j]], float(t), M)
+        if best is None:
+            raise DesignError(f"the rig cannot identify K at pose {np.round(rv, 4).tolist()} with this load set: "
+                              "fewer than three admissible loads at every pretension (lighter weights, "
+                              "other points or a larger max_rotation_rad)", "loads")
+        _, cyc, picked, t, M = best
+        rows.append(_cycle_protocol(c, cyc, picked))
+        out["crlb6"].append(_bound(M))
+        out["K_model"].append(cyc.K)
+        out["pretension_N"].append(t)
+        out["rotvec_ref"].append(so3.log(cyc.R_ref))
+    return ExperimentPlan(_concat(rows), budget=int(budget), **out)
+
+
+def _units(cyc: Cycle, pairs: bool) -> tuple[np.ndarray, np.ndarray, list[tuple[int, ...]]]:
+    """Selectable units: +- pairs (cost 2, when ``pairs``) and single loads (cost 1)."""
+    members: list[tuple[int, ...]] = []
+    if pairs:
+        members += [(i, int(j)) for i, j in enumerate(cyc.partner) if j > i]
+    members += [(i,) for i in range(len(cyc.info))]
+    units = np.array([sum(cyc.info[i] for i in m) for m in members]) if members else np.zeros((0, 9, 9))
+    return units, np.array([len(m) for m in members]), members
+
+
+def _bound(M: np.ndarray) -> np.ndarray:
+    from .crlb import bound
+
+    return bound(M)
+
+
+def _cycle_protocol(c: int, cyc: Cycle, picked: list[int]) -> Protocol:
+    n = len(picked) + 1
+    w = np.r_[0.0, cyc.weight[picked]]
+    d = np.vstack([np.zeros(3), cyc.direction[picked]])
+    p = np.vstack([np.zeros(3), cyc.point[picked]])
+    return Protocol(np.full(n, c), np.repeat(cyc.rest_lengths_m[None], n, 0), w, d, p)
+
+
+def _concat(parts: list[Protocol]) -> Protocol:
+    return Protocol(*(np.concatenate([getattr(p, f.name) for p in parts])
+                      for f in dataclasses.fields(Protocol)))
+
+
+def paper_protocol(rig: Rig, budget: int, rng: np.random.Generator, pose: np.ndarray | None = None,
+                   pretension_N: float = 25.0, weights_N: tuple[float, float] = (3.0, 15.0),
+                   loads: LoadSet | None = None, noise: InstrumentNoise | None = None,
+                   model: Model | None = None, max_draws: int = 100) -> ExperimentPlan:
+    """The paper's protocol: one pose, 25 N pretension, U(3, 15) N loads in random directions.
+
+    Parameters
+    ----------
+    rig : Rig
+    budget : int
+        Loads (the reference row comes on top).
+    rng : numpy.random.Generator
+    pose : array (3,), optional
+        Reference pose (rotation vector; identity by default).
+    pretension_N : float
+        Reference tension (clipped into the rig's range).
+    weights_N : (float, float)
+        Range of the uniformly drawn weights.
+    loads : LoadSet, optional
+        Attachment points and the tracker range (default :meth:`LoadSet.default`).
+    noise : InstrumentNoise, optional
+    model : Model, optional
+    max_draws : int
+        Draws per load before giving up.
+
+    Returns
+    -------
+    ExperimentPlan
+
+    Raises
+    ------
+    DesignError
+        No admissible load in ``max_draws`` draws.
+    """
+    loads = loads or LoadSet.default(rig)
+    noise = noise or InstrumentNoise.paper()
+    model = model or Model(rig)
+    R = so3.exp(np.zeros(3) if pose is None else np.asarray(pose, float))
+    t = float(np.clip(pretension_N, rig.t_min_N, rig.t_max_N))
+    l = plan_tensions(rig, R, np.zeros(3), t_ref_N=t, model=model).rest_lengths_m
+    try:
+        ref = solve_equilibrium(rig, l, R_init=R, model=model)
+    except CsjmError as exc:
+        raise DesignError(f"the paper protocol's reference does not settle: {exc}", "pretension") from exc
+    w, d, p = [], [], []
+    for _ in range(budget):
+        for _ in range(max_draws):
+            wi = rng.uniform(*weights_N)
+            di = rng.normal(size=3)
+            di /= np.linalg.norm(di)
+            pi = loads.points_A_m[rng.integers(len(loads.points_A_m))]
+            if admissible(rig, EquilibriumSolver(rig, [(wi * di, pi)]), l, ref.R, loads.max_rotation_rad) is not None:
+                break
+        else:
+            raise DesignError(f"no admissible paper-protocol load in {max_draws} draws", "loads")
+        w.append(wi), d.append(di), p.append(pi)
+    n = budget + 1
+    proto = Protocol(np.zeros(n, int), np.repeat(l[None], n, 0), np.r_[0.0, w],
+                     np.vstack([np.zeros(3), d]), np.vstack([np.zeros(3), p]))
+    crlb6, K = predict_bound(rig, proto, noise, model)[0]
+    return ExperimentPlan(proto, [crlb6], [K], [t], [so3.log(ref.R)], budget)
+
+
+def predict_bound(rig: Rig, protocol: Protocol, noise: InstrumentNoise | None = None,
+                  model: Model | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Predicted bound (6, 6) and model K per cycle of a protocol, settled on the rig model.
+
+    Parameters
+    ----------
+    rig : Rig
+    protocol : Protocol
+    noise : InstrumentNoise, optional
+    model : Model, optional
+
+    Returns
+    -------
+    list of (ndarray (6, 6), ndarray (3, 3))
+
+    Raises
+    ------
+    DesignError
+        A row's load is not admissible on the model.
+    """
+    noise = noise or InstrumentNoise.paper()
+    model = model or Model(rig)
+    out = []
+    for c in np.unique(protocol.cycle):
+        rows = np.flatnonzero(protocol.cycle == c)
+        l = protocol.rest_lengths_m[rows[0]]
+        ref = solve_equilibrium(rig, l, R_init=np.eye(3), model=model)
+        Rs = []
+        for i in rows[1:]:
+            R = admissible(rig, EquilibriumSolver(rig, [(protocol.force_B_N[i], protocol.point_A_m[i])]), l, ref.R,
+                           np.inf)
+            if R is None:
+                raise DesignError(f"protocol row {i}: the rig model cannot hold this load", "protocol")
+            Rs.append(R)
+        zeta = np.vstack([np.zeros(3), so3.log(ref.R.T @ np.array(Rs))])
+        info = row_information(model, ref.R, l, ref.K, model.weight_moment(ref.R), zeta, noise).sum(0)
+        out.append((_bound(info), ref.K))
+    return out
