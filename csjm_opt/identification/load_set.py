@@ -5,7 +5,7 @@ A load set is read from TOML (every key optional; defaults from the rig)::
     weights_N = [3.0, 6.0, 9.0, 12.0, 15.0]       # dead weights available
     points_A_m = [[0.05, 0.0, 0.08], [-0.05, 0.0, 0.08], [0.0, 0.05, 0.08], [0.0, -0.05, 0.08]]
     directions = 48                               # unit directions in {B} over the sphere (pulleys)
-    pretensions_N = [8.0, 12.0, 18.0, 25.0, 40.0]  # reference tensions the planner may choose
+    pretensions_N = [8.0, 14.0, 25.0, 45.0, 80.0]  # reference tensions the planner may choose
     max_rotation_rad = 0.15                       # tracker range: largest turn from the reference
 
 Default attachment points: four points at 50 mm from the axis, at the height of the
@@ -108,7 +108,10 @@ class LoadSet:
 
 
 def default_pretensions(rig: Rig) -> np.ndarray:
-    """Reference tensions to choose from: five levels from just above ``t_min`` to 40 N.
+    """Reference tensions to choose from: six levels from just above ``t_min`` to ``0.6 t_max`` (at most 100 N).
+
+    A higher pretension softens the tilt stiffness (the tension term of K) and lets larger
+    weights hang without slackening a cable, so the top levels are often the best.
 
     Parameters
     ----------
@@ -118,8 +121,8 @@ def default_pretensions(rig: Rig) -> np.ndarray:
     -------
     ndarray
     """
-    lo, hi = rig.t_min_N, min(rig.t_max_N, 40.0)
-    return np.unique(np.clip(np.geomspace(max(lo + 2.0, 1.0), max(hi, lo + 3.0), 5), lo, hi))
+    lo, hi = rig.t_min_N, min(0.6 * rig.t_max_N, 100.0)
+    return np.unique(np.clip(np.geomspace(max(lo + 2.0, 1.0), max(hi, lo + 3.0), 6), lo, rig.t_max_N))
 
 
 def sphere_directions(n: int) -> np.ndarray:
