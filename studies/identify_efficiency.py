@@ -32,10 +32,9 @@ import numpy as np
 from tqdm import tqdm
 
 from csjm_opt import so3
-from csjm_opt.identification.crlb import SYM_NAMES, sym_entries
+from csjm_opt.identification.crlb import sym_entries
 from csjm_opt.identification.experiment_design import paper_protocol, plan_experiment
 from csjm_opt.identification.identify import identify_log
-from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.measurement.logfile import MeasurementLog
 from csjm_opt.model.statics import solve_equilibrium
 from csjm_opt.testbed.plant import Plant
@@ -158,6 +157,7 @@ def main(argv=None) -> int:
     ap.add_argument("--budget", type=int, default=40)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--no-mujoco", action="store_true")
+    ap.add_argument("--mujoco-logs", type=int, default=100, help="logs per design with MuJoCo as the plant")
     ap.add_argument("--sweep", type=int, nargs="*", default=[12, 24, 40, 60, 90])
     args = ap.parse_args(argv)
     rng = np.random.default_rng(args.seed)
@@ -236,7 +236,7 @@ def run_mujoco(rig_noise, args, rng):
             so3.log(np.swapaxes(R_tb, 1, 2) @ R_true), axis=1)))
         K_true = sym_entries(solve_equilibrium(rig, des.protocol.rest_lengths_m[0], R_init=np.eye(3)).K)
         recs = [record(noisy_log(des.protocol, R_true, tau, noise, rng), rig, noise, K_true)
-                for _ in tqdm(range(max(args.logs, 20)), file=sys.stderr, desc=f"mujoco {name}")]
+                for _ in tqdm(range(args.mujoco_logs), file=sys.stderr, desc=f"mujoco {name}")]
         out[name] = summarise(recs) | {"mc_trace_over_bound": mc_vs_bound([recs])}
     return out
 

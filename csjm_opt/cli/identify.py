@@ -12,7 +12,6 @@ from .._limits import MAX_BOOTSTRAP, MAX_EXACT_INT
 from ..model.rig import load_rig
 from ._options import check_outputs, float_in, int_in
 
-
 #: Above this many cycles, one line per cycle is printed and the JSON is compact.
 LONG_LOG_CYCLES = 50
 
@@ -105,15 +104,15 @@ def run_preprocess(args: argparse.Namespace) -> int:
 def run_identify(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from .. import so3
+    from .._plotting import save
     from ..identification.crlb import SYM_NAMES
+    from ..identification.figures import convergence_curve, plot_convergence
     from ..identification.identify import MAX_CONDITION, identify_cycles, identify_log
     from ..identification.stiffness_fits import n_parameters
-    from .._plotting import save
-    from ..identification.figures import convergence_curve, plot_convergence
     from ..measurement.instruments import InstrumentNoise
     from ..measurement.logfile import MeasurementLog
     from ..model.numeric import Model
-    from .. import so3
 
     check_outputs([args.data, args.rig], {"--json": args.json}, {"--figures": args.figures})
     rig = load_rig(args.rig)
@@ -126,7 +125,8 @@ def run_identify(args: argparse.Namespace) -> int:
         raise UsageError("--tau-sigma and --angle-sigma go together (state both noises)", "--tau-sigma")
     if args.tau_sigma is not None:
         noise = InstrumentNoise((args.tau_sigma,) * 3, args.angle_sigma)
-    options = dict(order=args.order, noise=noise, curvature=args.curvature, ci_level=args.ci_level, bootstrap=args.bootstrap,
+    options = dict(order=args.order, noise=noise, curvature=args.curvature, ci_level=args.ci_level,
+                   bootstrap=args.bootstrap,
                    max_condition=args.max_condition or MAX_CONDITION,
                    allow_ill_conditioned=args.allow_ill_conditioned)
     progress = None

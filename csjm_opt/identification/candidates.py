@@ -117,7 +117,7 @@ def cycle_for(rig: Rig, model: Model, R_pose: np.ndarray, pretension_N: float, l
     Cycle or None
     """
     try:
-        l = plan_tensions(rig, R_pose, np.zeros(3), t_ref_N=pretension_N, model=model).rest_lengths_m
+        l = plan_tensions(rig, R_pose, np.zeros(3), t_ref_N=np.full(6, pretension_N), model=model).rest_lengths_m
         ref = solve_equilibrium(rig, l, R_init=R_pose, model=model)
     except CsjmError:
         return None
@@ -125,7 +125,11 @@ def cycle_for(rig: Rig, model: Model, R_pose: np.ndarray, pretension_N: float, l
         return None
     nd = len(loads.directions_B)
     neg = np.array([int(np.argmin(np.linalg.norm(loads.directions_B + d, axis=1))) for d in loads.directions_B])
-    key, poses, w_, p_, d_ = {}, [], [], [], []
+    key: dict[tuple[int, int, int], int] = {}
+    poses: list[np.ndarray] = []
+    w_: list[float] = []
+    p_: list[np.ndarray] = []
+    d_: list[np.ndarray] = []
     for wi, w in enumerate(loads.weights_N):
         for pi, p in enumerate(loads.points_A_m):
             for di, d in enumerate(loads.directions_B):
@@ -134,7 +138,9 @@ def cycle_for(rig: Rig, model: Model, R_pose: np.ndarray, pretension_N: float, l
                     continue
                 key[(wi, pi, di)] = len(poses)
                 poses.append(R)
-                w_.append(w), p_.append(p), d_.append(d)
+                w_.append(float(w))
+                p_.append(p)
+                d_.append(d)
     tau0 = model.weight_moment(ref.R)
     ref_info = row_information(model, ref.R, l, ref.K, tau0, np.zeros((1, 3)), noise)[0]
     if not poses:

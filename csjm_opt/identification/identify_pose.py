@@ -11,9 +11,12 @@ import numpy as np
 from scipy import stats
 
 from .. import so3
+from .._limits import MAX_BOOTSTRAP
+from .._validate import as_array, as_rotations
 from ..errors import IllConditionedData, InvalidInput
 from ..measurement.instruments import InstrumentNoise
 from ..model.numeric import Model
+from .curvature import model_curvature, weight_slopes
 from .estimate import StiffnessEstimate
 from .excitation import (
     MAX_CONDITION,
@@ -23,7 +26,6 @@ from .excitation import (
     excitation,
     weakest_load_direction,
 )
-from .curvature import model_curvature, weight_slopes
 from .ml_estimator import fit_ml
 from .stiffness_fits import (
     affine_fit,
@@ -32,8 +34,6 @@ from .stiffness_fits import (
     paper_estimate,
     symmetric_fit,
 )
-from .._limits import MAX_BOOTSTRAP
-from .._validate import as_array, as_rotations
 
 
 # --------------------------------------------------------------- estimators

@@ -108,7 +108,7 @@ class LoadSet:
 
 
 def default_pretensions(rig: Rig) -> np.ndarray:
-    """Reference tensions to choose from: six levels from just above ``t_min`` to ``0.6 t_max`` (at most 100 N).
+    """Reference tensions to choose from: eight levels from just above ``t_min`` to ``0.8 t_max``.
 
     A higher pretension softens the tilt stiffness (the tension term of K) and lets larger
     weights hang without slackening a cable, so the top levels are often the best.
@@ -121,8 +121,8 @@ def default_pretensions(rig: Rig) -> np.ndarray:
     -------
     ndarray
     """
-    lo, hi = rig.t_min_N, min(0.6 * rig.t_max_N, 100.0)
-    return np.unique(np.clip(np.geomspace(max(lo + 2.0, 1.0), max(hi, lo + 3.0), 6), lo, rig.t_max_N))
+    lo, hi = rig.t_min_N, 0.8 * rig.t_max_N
+    return np.unique(np.clip(np.geomspace(max(lo + 2.0, 1.0), max(hi, lo + 3.0), 8), lo, rig.t_max_N))
 
 
 def sphere_directions(n: int) -> np.ndarray:
