@@ -201,7 +201,7 @@ def main(argv=None) -> int:
                          "entries_with_bias_over_2se": int(sum(np.sum(np.abs(x["bias_in_se"]) > 2) for x in per)),
                          "entries_tested": 6 * len(per)}
     res["paper_estimators"] = {"K_sym": summarise(everything, "sym"), "K_(50)": summarise(everything, "paper"),
-                               "K_ml_linear_noise_estimated": summarise(everything, "ml_est")}
+                               "K_ml_noise_estimated": summarise(everything, "ml_est")}
     res["wrong_rig_model_k_minus_20pct"] = summarise(wrong, "wrong")
     res["planned_vs_paper"] = {
         "predicted_ratio_per_rig": (np.array(widths["paper_pred"]) / widths["planned_pred"]).round(2).tolist(),

@@ -54,7 +54,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--tau-sigma", type=float_in(0, 100, low_open=True, unit="N m"), default=None, metavar="NM",
                    help="state the F/T moment noise (N m per axis; with --angle-sigma, overrides --noise)")
     p.add_argument("--angle-sigma", type=float_in(0, 1, unit="rad"), default=None, metavar="RAD",
-                   help="state the tracker orientation noise (rad per axis; with --tau-sigma)")
+                   help="state the tracker orientation noise (rad per axis). With --tau-sigma: both noises "
+                   "stated. Alone: the F/T noise is estimated and this corrects K_ml's regression dilution "
+                   "(default for that: the paper's tracker, Table 1)")
     p.add_argument("--curvature", choices=("model", "none"), default="model",
                    help="K_ml's curvature of the moment-rotation relation: from the rig model and the log's "
                    "rest lengths (default), or none (a linear relation)")
@@ -119,13 +121,15 @@ def run_identify(args: argparse.Namespace) -> int:
     log = MeasurementLog.from_csv(args.data)
     model = Model(rig)
     noise = InstrumentNoise.paper() if args.noise == "paper" else None
-    if (args.tau_sigma is None) != (args.angle_sigma is None):
+    if args.tau_sigma is not None and args.angle_sigma is None:
         from ..errors import UsageError
 
-        raise UsageError("--tau-sigma and --angle-sigma go together (state both noises)", "--tau-sigma")
+        raise UsageError("--tau-sigma needs --angle-sigma (state both noises, or only the tracker's)",
+                         "--tau-sigma")
     if args.tau_sigma is not None:
         noise = InstrumentNoise((args.tau_sigma,) * 3, args.angle_sigma)
-    options = dict(order=args.order, noise=noise, curvature=args.curvature, ci_level=args.ci_level,
+    options = dict(order=args.order, noise=noise, curvature=args.curvature, tracker_sigma_rad=args.angle_sigma,
+                   ci_level=args.ci_level,
                    bootstrap=args.bootstrap,
                    max_condition=args.max_condition or MAX_CONDITION,
                    allow_ill_conditioned=args.allow_ill_conditioned)

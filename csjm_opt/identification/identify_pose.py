@@ -49,7 +49,8 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
                        order: int = 1, ci_level: float = 0.95, bootstrap: int = 0,
                        rng: np.random.Generator | None = None, max_condition: float = MAX_CONDITION,
                        cycle: int | None = None, allow_ill_conditioned: bool = False,
-                       rest_lengths_m: np.ndarray | None = None, curvature: str = "model") -> StiffnessEstimate:
+                       rest_lengths_m: np.ndarray | None = None, curvature: str = "model",
+                       tracker_sigma_rad: float | None = None) -> StiffnessEstimate:
     """Identify K at ``R[0]`` from one cycle's orientations (n, 3, 3) and external moments (n, 3).
 
     Parameters
@@ -146,7 +147,9 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
                 f"half-widths up to {half.max():.3g} N m/rad against ||K|| = {scale:.3g} N m/rad "
                 f"({rel:.0%}); {_missing(u)}", cond, 3, u)
         ill = True
-    ml, curv_used = _fit_ml(dzeta, tau_load, R, model, rest_lengths_m, noise, curvature)
+    if tracker_sigma_rad is None:
+        tracker_sigma_rad = InstrumentNoise.paper().angle_sigma_rad
+    ml, curv_used = _fit_ml(dzeta, tau_load, R, model, rest_lengths_m, noise, curvature, tracker_sigma_rad)
     boot = None
     if bootstrap:
         boot = bootstrap_interval(dzeta, tau_load, order, noise, bootstrap, ci_level,
@@ -165,11 +168,11 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
         curvature=curv_used, noise_estimated=ml.noise_estimated)
 
 
-def _fit_ml(dzeta, tau_load, R, model, rest_lengths_m, noise, curvature):
+def _fit_ml(dzeta, tau_load, R, model, rest_lengths_m, noise, curvature, tracker_sigma_rad):
     """K_ml of the cycle: the curvature from the rig model when it and the rest lengths are known."""
     W = weight_slopes(model, R, dzeta) if model is not None else None
     if curvature == "model" and model is not None and rest_lengths_m is not None:
         l = as_array(rest_lengths_m, (6,), "rest_lengths_m")
         c, dc = model_curvature(model, R[0], l, dzeta)
-        return fit_ml(dzeta, tau_load, noise, c, dc, W), "model"
-    return fit_ml(dzeta, tau_load, noise, None, None, W), "none"
+        return fit_ml(dzeta, tau_load, noise, c, dc, W, tracker_sigma_rad=tracker_sigma_rad), "model"
+    return fit_ml(dzeta, tau_load, noise, None, None, W, tracker_sigma_rad=tracker_sigma_rad), "none"

@@ -10,8 +10,9 @@ generalised least squares::
 solved by iterating the weights ``V_i`` (three passes reach round-off). With the weights fixed,
 the noise in the measured displacements also dilutes the slope (by ``s^2 / var(zeta)``, up to
 0.3 % for stiff rigs with small turns: small against one log's noise but a clear bias over
-hundreds of logs); with a stated noise its expectation is subtracted from the normal
-equations (corrected least squares), which makes the estimate consistent.
+hundreds of logs); its expectation is subtracted from the normal equations (corrected least
+squares, with the stated tracker noise, or an assumed one when the noise is estimated), which
+makes the estimate consistent.
 
 Noise: stated (an :class:`~csjm_opt.measurement.instruments.InstrumentNoise`) or, when not
 given, estimated from the data as one constant 3x3 row covariance (the residual covariance,
@@ -62,7 +63,8 @@ class MLFit:
 
 def fit_ml(zeta: np.ndarray, tau_load: np.ndarray, noise: InstrumentNoise | None = None,
            curv: np.ndarray | None = None, dcurv: np.ndarray | None = None,
-           W: np.ndarray | None = None, iterations: int = ML_ITERATIONS) -> MLFit:
+           W: np.ndarray | None = None, iterations: int = ML_ITERATIONS,
+           tracker_sigma_rad: float | None = None) -> MLFit:
     """Maximum-likelihood (effective-variance) fit of ``theta = (tau0, s)`` for one cycle.
 
     Parameters
@@ -80,6 +82,10 @@ def fit_ml(zeta: np.ndarray, tau_load: np.ndarray, noise: InstrumentNoise | None
         Slope of the weight moment at each row.
     iterations : int
         Weight iterations.
+    tracker_sigma_rad : float, optional
+        With ``noise=None``: the tracker noise assumed for the dilution correction (the row
+        covariance is still estimated from the residuals; the tracker noise alone cannot be told
+        apart from the F/T noise there). None: no correction.
 
     Returns
     -------
@@ -96,8 +102,9 @@ def fit_ml(zeta: np.ndarray, tau_load: np.ndarray, noise: InstrumentNoise | None
         Vi = np.linalg.inv(V)
         info = np.einsum("nia,nij,njb->ab", A, Vi, A)
         rhs = np.einsum("nia,nij,nj->a", A, Vi, y)
-        if noise is not None and noise.angle_sigma_rad > 0:
-            dN, dr = _dilution(Vi, G, noise.angle_sigma_rad)
+        sigma = noise.angle_sigma_rad if noise is not None else (tracker_sigma_rad or 0.0)
+        if sigma > 0:
+            dN, dr = _dilution(Vi, G, sigma)
             info, rhs = info - dN, rhs - dr
         theta = _solve(info, rhs)
         tau0, K = theta[:3], sym_matrix(theta[3:])
