@@ -12,7 +12,8 @@ D: log det), followed by exchange passes (a chosen unit swapped for a better one
 improves). With ``pairs=True`` (default) a unit is a ``+-`` pair of the same weight and point
 in opposite directions: the pair cancels the curvature of the moment-rotation relation to
 second order, so the estimate stays unbiased even without (or with a wrong) rig model.
-The best pretension is kept per pose; several poses (a K field) share the budget equally.
+The best pretension is kept per pose (a grid, then two rounds of bisection around the best
+level); several poses (a K field) share the budget equally.
 
 :func:`paper_protocol` draws the paper's protocol for comparison: one pose, 25 N pretension,
 loads of U(3, 15) N in random directions at the four default points, redrawn until admissible.
@@ -38,6 +39,8 @@ from .load_set import LoadSet
 CRITERIA = ("A", "D")
 #: Exchange passes after the greedy selection.
 EXCHANGE_PASSES = 3
+#: Bisection rounds on the pretension around the best level of the grid.
+REFINE_ROUNDS = 2
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -170,19 +173,26 @@ def plan_experiment(rig: Rig, budget: int, loads: LoadSet | None = None, poses: 
     rows: list[Protocol] = []
     out: dict[str, list] = {"crlb6": [], "K_model": [], "pretension_N": [], "rotvec_ref": []}
     for c, (rv, share) in enumerate(zip(poses_arr, shares)):
-        best = None
+        tried: dict[float, tuple | None] = {}
+
+        def design_at(t: float, rv=rv, share=share, tried=tried) -> tuple | None:
+            if t not in tried:
+                tried[t] = _design_at(rig, model, so3.exp(rv), t, loads, noise, int(share), criterion, pairs)
+            return tried[t]
+
         for t in loads.pretensions_N:
-            cyc = cycle_for(rig, model, so3.exp(rv), float(t), loads, noise)
-            if cyc is None or len(cyc.info) < 3:
-                continue
-            units, costs, members = _units(cyc, pairs)
-            if len(units) == 0:
-                continue
-            chosen = _select(cyc.ref_info, units, costs, int(share), criterion, pairs)
-            M = cyc.ref_info + sum(units[j] for j in chosen)
-            value = float(_criterion(M, criterion))
-            if np.isfinite(value) and (best is None or value < best[0]):
-                best = (value, cyc, [i for j in chosen for i in members[j]], float(t), M)
+            design_at(float(t))
+        for _ in range(REFINE_ROUNDS):   # bisect the pretension around the best so far
+            levels = sorted(tried)
+            scored = [(tried[t][0], t) for t in levels if tried[t] is not None]
+            if not scored:
+                break
+            i = levels.index(min(scored)[1])
+            for j in (i - 1, i + 1):
+                if 0 <= j < len(levels):
+                    design_at(0.5 * (levels[i] + levels[j]))
+        found = [v for v in tried.values() if v is not None]
+        best = min(found, key=lambda v: v[0]) if found else None
         if best is None:
             raise DesignError(f"the rig cannot identify K at pose {np.round(rv, 4).tolist()} with this load set: "
                               "fewer than three admissible loads at every pretension (lighter weights, "
@@ -194,6 +204,21 @@ def plan_experiment(rig: Rig, budget: int, loads: LoadSet | None = None, poses: 
         out["pretension_N"].append(t)
         out["rotvec_ref"].append(so3.log(cyc.R_ref))
     return ExperimentPlan(_concat(rows), budget=int(budget), **out)
+
+
+def _design_at(rig: Rig, model: Model, R: np.ndarray, t: float, loads: LoadSet, noise: InstrumentNoise,
+               share: int, criterion: str, pairs: bool) -> tuple | None:
+    """(criterion, cycle, picked rows, pretension, information) of the best selection at pretension ``t``."""
+    cyc = cycle_for(rig, model, R, t, loads, noise)
+    if cyc is None or len(cyc.info) < 3:
+        return None
+    units, costs, members = _units(cyc, pairs)
+    if len(units) == 0:
+        return None
+    chosen = _select(cyc.ref_info, units, costs, share, criterion, pairs)
+    M = cyc.ref_info + sum(units[j] for j in chosen)
+    value = float(_criterion(M, criterion))
+    return (value, cyc, [i for j in chosen for i in members[j]], t, M) if np.isfinite(value) else None
 
 
 def _units(cyc: Cycle, pairs: bool) -> tuple[np.ndarray, np.ndarray, list[tuple[int, ...]]]:
