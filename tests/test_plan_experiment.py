@@ -91,7 +91,7 @@ def test_impossible_designs_are_refused(tmp_path, capsys):
     with pytest.raises(DesignError):
         plan_experiment(RIG, 2)
     loads = tmp_path / "heavy.toml"
-    loads.write_text("weights_N = [5000.0]\ndirections = 8\n")
+    loads.write_text("weights_N = [5000.0]\ndirections = 8\npretensions_N = [25.0]\n")
     assert main(["plan-experiment", "--budget", "10", "--loads", str(loads), "-o", str(tmp_path / "p.csv")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "cannot" in err[0]
