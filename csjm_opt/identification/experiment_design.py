@@ -12,7 +12,7 @@ D: log det), followed by exchange passes (a chosen unit swapped for a better one
 improves). With ``pairs=True`` (default) a unit is a ``+-`` pair of the same weight and point
 in opposite directions: the pair cancels the curvature of the moment-rotation relation to
 second order, so the estimate stays unbiased even without (or with a wrong) rig model.
-The best pretension is kept per pose (a grid, then two rounds of bisection around the best
+The best pretension is kept per pose (a grid, then three rounds of bisection around the best
 level); several poses (a K field) share the budget equally.
 
 The paper's protocol and the bound of a given protocol are in
@@ -40,7 +40,7 @@ CRITERIA = ("A", "D")
 #: Exchange passes after the greedy selection.
 EXCHANGE_PASSES = 3
 #: Bisection rounds on the pretension around the best level of the grid.
-REFINE_ROUNDS = 2
+REFINE_ROUNDS = 3
 
 
 def _criterion(M: np.ndarray, kind: str) -> np.ndarray:

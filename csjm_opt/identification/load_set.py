@@ -108,7 +108,7 @@ class LoadSet:
 
 
 def default_pretensions(rig: Rig) -> np.ndarray:
-    """Reference tensions to choose from: eight levels from just above ``t_min`` to ``0.8 t_max``.
+    """Reference tensions to choose from: eight levels from just above ``t_min`` to ``0.95 t_max``.
 
     A higher pretension softens the tilt stiffness (the tension term of K) and lets larger
     weights hang without slackening a cable, so the top levels are often the best.
@@ -121,7 +121,7 @@ def default_pretensions(rig: Rig) -> np.ndarray:
     -------
     ndarray
     """
-    lo, hi = rig.t_min_N, 0.8 * rig.t_max_N
+    lo, hi = rig.t_min_N, 0.95 * rig.t_max_N
     return np.unique(np.clip(np.geomspace(max(lo + 2.0, 1.0), max(hi, lo + 3.0), 8), lo, rig.t_max_N))
 
 
