@@ -12,7 +12,6 @@ from .._limits import MAX_BOOTSTRAP, MAX_EXACT_INT
 from ..model.rig import load_rig
 from ._options import check_outputs, float_in, int_in
 
-
 #: Above this many cycles, one line per cycle is printed and the JSON is compact.
 LONG_LOG_CYCLES = 50
 
@@ -36,10 +35,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run_preprocess)
 
     p = sub.add_parser("identify", help="identify K per load cycle of a measurement log",
-                       description="Per cycle (first row = reference): K_D by (49), K = K_D + K_L with "
-                       "K_L = -1/2 hat(tau_load) (errata 1-2), an affine least-squares estimate with "
-                       "confidence intervals, a symmetric-constrained estimate K_sym, and the "
-                       "condition number of the excitation.")
+                       description="Per cycle (first row = reference): the default estimate K_ml "
+                       "(maximum likelihood with tracker and F/T noise, curvature of the moment-rotation "
+                       "relation from the rig model) with its interval, the Cramér-Rao bound of K's six "
+                       "entries, its own covariance and their ratio; and for comparison K_D by (49), "
+                       "K = K_D + K_L with K_L = -1/2 hat(tau_load) (errata 1-2), an affine least-squares "
+                       "estimate, a symmetric-constrained estimate K_sym, and the condition number of the "
+                       "excitation.")
     p.add_argument("data", metavar="DATA.csv", help="measurement log (format in docs/conventions.md)")
     p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
     p.add_argument("--cycle", type=int_in(-MAX_EXACT_INT, MAX_EXACT_INT), default=None, help="only this cycle id")
@@ -47,7 +49,17 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="1: linear fit (paper); 2, 3: add terms up to that degree in dzeta "
                    "(less finite-displacement bias; needs 11 / 21 rows)")
     p.add_argument("--noise", choices=("none", "paper"), default="none",
-                   help="'paper': weight and correct with the instrument uncertainties of Tables 1-2")
+                   help="'paper': weight and correct with the instrument uncertainties of Tables 1-2; "
+                   "'none' (default): K_ml's noise is estimated from the residuals")
+    p.add_argument("--tau-sigma", type=float_in(0, 100, low_open=True, unit="N m"), default=None, metavar="NM",
+                   help="state the F/T moment noise (N m per axis; with --angle-sigma, overrides --noise)")
+    p.add_argument("--angle-sigma", type=float_in(0, 1, unit="rad"), default=None, metavar="RAD",
+                   help="state the tracker orientation noise (rad per axis). With --tau-sigma: both noises "
+                   "stated. Alone: the F/T noise is estimated and this corrects K_ml's regression dilution "
+                   "(default for that: the paper's tracker, Table 1)")
+    p.add_argument("--curvature", choices=("model", "none"), default="model",
+                   help="K_ml's curvature of the moment-rotation relation: from the rig model and the log's "
+                   "rest lengths (default), or none (a linear relation)")
     p.add_argument("--ci-level", type=float_in(0, 1, low_open=True, high_open=True), default=0.95,
                    help="confidence level (default 0.95)")
     p.add_argument("--bootstrap", type=int_in(0, MAX_BOOTSTRAP), default=0, metavar="N",
@@ -94,21 +106,31 @@ def run_preprocess(args: argparse.Namespace) -> int:
 def run_identify(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from .. import so3
+    from .._plotting import save
+    from ..identification.crlb import SYM_NAMES
+    from ..identification.figures import convergence_curve, plot_convergence
     from ..identification.identify import MAX_CONDITION, identify_cycles, identify_log
     from ..identification.stiffness_fits import n_parameters
-    from .._plotting import save
-    from ..identification.figures import convergence_curve, plot_convergence
     from ..measurement.instruments import InstrumentNoise
     from ..measurement.logfile import MeasurementLog
     from ..model.numeric import Model
-    from .. import so3
 
     check_outputs([args.data, args.rig], {"--json": args.json}, {"--figures": args.figures})
     rig = load_rig(args.rig)
     log = MeasurementLog.from_csv(args.data)
     model = Model(rig)
     noise = InstrumentNoise.paper() if args.noise == "paper" else None
-    options = dict(order=args.order, noise=noise, ci_level=args.ci_level, bootstrap=args.bootstrap,
+    if args.tau_sigma is not None and args.angle_sigma is None:
+        from ..errors import UsageError
+
+        raise UsageError("--tau-sigma needs --angle-sigma (state both noises, or only the tracker's)",
+                         "--tau-sigma")
+    if args.tau_sigma is not None:
+        noise = InstrumentNoise((args.tau_sigma,) * 3, args.angle_sigma)
+    options = dict(order=args.order, noise=noise, curvature=args.curvature, tracker_sigma_rad=args.angle_sigma,
+                   ci_level=args.ci_level,
+                   bootstrap=args.bootstrap,
                    max_condition=args.max_condition or MAX_CONDITION,
                    allow_ill_conditioned=args.allow_ill_conditioned)
     progress = None
@@ -144,7 +166,8 @@ def run_identify(args: argparse.Namespace) -> int:
     if args.json != "-" and len(estimates) > LONG_LOG_CYCLES:  # one line per cycle
         for e in estimates:
             d = np.diag(e.K)
-            print(f"cycle {e.cycle}: {e.n_rows} rows, diag K [{d[0]:.3f}, {d[1]:.3f}, {d[2]:.3f}] N m/rad, "
+            d = np.diag(e.K_ml)
+            print(f"cycle {e.cycle}: {e.n_rows} rows, diag K_ml [{d[0]:.3f}, {d[1]:.3f}, {d[2]:.3f}] N m/rad, "
                   f"+-{e.relative_half_width:.1%} of ||K||, condition {e.condition:.3g}"
                   + ("  ILL-CONDITIONED" if e.ill_conditioned else ""))
     elif args.json != "-":
@@ -153,7 +176,14 @@ def run_identify(args: argparse.Namespace) -> int:
             print(f"cycle {e.cycle}: {e.n_rows} rows, condition {e.condition:.3g}, symmetry error "
                   f"{e.symmetry_error:.3g}, residual rms {e.residual_rms_Nm:.3g} N m"
                   + ("  ILL-CONDITIONED (returned on request)" if e.ill_conditioned else ""))
-            print(f"  K (N m/rad) =\n{e.K}\n  +- ({int(e.ci_level * 100)} %)\n{e.ci_quantile * e.K_std}")
+            print(f"  K_ml (N m/rad, maximum likelihood, curvature {e.curvature}, noise "
+                  f"{'estimated' if e.noise_estimated else 'stated'}) =\n{e.K_ml}\n  +- ({int(e.ci_level * 100)} %)\n"
+                  f"{e.ml_quantile * e.K_ml_std}")
+            print("  Cramer-Rao bound (std, " + ", ".join(SYM_NAMES) + "): "
+                  + " ".join(f"{x:.3g}" for x in np.sqrt(np.diag(e.crlb6)))
+                  + f" N m/rad; efficiency (bound / own covariance, trace) {e.efficiency:.2f}")
+            print(f"  K (paper (50), affine fit) =\n{e.K}\n  +- ({int(e.ci_level * 100)} %)\n"
+                  f"{e.ci_quantile * e.K_std}")
             print(f"  K_sym =\n{e.K_sym}")
             for problem in e.problems():
                 print(f"  warning: {problem}")

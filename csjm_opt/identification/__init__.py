@@ -1,8 +1,12 @@
 """Identification: K from measured poses and loads ((49)-(50) and better), parameter fits,
 verification (Section IV-C) and the paper's tables."""
 
+from .crlb import SYM_NAMES, crlb
+from .experiment_design import ExperimentPlan, paper_protocol, plan_experiment, predict_bound
 from .figures import ConvergenceCurve, convergence_curve, plot_convergence, plot_verification
 from .identify import StiffnessEstimate, identify_log, identify_stiffness
+from .load_set import LoadSet
+from .ml_estimator import MLFit, fit_ml
 from .paper_tables import paper_report
 from .param_fit import ParameterFit, check_fit, fit_parameters
 from .verify import (
@@ -14,7 +18,8 @@ from .verify import (
     verify_log,
 )
 
-__all__ = ["ConvergenceCurve", "ParameterFit", "StiffnessEstimate", "Verification", "check_fit",
-           "convergence_curve", "estimation_error", "fit_parameters", "identify_log",
-           "identify_stiffness", "paper_report", "plot_convergence", "plot_verification",
-           "predict_pose", "predict_pose_external", "verify_increments", "verify_log"]
+__all__ = ["SYM_NAMES", "ConvergenceCurve", "ExperimentPlan", "LoadSet", "MLFit", "ParameterFit",
+           "StiffnessEstimate", "Verification", "check_fit", "convergence_curve", "crlb", "estimation_error",
+           "fit_ml", "fit_parameters", "identify_log", "identify_stiffness", "paper_protocol", "paper_report",
+           "plan_experiment", "plot_convergence", "plot_verification", "predict_bound", "predict_pose",
+           "predict_pose_external", "verify_increments", "verify_log"]

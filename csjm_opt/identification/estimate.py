@@ -9,6 +9,7 @@ import numpy as np
 
 from .. import so3
 from ..errors import InvalidInput
+from .crlb import SYM_NAMES, sym_to_full
 from .excitation import MAX_CONDITION, MAX_RELATIVE_HALF_WIDTH
 
 
@@ -39,6 +40,31 @@ class StiffnessEstimate:
     design_condition: float = float("nan")  # condition of the column-scaled design (with higher terms)
     weakest_load_direction_A: np.ndarray = dataclasses.field(default_factory=lambda: np.full(3, np.nan))
     ill_conditioned: bool = False   # returned although refused by the rule (allow_ill_conditioned=True)
+    # ---- the default estimator: maximum likelihood (csjm_opt.identification.ml_estimator)
+    K_ml: np.ndarray = dataclasses.field(default_factory=lambda: np.full((3, 3), np.nan))
+    crlb6: np.ndarray = dataclasses.field(default_factory=lambda: np.full((6, 6), np.nan))  # bound, SYM_NAMES
+    cov6_ml: np.ndarray = dataclasses.field(default_factory=lambda: np.full((6, 6), np.nan))  # sandwich
+    ml_quantile: float = float("nan")  # half-width = quantile * sqrt(crlb)
+    curvature: str = "none"         # "model": second-order term from the rig model; "none"
+    noise_estimated: bool = True    # the noise of the bound was estimated from the residuals
+    estimator: str = "K_ml"
+
+    @property
+    def K_ml_std(self) -> np.ndarray:
+        """(3, 3) standard errors of K_ml (square roots of the bound)."""
+        return np.sqrt(np.diag(sym_to_full(self.crlb6))).reshape(3, 3)
+
+    @property
+    def K_ml_ci(self) -> np.ndarray:
+        """(2, 3, 3) interval of K_ml at ``ci_level`` (from the information at the estimate)."""
+        h = self.ml_quantile * self.K_ml_std
+        return np.stack([self.K_ml - h, self.K_ml + h])
+
+    @property
+    def efficiency(self) -> float:
+        """``trace(bound) / trace(own covariance)`` of K_ml's six entries (about 1 when the models hold)."""
+        t = float(np.trace(self.cov6_ml))
+        return float(np.trace(self.crlb6) / t) if t > 0 else float("nan")
 
     @property
     def relative_half_width(self) -> float:
@@ -88,8 +114,9 @@ class StiffnessEstimate:
         ----------
         K_true : array_like, shape (3, 3)
             The true stiffness (N m/rad).
-        which : {"K", "K_sym", "bootstrap"}, optional
-            Which interval: of the affine estimate, the symmetric one, or the pairs bootstrap.
+        which : {"K", "K_sym", "K_ml", "bootstrap"}, optional
+            Which interval: of the affine estimate, the symmetric one, the maximum-likelihood one,
+            or the pairs bootstrap.
 
         Returns
         -------
@@ -101,7 +128,8 @@ class StiffnessEstimate:
         InvalidInput
             If ``which="bootstrap"`` but the estimate was made without bootstrap resamples.
         """
-        interval = {"K": self.K_ci, "K_sym": self.K_sym_ci, "bootstrap": self.bootstrap_K_ci}[which]
+        interval = {"K": self.K_ci, "K_sym": self.K_sym_ci, "K_ml": self.K_ml_ci,
+                    "bootstrap": self.bootstrap_K_ci}[which]
         if interval is None:
             raise InvalidInput("no bootstrap interval: identify with bootstrap > 0", "which")
         lo, hi = interval
@@ -156,6 +184,9 @@ class StiffnessEstimate:
         if np.isfinite(self.chi2_per_dof) and self.chi2_per_dof > max_chi2:
             out.append(f"residuals {self.chi2_per_dof:.2f}x the instrument variance: model or noise "
                        "assumptions do not hold")
+        if np.isfinite(self.efficiency) and self.efficiency < 0.5:
+            out.append(f"K_ml scatters {1 / self.efficiency:.1f}x more than its bound: the noise statement "
+                       "or the rig model's curvature does not hold")
         if np.any(np.linalg.eigvalsh(self.K_sym) <= 0):
             out.append("K_sym is not positive definite: the reference pose looks unstable")
         return out
@@ -166,10 +197,16 @@ class StiffnessEstimate:
         Returns
         -------
         dict
-            ``cycle``, ``K_D``, ``K_L``, ``K``, ``K_sym``, ``K_paper``, intervals, condition numbers,
+            ``estimator`` (``"K_ml"``, the default estimate) with ``K_ml``, ``K_ml_ci`` ([lower, upper]),
+            ``crlb_std`` (bound of K11, K22, K33, K12, K13, K23), ``K_ml_cov`` (its own covariance),
+            ``efficiency``; ``cycle``, ``K_D``, ``K_L``, ``K``, ``K_sym``, ``K_paper``, intervals, condition numbers,
             symmetry, residuals and ``problems`` (keys in docs/conventions.md).
         """
         d = {"cycle": self.cycle, "n_rows": self.n_rows, "order": self.order,
+             "estimator": self.estimator, "K_ml": self.K_ml, "K_ml_ci": self.K_ml_ci, "K_ml_std": self.K_ml_std,
+             "crlb_std": np.sqrt(np.diag(self.crlb6)), "crlb_entries": list(SYM_NAMES), "crlb_cov": self.crlb6,
+             "K_ml_cov": self.cov6_ml, "efficiency": self.efficiency, "curvature": self.curvature,
+             "noise": "estimated" if self.noise_estimated else "stated",
              "K_D": self.K_D, "K_L": self.K_L, "K": self.K, "K_sym": self.K_sym,
              "K_D_paper": self.K_D_paper, "K_paper": self.K_paper,
              "K_std": self.K_std, "K_sym_std": self.K_sym_std,

@@ -7,7 +7,11 @@ For one load cycle (rows in time order, the first row is the reference)::
     K_D ~ dtau_load / dzeta                           (48a), estimated by (49)
     K = K_D + K_L,  K_L = -1/2 hat(tau_load_ref)      (47), corrected (errata 1-2)
 
-Three estimates are returned together in :class:`StiffnessEstimate`:
+The default estimate is ``K_ml`` (``StiffnessEstimate.estimator``): maximum likelihood with
+the tracker and F/T noise and the curvature of the moment-rotation relation from the rig model,
+with the Cramér-Rao bound of its six entries (:mod:`csjm_opt.identification.ml_estimator`,
+:mod:`csjm_opt.identification.crlb`). For comparison, three more estimates are returned
+together in :class:`StiffnessEstimate`:
 
 * ``K_D_paper`` / ``K_paper``: the paper's literal ``Psi Omega^+`` on
   differences to the reference row (49)-(50), with the corrected ``K_L``.

@@ -11,9 +11,12 @@ import numpy as np
 from scipy import stats
 
 from .. import so3
+from .._limits import MAX_BOOTSTRAP
+from .._validate import as_array, as_rotations
 from ..errors import IllConditionedData, InvalidInput
 from ..measurement.instruments import InstrumentNoise
 from ..model.numeric import Model
+from .curvature import model_curvature, weight_slopes
 from .estimate import StiffnessEstimate
 from .excitation import (
     MAX_CONDITION,
@@ -23,6 +26,7 @@ from .excitation import (
     excitation,
     weakest_load_direction,
 )
+from .ml_estimator import fit_ml
 from .stiffness_fits import (
     affine_fit,
     bootstrap_interval,
@@ -30,8 +34,6 @@ from .stiffness_fits import (
     paper_estimate,
     symmetric_fit,
 )
-from .._limits import MAX_BOOTSTRAP
-from .._validate import as_array, as_rotations
 
 
 # --------------------------------------------------------------- estimators
@@ -46,7 +48,9 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
                        tau_weight_A_Nm: np.ndarray | None = None, *, noise: InstrumentNoise | None = None,
                        order: int = 1, ci_level: float = 0.95, bootstrap: int = 0,
                        rng: np.random.Generator | None = None, max_condition: float = MAX_CONDITION,
-                       cycle: int | None = None, allow_ill_conditioned: bool = False) -> StiffnessEstimate:
+                       cycle: int | None = None, allow_ill_conditioned: bool = False,
+                       rest_lengths_m: np.ndarray | None = None, curvature: str = "model",
+                       tracker_sigma_rad: float | None = None) -> StiffnessEstimate:
     """Identify K at ``R[0]`` from one cycle's orientations (n, 3, 3) and external moments (n, 3).
 
     Parameters
@@ -92,6 +96,8 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
     R = as_rotations(R, "R")
     n = R.shape[0]
     tau_ext = as_array(tau_ext_A_Nm, (n, 3), "tau_ext")
+    if curvature not in ("model", "none"):
+        raise InvalidInput(f"curvature: expected 'model' or 'none', got {curvature!r}", "curvature")
     if tau_weight_A_Nm is None:
         if model is None:
             raise InvalidInput("give a model (for the weight moment) or tau_weight_A_Nm", "model")
@@ -141,6 +147,9 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
                 f"half-widths up to {half.max():.3g} N m/rad against ||K|| = {scale:.3g} N m/rad "
                 f"({rel:.0%}); {_missing(u)}", cond, 3, u)
         ill = True
+    if tracker_sigma_rad is None:
+        tracker_sigma_rad = InstrumentNoise.paper().angle_sigma_rad
+    ml, curv_used = _fit_ml(dzeta, tau_load, R, model, rest_lengths_m, noise, curvature, tracker_sigma_rad)
     boot = None
     if bootstrap:
         boot = bootstrap_interval(dzeta, tau_load, order, noise, bootstrap, ci_level,
@@ -153,4 +162,17 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
         condition=cond, singular_values_rad=s,
         residual_rms_Nm=float(np.sqrt(np.mean(np.sum(fit["resid"] ** 2, axis=1)))),
         chi2_per_dof=chi2, bootstrap_K_ci=boot, design_condition=float(fit["design_condition"]),
-        weakest_load_direction_A=u, ill_conditioned=ill)
+        weakest_load_direction_A=u, ill_conditioned=ill,
+        K_ml=ml.K, crlb6=ml.crlb6, cov6_ml=ml.cov6,
+        ml_quantile=_quantile(ci_level, 0 if noise is not None else max(ml.dof, 1)),
+        curvature=curv_used, noise_estimated=ml.noise_estimated)
+
+
+def _fit_ml(dzeta, tau_load, R, model, rest_lengths_m, noise, curvature, tracker_sigma_rad):
+    """K_ml of the cycle: the curvature from the rig model when it and the rest lengths are known."""
+    W = weight_slopes(model, R, dzeta) if model is not None else None
+    if curvature == "model" and model is not None and rest_lengths_m is not None:
+        l = as_array(rest_lengths_m, (6,), "rest_lengths_m")
+        c, dc = model_curvature(model, R[0], l, dzeta)
+        return fit_ml(dzeta, tau_load, noise, c, dc, W, tracker_sigma_rad=tracker_sigma_rad), "model"
+    return fit_ml(dzeta, tau_load, noise, None, None, W, tracker_sigma_rad=tracker_sigma_rad), "none"

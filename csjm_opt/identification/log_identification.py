@@ -48,7 +48,8 @@ def identify_log(log: MeasurementLog, rig: Rig, cycle: int | None = None, model:
     R, W = _poses_and_weight(log, np.concatenate([rows for _, rows in pairs]), model)
     for c, rows in (progress(pairs) if progress is not None else pairs):
         try:
-            out.append(identify_stiffness(R[rows], log.tau_ext_A_Nm[rows], model, W[rows], cycle=c, **options))
+            out.append(identify_stiffness(R[rows], log.tau_ext_A_Nm[rows], model, W[rows], cycle=c,
+                                          **_rest(log, rows, options)))
         except IllConditionedData as exc:
             raise IllConditionedData(f"cycle {c}: {exc}", exc.condition, exc.rank, exc.direction) from exc
     return out
@@ -76,7 +77,7 @@ def identify_cycles(log: MeasurementLog, rig: Rig, model: Model | None = None, p
     for c, rows in (progress(pairs) if progress is not None else pairs):
         try:
             estimates.append(identify_stiffness(R[rows], log.tau_ext_A_Nm[rows], model, W[rows], cycle=c,
-                                                **options))
+                                                **_rest(log, rows, options)))
         except IllConditionedData as exc:
             err = IllConditionedData(f"cycle {c}: {exc}", exc.condition, exc.rank, exc.direction)
             first_error = first_error or err
@@ -85,6 +86,14 @@ def identify_cycles(log: MeasurementLog, rig: Rig, model: Model | None = None, p
     if not estimates and first_error is not None:
         raise first_error
     return estimates, skipped
+
+
+def _rest(log: MeasurementLog, rows: np.ndarray, options: dict[str, Any]) -> dict[str, Any]:
+    """Options plus the cycle's rest lengths (for K_ml's model curvature) when they are constant."""
+    l = log.rest_lengths_m[rows]
+    if "rest_lengths_m" in options or not np.allclose(l, l[0], rtol=0, atol=1e-9):
+        return options
+    return options | {"rest_lengths_m": l[0]}
 
 
 def _cycle_rows(log: MeasurementLog, cycles: list[int]) -> list[tuple[int, np.ndarray]]:

@@ -1,0 +1,105 @@
+"""``csjm plan-experiment``: an identification experiment planned for a small Cramér-Rao bound of K."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .._fileio import atomic_write_json
+from ._options import check_outputs, int_in, rotvec_component
+
+#: Largest budget accepted (loads).
+MAX_BUDGET = 2000
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("plan-experiment", help="plan an identification experiment (loads, pretension)",
+                       description="Choose the pretension (rest lengths), dead weights, attachment points and "
+                       "directions of an identification experiment with BUDGET loads, within the rig's limits "
+                       "(tensions in bounds, stable, within the tracker's range), to minimise the A- or "
+                       "D-criterion of the Cramér-Rao bound of K. Writes the protocol (the measurement-log "
+                       "format with the measured columns empty; docs/guide/input-files.md) and prints the "
+                       "predicted 95 %% interval per entry of K, and the same for the paper's protocol "
+                       "with the same budget.")
+    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
+    p.add_argument("--budget", type=int_in(1, MAX_BUDGET), required=True, metavar="N", help="number of loads")
+    p.add_argument("--loads", default=None, metavar="LOADS.toml",
+                   help="weights, attachment points, directions, pretensions, tracker range "
+                   "(format in docs/guide/identification.md; default from the rig)")
+    p.add_argument("--poses", nargs="+", default=None, metavar="RX,RY,RZ",
+                   help="reference poses as rotation vectors (rad); one cycle each, the budget split "
+                   "(default: the home pose)")
+    p.add_argument("--criterion", choices=("A", "D"), default="A", help="A: trace, D: log det of the bound")
+    p.add_argument("--no-pairs", action="store_true", help="do not spend the budget on +- load pairs")
+    p.add_argument("--seed", type=int_in(0, 2 ** 31 - 1), default=0, help="seed of the paper protocol's draw")
+    p.add_argument("-o", "--output", required=True, metavar="PROTOCOL.csv", help="protocol to write")
+    p.add_argument("--force", action="store_true", help="replace an existing output file")
+    p.add_argument("--json", metavar="PATH", help="write machine-readable output ('-' = stdout)")
+    p.set_defaults(func=run)
+
+
+def _poses(values: list[str] | None):
+    import numpy as np
+
+    from ..errors import UsageError
+    from ._options import check_rotvec
+
+    if values is None:
+        return None
+    out = []
+    for v in values:
+        parts = v.split(",")
+        if len(parts) != 3:
+            raise UsageError(f"--poses: expected RX,RY,RZ, got {v!r}", "--poses")
+        try:
+            out.append(check_rotvec([rotvec_component(x) for x in parts], "--poses"))
+        except argparse.ArgumentTypeError as exc:
+            raise UsageError(f"--poses: {exc}", "--poses") from None
+    return np.array(out)
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from ..errors import DesignError
+    from ..identification.crlb import SYM_NAMES
+    from ..identification.experiment_design import paper_protocol, plan_experiment
+    from ..identification.load_set import LoadSet
+    from ..measurement.instruments import InstrumentNoise
+    from ..model.numeric import Model
+    from ..model.rig import load_rig
+
+    check_outputs([args.rig, args.loads], {"-o/--output": args.output, "--json": args.json},
+                  overwrite={"-o/--output": args.force})
+    rig = load_rig(args.rig)
+    loads = LoadSet.from_toml(args.loads, rig) if args.loads else LoadSet.default(rig)
+    poses = _poses(args.poses)
+    noise, model = InstrumentNoise.paper(), Model(rig)
+    plan = plan_experiment(rig, args.budget, loads, poses, noise, args.criterion, not args.no_pairs, model)
+    try:
+        paper = paper_protocol(rig, args.budget, np.random.default_rng(args.seed),
+                               None if poses is None else poses[0], loads=loads, noise=noise, model=model)
+    except DesignError:    # the comparison is not runnable on this rig; the plan still is
+        paper = None
+    plan.protocol.to_csv(args.output, overwrite=args.force)
+    hw_plan = plan.ci_half_width()
+    hw_paper = paper.ci_half_width() if paper is not None else None
+    ratio = float(hw_paper[0].mean() / hw_plan[0].mean()) if hw_paper is not None else None
+    out = {"output": str(args.output), "planned": plan.as_dict(),
+           "paper_protocol": paper.as_dict() if paper is not None else None,
+           "entries": list(SYM_NAMES), "narrower_by": ratio}
+    if args.json:
+        atomic_write_json(args.json, out)
+    if args.json != "-":
+        print(f"wrote {args.output}: {len(plan.protocol)} rows ({args.budget} loads, "
+              f"{len(plan.rotvec_ref)} reference pose(s)), pretension {plan.pretension_N} N")
+        print("predicted 95 % half-width (N m/rad)  " + "  ".join(f"{n:>6}" for n in SYM_NAMES))
+        for c, hw in enumerate(hw_plan):
+            print(f"  planned, cycle {c}:                 " + "  ".join(f"{x:6.3f}" for x in hw))
+        if hw_paper is None:
+            print("  paper protocol, same budget:       not admissible on this rig (25 N pretension)")
+        else:
+            print("  paper protocol, same budget:       " + "  ".join(f"{x:6.3f}" for x in hw_paper[0]))
+            print(f"planned intervals are {ratio:.2f}x narrower (mean over the six entries, first pose)")
+    sys.stdout.flush()
+    return 0
