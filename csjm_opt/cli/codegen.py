@@ -10,6 +10,13 @@ from ._options import check_outputs
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``codegen`` command to the ``csjm`` parser.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``csjm`` subparsers the command is added to.
+    """
     p = sub.add_parser("codegen", help="C99 tension planner and K of a rig (no malloc, libm only)",
                        description="Write a C99 library for a 1 kHz controller: cable lengths, J and the "
                        "weight moment at a pose, the bounded tension QP of `csjm plan` (warm start, fixed "
@@ -24,6 +31,27 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """``csjm codegen``: write the rig's C99 planner and K to ``--out``, optionally compile it, print a summary.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status (0 on success).
+
+    Raises
+    ------
+    RigFileError
+        The rig file cannot be read or is malformed.
+    InvalidInput
+        An output that cannot be written, or a folder that lacks a generated file at ``--build``.
+    SolverError
+        ``--build``: no C compiler, or the compiler failed.
+    """
     from ..codegen import build_shared, generate_c  # CasADi code generation: loaded only for this command
 
     check_outputs([args.rig], {"--json": args.json}, {"-o/--out": args.out})

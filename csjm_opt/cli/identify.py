@@ -17,6 +17,13 @@ LONG_LOG_CYCLES = 50
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``preprocess``, ``identify`` and ``paper`` commands to the ``csjm`` parser.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``csjm`` subparsers the commands are added to.
+    """
     p = sub.add_parser("preprocess", help="raw tracker/F/T CSV -> measurement log",
                        description="Turn a raw instrument CSV (tracker base points, platform poses "
                        "in the tracker frame, F/T readings in the sensor frame; format in "
@@ -86,6 +93,28 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run_preprocess(args: argparse.Namespace) -> int:
+    """``csjm preprocess``: turn a raw instrument CSV into a measurement log, print the base-fit summary.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status (0 on success).
+
+    Raises
+    ------
+    DataFileError
+        The raw CSV is malformed, or a sample puts the origin of {A} farther than ``--origin-tol``
+        from the origin of {B} (naming the line).
+    InvalidInput
+        An output that cannot be written (or exists without ``--force``).
+    RigFileError
+        The rig file cannot be read or is malformed.
+    """
     from ..measurement.preprocess import DEFAULT_ORIGIN_TOL_M, preprocess_file
 
     check_outputs([args.raw, args.rig], {"-o/--output": args.output, "--json": args.json},
@@ -104,6 +133,34 @@ def run_preprocess(args: argparse.Namespace) -> int:
 
 
 def run_identify(args: argparse.Namespace) -> int:
+    """``csjm identify``: estimate K per load cycle of a measurement log, print or write the estimates.
+
+    Cycles that cannot be identified are skipped and listed (a warning on stderr) unless all are;
+    with ``--figures``, the Figure 5 convergence curve of each cycle is saved as a PNG.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status (0 on success, also when some cycles were skipped).
+
+    Raises
+    ------
+    UsageError
+        ``--tau-sigma`` without ``--angle-sigma``.
+    DataFileError
+        The measurement log is malformed, or has no ``--cycle``.
+    InvalidInput
+        An output that cannot be written.
+    RigFileError
+        The rig file cannot be read or is malformed.
+    IllConditionedData
+        No cycle (or the ``--cycle`` asked for) can be identified.
+    """
     import numpy as np
 
     from .. import so3
@@ -202,6 +259,23 @@ def run_identify(args: argparse.Namespace) -> int:
 
 
 def run_paper(args: argparse.Namespace) -> int:
+    """``csjm paper``: recompute Tables 3 and 4 from the printed numbers, print or write the check.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status (0 on success).
+
+    Raises
+    ------
+    InvalidInput
+        The ``--json`` output cannot be written.
+    """
     from ..identification.paper_tables import format_report, paper_report
 
     check_outputs([], {"--json": args.json})

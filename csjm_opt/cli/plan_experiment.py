@@ -13,6 +13,13 @@ MAX_BUDGET = 2000
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``plan-experiment`` command to the ``csjm`` parser.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``csjm`` subparsers the command is added to.
+    """
     p = sub.add_parser("plan-experiment", help="plan an identification experiment (loads, pretension)",
                        description="Choose the pretension (rest lengths), dead weights, attachment points and "
                        "directions of an identification experiment with BUDGET loads, within the rig's limits "
@@ -59,6 +66,33 @@ def _poses(values: list[str] | None):
 
 
 def run(args: argparse.Namespace) -> int:
+    """``csjm plan-experiment``: plan the experiment, write its protocol, print the predicted intervals.
+
+    The paper's protocol with the same budget is planned for comparison; when the rig cannot hold
+    it, the comparison is left out (``null`` in the JSON) and the plan is still written.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status (0 on success).
+
+    Raises
+    ------
+    UsageError
+        A ``--poses`` entry that is not three comma-separated components.
+    InvalidInput
+        An output that cannot be written (or exists without ``--force``), a rotation vector outside
+        the principal ball, or a bad load-set file.
+    RigFileError
+        The rig file cannot be read or is malformed.
+    DesignError
+        The rig cannot hold enough of the load set to identify K.
+    """
     import numpy as np
 
     from ..errors import DesignError

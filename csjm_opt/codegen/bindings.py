@@ -70,7 +70,8 @@ class CPlanner:
 
     Parameters
     ----------
-    path : the shared library.
+    path : str or Path
+        The shared library (built by :func:`csjm_opt.codegen.build_shared`).
     """
 
     def __init__(self, path: str | Path):
@@ -110,21 +111,32 @@ class CPlanner:
 
         Parameters
         ----------
-        R : (3, 3) orientation of {A} in {B}.
-        tau_ext_A_Nm : (3,) external moment in {A}, weight excluded (N m).
-        t_ref_N : reference tensions (scalar or (6,); default mid-range).
-        warm_start : start from the previous warm-started call's active set.
-        max_iter : active-set iteration cap (0: the C default), optionally ``+ NO_FALLBACK``.
+        R : array_like, shape (3, 3)
+            Orientation of {A} in {B}.
+        tau_ext_A_Nm : array_like, shape (3,), optional
+            External moment in {A}, weight excluded (N m).
+        t_ref_N : float or array_like, shape (6,), optional
+            Reference tensions (N); default mid-range.
+        warm_start : bool, optional
+            Start from the previous warm-started call's active set.
+        max_iter : int, optional
+            Active-set iteration cap (0: the C default), optionally ``+ NO_FALLBACK``.
 
         Returns
         -------
-        TensionPlan : with ``solver="c"``.
+        TensionPlan
+            With ``solver="c"``.
 
         Raises
         ------
-        InvalidInput, NotARotation : bad shapes, non-finite numbers, not a rotation.
-        InfeasibleLoad : the load lies more than 1e-8 N m outside the wrench-feasible set.
-        SolverError : the iteration cap was reached (only with ``NO_FALLBACK``, or at a degenerate load).
+        InvalidInput
+            Bad shapes or non-finite numbers.
+        NotARotation
+            ``R`` is not a rotation.
+        InfeasibleLoad
+            The load lies more than 1e-8 N m outside the wrench-feasible set.
+        SolverError
+            The iteration cap was reached (only with ``NO_FALLBACK``, or at a degenerate load).
         """
         R_arr = np.ascontiguousarray(np.asarray(R, dtype=np.float64))
         tau = np.ascontiguousarray(np.asarray(tau_ext_A_Nm, dtype=np.float64))
@@ -157,17 +169,24 @@ class CPlanner:
 
         Parameters
         ----------
-        q_wxyz : (4,) quaternion of {A} in {B}, norm 1 within 1e-6.
-        tau_ext_A_Nm : (3,) external moment in {A} (N m).
+        q_wxyz : array_like, shape (4,)
+            Quaternion of {A} in {B}, norm 1 within 1e-6.
+        tau_ext_A_Nm : array_like, shape (3,), optional
+            External moment in {A}, weight excluded (N m).
 
         Returns
         -------
         TensionPlan
+            With ``solver="c"``.
 
         Raises
         ------
-        InvalidInput : not finite, or not of unit norm.
-        InfeasibleLoad, SolverError : as :meth:`plan_tensions`.
+        InvalidInput
+            Not finite, or not of unit norm.
+        InfeasibleLoad
+            As in :meth:`plan_tensions`.
+        SolverError
+            As in :meth:`plan_tensions`.
         """
         q = _f64(as_array(q_wxyz, (4,), "q_wxyz"), (4,))
         R = np.empty(9)
@@ -181,19 +200,28 @@ class CPlanner:
 
         Parameters
         ----------
-        R : (3, 3) orientation.
-        tensions_N : (6,) tensions; ``t_i <= 0`` marks cable i slack.
-        check_bounds : refuse taut cables outside ``[t_min, t_max]`` (within ``bound_tol_N``).
-        bound_tol_N : tolerance of that check.
+        R : array_like, shape (3, 3)
+            Orientation of {A} in {B}.
+        tensions_N : array_like, shape (6,)
+            Cable tensions (N); ``t_i <= 0`` marks cable i slack.
+        check_bounds : bool, optional
+            Refuse taut cables outside ``[t_min, t_max]`` (within ``bound_tol_N``).
+        bound_tol_N : float, optional
+            Tolerance of that check (N).
 
         Returns
         -------
-        K : (3, 3) N m/rad, symmetric.
+        K : ndarray, shape (3, 3)
+            Stiffness in {A} (N m/rad), symmetric.
 
         Raises
         ------
-        InvalidInput, NotARotation : bad input.
-        InconsistentTensions : a taut cable outside the bounds.
+        InvalidInput
+            Bad shapes or non-finite numbers.
+        NotARotation
+            ``R`` is not a rotation.
+        InconsistentTensions
+            A taut cable outside the bounds.
         """
         R_arr = _f64(as_array(R, (3, 3), "R"), (3, 3))
         T = _f64(as_array(tensions_N, (6,), "tensions"), (6,))
@@ -217,15 +245,24 @@ class CPlanner:
 
         Parameters
         ----------
-        R : (3, 3) orientation.
+        R : array_like, shape (3, 3)
+            Orientation of {A} in {B}.
 
         Returns
         -------
-        c, J, tau_weight_A_Nm
+        c : ndarray, shape (6,)
+            Cable lengths (m).
+        J : ndarray, shape (6, 3)
+            Jacobian of the cable lengths (m/rad).
+        tau_weight_A_Nm : ndarray, shape (3,)
+            Moment of the platform's weight about O, in {A} (N m).
 
         Raises
         ------
-        InvalidInput, NotARotation : bad input.
+        InvalidInput
+            Bad shape, or the C code refused ``R``.
+        NotARotation
+            ``R`` is not a rotation.
         """
         R_arr = _f64(as_array(R, (3, 3), "R"), (3, 3))
         c, J, w = np.empty(6), np.empty(18), np.empty(3)
@@ -241,19 +278,26 @@ class CPlanner:
 
         Parameters
         ----------
-        Rs : (n, 3, 3) orientations.
-        taus_A_Nm : (n, 3) external moments.
-        warm_start : warm-start each row from the previous one's active set.
-        max_iter : as in :meth:`plan_tensions`.
-        t_ref_N : (n, 6) reference tensions (default mid-range).
+        Rs : array_like, shape (n, 3, 3)
+            Orientations of {A} in {B}.
+        taus_A_Nm : array_like, shape (n, 3)
+            External moments in {A}, weight excluded (N m).
+        warm_start : bool, optional
+            Warm-start each row from the previous one's active set.
+        max_iter : int, optional
+            As in :meth:`plan_tensions`.
+        t_ref_N : array_like, shape (n, 6), optional
+            Reference tensions (N); default mid-range.
 
         Returns
         -------
         CPlanBatch
+            One row per pose, with its status code.
 
         Raises
         ------
-        InvalidInput : bad shapes.
+        InvalidInput
+            Bad shapes.
         """
         Rs_a = _f64(as_array(Rs, (None, 3, 3), "Rs"), (-1, 9))
         n = Rs_a.shape[0]
@@ -271,16 +315,20 @@ class CPlanner:
 
         Parameters
         ----------
-        Rs : (n, 3, 3) orientations.
-        tensions_N : (n, 6) tensions.
+        Rs : array_like, shape (n, 3, 3)
+            Orientations of {A} in {B}.
+        tensions_N : array_like, shape (n, 6)
+            Cable tensions (N).
 
         Returns
         -------
-        ndarray (n, 3, 3)
+        ndarray, shape (n, 3, 3)
+            Stiffness in {A} (N m/rad); NaN rows where C refused the input.
 
         Raises
         ------
-        InvalidInput : bad shapes.
+        InvalidInput
+            Bad shapes.
         """
         Rs_a = _f64(as_array(Rs, (None, 3, 3), "Rs"), (-1, 9))
         n = Rs_a.shape[0]
@@ -296,15 +344,22 @@ class CPlanner:
 
         Parameters
         ----------
-        Rs, taus_A_Nm, warm_start, max_iter : as in :meth:`plan_many`.
+        Rs, taus_A_Nm, warm_start, max_iter
+            As in :meth:`plan_many`.
 
         Returns
         -------
-        (ns per call (n,), mean cost of a pair of clock readings (ns), calls not solved)
+        ns_per_call : ndarray, shape (n,)
+            Time of each call (ns).
+        clock_overhead_ns : float
+            Mean cost of a pair of clock readings (ns).
+        n_failed : int
+            Calls not solved.
 
         Raises
         ------
-        InvalidInput : bad shapes.
+        InvalidInput
+            Bad shapes.
         """
         Rs_a = _f64(as_array(Rs, (None, 3, 3), "Rs"), (-1, 9))
         n = Rs_a.shape[0]
@@ -326,8 +381,10 @@ def load(out_dir: str | Path, extra_cflags: Sequence[str] = ()) -> CPlanner:
 
     Parameters
     ----------
-    out_dir : a folder written by :func:`csjm_opt.codegen.generate_c`.
-    extra_cflags : extra compiler flags.
+    out_dir : str or Path
+        A folder written by :func:`csjm_opt.codegen.generate_c`.
+    extra_cflags : sequence of str, optional
+        Extra compiler flags.
 
     Returns
     -------
@@ -335,7 +392,9 @@ def load(out_dir: str | Path, extra_cflags: Sequence[str] = ()) -> CPlanner:
 
     Raises
     ------
-    InvalidInput : not a generated folder.
-    SolverError : no C compiler, or it failed.
+    InvalidInput
+        Not a generated folder.
+    SolverError
+        No C compiler, or it failed.
     """
     return CPlanner(build_shared(out_dir, extra_cflags))

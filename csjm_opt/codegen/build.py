@@ -33,6 +33,7 @@ def find_compiler() -> str | None:
     Returns
     -------
     str or None
+        Full path of the compiler executable.
     """
     cc = os.environ.get("CC", "cc")
     return shutil.which(cc)
@@ -47,18 +48,24 @@ def build_shared(out_dir: str | Path, extra_cflags: Sequence[str] = (), force: b
 
     Parameters
     ----------
-    out_dir : a folder written by :func:`csjm_opt.codegen.generate_c`.
-    extra_cflags : more compiler flags (e.g. ``-fsanitize=address,undefined``).
-    force : compile even when the library exists.
+    out_dir : str or Path
+        A folder written by :func:`csjm_opt.codegen.generate_c`.
+    extra_cflags : sequence of str, optional
+        More compiler flags (e.g. ``-fsanitize=address,undefined``).
+    force : bool, optional
+        Compile even when the library exists.
 
     Returns
     -------
-    Path : the library.
+    Path
+        The library.
 
     Raises
     ------
-    InvalidInput : ``out_dir`` lacks a generated file.
-    SolverError : no C compiler, or the compiler failed (its first error line is quoted).
+    InvalidInput
+        ``out_dir`` lacks a generated file.
+    SolverError
+        No C compiler, or the compiler failed (its first error line is quoted).
     """
     d = Path(out_dir)
     sources = [d / s for s in CORE_SOURCES + ("csjm_host.c",)]

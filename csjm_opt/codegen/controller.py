@@ -24,16 +24,23 @@ class CTensionPlanningController(PoseHoldingController):
 
     Parameters
     ----------
-    rig : the rig the library was generated from (checked by its fingerprint).
-    planner : the loaded library.
-    R_ref : fixed rotation or function of time.
-    t_ref_N : reference tensions (default mid-range).
-    integral_gain : integral pose correction (as :class:`PoseHoldingController`).
-    warm_start : warm-start each step from the previous one's active set.
+    rig : Rig
+        The rig the library was generated from (checked by its fingerprint).
+    planner : CPlanner
+        The loaded library.
+    R_ref : ndarray, shape (3, 3), or callable
+        Fixed orientation of {A} in {B}, or a function of time (s) returning one.
+    t_ref_N : ndarray, shape (6,), optional
+        Reference tensions (N); default mid-range.
+    integral_gain : float, optional
+        Integral pose correction (as :class:`PoseHoldingController`).
+    warm_start : bool, optional
+        Warm-start each step from the previous one's active set.
 
     Raises
     ------
-    InvalidInput : the library was generated from another rig.
+    InvalidInput
+        The library was generated from another rig.
     """
 
     def __init__(self, rig: Rig, planner: CPlanner, R_ref: PoseReference, t_ref_N: np.ndarray | None = None,
@@ -57,12 +64,22 @@ class CTensionPlanningController(PoseHoldingController):
 
         Parameters
         ----------
-        R_cmd : (3, 3) commanded pose.
-        observation : the step's measurements.
+        R_cmd : ndarray, shape (3, 3)
+            Commanded orientation of {A} in {B}.
+        observation : Observation
+            The step's measurements (its ``tau_ext_A_Nm`` is held).
 
         Returns
         -------
-        (tensions_N, None, None)
+        tuple
+            ``(tensions_N, None, None)``: the (6,) tensions (N), no target K and no planned K.
+
+        Raises
+        ------
+        InfeasibleLoad
+            No tensions within the bounds hold the measured load.
+        SolverError
+            The C planner reached its iteration cap.
         """
         plan = self.planner.plan_tensions(R_cmd, observation.tau_ext_A_Nm, self.t_ref_N, warm_start=self.warm_start)
         self._rest_m = plan.rest_lengths_m
@@ -73,10 +90,12 @@ class CTensionPlanningController(PoseHoldingController):
 
         Parameters
         ----------
-        R_cmd, tensions_N : the pose and tensions of this step's plan.
+        R_cmd, tensions_N : ndarray
+            The pose and tensions of this step's plan (unused: the plan's rest lengths are kept).
 
         Returns
         -------
-        (6,) rest lengths (m).
+        ndarray, shape (6,)
+            Rest lengths (m).
         """
         return self._rest_m.copy()

@@ -122,7 +122,17 @@ static const double CSJM_GRAVITY_B[3] = {_c_array(rig.gravity_B_m_per_s2)};
 
 
 def rig_fingerprint(rig: Rig) -> str:
-    """SHA-256 of the rig's TOML text: which rig a generated folder was made from."""
+    """SHA-256 of the rig's TOML text: which rig a generated folder was made from.
+
+    Parameters
+    ----------
+    rig : Rig
+
+    Returns
+    -------
+    str
+        64 hexadecimal digits.
+    """
     return hashlib.sha256(rig.to_toml().encode()).hexdigest()
 
 
@@ -132,6 +142,20 @@ def sample_trajectory_csv(rig: Rig, duration_s: float = 2.0, rate_Hz: float = 10
     Columns ``t_s,qw,qx,qy,qz,tau_x,tau_y,tau_z`` (quaternion of {A} in {B}, load in {A}, N m).
     The load is 2 % of ``t_max`` times the mean hole radius, so the trajectory is feasible on
     rigs near the paper's.
+
+    Parameters
+    ----------
+    rig : Rig
+        Sets the load's scale.
+    duration_s : float, optional
+        Length of the trajectory (s).
+    rate_Hz : float, optional
+        Sample rate (Hz).
+
+    Returns
+    -------
+    str
+        The CSV text, header first, values to 17 significant digits.
     """
     from ..model.mjcf import quat_wxyz
 
@@ -151,17 +175,22 @@ def generate_c(rig: Rig, out_dir: str | Path, rig_source: str = "paper") -> Gene
 
     Parameters
     ----------
-    rig : the rig whose constants are baked in.
-    out_dir : the folder to write.
-    rig_source : where the rig came from (a file name or ``"paper"``), recorded in ``csjm_rig.h``.
+    rig : Rig
+        The rig whose constants are baked in.
+    out_dir : str or Path
+        The folder to write.
+    rig_source : str, optional
+        Where the rig came from (a file name or ``"paper"``), recorded in ``csjm_rig.h``.
 
     Returns
     -------
     GeneratedCode
+        The folder, the files written and the rig's fingerprint.
 
     Raises
     ------
-    InvalidInput : ``out_dir`` is not a writable folder (or cannot be created).
+    InvalidInput
+        ``out_dir`` is not a writable folder (or cannot be created).
     """
     check_output_dir(out_dir, name="-o")
     out = Path(out_dir)

@@ -1,5 +1,8 @@
-"""Identification: K from measured poses and loads ((49)-(50) and better), parameter fits,
-verification (Section IV-C) and the paper's tables."""
+"""Identification: K from measured poses and loads ((49)-(50) and better).
+
+Also parameter fits, verification (Section IV-C), experiment design for a small
+Cramér-Rao bound, and the paper's tables.
+"""
 
 from .crlb import SYM_NAMES, crlb
 from .experiment_design import ExperimentPlan, paper_protocol, plan_experiment, predict_bound

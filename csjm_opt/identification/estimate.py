@@ -75,10 +75,12 @@ class StiffnessEstimate:
     # ----------------------------------------------------------- self-checks
     @property
     def K_std(self) -> np.ndarray:
+        """(3, 3) standard errors of K (N m/rad, from the diagonal of ``cov_K``)."""
         return np.sqrt(np.diag(self.cov_K)).reshape(3, 3)
 
     @property
     def K_sym_std(self) -> np.ndarray:
+        """(3, 3) standard errors of K_sym (N m/rad, from the diagonal of ``cov_K_sym``)."""
         return np.sqrt(np.diag(self.cov_K_sym)).reshape(3, 3)
 
     @property
@@ -89,6 +91,7 @@ class StiffnessEstimate:
 
     @property
     def K_sym_ci(self) -> np.ndarray:
+        """(2, 3, 3) analytic interval of K_sym at ``ci_level``."""
         h = self.ci_quantile * self.K_sym_std
         return np.stack([self.K_sym - h, self.K_sym + h])
 
@@ -108,7 +111,7 @@ class StiffnessEstimate:
         return np.asarray(out)
 
     def covers(self, K_true: np.ndarray, which: str = "K") -> np.ndarray:
-        """Does the confidence interval of each entry contain the true value? (For simulation studies.)
+        """Whether the confidence interval of each entry contains the true value (for simulation studies).
 
         Parameters
         ----------

@@ -26,9 +26,28 @@ def excitation(dzeta: np.ndarray, noise: InstrumentNoise | None = None,
                max_condition: float = MAX_CONDITION) -> tuple[float, np.ndarray]:
     """Condition number and singular values of the centred displacements.
 
-    Raises :class:`IllConditionedData` when they do not span three directions:
-    rank below 3, condition above ``max_condition``, or (with a noise model) a
-    smallest singular value within ``NOISE_FLOOR_FACTOR`` of the orientation noise.
+    Parameters
+    ----------
+    dzeta : ndarray, shape (n, 3)
+        Body-frame displacements from the reference row (rad).
+    noise : InstrumentNoise, optional
+        With it, the smallest singular value must exceed :data:`NOISE_FLOOR_FACTOR` times the
+        orientation noise (scaled by ``sqrt(2 n)``).
+    max_condition : float, optional
+        Largest accepted condition number.
+
+    Returns
+    -------
+    condition : float
+        Largest over smallest singular value.
+    singular_values_rad : ndarray, shape (3,)
+        Singular values of the centred displacements, largest first (rad).
+
+    Raises
+    ------
+    IllConditionedData
+        When the displacements do not span three directions: rank below 3, condition above
+        ``max_condition``, or a smallest singular value under the noise floor.
     """
     Z = dzeta - dzeta.mean(axis=0)
     s = np.linalg.svd(Z, compute_uv=False) if len(Z) else np.zeros(0)
@@ -54,6 +73,18 @@ def weakest_load_direction(tau_load_A_Nm: np.ndarray) -> tuple[np.ndarray, np.nd
     """Unit direction in {A} along which the centred load moments vary least, and their singular values (N m).
 
     The sign is fixed so that the largest component is positive.
+
+    Parameters
+    ----------
+    tau_load_A_Nm : ndarray, shape (n, 3)
+        Total load moments in {A} (N m).
+
+    Returns
+    -------
+    direction_A : ndarray, shape (3,)
+        Unit vector in {A}.
+    singular_values_Nm : ndarray, shape (3,)
+        Singular values of the centred moments, largest first, zero-padded (N m).
     """
     T = tau_load_A_Nm - tau_load_A_Nm.mean(axis=0)
     _, s, Vt = np.linalg.svd(T, full_matrices=True)

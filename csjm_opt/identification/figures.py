@@ -1,5 +1,7 @@
-"""Figures of the identification: the convergence curve of Figure 5 (det K against N), and
-the verification bar chart of E_theta per held-out case.
+"""Figures of the identification: Figure 5's convergence curve and the verification bar chart.
+
+The convergence curve is det K against the number of measurements N; the bar
+chart shows E_theta per held-out case.
 
 ``convergence_curve`` re-identifies K from the first N rows of a cycle for
 growing N; ``plot_convergence`` draws det K (paper estimate (50), affine and

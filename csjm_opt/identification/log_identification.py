@@ -65,6 +65,24 @@ def identify_cycles(log: MeasurementLog, rig: Rig, model: Model | None = None, p
     instead of stopping the whole log. Time is linear in the log length
     (orientations are computed once per cycle's rows).
 
+    Parameters
+    ----------
+    log : MeasurementLog
+    rig : Rig
+    model : Model, optional
+        Reused numeric model of ``rig``.
+    progress : callable, optional
+        Wraps the iterable of cycles (e.g. ``functools.partial(tqdm, ...)``).
+    **options
+        Passed to :func:`identify_stiffness`.
+
+    Returns
+    -------
+    estimates : list of StiffnessEstimate
+        One per identified cycle, in the log's cycle order.
+    skipped : list of dict
+        One per refused cycle: ``{"cycle", "reason", "condition", "weakest_load_direction_A"}``.
+
     Raises
     ------
     IllConditionedData
@@ -111,8 +129,10 @@ def _cycle_rows(log: MeasurementLog, cycles: list[int]) -> list[tuple[int, np.nd
 
 
 def _poses_and_weight(log: MeasurementLog, rows: np.ndarray, model: Model) -> tuple[np.ndarray, np.ndarray]:
-    """Orientations (n, 3, 3) and weight moments (n, 3) of the log, computed once for ``rows``
-    (other rows are left zero): one batched call instead of one per cycle."""
+    """Orientations (n, 3, 3) and weight moments (n, 3, N m in {A}) of the log's rows.
+
+    Computed once for ``rows`` (other rows are left zero): one batched call instead of one per cycle.
+    """
     R = np.zeros((len(log), 3, 3))
     W = np.zeros((len(log), 3))
     if len(rows):

@@ -23,7 +23,18 @@ from .verify import estimation_error, predict_pose
 
 
 def check_printed_R0() -> np.ndarray:
-    """Validate Table 3's R0 exactly as printed: raises :class:`NotARotation` (erratum 3)."""
+    """Table 3's R0 exactly as printed, validated as a rotation (it is not one: erratum 3).
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        Never returned for the printed numbers.
+
+    Raises
+    ------
+    NotARotation
+        Always: the printed R0 is not orthonormal to the validator's tolerance.
+    """
     return as_rotation(pd.R0_PRINTED, "R0 (Table 3, as printed)")
 
 
@@ -32,7 +43,20 @@ def _antisym(K: np.ndarray) -> float:
 
 
 def table3(tau0_A_Nm: np.ndarray = pd.TAU0_A_NM) -> dict[str, Any]:
-    """Table 3 with the corrected ``K_L`` and the checks on the printed numbers."""
+    """Table 3 with the corrected ``K_L`` and the checks on the printed numbers.
+
+    Parameters
+    ----------
+    tau0_A_Nm : ndarray, shape (3,), optional
+        Total load at the reference pose in {A} (N m); default the paper's.
+
+    Returns
+    -------
+    dict
+        ``K_D`` (printed), ``K_L = -1/2 hat(tau0)``, ``K = K_D + K_L`` (N m/rad), the printed
+        ``K_L`` and ``K``, and scalar checks: deviations of the printed matrices from the
+        equations, symmetry errors, eigenvalues of the symmetric part, determinants.
+    """
     K_L = -0.5 * so3.hat(tau0_A_Nm) + 0.0  # + 0.0: no negative zeros in the report
     K = pd.TABLE3_K_D + K_L
     return {
@@ -55,7 +79,27 @@ def table3(tau0_A_Nm: np.ndarray = pd.TAU0_A_NM) -> dict[str, Any]:
 
 
 def table4(R0: np.ndarray = pd.R0_CORRECTED) -> dict[str, Any]:
-    """Table 4 recomputed from Table 3's ``K_D`` and ``R0`` (rejects a non-rotation R0)."""
+    """Table 4 recomputed from Table 3's ``K_D`` and ``R0``.
+
+    Parameters
+    ----------
+    R0 : ndarray, shape (3, 3), optional
+        Reference orientation of {A} in {B}; default the corrected R0 (erratum 3).
+
+    Returns
+    -------
+    dict
+        Poses predicted with ``K_D``, the printed K and the corrected K (``R_est_*``), the largest
+        entry error of each against the printed estimates (column C, ``col_C_max_entry_error_*``),
+        and ``E_theta`` (rad) against the actual poses (column B): of column C
+        (``E_theta_from_B_C``), as printed (``E_theta_printed``), and of the ``K_D`` and corrected-K
+        predictions.
+
+    Raises
+    ------
+    NotARotation
+        ``R0`` (or a printed column) is not a rotation.
+    """
     R0 = as_rotation(R0, "R0")
     R_act = as_rotations(pd.TABLE4_R_ACT, "Table 4 column B")
     R_est_printed = as_rotations(pd.TABLE4_R_EST, "Table 4 column C")
@@ -133,7 +177,18 @@ def paper_report() -> dict[str, Any]:
 
 
 def format_report(report: dict[str, Any]) -> str:
-    """Plain-text rendering of :func:`paper_report`."""
+    """Plain-text rendering of :func:`paper_report`.
+
+    Parameters
+    ----------
+    report : dict
+        As returned by :func:`paper_report`.
+
+    Returns
+    -------
+    str
+        Tables 3 and 4 with the checks and the errata, one item per line.
+    """
     def mat(M) -> list[str]:
         return ["[" + " ".join(f"{x:8.3f}" for x in row) + " ]" for row in np.asarray(M)]
 

@@ -49,6 +49,7 @@ class ParameterFit:
 
     @property
     def std(self) -> np.ndarray:
+        """(p,) standard deviations of the fitted parameters, in the order of ``names``."""
         return np.sqrt(np.diag(self.cov))
 
     def summary(self) -> dict[str, Any]:

@@ -26,7 +26,20 @@ from ..measurement.instruments import InstrumentNoise
 
 
 def higher_terms(dzeta: np.ndarray, order: int) -> np.ndarray:
-    """(n, m) monomials of dzeta of degree 2..order (m = 0, 6, 16 for order 1, 2, 3)."""
+    """Monomials of ``dzeta`` of degree 2..order, the columns of the higher terms ``q(dzeta)``.
+
+    Parameters
+    ----------
+    dzeta : ndarray, shape (n, 3)
+        Body-frame displacements (rad).
+    order : int
+        Highest degree (1, 2 or 3).
+
+    Returns
+    -------
+    ndarray, shape (n, m)
+        ``m = 0, 6, 16`` for ``order`` 1, 2, 3.
+    """
     cols = []
     for degree in range(2, order + 1):
         for powers in itertools.combinations_with_replacement(range(3), degree):
@@ -35,23 +48,83 @@ def higher_terms(dzeta: np.ndarray, order: int) -> np.ndarray:
 
 
 def n_parameters(order: int) -> int:
-    """Parameters per output axis of the affine fit: 1 + 3 + higher terms."""
+    """Parameters per output axis of the affine fit: 1 + 3 + higher terms.
+
+    Parameters
+    ----------
+    order : int
+        Highest degree in ``dzeta`` (1, 2 or 3).
+
+    Returns
+    -------
+    int
+        4, 10 or 20.
+    """
     return 4 + higher_terms(np.zeros((1, 3)), order).shape[1]
 
 
 def paper_estimate(dzeta: np.ndarray, tau_load: np.ndarray) -> np.ndarray:
-    """(49): ``K_D = Psi Omega^+`` with columns ``dtau_i``, ``dzeta_i`` relative to the reference."""
+    """The paper's estimate (49): ``K_D = Psi Omega^+``, columns ``dtau_i``, ``dzeta_i`` relative to row 0.
+
+    Parameters
+    ----------
+    dzeta : ndarray, shape (n, 3)
+        Body-frame displacements from the reference row (rad).
+    tau_load : ndarray, shape (n, 3)
+        Total load moments in {A} (N m).
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``K_D`` (N m/rad).
+    """
     Psi, Omega = (tau_load[1:] - tau_load[0]).T, dzeta[1:].T
     return Psi @ np.linalg.pinv(Omega)
 
 
 def design_matrix(dzeta: np.ndarray, order: int) -> np.ndarray:
+    """Design matrix of the affine fit: a column of ones, ``dzeta``, then the monomials of degree 2..order.
+
+    Parameters
+    ----------
+    dzeta : ndarray, shape (n, 3)
+        Body-frame displacements from the reference row (rad).
+    order : int
+        Highest degree in ``dzeta`` (1: the paper's linear fit; 2 or 3).
+
+    Returns
+    -------
+    ndarray, shape (n, :func:`n_parameters` (order))
+        One row per measurement, columns ``[1, dzeta, higher_terms(dzeta, order)]``.
+    """
     return np.hstack([np.ones((len(dzeta), 1)), dzeta, higher_terms(dzeta, order)])
 
 
 def affine_fit(dzeta: np.ndarray, tau_load: np.ndarray, order: int,
                 noise: InstrumentNoise | None) -> dict[str, np.ndarray]:
-    """Least squares ``tau_load = c + K_D dzeta (+ Q q(dzeta))``; covariance of ``K = K_D - 1/2 hat(c)``."""
+    """Least squares ``tau_load = c + K_D dzeta (+ Q q(dzeta))``; covariance of ``K = K_D - 1/2 hat(c)``.
+
+    With an orientation noise, the normal matrix of the ``dzeta`` columns is corrected for it
+    (corrected least squares, errors in variables).
+
+    Parameters
+    ----------
+    dzeta : ndarray, shape (n, 3)
+        Body-frame displacements from the reference row (rad).
+    tau_load : ndarray, shape (n, 3)
+        Total load moments in {A} (N m).
+    order : int
+        Highest degree in ``dzeta`` (1, 2 or 3).
+    noise : InstrumentNoise or None
+        Instrument model of the row covariance; ``None``: estimated from the residuals.
+
+    Returns
+    -------
+    dict
+        ``c`` (3,) fitted load at the reference (N m); ``K_D``, ``K`` (3, 3) (N m/rad);
+        ``cov_K`` (9, 9) covariance of ``K.ravel()``; ``resid`` (n, 3) (N m); ``Sigma`` (3, 3)
+        row covariance (N m^2); ``design_condition`` of the column-scaled design.
+    """
     X = design_matrix(dzeta, order)
     n, p = X.shape
     scale = np.maximum(np.linalg.norm(X, axis=0), 1e-300)
@@ -90,7 +163,25 @@ _SYM_INDEX = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 
 def symmetric_fit(dzeta: np.ndarray, tau_load: np.ndarray, order: int,
                    Sigma: np.ndarray) -> dict[str, np.ndarray]:
-    """GLS for ``tau_load_i = (I - 1/2 hat(dzeta_i)) tau0 + S dzeta_i (+ Q q_i)``; K_sym = S."""
+    """GLS for ``tau_load_i = (I - 1/2 hat(dzeta_i)) tau0 + S dzeta_i (+ Q q_i)``; K_sym = S.
+
+    Parameters
+    ----------
+    dzeta : ndarray, shape (n, 3)
+        Body-frame displacements from the reference row (rad).
+    tau_load : ndarray, shape (n, 3)
+        Total load moments in {A} (N m).
+    order : int
+        Highest degree in ``dzeta`` (1, 2 or 3).
+    Sigma : ndarray, shape (3, 3)
+        Row covariance (N m^2) the fit is weighted by.
+
+    Returns
+    -------
+    dict
+        ``K`` (3, 3) symmetric estimate ``S`` (N m/rad), ``cov_K`` (9, 9) covariance of
+        ``K.ravel()``, ``tau0`` (3,) fitted load at the reference (N m).
+    """
     n = len(dzeta)
     blocks = [np.eye(3)[None] - 0.5 * so3.hat(dzeta)]      # tau0 (3 params)
     E = np.zeros((6, 3, 3))
@@ -121,7 +212,26 @@ def _whitener(Sigma: np.ndarray) -> np.ndarray:
 
 
 def bootstrap_interval(dzeta, tau_load, order, noise, n_boot, ci_level, rng) -> np.ndarray:
-    """Pairs bootstrap (rows resampled with replacement) percentile interval of K."""
+    """Pairs bootstrap (rows resampled with replacement) percentile interval of K.
+
+    Resamples whose fit is singular are dropped.
+
+    Parameters
+    ----------
+    dzeta, tau_load, order, noise
+        As in :func:`affine_fit`.
+    n_boot : int
+        Number of resamples.
+    ci_level : float
+        Confidence level in (0, 1).
+    rng : numpy.random.Generator
+        Source of the resampled rows.
+
+    Returns
+    -------
+    ndarray, shape (2, 3, 3)
+        Lower and upper percentile bounds of K (N m/rad).
+    """
     n = len(dzeta)
     Ks = []
     for _ in range(n_boot):

@@ -166,14 +166,17 @@ class Verification:
 
     @property
     def E_theta_rad(self) -> np.ndarray:
+        """(n,) estimation error ``E_theta`` (65) of each case (rad)."""
         return estimation_error(self.R_act, self.R_est)
 
     @property
     def rms_rad(self) -> float:
+        """Root mean square of ``E_theta`` over the cases (rad; nan without cases)."""
         return float(np.sqrt(np.mean(self.E_theta_rad ** 2))) if len(self.R_act) else float("nan")
 
     @property
     def max_rad(self) -> float:
+        """Largest ``E_theta`` over the cases (rad; nan without cases)."""
         return float(np.max(self.E_theta_rad)) if len(self.R_act) else float("nan")
 
     def table(self) -> str:

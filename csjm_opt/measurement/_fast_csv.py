@@ -1,7 +1,7 @@
-"""One compiled pass over the bytes of a CSV table of numbers: the fast path of the log reader.
+r"""One compiled pass over the bytes of a CSV table of numbers: the fast path of the log reader.
 
 :func:`scan_rows` reads *plain* rows (ASCII numbers in the leading numeric
-columns, optional surrounding spaces or tabs, ``\\n`` or ``\\r\\n`` line ends,
+columns, optional surrounding spaces or tabs, ``\n`` or ``\r\n`` line ends,
 no quotes; every number finite, ids whole and within +-(2^53 - 1): what
 the strict parser would accept) straight from the file's bytes into a float64 array and stops at
 the first line that is not plain, leaving that line to the strict row-by-row
@@ -215,7 +215,7 @@ def _scan(buf, pos, line, row, n_int, n_num, n_cells, values, lines, extra_lo, e
 
 def scan_rows(buf: np.ndarray, pos: int, line: int, row: int, n_int: int, n_cells: int, values: np.ndarray,
               lines: np.ndarray, extra_lo: np.ndarray, extra_hi: np.ndarray) -> tuple[int, int, int, int]:
-    """Read plain rows from ``buf[pos:]`` until the end or a line that is not plain.
+    r"""Read plain rows from ``buf[pos:]`` until the end or a line that is not plain.
 
     Parameters
     ----------
@@ -224,7 +224,7 @@ def scan_rows(buf: np.ndarray, pos: int, line: int, row: int, n_int: int, n_cell
     pos : int
         Byte offset of the first line to read.
     line : int
-        Its 1-based line number (counted in ``\\n``).
+        Its 1-based line number (counted in ``\n``).
     row : int
         Index of the first row of ``values`` to fill.
     n_int : int

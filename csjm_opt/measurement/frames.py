@@ -62,15 +62,47 @@ def fit_rigid_transform(P_src: np.ndarray, P_dst: np.ndarray) -> tuple[np.ndarra
 
 def wrench_to_A(f_S_N: np.ndarray, tau_S_Nm: np.ndarray, R_AS: np.ndarray,
                 p_AS_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(55): force and moment about O in {A} from an F/T reading in {S}; batched over rows."""
+    """Force and moment about O in {A} from an F/T reading in {S}, (55); batched over rows.
+
+    Parameters
+    ----------
+    f_S_N : ndarray, shape (3,) or (n, 3)
+        Force measured by the sensor, in {S} (N).
+    tau_S_Nm : ndarray, shape (3,) or (n, 3)
+        Moment measured by the sensor about its origin, in {S} (N m).
+    R_AS : ndarray, shape (3, 3)
+        Orientation of {S} in {A}.
+    p_AS_m : ndarray, shape (3,)
+        Origin of {S} in {A} (m), relative to O.
+
+    Returns
+    -------
+    f_A_N : ndarray, shape like ``f_S_N``
+        The force in {A} (N).
+    tau_A_Nm : ndarray, shape like ``tau_S_Nm``
+        The moment about O in {A} (N m).
+    """
     f_A = np.asarray(f_S_N) @ R_AS.T
     tau_A = np.asarray(tau_S_Nm) @ R_AS.T + np.cross(p_AS_m, f_A)
     return f_A, tau_A
 
 
 def weight_moment_A(rig: Rig, R_BA: np.ndarray) -> np.ndarray:
-    """(56) with coincident origins: ``r_G x (R^T m g)`` in {A} (N m); batched.
+    """Moment of the platform's weight about O, in {A} (N m): (56) with coincident origins; batched.
 
-    The physics is :func:`csjm_opt.model.cable_terms.weight_moment` (the numpy reference).
+    ``r_G x (R^T m g)``; the physics is :func:`csjm_opt.model.cable_terms.weight_moment`
+    (the numpy reference).
+
+    Parameters
+    ----------
+    rig : Rig
+        Supplies the platform mass, centre of mass in {A} and gravity in {B}.
+    R_BA : ndarray, shape (3, 3) or (n, 3, 3)
+        Orientation(s) of {A} in {B}.
+
+    Returns
+    -------
+    ndarray, shape (3,) or (n, 3)
+        Weight moment about O in {A} (N m).
     """
     return weight_moment(R_BA, rig.platform_mass_kg * np.asarray(rig.com_A_m), rig.gravity_B_m_per_s2)

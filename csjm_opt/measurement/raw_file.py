@@ -36,7 +36,28 @@ _QUANTITY = {**{c: "position_m" for c in ("x", "y", "z", "px", "py", "pz")},
 
 
 def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int, dict[str, Any]]]]:
-    """Strict parse: records by kind, each ``(line, {column: value})``; errors name the line."""
+    """Records of a raw instrument CSV by kind, parsed strictly; errors name the line.
+
+    Parameters
+    ----------
+    text : str
+        The file's contents (header first).
+    source : str, optional
+        File name for error messages.
+
+    Returns
+    -------
+    dict
+        Record kind (``"base_point"``, ``"sensor"``, ``"sample"``, ``"platform_point"``) -> list of
+        ``(line, {column: value})``, numbers parsed and checked against their limits (m, N, N m).
+
+    Raises
+    ------
+    DataFileError
+        Empty file, bad header, unknown record kind, a missing, misplaced, non-numeric or
+        out-of-limit value, a rotation vector of norm above pi, or a partial sample pose
+        (naming the line and column).
+    """
     reader = csv.reader(io.StringIO(text))
     try:
         header = [h.strip() for h in next(reader)]
