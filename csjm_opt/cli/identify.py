@@ -222,7 +222,6 @@ def run_identify(args: argparse.Namespace) -> int:
         atomic_write_json(args.json, out, indent=2 if len(estimates) <= LONG_LOG_CYCLES else None)
     if args.json != "-" and len(estimates) > LONG_LOG_CYCLES:  # one line per cycle
         for e in estimates:
-            d = np.diag(e.K)
             d = np.diag(e.K_ml)
             print(f"cycle {e.cycle}: {e.n_rows} rows, diag K_ml [{d[0]:.3f}, {d[1]:.3f}, {d[2]:.3f}] N m/rad, "
                   f"+-{e.relative_half_width:.1%} of ||K||, condition {e.condition:.3g}"

@@ -129,10 +129,13 @@ class StiffnessEstimate:
         Raises
         ------
         InvalidInput
-            If ``which="bootstrap"`` but the estimate was made without bootstrap resamples.
+            If ``which`` is not one of the names above, or is ``"bootstrap"`` but the estimate was
+            made without bootstrap resamples.
         """
-        interval = {"K": self.K_ci, "K_sym": self.K_sym_ci, "K_ml": self.K_ml_ci,
-                    "bootstrap": self.bootstrap_K_ci}[which]
+        intervals = {"K": self.K_ci, "K_sym": self.K_sym_ci, "K_ml": self.K_ml_ci, "bootstrap": self.bootstrap_K_ci}
+        if which not in intervals:
+            raise InvalidInput(f"which must be one of {sorted(intervals)}, got {which!r}", "which")
+        interval = intervals[which]
         if interval is None:
             raise InvalidInput("no bootstrap interval: identify with bootstrap > 0", "which")
         lo, hi = interval
