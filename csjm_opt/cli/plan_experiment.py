@@ -26,7 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "(tensions in bounds, stable, within the tracker's range), to minimise the A- or "
                        "D-criterion of the Cramér-Rao bound of K. Writes the protocol (the measurement-log "
                        "format with the measured columns empty; docs/guide/input-files.md) and prints the "
-                       "predicted 95 %% interval per entry of K, and the same for the paper's protocol "
+                       "predicted 95 % interval per entry of K, and the same for the paper's protocol "
                        "with the same budget.")
     p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
     p.add_argument("--budget", type=int_in(1, MAX_BUDGET), required=True, metavar="N", help="number of loads")

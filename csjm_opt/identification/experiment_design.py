@@ -10,8 +10,9 @@ tracker's range). Each admissible load adds its row information ``A^T V^-1 A``
 greedily on the unit that lowers the criterion most (A: trace of the six entries' bound;
 D: log det), followed by exchange passes (a chosen unit swapped for a better one until none
 improves). With ``pairs=True`` (default) a unit is a ``+-`` pair of the same weight and point
-in opposite directions: the pair cancels the curvature of the moment-rotation relation to
-second order, so the estimate stays unbiased even without (or with a wrong) rig model.
+in opposite directions: the pair takes the even (second-order) part of the curvature of the
+moment-rotation relation out of the slope, which makes the estimate less dependent on the rig
+model's curvature (the odd, third-order part remains; docs/guide/identification.md).
 The best pretension is kept per pose (a grid, then three rounds of bisection around the best
 level); several poses (a K field) share the budget equally.
 
@@ -106,7 +107,7 @@ def plan_experiment(rig: Rig, budget: int, loads: LoadSet | None = None, poses: 
         Instrument noise of the bound (the paper's by default).
     criterion : {"A", "D"}
     pairs : bool
-        Spend the budget on +- pairs of loads (curvature cancels; robust to a wrong rig model).
+        Spend the budget on +- pairs of loads (the second-order curvature leaves the slope).
     model : Model, optional
 
     Returns
