@@ -77,6 +77,7 @@ _SECTIONS = {
     "sampling": {"orientations", "max_tilt_deg", "max_torsion_deg", "seed", "method"},
     "loads": {"tau_ext"},
     "metrics": {"shaping_poses", "feasibility_tol_Nm", "min_hole_spacing_m", "min_cable_clearance_m"},
+    "optimise": set(),  # read by csjm_opt.design.optimise_settings; a sweep ignores it
 }
 
 
@@ -174,7 +175,7 @@ class SweepSpec:
                 raise fail(f"unknown section (expected one of {sorted(_SECTIONS)})", section)
             if not isinstance(table, dict):
                 raise fail("expected a table", section)
-            for key in table:
+            for key in table if section != "optimise" else ():
                 if key not in _SECTIONS[section]:
                     hint = "see csjm_opt.design.PARAMETERS" if section in ("base", "parameters") \
                         else f"expected one of {sorted(_SECTIONS[section])}"
