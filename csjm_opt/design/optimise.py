@@ -1,0 +1,342 @@
+"""Hole-geometry optimisation: multi-start IPOPT, certification rounds, an epsilon-constraint front.
+
+:func:`optimise` solves the NLP of :mod:`csjm_opt.design.optimise_problem`
+from several space-filling starts (run on the sweep's worker processes),
+certifies the best solution on a dense orientation set
+(:mod:`csjm_opt.design.certify`), adds the failing orientations (and the
+cable contacts of the current design) to the problem and solves again until
+the dense check holds. With ``pareto_with`` it then walks an epsilon-constraint
+front: the second objective held at values from the first design's value to
+the value it reaches when the first objective is halved, each point
+warm-started from the previous design.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+from typing import Any
+
+import numpy as np
+from scipy.stats import qmc
+
+from ..errors import InfeasibleRequirement
+from .certify import certify
+from .geometry import GeometryLimits, design_rig
+from .interference import PAIRS, cable_ends_B_m, point_segment_distance, segment_distance
+from .optimise_problem import Contact, build_problem
+from .optimise_settings import OptimiseSettings
+from .sampling import OrientationSampling, tilt_torsion_rotations
+
+#: Extra distance (m) within which a cable pair or cable and link become a contact constraint.
+CONTACT_BUFFER_M = 0.005
+_INFEASIBLE = ("Infeasible_Problem_Detected", "Restoration_Failed", "Error_In_Step_Computation")
+
+
+@dataclasses.dataclass
+class OptimisedDesign:
+    """One certified design of an optimisation."""
+
+    params: dict[str, float]
+    objectives: dict[str, float]
+    certified: dict[str, Any]
+    epsilon: dict[str, float]
+    rounds: int
+    ok: bool
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-able record.
+
+        Returns
+        -------
+        dict
+        """
+        return dataclasses.asdict(self)
+
+
+@dataclasses.dataclass
+class OptimisationResult:
+    """The designs of an optimisation, what they were certified against, and the work it took."""
+
+    designs: list[OptimisedDesign]
+    settings: OptimiseSettings
+    evaluations: int
+    ipopt_iterations: int
+    certified_orientations: int
+
+    def as_json(self) -> dict[str, Any]:
+        """The ``result.json`` document.
+
+        Returns
+        -------
+        dict
+        """
+        s = self.settings
+        return {"objective": s.objective, "pareto_with": s.pareto_with or None, "variables": list(s.names),
+                "bounds": {n: [lo, hi] for n, lo, hi in zip(s.names, s.lower, s.upper)}, "base": s.base,
+                "requirements": s.requirements.as_dict(), "link": dataclasses.asdict(s.link),
+                "certify_orientations": s.certify_orientations, "evaluations": self.evaluations,
+                "ipopt_iterations": self.ipopt_iterations, "certified_orientations": self.certified_orientations,
+                "designs": [d.as_dict() for d in self.designs]}
+
+
+class _Budget:
+    def __init__(self, limit: int | None):
+        self.limit, self.used, self.iterations, self.dense = limit, 0, 0, 0
+
+    def left(self) -> int:
+        return 10 ** 9 if self.limit is None else max(self.limit - self.used, 0)
+
+
+def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, workers: int = 1,
+             progress: bool | None = None) -> OptimisationResult:
+    """Optimise the hole geometry (see the module docstring).
+
+    Parameters
+    ----------
+    settings : OptimiseSettings
+        From :func:`csjm_opt.design.optimise_settings.read_optimise_file` or built directly.
+    max_evaluations : int, optional
+        Bound on design evaluations: IPOPT's constraint evaluations plus one per certification.
+    workers : int
+        Processes for the multi-start (the sweep's worker pool when > 1).
+    progress : bool, optional
+        Progress bar on stderr (``None``: on a terminal only).
+
+    Returns
+    -------
+    OptimisationResult
+
+    Raises
+    ------
+    InfeasibleRequirement
+        If no design meets the requirements (naming the binding constraint and an orientation).
+    DesignError
+        If a setting is invalid.
+    """
+    from tqdm import tqdm
+
+    budget = _Budget(max_evaluations)
+    points = settings.pareto_points if settings.pareto_with else 1
+    bar = tqdm(total=points + 1 if points > 1 else 1, desc="designs", unit="design", file=sys.stderr,
+               disable=None if progress is None else not progress)
+    try:
+        starts = _starts(settings)
+        first = _best_start(settings, starts, {}, budget, workers)
+        designs = [first]
+        bar.update(1)
+        if points > 1 and budget.left() > 0:
+            other = settings.pareto_with
+            half = {settings.objective: _halved(settings.objective, first.objectives[settings.objective])}
+            flipped = settings.replace(objective=other, pareto_with=settings.objective)
+            anchor = _certified_solve(flipped, first.params, half, budget)
+            bar.update(1)
+            lo_v, hi_v = first.objectives[other], anchor.objectives[other] if anchor.ok else first.objectives[other]
+            prev = first
+            for eps in np.linspace(lo_v, hi_v, points)[1:]:
+                if budget.left() <= 0:
+                    break
+                d = _certified_solve(settings, prev.params, {other: float(eps)}, budget)
+                bar.update(1)
+                if d.ok:
+                    designs.append(d)
+                    prev = d
+    finally:
+        bar.close()
+    designs = [d for d in designs if d.ok] or designs[:1]
+    return OptimisationResult(designs=designs, settings=settings, evaluations=budget.used,
+                              ipopt_iterations=budget.iterations, certified_orientations=budget.dense)
+
+
+def _halved(name: str, value: float) -> float:
+    return value * 2.0 if name == "size" else value * 0.5
+
+
+def _starts(settings: OptimiseSettings) -> list[dict[str, float]]:
+    d = len(settings.names)
+    u = qmc.Halton(d=d, scramble=True, seed=np.random.default_rng(settings.seed)).random(settings.starts)
+    lo, hi = np.array(settings.lower), np.array(settings.upper)
+    return [dict(zip(settings.names, (lo + row * (hi - lo)).tolist())) for row in u]
+
+
+def _best_start(settings: OptimiseSettings, starts: list[dict[str, float]], epsilon: dict[str, float],
+                budget: _Budget, workers: int) -> OptimisedDesign:
+    """Solve from every start (on worker processes when ``workers > 1``); certify the best."""
+    results: list[tuple[dict[str, float] | None, float, int, str, Any]] = []
+    if workers > 1 and len(starts) > 1:
+        from ._worker_processes import _run_processes
+
+        todo = list(enumerate(starts))
+        got = dict(_run_processes(todo, (settings, epsilon), workers, fn=_solve_start))
+        results = [got[i] for i in range(len(starts))]
+    else:
+        results = [_solve_start(p, (settings, epsilon)) for p in starts]
+    for _, _, calls, _, _ in results:
+        budget.used += calls
+    good = [r for r in results if r[0] is not None]
+    if not good:
+        raise _infeasible(results[0][4])
+    sign = 1.0 if settings.objective == "size" else -1.0
+    best = min(good, key=lambda r: sign * r[1])
+    return _certified_solve(settings, best[0], epsilon, budget)  # type: ignore[arg-type]
+
+
+def _solve_start(start: dict[str, float], payload: tuple[OptimiseSettings, dict[str, float]]) -> tuple:
+    """One IPOPT solve on the starting orientation set (a worker-process task)."""
+    settings, epsilon = payload
+    angles = _initial_angles(settings)
+    pb = build_problem(settings, angles, start, [], epsilon)
+    sol = pb.solver(x0=pb.x0, lbx=pb.lbx, ubx=pb.ubx, lbg=pb.lbg, ubg=pb.ubg)
+    stats = pb.solver.stats()
+    x = np.array(sol["x"]).ravel()
+    calls = int(stats.get("n_call_nlp_g", stats["iter_count"]))
+    if not stats["success"] and stats["return_status"] != "Maximum_Iterations_Exceeded":
+        return None, math.nan, calls, stats["return_status"], _violation(settings, angles, pb, x, sol)
+    params = dict(zip(settings.names, np.array(pb.design_of(x[:pb.n_design])).ravel().tolist()))
+    return params, float(x[pb.objective_index]), calls, stats["return_status"], None
+
+
+def _initial_angles(settings: OptimiseSettings) -> np.ndarray:
+    req = settings.requirements
+    s = OrientationSampling(settings.orientations, req.max_tilt_deg, req.max_torsion_deg, seed=settings.seed)
+    return np.vstack([np.zeros((1, 3)), np.column_stack(s.angles())])
+
+
+def _certified_solve(settings: OptimiseSettings, start: dict[str, float], epsilon: dict[str, float],
+                     budget: _Budget) -> OptimisedDesign:
+    """Solve, certify, add failing orientations and contacts, solve again (up to ``max_rounds``)."""
+    angles = _initial_angles(settings)
+    contacts: list[Contact] = []
+    params, q_obj = dict(start), None
+    check = None
+    for rounds in range(1, settings.max_rounds + 1):
+        pb = build_problem(settings, angles, params, contacts, epsilon, max_iter=max(min(budget.left(), 300), 1),
+                           objective_start=q_obj)
+        sol = pb.solver(x0=pb.x0, lbx=pb.lbx, ubx=pb.ubx, lbg=pb.lbg, ubg=pb.ubg)
+        stats = pb.solver.stats()
+        budget.used += int(stats.get("n_call_nlp_g", stats["iter_count"]))
+        budget.iterations += int(stats["iter_count"])
+        x = np.array(sol["x"]).ravel()
+        if stats["return_status"] in _INFEASIBLE:
+            raise _infeasible(_violation(settings, angles, pb, x, sol))
+        params = dict(zip(settings.names, np.array(pb.design_of(x[:pb.n_design])).ravel().tolist()))
+        q_obj = float(x[pb.objective_index]) * _scale(settings.objective)
+        values = _values(settings, epsilon, q_obj)
+        rig = design_rig_of(settings, params)
+        check = certify(rig, settings.requirements, values["range"], values["stiffness"], values["tension_margin"],
+                        n=settings.certify_orientations, seed=settings.seed + 7919)
+        budget.used += 1
+        budget.dense += check.orientations
+        if check.ok or budget.left() <= 0:
+            break
+        angles = np.unique(np.vstack([angles, check.failing / np.array([values["range"], 1.0, values["range"]])]),
+                           axis=0)
+        contacts = _contacts(settings, rig, angles, values["range"])
+    assert check is not None
+    objectives = _objectives(settings, params, check, values)
+    return OptimisedDesign(params=params, objectives=objectives, certified=check.as_dict(), epsilon=dict(epsilon),
+                           rounds=rounds, ok=check.ok)
+
+
+def _scale(name: str) -> float:
+    from .optimise_problem import MARGIN_SCALE_N, SIZE_SCALE_M, STIFFNESS_SCALE_NM_PER_RAD
+
+    return {"stiffness": STIFFNESS_SCALE_NM_PER_RAD, "tension_margin": MARGIN_SCALE_N, "range": 1.0,
+            "size": SIZE_SCALE_M}[name]
+
+
+def _values(settings: OptimiseSettings, epsilon: dict[str, float], q_obj: float) -> dict[str, float]:
+    req = settings.requirements
+    v = {"stiffness": req.min_stiffness_Nm_per_rad, "tension_margin": req.tension_margin_N,
+         "range": req.range_scale, "size": math.inf, **epsilon}
+    v[settings.objective] = q_obj
+    return v
+
+
+def design_rig_of(settings: OptimiseSettings, params: dict[str, float]) -> Any:
+    """The rig of an optimised design: the base parameters, ``params`` and the settings' link.
+
+    Parameters
+    ----------
+    settings : OptimiseSettings
+    params : dict of str to float
+
+    Returns
+    -------
+    Rig
+    """
+    limits = GeometryLimits(settings.requirements.min_hole_spacing_m, 0.0)
+    return design_rig({**settings.base, **params}, limits).replace(link=settings.link)
+
+
+def _objectives(settings: OptimiseSettings, params: dict[str, float], check: Any,
+                values: dict[str, float]) -> dict[str, float]:
+    """Certified objective values: the range scale held, and the worst values over the dense check."""
+    rig = design_rig_of(settings, params)
+    size = float(max(np.hypot(*rig.platform_holes_A_m[:, :2].T).max(), np.hypot(*rig.base_holes_B_m[:, :2].T).max()))
+    return {"range": values["range"],
+            "stiffness": values["stiffness"] + check.worst["stiffness"][0],
+            "tension_margin": values["tension_margin"] + check.worst["tension"][0],
+            "size": size}
+
+
+def _contacts(settings: OptimiseSettings, rig: Any, angles: np.ndarray, scale: float) -> list[Contact]:
+    """Cable pairs and cable-link pairs closer than the requirement plus a buffer, at their closest points."""
+    req, link = settings.requirements, settings.link
+    Rs = tilt_torsion_rotations(angles[:, 0] * scale, angles[:, 1], angles[:, 2] * scale)
+    top, bottom = cable_ends_B_m(rig, Rs)
+    i, j = PAIRS[:, 0], PAIRS[:, 1]
+    d, s, t = segment_distance(top[:, i], bottom[:, i], top[:, j], bottom[:, j])
+    out = [Contact(int(o), "pair", int(i[p]), int(j[p]), float(s[o, p]), float(t[o, p]))
+           for o, p in zip(*np.nonzero(d < req.min_cable_distance_m + CONTACT_BUFFER_M))]
+    r0, r1 = link.rod_ends_B_m
+    d, s, t = segment_distance(top, bottom, r0, r1)
+    out += [Contact(int(o), "rod", int(c), -1, float(s[o, c]), float(t[o, c]))
+            for o, c in zip(*np.nonzero(d - link.rod_radius_m < req.min_link_clearance_m + CONTACT_BUFFER_M))]
+    ball = point_segment_distance(np.zeros(3), top, bottom)
+    u = bottom - top
+    s_ball = np.clip(-np.einsum("nki,nki->nk", top, u) / np.einsum("nki,nki->nk", u, u), 0.0, 1.0)
+    out += [Contact(int(o), "ball", int(c), -1, float(s_ball[o, c]), 0.0)
+            for o, c in zip(*np.nonzero(ball - link.ball_radius_m < req.min_link_clearance_m + CONTACT_BUFFER_M))]
+    return out
+
+
+def _violation(settings: OptimiseSettings, angles: np.ndarray, pb: Any, x: np.ndarray, sol: Any) -> tuple:
+    """The most violated constraint at IPOPT's last point: (name, angles (deg) or None, amount)."""
+    g = np.array(sol["g"]).ravel()
+    viol = np.maximum(pb.lbg - g, 0.0) + np.maximum(g - pb.ubg, 0.0)
+    k = int(np.argmax(viol))
+    names = _pose_names(settings)
+    per = len(names)
+    n_pose = per * angles.shape[0]
+    scale = settings.requirements.range_scale if settings.objective != "range" else float(x[pb.objective_index])
+    if k < n_pose:
+        o, c = divmod(k, per)
+        a = angles[o] * np.array([scale, 1.0, scale])
+        return names[c], tuple(math.degrees(v) for v in a), float(viol[k])
+    return "hole spacing or cable contact", None, float(viol[k])
+
+
+def _pose_names(settings: OptimiseSettings) -> list[str]:
+    n_l = np.asarray(settings.requirements.loads).shape[0]
+    names = ["tension range of load 1 (lower bound)"] * 6 + ["tension range of load 1 (upper bound)"] * 6
+    names += ["stiffness (smallest eigenvalue of K)"] * 7
+    for k in range(2, n_l + 1):
+        names += [f"tension range of load {k}"] * 12 + [f"equilibrium of load {k}"] * 3
+    if settings.requirements.max_exit_angle_deg < 180:
+        names += ["exit angle at a platform hole"] * 6 + ["exit angle at a base hole"] * 6
+    return names
+
+
+def _infeasible(info: tuple | None) -> InfeasibleRequirement:
+    if info is None:
+        return InfeasibleRequirement("no design within the bounds meets the requirements", "unknown")
+    name, angles, amount = info
+    where = "" if angles is None else \
+        f" at tilt {angles[0]:.1f} deg, azimuth {angles[1]:.1f} deg, torsion {angles[2]:.1f} deg"
+    return InfeasibleRequirement(f"no design within the bounds meets the requirements: {name} binds{where} "
+                                 f"(violated by {amount:.3g} in scaled units)", name, angles)
+
+
+__all__ = ["OptimisationResult", "OptimisedDesign", "design_rig_of", "optimise"]
