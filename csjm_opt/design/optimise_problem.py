@@ -147,7 +147,8 @@ class Problem:
     n_design: int
     objective_index: int
     design_of: Any        # casadi Function: x -> scaled design vector
-    tensions_of: Any      # casadi Function: design vector, quantities -> T0 (6, N), T (6, N*(m-1))
+    tensions_of: Any      # casadi Function: x -> T0 (6, N), the stiffness load's tensions
+    constraints_of: Any   # casadi Function: x -> g
 
 
 def _quantity_values(settings: OptimiseSettings, epsilon: dict[str, float]) -> dict[str, float]:
@@ -308,7 +309,8 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
     lbx = np.concatenate([np.zeros(n_d), [q_lo], np.zeros(n_t)])
     ubx = np.concatenate([np.ones(n_d), [q_hi], np.full(n_t, np.inf)])
     return Problem(solver=solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, n_design=n_d,
-                   objective_index=n_d, design_of=design_of, tensions_of=tensions_of)
+                   objective_index=n_d, design_of=design_of, tensions_of=tensions_of,
+                   constraints_of=ca.Function("constraints_of", [x], [g]))
 
 
 def _objective_bounds(settings: OptimiseSettings, scale: float) -> tuple[float, float]:
