@@ -6,7 +6,12 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from csjm_opt.design.interference import interference, point_segment_distance, pose_interference, segment_distance
+from csjm_opt.design.interference import (
+    interference,
+    point_segment_distance,
+    pose_interference,
+    segment_distance,
+)
 from csjm_opt.design.sampling import tilt_torsion_rotations
 from csjm_opt.errors import RigFileError
 from csjm_opt.model.link import DEFAULT_LINK, Link

@@ -66,6 +66,10 @@ class Check:
                 for k, v in self.worst.items()}
 
 
+def _deg(a: np.ndarray) -> tuple[float, float, float]:
+    return float(math.degrees(a[0])), float(math.degrees(a[1])), float(math.degrees(a[2]))
+
+
 def _kind(name: str) -> str:
     return "load" if name.startswith("load ") else name
 
@@ -152,17 +156,17 @@ def certify(rig: Rig, req: Requirements, scale: float, stiffness_Nm_per_rad: flo
     count = angles.shape[0] + extra[2]
     sl2 = slacks(rig, extra[0], req, stiffness_Nm_per_rad, margin_N, model)
     failing = []
-    for name, v in sl2.items():
-        i = int(np.argmin(v))
-        if v[i] < worst[name][0]:
-            worst[name] = (float(v[i]), extra[0][i])
-    for name, (v, a) in worst.items():
-        if v < -TOLERANCES[_kind(name)]:
+    for name, vals in sl2.items():
+        i = int(np.argmin(vals))
+        if vals[i] < worst[name][0]:
+            worst[name] = (float(vals[i]), extra[0][i])
+    for name, (w, a) in worst.items():
+        if w < -TOLERANCES[_kind(name)]:
             bad_dense = angles[sl[name] < -TOLERANCES[_kind(name)]]
             failing.append(a[None])
             failing.append(bad_dense[np.argsort(sl[name][sl[name] < -TOLERANCES[_kind(name)]])[:4]])
     fail = np.unique(np.vstack(failing), axis=0) if failing else np.zeros((0, 3))
-    return Check(worst={k: (v, tuple(float(math.degrees(x)) for x in a)) for k, (v, a) in worst.items()},
+    return Check(worst={k: (w, _deg(a)) for k, (w, a) in worst.items()},
                  failing=fail, orientations=count)
 
 

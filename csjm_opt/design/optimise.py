@@ -210,7 +210,9 @@ def _certified_solve(settings: OptimiseSettings, start: dict[str, float], epsilo
     contacts: list[Contact] = []
     params, q_obj = dict(start), None
     check = None
-    for rounds in range(1, settings.max_rounds + 1):
+    rounds = 0
+    while rounds < settings.max_rounds:
+        rounds += 1
         pb = build_problem(settings, angles, params, contacts, epsilon, max_iter=max(min(budget.left(), 300), 1),
                            objective_start=q_obj)
         sol = pb.solver(x0=pb.x0, lbx=pb.lbx, ubx=pb.ubx, lbg=pb.lbg, ubg=pb.ubg)
@@ -336,7 +338,7 @@ def _infeasible(info: tuple | None) -> InfeasibleRequirement:
     where = "" if angles is None else \
         f" at tilt {angles[0]:.1f} deg, azimuth {angles[1]:.1f} deg, torsion {angles[2]:.1f} deg"
     return InfeasibleRequirement(f"no design within the bounds meets the requirements: {name} binds{where} "
-                                 f"(violated by {amount:.3g} in scaled units)", name, angles)
+                                 "(the binding constraint at the best point IPOPT found)", name, angles)
 
 
 __all__ = ["OptimisationResult", "OptimisedDesign", "design_rig_of", "optimise"]

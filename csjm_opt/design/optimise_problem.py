@@ -46,7 +46,7 @@ from ..model import hexagon
 from ..model.casadi_model import build_functions
 from .geometry import PAPER_DESIGN
 from .interference import PAIRS
-from .optimise_settings import OBJECTIVES, OptimiseSettings
+from .optimise_settings import OptimiseSettings
 
 #: Scales that make the objectives and constraints of order one.
 STIFFNESS_SCALE_NM_PER_RAD = 10.0
@@ -293,10 +293,11 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
     lbg = np.concatenate([np.tile(lo_pose, n_o), np.zeros(n_fixed)])
     ubg = np.concatenate([np.tile(hi_pose, n_o), np.full(n_fixed, np.inf)])
     sign = -1.0 if obj != "size" else 1.0
-    opts = {"ipopt": {"print_level": 0, "max_iter": int(max_iter), "tol": 1e-9, "acceptable_tol": 1e-7,
+    opts: dict[str, Any] = {"ipopt": {"print_level": 0, "max_iter": int(max_iter), "tol": 1e-9, "acceptable_tol": 1e-7,
                       "constr_viol_tol": 1e-9, "mu_strategy": "adaptive", "sb": "yes",
                       "hessian_approximation": HESSIAN}, "print_time": False, "expand": True}
-    solver = ca.nlpsol("csjm_optimise", "ipopt", {"x": x, "f": sign * qx, "g": g}, opts)
+    nlp: dict[str, Any] = {"x": x, "f": sign * qx, "g": g}
+    solver = ca.nlpsol("csjm_optimise", "ipopt", nlp, opts)
     u0 = np.array([(start[n] - lo[k]) / (hi[k] - lo[k]) for k, n in enumerate(names)])
     q_lo, q_hi = _objective_bounds(settings, scale[obj])
     q0 = objective_start if objective_start is not None else {"stiffness": req.min_stiffness_Nm_per_rad,

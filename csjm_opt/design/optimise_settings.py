@@ -38,8 +38,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DesignError
 from .._fileio import read_text
+from ..errors import DesignError
 from ..model.link import DEFAULT_LINK, Link
 from ..model.rig import STANDARD_GRAVITY_B
 from .geometry import SCALAR_PARAMETERS
@@ -183,7 +183,7 @@ def settings_from(spec: SweepSpec, section: Any, path: str | None = None) -> Opt
     for key in section:
         if key not in KEYS:
             raise fail(f"unknown key (expected one of {sorted(KEYS)})", key)
-    o = {**_DEFAULTS, **section}
+    o: dict[str, Any] = {**_DEFAULTS, **section}
     for key in ("objective", "pareto_with"):
         if not isinstance(o[key], str) or (o[key] not in OBJECTIVES and not (key == "pareto_with" and o[key] == "")):
             extra = " or an empty string" if key == "pareto_with" else ""
@@ -203,10 +203,11 @@ def settings_from(spec: SweepSpec, section: Any, path: str | None = None) -> Opt
     s = spec.settings
     o.setdefault("max_tilt_deg", s.sampling.max_tilt_deg)
     o.setdefault("max_torsion_deg", s.sampling.max_torsion_deg)
-    for key, (low, high) in floats.items():
+    for key, (f_low, f_high) in floats.items():
         v = o[key]
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or not low <= v <= high:
-            raise fail(f"expected a number in [{low:g}, {high:g}], got {v!r}", key)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+                or not f_low <= v <= f_high:
+            raise fail(f"expected a number in [{f_low:g}, {f_high:g}], got {v!r}", key)
         o[key] = float(v)
     axes = {a.name: a for a in spec.axes}
     names = o.get("variables", list(axes))
