@@ -111,3 +111,23 @@ def test_rig_link_section_round_trip_and_errors(tmp_path):
     data["link"] = {"ball_radius": -1.0}
     with pytest.raises(RigFileError, match=r"link\.ball_radius"):
         Rig.from_dict(data)
+
+
+def test_sweep_records_interference_and_applies_the_rule():
+    from csjm_opt.design.design_evaluation import evaluate_design
+    from csjm_opt.design.sweep_file import SweepSpec
+
+    data = {"base": {}, "parameters": {"oo_a_m": {"values": [0.08]}},
+            "sampling": {"orientations": 40, "max_tilt_deg": 20.0, "max_torsion_deg": 10.0},
+            "metrics": {"shaping_poses": 0}}
+    plain = SweepSpec.from_dict(data)
+    rec = evaluate_design({"oo_a_m": 0.08}, plain.settings)
+    assert rec["status"] == "ok"
+    m = rec["metrics"]
+    # the paper's cables 2 and 3 start 5 mm apart at the base and part upwards: never farther than 5 mm
+    assert 0 < m["min_cable_distance_m"] <= 0.005 + 1e-12
+    assert m["min_link_clearance_m"] > 0 and 0 < m["max_exit_angle_deg"] < 90
+    strict = SweepSpec.from_dict({**data, "metrics": {"shaping_poses": 0, "min_cable_distance_m": 0.006}})
+    assert strict.settings.digest() != plain.settings.digest()
+    rec = evaluate_design({"oo_a_m": 0.08}, strict.settings)
+    assert rec["status"] == "invalid" and "metrics.min_cable_distance_m" in rec["error"]
