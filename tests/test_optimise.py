@@ -76,9 +76,9 @@ def test_constraint_jacobian_matches_finite_differences(tmp_path):
     x0 = pb.x0.copy()
     x0[pb.objective_index] = 0.7
     xs = ca.MX.sym("x", x0.size)
-    jac = ca.Function("jac_g", [xs], [ca.jacobian(pb.constraints_of(xs), xs)])
+    jac = ca.Function("jac_g", [xs], [ca.jacobian(pb.constraints_of(xs, pb.p), xs)])
     exact = np.array(jac(x0))
-    g = lambda x: np.array(pb.constraints_of(x)).ravel()  # noqa: E731
+    g = lambda x: np.array(pb.constraints_of(x, pb.p)).ravel()  # noqa: E731
     h = 1e-6
     fd = np.column_stack([(g(x0 + h * e) - g(x0 - h * e)) / (2 * h) for e in np.eye(x0.size)])
     scale = np.maximum(1.0, np.abs(exact))

@@ -187,7 +187,7 @@ def _solve_start(start: dict[str, float], payload: tuple[OptimiseSettings, dict[
     settings, epsilon = payload
     angles = _initial_angles(settings)
     pb = build_problem(settings, angles, start, [], epsilon)
-    sol = pb.solver(x0=pb.x0, lbx=pb.lbx, ubx=pb.ubx, lbg=pb.lbg, ubg=pb.ubg)
+    sol = pb.solver(x0=pb.x0, p=pb.p, lbx=pb.lbx, ubx=pb.ubx, lbg=pb.lbg, ubg=pb.ubg)
     stats = pb.solver.stats()
     x = np.array(sol["x"]).ravel()
     calls = int(stats.get("n_call_nlp_g", stats["iter_count"]))
@@ -213,9 +213,8 @@ def _certified_solve(settings: OptimiseSettings, start: dict[str, float], epsilo
     rounds = 0
     while rounds < settings.max_rounds:
         rounds += 1
-        pb = build_problem(settings, angles, params, contacts, epsilon, max_iter=max(min(budget.left(), 300), 1),
-                           objective_start=q_obj)
-        sol = pb.solver(x0=pb.x0, lbx=pb.lbx, ubx=pb.ubx, lbg=pb.lbg, ubg=pb.ubg)
+        pb = build_problem(settings, angles, params, contacts, epsilon, objective_start=q_obj)
+        sol = pb.solver(x0=pb.x0, p=pb.p, lbx=pb.lbx, ubx=pb.ubx, lbg=pb.lbg, ubg=pb.ubg)
         stats = pb.solver.stats()
         budget.used += int(stats.get("n_call_nlp_g", stats["iter_count"]))
         budget.iterations += int(stats["iter_count"])

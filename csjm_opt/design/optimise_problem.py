@@ -56,6 +56,8 @@ LENGTH_SCALE_M = 0.01
 MOMENT_SCALE_NM = 1.0
 #: IPOPT's Hessian: "limited-memory" (quasi-Newton on exact gradients) or "exact".
 HESSIAN = "exact"
+#: IPOPT iteration limit of one solve.
+MAX_ITER = 300
 
 
 @dataclasses.dataclass(frozen=True)
@@ -136,25 +138,37 @@ def holes_sym(p: dict[str, Any]) -> tuple[Any, Any]:
 
 @dataclasses.dataclass
 class Problem:
-    """A built NLP and what is needed to read its solution."""
+    """A built NLP with its start, bounds and parameter values, and what is needed to read its solution."""
 
     solver: Any
     x0: np.ndarray
+    p: np.ndarray
     lbx: np.ndarray
     ubx: np.ndarray
     lbg: np.ndarray
     ubg: np.ndarray
     n_design: int
     objective_index: int
-    design_of: Any        # casadi Function: x -> scaled design vector
-    tensions_of: Any      # casadi Function: x -> T0 (6, N), the stiffness load's tensions
-    constraints_of: Any   # casadi Function: x -> g
+    design_of: Any        # casadi Function: u -> design vector (natural units)
+    constraints_of: Any   # casadi Function: x, p -> g
+
+
+@dataclasses.dataclass
+class _Built:
+    solver: Any
+    design: Any
+    design_of: Any
+    constraints_of: Any
+    lbg: np.ndarray
+    ubg: np.ndarray
+    n_slots: int
+    n_contacts: int
 
 
 def _quantity_values(settings: OptimiseSettings, epsilon: dict[str, float]) -> dict[str, float]:
     req = settings.requirements
     values = {"stiffness": req.min_stiffness_Nm_per_rad, "tension_margin": req.tension_margin_N,
-              "range": req.range_scale, "size": math.inf}
+              "range": req.range_scale, "size": _NO_SIZE_LIMIT_M}
     values.update(epsilon)
     return values
 
@@ -211,8 +225,12 @@ def _pose_bounds(n_loads: int, exit_limit: bool) -> tuple[np.ndarray, np.ndarray
 
 def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[str, float],
                   contacts: list[Contact], epsilon: dict[str, float],
-                  max_iter: int = 200, objective_start: float | None = None) -> Problem:
+                  objective_start: float | None = None) -> Problem:
     """The NLP on the orientation set ``angles`` from ``start`` (see the module docstring).
+
+    The solver is built once per process for a number of orientation and contact slots
+    (rounded up to :data:`SLOT_STEP`) and reused: orientations, contacts and held values are its
+    parameters.
 
     Parameters
     ----------
@@ -226,8 +244,6 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
         Cable distances to keep, at fixed closest points.
     epsilon : dict of str to float
         Quantities held at a value instead of their requirement (Pareto front).
-    max_iter : int
-        IPOPT iteration limit.
     objective_start : float, optional
         Initial value of the objective's variable (natural units).
 
@@ -235,19 +251,66 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
     -------
     Problem
     """
+    n_slots = -(-angles.shape[0] // SLOT_STEP) * SLOT_STEP
+    n_contacts = -(-len(contacts) // SLOT_STEP) * SLOT_STEP
+    built = _built(settings, n_slots, n_contacts)
+    padded = np.vstack([angles, np.zeros((n_slots - angles.shape[0], 3))])
+    values = _quantity_values(settings, epsilon)
+    p_q = [values["tension_margin"], values["stiffness"], values["range"], values["size"]]
+    p_c = np.zeros((n_contacts, _CONTACT_WIDTH))
+    p_c[:, -1] = -1.0                                   # unused slot: needs a negative distance
+    link, req = settings.link, settings.requirements
+    for row, c in zip(p_c, contacts):
+        row[:3] = padded[c.orientation]
+        row[3 + c.i] = 1.0
+        row[15], row[16] = c.s, c.t
+        if c.kind == "pair":
+            row[9 + c.j] = 1.0
+            row[18] = req.min_cable_distance_m
+        else:
+            row[17] = link.rod_length_m if c.kind == "rod" else 0.0
+            row[18] = req.min_link_clearance_m + (link.rod_radius_m if c.kind == "rod" else link.ball_radius_m)
+    p = np.concatenate([padded.ravel(), p_q, p_c.ravel()])
     names, lo, hi = settings.names, settings.lower, settings.upper
-    n_d, n_o = len(names), angles.shape[0]
+    obj = settings.objective
+    u0 = np.array([(start[n] - lo[k]) / (hi[k] - lo[k]) for k, n in enumerate(names)])
+    q_lo, q_hi = _objective_bounds(settings, _SCALE[obj])
+    q0 = objective_start if objective_start is not None else {"stiffness": req.min_stiffness_Nm_per_rad,
+                                                              "tension_margin": req.tension_margin_N,
+                                                              "range": 0.5, "size": SIZE_SCALE_M}[obj]
+    q0 = min(max(q0 / _SCALE[obj], q_lo), q_hi)
+    loads = np.asarray(req.loads, float)
+    n_t = 6 * (loads.shape[0] - 1) * n_slots
+    x0 = np.concatenate([u0, [q0], _initial_tensions(built.design, u0, q0, np.array(p_q), padded, loads)])
+    lbx = np.concatenate([np.zeros(len(names)), [q_lo], np.zeros(n_t)])
+    ubx = np.concatenate([np.ones(len(names)), [q_hi], np.full(n_t, np.inf)])
+    return Problem(solver=built.solver, x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=built.lbg, ubg=built.ubg,
+                   n_design=len(names), objective_index=len(names), design_of=built.design_of,
+                   constraints_of=built.constraints_of)
+
+
+_SCALE = {"stiffness": STIFFNESS_SCALE_NM_PER_RAD, "tension_margin": MARGIN_SCALE_N, "range": 1.0,
+          "size": SIZE_SCALE_M}
+#: Orientation and contact slots come in multiples of this (a solver is reused for all sizes below).
+SLOT_STEP = 16
+_CONTACT_WIDTH = 19    # angles (3), one-hot cable i (6), one-hot cable j (6), s, t, rod length, need
+_NO_SIZE_LIMIT_M = 1e3
+
+
+@functools.lru_cache(maxsize=8)
+def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int) -> _Built:
+    """The solver for ``n_slots`` orientations and ``n_contacts`` contacts (cached per process)."""
+    names, lo, hi = settings.names, settings.lower, settings.upper
+    n_d = len(names)
     req = settings.requirements
     loads = np.asarray(req.loads, float)
     n_l = loads.shape[0]
     exit_limit = req.max_exit_angle_deg < 180
-    # design and objective: SX (small); orientations: one mapped function
-    u, q_var = ca.SX.sym("u", n_d), ca.SX.sym("q")
-    values = _quantity_values(settings, epsilon)
-    scale = {"stiffness": STIFFNESS_SCALE_NM_PER_RAD, "tension_margin": MARGIN_SCALE_N, "range": 1.0,
-             "size": SIZE_SCALE_M}
     obj = settings.objective
-    q = {k: (q_var * scale[k] if k == obj else v) for k, v in values.items()}
+    u, q_var = ca.SX.sym("u", n_d), ca.SX.sym("q")
+    pq = ca.SX.sym("pq", 4)
+    held = {"tension_margin": pq[0], "stiffness": pq[1], "range": pq[2], "size": pq[3]}
+    q = {k: (q_var * _SCALE[k] if k == obj else v) for k, v in held.items()}
     p: dict[str, Any] = {**PAPER_DESIGN, **settings.base}
     for k, name in enumerate(names):
         p[name] = lo[k] + u[k] * (hi[k] - lo[k])
@@ -255,63 +318,50 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
     rig = ca.vertcat(p["cable_stiffness_N_per_m"], p["t_min_N"], p["t_max_N"], p["platform_mass_kg"],
                      p["com_z_m"], *settings.gravity_B_m_per_s2)
     qv = ca.vertcat(q["tension_margin"], q["stiffness"], q["range"], math.cos(math.radians(req.max_exit_angle_deg)))
-    design = ca.Function("design", [u, q_var], [A, B, rig, qv])
+    design = ca.Function("design", [u, q_var, pq], [A, B, rig, qv])
+    pc = ca.SX.sym("pc", _CONTACT_WIDTH, n_contacts)
     fixed: list[Any] = []
-    link = settings.link
-    for c in contacts:
-        R = rotation_sym(q["range"] * angles[c.orientation, 0], angles[c.orientation, 1],
-                         q["range"] * angles[c.orientation, 2])
-        top_i, bot_i = R @ A[:, c.i], B[:, c.i]
-        point = top_i + c.s * (bot_i - top_i)
-        if c.kind == "pair":
-            top_j, bot_j = R @ A[:, c.j], B[:, c.j]
-            other, need = top_j + c.t * (bot_j - top_j), req.min_cable_distance_m
-        elif c.kind == "rod":
-            other = ca.DM([0.0, 0.0, -link.rod_length_m * (1.0 - c.t)])
-            need = req.min_link_clearance_m + link.rod_radius_m
-        else:
-            other, need = ca.DM.zeros(3), req.min_link_clearance_m + link.ball_radius_m
-        fixed.append((ca.norm_2(point - other) - need) / LENGTH_SCALE_M)
+    for c in range(n_contacts):
+        row = pc[:, c]
+        R = rotation_sym(q["range"] * row[0], row[1], q["range"] * row[2])
+        top, bottom = R @ A, B
+        point = (top + row[15] * (bottom - top)) @ row[3:9]
+        other = (top + row[16] * (bottom - top)) @ row[9:15] \
+            + ca.vertcat(0, 0, -row[17] * (1.0 - row[16]))
+        fixed.append((ca.sqrt(ca.sumsqr(point - other) + 1e-18) - row[18]) / LENGTH_SCALE_M)
     for H in (A, B):
         for a, b in PAIRS:
             fixed.append((ca.norm_2(H[:, a] - H[:, b]) - req.min_hole_spacing_m) / LENGTH_SCALE_M)
-    if obj == "size" or math.isfinite(q["size"]):
+    if "size" in (obj, settings.pareto_with):
         for H in (A, B):
             fixed.append((q["size"] ** 2 - ca.sum1(H[:2, :] ** 2).T) / SIZE_SCALE_M ** 2)
-    g_fixed = ca.Function("fixed", [u, q_var], [ca.vertcat(*fixed)])
+    g_fixed = ca.Function("fixed", [u, q_var, pq, pc], [ca.vertcat(*fixed)])
 
-    n_t = 6 * (n_l - 1) * n_o
+    n_t = 6 * (n_l - 1) * n_slots
     x = ca.MX.sym("x", n_d + 1 + n_t)
+    par = ca.MX.sym("p", 3 * n_slots + 4 + _CONTACT_WIDTH * n_contacts)
     ux, qx = x[:n_d], x[n_d]
-    A_m, B_m, rig_m, q_m = design(ux, qx)
-    F = pose_constraints(n_l, exit_limit).map(n_o, "serial")
-    g_pose, T0_all = F(A_m, B_m, rig_m, q_m, ca.DM(angles.T), ca.DM(loads.T),
-                       ca.reshape(x[n_d + 1:], 6 * (n_l - 1), n_o))
-    g = ca.vertcat(ca.vec(g_pose), g_fixed(ux, qx))
+    ang = ca.reshape(par[:3 * n_slots], 3, n_slots)
+    pq_m = par[3 * n_slots:3 * n_slots + 4]
+    pc_m = ca.reshape(par[3 * n_slots + 4:], _CONTACT_WIDTH, n_contacts)
+    A_m, B_m, rig_m, q_m = design(ux, qx, pq_m)
+    F = pose_constraints(n_l, exit_limit).map(n_slots, "serial")
+    g_pose, _ = F(A_m, B_m, rig_m, q_m, ang, ca.DM(loads.T), ca.reshape(x[n_d + 1:], 6 * (n_l - 1), n_slots))
+    g = ca.vertcat(ca.vec(g_pose), g_fixed(ux, qx, pq_m, pc_m))
     lo_pose, hi_pose = _pose_bounds(n_l, exit_limit)
     n_fixed = g_fixed.size1_out(0)
-    lbg = np.concatenate([np.tile(lo_pose, n_o), np.zeros(n_fixed)])
-    ubg = np.concatenate([np.tile(hi_pose, n_o), np.full(n_fixed, np.inf)])
+    lbg = np.concatenate([np.tile(lo_pose, n_slots), np.zeros(n_fixed)])
+    ubg = np.concatenate([np.tile(hi_pose, n_slots), np.full(n_fixed, np.inf)])
     sign = -1.0 if obj != "size" else 1.0
-    opts: dict[str, Any] = {"ipopt": {"print_level": 0, "max_iter": int(max_iter), "tol": 1e-9, "acceptable_tol": 1e-7,
-                      "constr_viol_tol": 1e-9, "mu_strategy": "adaptive", "sb": "yes",
-                      "hessian_approximation": HESSIAN}, "print_time": False, "expand": True}
-    nlp: dict[str, Any] = {"x": x, "f": sign * qx, "g": g}
+    opts: dict[str, Any] = {"ipopt": {"print_level": 0, "max_iter": MAX_ITER, "tol": 1e-9, "acceptable_tol": 1e-7,
+                                      "constr_viol_tol": 1e-9, "mu_strategy": "adaptive", "sb": "yes",
+                                      "hessian_approximation": HESSIAN}, "print_time": False, "expand": True}
+    nlp: dict[str, Any] = {"x": x, "p": par, "f": sign * qx, "g": g}
     solver = ca.nlpsol("csjm_optimise", "ipopt", nlp, opts)
-    u0 = np.array([(start[n] - lo[k]) / (hi[k] - lo[k]) for k, n in enumerate(names)])
-    q_lo, q_hi = _objective_bounds(settings, scale[obj])
-    q0 = objective_start if objective_start is not None else {"stiffness": req.min_stiffness_Nm_per_rad,
-                                                              "tension_margin": req.tension_margin_N,
-                                                              "range": 0.5, "size": SIZE_SCALE_M}[obj]
-    q0 = min(max(q0 / scale[obj], q_lo), q_hi)
     design_of = ca.Function("design_of", [u], [ca.vertcat(*[p[n] for n in names])])
-    tensions_of = ca.Function("tensions_of", [x], [T0_all])
-    x0 = np.concatenate([u0, [q0], _initial_tensions(design, u0, q0, angles, loads)])
-    lbx = np.concatenate([np.zeros(n_d), [q_lo], np.zeros(n_t)])
-    ubx = np.concatenate([np.ones(n_d), [q_hi], np.full(n_t, np.inf)])
-    return Problem(solver=solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, n_design=n_d,
-                   objective_index=n_d, design_of=design_of, tensions_of=tensions_of,
-                   constraints_of=ca.Function("constraints_of", [x], [g]))
+    return _Built(solver=solver, design=design, design_of=design_of,
+                  constraints_of=ca.Function("constraints_of", [x, par], [g]), lbg=lbg, ubg=ubg,
+                  n_slots=n_slots, n_contacts=n_contacts)
 
 
 def _objective_bounds(settings: OptimiseSettings, scale: float) -> tuple[float, float]:
@@ -325,13 +375,13 @@ def _objective_bounds(settings: OptimiseSettings, scale: float) -> tuple[float, 
     return 0.0, math.inf
 
 
-def _initial_tensions(design: Any, u0: np.ndarray, q0: float, angles: np.ndarray,
+def _initial_tensions(design: Any, u0: np.ndarray, q0: float, pq: np.ndarray, angles: np.ndarray,
                       loads: np.ndarray) -> np.ndarray:
     """Least-squares tensions of every load k >= 1 at the start, clipped to the tension box, scaled."""
     n_l, n_o = loads.shape[0], angles.shape[0]
     if n_l == 1:
         return np.zeros(0)
-    A, B, rig, q = (np.array(v) for v in design(u0, q0))
+    A, B, rig, q = (np.array(v) for v in design(u0, q0, pq))
     F = pose_constraints(n_l, False).map(n_o, "serial")
     out = []
     for k in range(1, n_l):
