@@ -12,7 +12,7 @@ import pytest
 from csjm_opt.cli.app import main
 from csjm_opt.design.certify import certify
 from csjm_opt.design.geometry import design_holes
-from csjm_opt.design.optimise import design_rig_of, optimise
+from csjm_opt.design.optimisation import design_rig_of, optimise
 from csjm_opt.design.optimise_problem import build_problem, holes_sym, rotation_sym
 from csjm_opt.design.optimise_settings import read_optimise_file
 from csjm_opt.design.sampling import tilt_torsion_rotations

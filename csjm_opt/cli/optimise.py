@@ -34,7 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from .._fileio import atomic_write_json
-    from ..design.optimise import design_rig_of, optimise
+    from ..design.optimisation import design_rig_of, optimise
     from ..design.optimise_settings import read_optimise_file
 
     out = Path(args.out)
