@@ -42,7 +42,7 @@ def main() -> None:
     spec, settings = read_optimise_file(HERE.parent / "studies" / "paper_sweep.toml")
     t_opt, t_sweep, t_map, evals = [], [], [], []
     for _ in range(args.repeats):
-        optimise_problem._built.cache_clear()
+        optimise_problem.clear_cache()
         t0 = time.perf_counter()
         res = optimise(settings, workers=args.workers, progress=False)
         t_opt.append(time.perf_counter() - t0)

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import json
 import math
 from typing import Any
 
@@ -253,7 +254,7 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
     """
     n_slots = -(-angles.shape[0] // SLOT_STEP) * SLOT_STEP
     n_contacts = -(-len(contacts) // SLOT_STEP) * SLOT_STEP
-    built = _built(settings, n_slots, n_contacts)
+    built = _built_for(settings, n_slots, n_contacts)
     padded = np.vstack([angles, np.zeros((n_slots - angles.shape[0], 3))])
     values = _quantity_values(settings, epsilon)
     p_q = [values["tension_margin"], values["stiffness"], values["range"], values["size"]]
@@ -297,9 +298,29 @@ _CONTACT_WIDTH = 19    # angles (3), one-hot cable i (6), one-hot cable j (6), s
 _NO_SIZE_LIMIT_M = 1e3
 
 
-@functools.lru_cache(maxsize=8)
+_CACHE: dict[tuple[str, int, int], _Built] = {}
+_CACHE_SIZE = 8
+
+
+def _built_for(settings: OptimiseSettings, n_slots: int, n_contacts: int) -> _Built:
+    """The cached solver of settings with this content (a worker process reuses it across tasks)."""
+    key = (json.dumps([settings.names, settings.lower, settings.upper, settings.base, settings.requirements.as_dict(),
+                       settings.objective, settings.pareto_with, dataclasses.asdict(settings.link),
+                       settings.gravity_B_m_per_s2], sort_keys=True, default=str), n_slots, n_contacts)
+    if key not in _CACHE:
+        if len(_CACHE) >= _CACHE_SIZE:
+            _CACHE.pop(next(iter(_CACHE)))
+        _CACHE[key] = _built(settings, n_slots, n_contacts)
+    return _CACHE[key]
+
+
+def clear_cache() -> None:
+    """Forget the built solvers (benchmarks time fresh runs)."""
+    _CACHE.clear()
+
+
 def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int) -> _Built:
-    """The solver for ``n_slots`` orientations and ``n_contacts`` contacts (cached per process)."""
+    """The solver for ``n_slots`` orientations and ``n_contacts`` contacts."""
     names, lo, hi = settings.names, settings.lower, settings.upper
     n_d = len(names)
     req = settings.requirements

@@ -199,7 +199,8 @@ def write_optimisation_report(result_dir: str | Path, out_dir: str | Path) -> Pa
         Section("Geometry at the worst orientation", "", "info", blocks),
         Section("Requirements certified", "", "info", [Paragraph(
             f"Tilt up to s x {req['max_tilt_deg']:g} deg, torsion up to s x {req['max_torsion_deg']:g} deg; "
-            f"{len(req['loads'])} loads (N m in {{A}}): {req['loads']}; tension margin {sig(req['tension_margin_N'])} N; "
+            f"{len(req['loads'])} loads (N m in {{A}}): {req['loads']}; "
+            f"tension margin {sig(req['tension_margin_N'])} N; "
             f"smallest K eigenvalue at least {sig(req['min_stiffness_Nm_per_rad'])} N m/rad (or the front's value); "
             f"cables at least {sig(req['min_cable_distance_m'] * 1e3)} mm apart and "
             f"{sig(req['min_link_clearance_m'] * 1e3)} mm from the link; exit angle at most "
