@@ -131,3 +131,21 @@ def test_sweep_records_interference_and_applies_the_rule():
     assert strict.settings.digest() != plain.settings.digest()
     rec = evaluate_design({"oo_a_m": 0.08}, strict.settings)
     assert rec["status"] == "invalid" and "metrics.min_cable_distance_m" in rec["error"]
+
+
+def test_certify_finds_failures_the_optimiser_never_saw():
+    from csjm_opt.design.certify import certify, slacks
+    from csjm_opt.design.optimise_settings import Requirements
+
+    rig = paper_rig()
+    req = Requirements(max_tilt_deg=45.0, max_torsion_deg=30.0, loads=np.array([[0.0, 0.0, 0.0], [3.0, 0, 0]]),
+                       min_cable_distance_m=0.0, min_link_clearance_m=0.0, max_exit_angle_deg=90.0)
+    # the paper's design does not hold the whole 45 deg / 30 deg range (sweep: workspace 0.8 or so)
+    check = certify(rig, req, 1.0, 0.0, 0.0, n=400, seed=5)
+    assert not check.ok and len(check.failing)
+    sl = slacks(rig, check.failing, req, 0.0, 0.0)
+    assert np.all(np.min(np.stack(list(sl.values())), axis=0) < 0)   # each returned orientation fails
+    worst = min(check.worst.values())
+    assert worst[0] < 0
+    # a small range holds everywhere
+    assert certify(rig, req, 0.2, 0.0, 0.0, n=400, seed=5).ok
