@@ -149,3 +149,20 @@ def test_certify_finds_failures_the_optimiser_never_saw():
     assert worst[0] < 0
     # a small range holds everywhere
     assert certify(rig, req, 0.2, 0.0, 0.0, n=400, seed=5).ok
+
+
+def test_certified_tensions_are_the_planners_where_no_bound_is_active():
+    from csjm_opt.design.certify import slacks
+    from csjm_opt.design.metrics import LoadSet, MetricOptions, evaluate_poses
+    from csjm_opt.design.optimise_settings import Requirements
+
+    rig = paper_rig()
+    req = Requirements(max_tilt_deg=30.0, max_torsion_deg=20.0, loads=np.zeros((1, 3)))
+    rng = np.random.default_rng(0)
+    angles = np.column_stack([rng.uniform(0, 0.5, 40), rng.uniform(0, 6.28, 40), rng.uniform(-0.3, 0.3, 40)])
+    sl = slacks(rig, angles, req, 0.0, 0.0)
+    inside = sl["tension"] > 1e-6
+    assert inside.sum() > 10
+    pm = evaluate_poses(rig, tilt_torsion_rotations(*angles.T), LoadSet(np.zeros((1, 3))), MetricOptions(0))
+    # the planner's (active-set QP) smallest eigenvalue equals the certification's at those poses
+    assert np.allclose(pm.eig_Nm_per_rad[inside, 0], sl["stiffness"][inside], rtol=1e-8, atol=1e-8)

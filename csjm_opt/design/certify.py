@@ -1,17 +1,19 @@
 """Dense certification of an optimised design: every requirement re-checked where the optimiser never looked.
 
-The design is evaluated by the sweep's evaluator (:func:`csjm_opt.design.metrics.evaluate_poses`:
-exact zonotope feasibility, the planner's tensions, K and its eigenvalues) and by
+The design is evaluated with the sweep's kernels (the exact zonotope feasibility test of
+:mod:`csjm_opt.design.feasibility`, the model's J and K) and by
 :mod:`csjm_opt.design.interference`, on a Halton set of orientations of its
 required range drawn with another seed than the optimiser's, then on the
 orientations a pattern search reaches from the worst samples of each
 requirement (tilt, azimuth and torsion moved within the range, steps halved).
 Each requirement has a slack per orientation (>= 0 holds):
 
-* ``tension``: the planner's tensions of the stiffness load within
-  ``[t_min + margin, t_max - margin]`` (N; where the load cannot be held at
-  all, its negative wrench margin);
-* ``stiffness``: smallest eigenvalue of K minus the required value (N m/rad);
+* ``tension``: the least-squares (closest to mid-range) tensions of the
+  stiffness load within ``[t_min + margin, t_max - margin]`` (N). Where they
+  are, they are the planner's tensions (no bound active), so the stiffness
+  below is the one the planner and the sweep see; a design whose planner must
+  push a tension onto a bound to hold the stiffness load fails here;
+* ``stiffness``: smallest eigenvalue of K at those tensions minus the required value (N m/rad);
 * ``load k``: wrench margin of load k in the tension box shrunk by the margin
   (N m; >= 0 iff some tensions in that box hold it);
 * ``cable distance``, ``link clearance`` (m) and ``exit angle`` (deg).
@@ -29,7 +31,6 @@ from ..model.numeric import Model
 from ..model.rig import Rig
 from .feasibility import wrench_margin_Nm
 from .interference import pose_interference
-from .metrics import LoadSet, MetricOptions, evaluate_poses
 from .optimise_settings import Requirements
 from .sampling import OrientationSampling, tilt_torsion_rotations
 
@@ -99,17 +100,19 @@ def slacks(rig: Rig, angles: np.ndarray, req: Requirements, stiffness_Nm_per_rad
     """
     model = model or Model(rig)
     Rs = tilt_torsion_rotations(angles[:, 0], angles[:, 1], angles[:, 2])
-    loads = LoadSet(np.asarray(req.loads, float))
-    pm = evaluate_poses(rig, Rs, loads, MetricOptions(shaping_poses=0), model)
-    T = pm.tensions_N
-    tension = np.minimum(T - rig.t_min_N - margin_N, rig.t_max_N - margin_N - T).min(axis=1)
-    tension = np.where(pm.feasible, tension, np.minimum(pm.wrench_margin_Nm[:, 0], 0.0) - 1e-3)
-    stiffness = np.where(pm.feasible, pm.eig_Nm_per_rad[:, 0] - stiffness_Nm_per_rad, -math.inf)
-    out = {"tension": tension, "stiffness": stiffness}
+    loads = np.asarray(req.loads, float)
     J = model.jacobian(Rs)
     tau_w = model.weight_moment(Rs)
-    for k in range(1, loads.taus_ext_A_Nm.shape[0]):
-        out[f"load {k + 1}"] = wrench_margin_Nm(J, loads.taus_ext_A_Nm[k] + tau_w, rig.t_min_N + margin_N,
+    # the planner's tensions of the stiffness load where no tension is at a bound: least squares from mid-range
+    t_mid = rig.t_mid_N
+    w0 = -(loads[0] + tau_w) - np.einsum("nij,i->nj", J, t_mid)
+    JtJ = np.einsum("nij,nik->njk", J, J)
+    T = t_mid + np.einsum("nij,nj->ni", J, np.linalg.solve(JtJ, w0[..., None])[..., 0])
+    tension = np.minimum(T - rig.t_min_N - margin_N, rig.t_max_N - margin_N - T).min(axis=1)
+    eig = np.linalg.eigvalsh(model.stiffness(Rs, T))
+    out = {"tension": tension, "stiffness": eig[:, 0] - stiffness_Nm_per_rad}
+    for k in range(1, loads.shape[0]):
+        out[f"load {k + 1}"] = wrench_margin_Nm(J, loads[k] + tau_w, rig.t_min_N + margin_N,
                                                 rig.t_max_N - margin_N)
     pi = pose_interference(rig, Rs)
     out["cable distance"] = pi.cable_distance_m.min(axis=1) - req.min_cable_distance_m
