@@ -27,6 +27,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="bound on design evaluations (IPOPT's constraint evaluations plus certifications)")
     p.add_argument("--workers", type=int_in(1, 256), default=1,
                    help="processes for the multi-start (default 1)")
+    p.add_argument("--starts-from", metavar="RESULTS", default=None,
+                   help="start from the best designs (largest workspace) of a csjm sweep result file "
+                   "instead of space-filling designs")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.add_argument("--json", metavar="PATH", help="also write result.json here ('-' = stdout)")
     p.set_defaults(func=run)
@@ -38,10 +41,16 @@ def run(args: argparse.Namespace) -> int:
     from ..design.optimise_settings import read_optimise_file
 
     out = Path(args.out)
-    check_outputs([args.sweep], {"--json": args.json}, dirs={"--out": out})
+    check_outputs([args.sweep, args.starts_from], {"--json": args.json}, dirs={"--out": out})
     _, settings = read_optimise_file(args.sweep)
+    starts = None
+    if args.starts_from:
+        from ..design.optimisation import sweep_starts
+        from ..design.store import read_records
+
+        starts = sweep_starts(settings, read_records(args.starts_from)[0])
     result = optimise(settings, max_evaluations=args.max_evaluations, workers=args.workers,
-                      progress=False if args.no_progress else None)
+                      progress=False if args.no_progress else None, starts=starts)
     out.mkdir(parents=True, exist_ok=True)
     doc = result.as_json()
     for k, d in enumerate(result.designs):

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from scipy.stats import qmc
 
-from ..errors import InfeasibleRequirement
+from ..errors import DesignError, InfeasibleRequirement
 from .certify import certify
 from .geometry import GeometryLimits, design_rig
 from .interference import PAIRS, cable_ends_B_m, point_segment_distance, segment_distance
@@ -90,7 +90,7 @@ class _Budget:
 
 
 def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, workers: int = 1,
-             progress: bool | None = None) -> OptimisationResult:
+             progress: bool | None = None, starts: list[dict[str, float]] | None = None) -> OptimisationResult:
     """Optimise the hole geometry (see the module docstring).
 
     Parameters
@@ -103,6 +103,9 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
         Processes for the multi-start (the sweep's worker pool when > 1).
     progress : bool, optional
         Progress bar on stderr (``None``: on a terminal only).
+    starts : list of dict, optional
+        Starting designs (e.g. :func:`sweep_starts`, a sweep's best); default: ``settings.starts``
+        space-filling designs in the variable box.
 
     Returns
     -------
@@ -122,7 +125,11 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
     bar = tqdm(total=points + 1 if points > 1 else 1, desc="designs", unit="design", file=sys.stderr,
                disable=None if progress is None else not progress)
     try:
-        starts = _starts(settings)
+        if starts is None:
+            starts = _starts(settings)
+        else:
+            starts = [{n: float(np.clip(p[n], lo, hi)) for n, lo, hi in zip(settings.names, settings.lower,
+                                                                           settings.upper)} for p in starts]
         first = _best_start(settings, starts, {}, budget, workers)
         designs = [first]
         bar.update(1)
@@ -151,6 +158,38 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
 
 def _halved(name: str, value: float) -> float:
     return value * 2.0 if name == "size" else value * 0.5
+
+
+def sweep_starts(settings: OptimiseSettings, records: list[dict[str, Any]], count: int | None = None,
+                 key: str = "workspace_fraction") -> list[dict[str, float]]:
+    """The best designs of a sweep as starts: valid records sorted by ``key`` (largest first).
+
+    Parameters
+    ----------
+    settings : OptimiseSettings
+    records : list of dict
+        Sweep records (``SweepResult.records`` or the lines of a result file).
+    count : int, optional
+        How many (default ``settings.starts``).
+    key : str
+        Record key to rank by.
+
+    Returns
+    -------
+    list of dict of str to float
+        The optimised parameters of each start.
+
+    Raises
+    ------
+    DesignError
+        If no valid record has every optimised parameter.
+    """
+    ok = [r for r in records if r.get("status") == "ok" and r.get(key) is not None
+          and all(n in r["params"] for n in settings.names)]
+    if not ok:
+        raise DesignError(f"no valid sweep record with {key} and the parameters {list(settings.names)}", "starts")
+    ok.sort(key=lambda r: -float(r[key]))
+    return [{n: float(r["params"][n]) for n in settings.names} for r in ok[:count or settings.starts]]
 
 
 def _starts(settings: OptimiseSettings) -> list[dict[str, float]]:
@@ -340,4 +379,4 @@ def _infeasible(info: tuple | None) -> InfeasibleRequirement:
                                  "(the binding constraint at the best point IPOPT found)", name, angles)
 
 
-__all__ = ["OptimisationResult", "OptimisedDesign", "design_rig_of", "optimise"]
+__all__ = ["OptimisationResult", "OptimisedDesign", "design_rig_of", "optimise", "sweep_starts"]
