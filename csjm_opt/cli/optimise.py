@@ -24,7 +24,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("sweep", metavar="DESIGN.toml", help="sweep file (with an optional [optimise] section)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.add_argument("--max-evaluations", type=int_in(1, MAX_EVALUATIONS), default=None, metavar="N",
-                   help="bound on design evaluations (IPOPT's constraint evaluations plus certifications)")
+                   help="bound on design evaluations (IPOPT's constraint evaluations plus certifications), checked "
+                   "between solves")
     p.add_argument("--workers", type=int_in(1, 256), default=1,
                    help="processes for the multi-start (default 1)")
     p.add_argument("--starts-from", metavar="RESULTS", default=None,

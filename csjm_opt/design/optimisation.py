@@ -98,7 +98,9 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
     settings : OptimiseSettings
         From :func:`csjm_opt.design.optimise_settings.read_optimise_file` or built directly.
     max_evaluations : int, optional
-        Bound on design evaluations: IPOPT's constraint evaluations plus one per certification.
+        Bound on design evaluations (IPOPT's constraint evaluations plus one per certification),
+        checked between solves: no new solve starts once it is reached (a design not yet certified
+        is then returned with ``ok = False``).
     workers : int
         Processes for the multi-start (the sweep's worker pool when > 1).
     progress : bool, optional
@@ -349,11 +351,11 @@ def _violation(settings: OptimiseSettings, angles: np.ndarray, pb: Any, x: np.nd
     k = int(np.argmax(viol))
     names = _pose_names(settings)
     per = len(names)
-    n_pose = per * angles.shape[0]
+    n_pose = per * pb.n_slots
     scale = settings.requirements.range_scale if settings.objective != "range" else float(x[pb.objective_index])
     if k < n_pose:
         o, c = divmod(k, per)
-        a = angles[o] * np.array([scale, 1.0, scale])
+        a = (angles[o] if o < angles.shape[0] else np.zeros(3)) * np.array([scale, 1.0, scale])
         return names[c], tuple(math.degrees(v) for v in a), float(viol[k])
     return "hole spacing or cable contact", None, float(viol[k])
 

@@ -152,6 +152,7 @@ class Problem:
     objective_index: int
     design_of: Any        # casadi Function: u -> design vector (natural units)
     constraints_of: Any   # casadi Function: x, p -> g
+    n_slots: int = 0      # orientation slots (the pose constraints come first, slot by slot)
 
 
 @dataclasses.dataclass
@@ -287,7 +288,7 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
     ubx = np.concatenate([np.ones(len(names)), [q_hi], np.full(n_t, np.inf)])
     return Problem(solver=built.solver, x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=built.lbg, ubg=built.ubg,
                    n_design=len(names), objective_index=len(names), design_of=built.design_of,
-                   constraints_of=built.constraints_of)
+                   constraints_of=built.constraints_of, n_slots=n_slots)
 
 
 _SCALE = {"stiffness": STIFFNESS_SCALE_NM_PER_RAD, "tension_margin": MARGIN_SCALE_N, "range": 1.0,
