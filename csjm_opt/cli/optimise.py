@@ -28,6 +28,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "between solves")
     p.add_argument("--workers", type=int_in(1, 256), default=1,
                    help="processes for the multi-start (default 1)")
+    p.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="run the starts on the Dask scheduler at ADDRESS (e.g. tcp://host:8786)")
+    p.add_argument("--dask", action="store_true", help="run the starts on a local Dask cluster")
     p.add_argument("--starts-from", metavar="RESULTS", default=None,
                    help="start from the best designs (largest workspace) of a csjm sweep result file "
                    "instead of space-filling designs")
@@ -51,7 +54,8 @@ def run(args: argparse.Namespace) -> int:
 
         starts = sweep_starts(settings, read_records(args.starts_from)[0])
     result = optimise(settings, max_evaluations=args.max_evaluations, workers=args.workers,
-                      progress=False if args.no_progress else None, starts=starts)
+                      progress=False if args.no_progress else None, starts=starts, dask=args.dask,
+                      scheduler=args.scheduler)
     out.mkdir(parents=True, exist_ok=True)
     doc = result.as_json()
     for k, d in enumerate(result.designs):

@@ -90,7 +90,8 @@ class _Budget:
 
 
 def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, workers: int = 1,
-             progress: bool | None = None, starts: list[dict[str, float]] | None = None) -> OptimisationResult:
+             progress: bool | None = None, starts: list[dict[str, float]] | None = None,
+             dask: bool = False, scheduler: str | None = None) -> OptimisationResult:
     """Optimise the hole geometry (see the module docstring).
 
     Parameters
@@ -108,6 +109,10 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
     starts : list of dict, optional
         Starting designs (e.g. :func:`sweep_starts`, a sweep's best); default: ``settings.starts``
         space-filling designs in the variable box.
+    dask : bool
+        Run the starts on Dask (a local cluster of ``workers`` processes without ``scheduler``).
+    scheduler : str, optional
+        Address of a running Dask scheduler for the starts, as for a sweep.
 
     Returns
     -------
@@ -132,7 +137,8 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
         else:
             starts = [{n: float(np.clip(p[n], lo, hi)) for n, lo, hi in zip(settings.names, settings.lower,
                                                                            settings.upper)} for p in starts]
-        first = _best_start(settings, starts, {}, budget, workers)
+        backend = ("dask", scheduler) if dask or scheduler else ("processes", None)
+        first = _best_start(settings, starts, {}, budget, workers, backend)
         designs = [first]
         bar.update(1)
         if points > 1 and budget.left() > 0:
@@ -202,10 +208,17 @@ def _starts(settings: OptimiseSettings) -> list[dict[str, float]]:
 
 
 def _best_start(settings: OptimiseSettings, starts: list[dict[str, float]], epsilon: dict[str, float],
-                budget: _Budget, workers: int) -> OptimisedDesign:
-    """Solve from every start (on worker processes when ``workers > 1``); certify the best."""
+                budget: _Budget, workers: int,
+                backend: tuple[str, str | None] = ("processes", None)) -> OptimisedDesign:
+    """Solve from every start (on the sweep's worker processes or Dask); certify the best."""
     results: list[tuple[dict[str, float] | None, float, int, str, Any]] = []
-    if workers > 1 and len(starts) > 1:
+    if backend[0] == "dask":
+        from ._dask_backend import _run_dask
+
+        got = dict(_run_dask(list(enumerate(starts)), (settings, epsilon), backend[1], max(workers, 1), 10.0,
+                             fn=_solve_start))
+        results = [got[i] for i in range(len(starts))]
+    elif workers > 1 and len(starts) > 1:
         from ._worker_processes import _run_processes
 
         todo = list(enumerate(starts))
