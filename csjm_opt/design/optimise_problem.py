@@ -254,7 +254,7 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
     Problem
     """
     n_slots = -(-angles.shape[0] // SLOT_STEP) * SLOT_STEP
-    n_contacts = -(-len(contacts) // SLOT_STEP) * SLOT_STEP
+    n_contacts = max(-(-len(contacts) // SLOT_STEP) * SLOT_STEP, MIN_CONTACT_SLOTS)
     built = _built_for(settings, n_slots, n_contacts)
     padded = np.vstack([angles, np.zeros((n_slots - angles.shape[0], 3))])
     values = _quantity_values(settings, epsilon)
@@ -295,6 +295,8 @@ _SCALE = {"stiffness": STIFFNESS_SCALE_NM_PER_RAD, "tension_margin": MARGIN_SCAL
           "size": SIZE_SCALE_M}
 #: Orientation and contact slots come in multiples of this (a solver is reused for all sizes below).
 SLOT_STEP = 16
+#: Contact slots of every solver (a round with more builds a larger one).
+MIN_CONTACT_SLOTS = 32
 _CONTACT_WIDTH = 19    # angles (3), one-hot cable i (6), one-hot cable j (6), s, t, rod length, need
 _NO_SIZE_LIMIT_M = 1e3
 
