@@ -183,6 +183,17 @@ def pose_constraints(n_loads: int, exit_limit: bool) -> Any:
     ``q`` = [margin, lambda, s, cos(exit limit)], ``ang`` = [tilt, azimuth, torsion] at scale 1,
     ``load`` (3 x m), ``T`` (6 (m - 1), scaled by t_max). Output ``g`` (all >= 0 but the
     equilibrium rows, == 0) and ``T0`` (the stiffness load's tensions).
+
+    Parameters
+    ----------
+    n_loads : int
+        Loads m of the set (row 0 the stiffness load).
+    exit_limit : bool
+        Include the exit-angle rows.
+
+    Returns
+    -------
+    casadi.Function
     """
     A, B = ca.SX.sym("A", 3, 6), ca.SX.sym("B", 3, 6)
     rig, q, ang = ca.SX.sym("rig", 8), ca.SX.sym("q", 4), ca.SX.sym("ang", 3)
@@ -318,7 +329,12 @@ def _built_for(settings: OptimiseSettings, n_slots: int, n_contacts: int) -> _Bu
 
 
 def clear_cache() -> None:
-    """Forget the built solvers (benchmarks time fresh runs)."""
+    """Forget the built solvers (benchmarks time fresh runs).
+
+    Returns
+    -------
+    None
+    """
     _CACHE.clear()
 
 
