@@ -156,3 +156,17 @@ class InconsistentTensions(InvalidInput):
         super().__init__(message, "tensions")
         self.reason = reason
         self.value = float(value)
+
+
+class InfeasibleRequirement(CsjmError):
+    """No design within the bounds meets an optimisation's requirements.
+
+    ``constraint`` names the requirement that binds, ``angles_deg`` the
+    orientation (tilt, azimuth, torsion in degrees) where it binds, or ``None``
+    when it is not tied to one orientation.
+    """
+
+    def __init__(self, message: str, constraint: str, angles_deg: Any = None):
+        super().__init__(message)
+        self.constraint = constraint
+        self.angles_deg = None if angles_deg is None else tuple(float(a) for a in angles_deg)

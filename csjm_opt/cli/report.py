@@ -21,7 +21,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description="Pareto front of workspace against minimum stiffness, the best designs in a "
                        "table and their hole geometry drawn, from a csjm sweep result file; writes index.html "
                        "(open it in a browser), index.md, figures and design_report.json into a folder.")
-    p.add_argument("results", metavar="RESULTS", help="csjm sweep result file (JSON Lines)")
+    p.add_argument("results", metavar="RESULTS", help="csjm sweep result file (JSON Lines), or a csjm optimise "
+                   "output folder (with result.json)")
     p.add_argument("--sweep", metavar="SWEEP.toml", default=None,
                    help="the sweep file of the results: draws the geometry with its [base] parameters and "
                    "evaluates the paper's design with the same settings to mark it")
@@ -54,6 +55,13 @@ def run(args: argparse.Namespace) -> int:
     from ..report.design import write_design_report
 
     results = Path(args.results)
+    if results.is_dir() and (results / "result.json").is_file():  # a csjm optimise folder
+        from ..report.optimisation_page import write_optimisation_report
+
+        out = Path(args.out) if args.out else results.with_name(results.name + "_report")
+        check_outputs([results / "result.json"], dirs={"--out": out})
+        print(f"report written to {write_optimisation_report(results, out)}")
+        return 0
     if not results.is_file():
         raise InvalidInput(f"no result file {results}", "RESULTS")
     out = Path(args.out) if args.out else results.with_name(results.stem + "_report")

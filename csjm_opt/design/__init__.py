@@ -7,9 +7,12 @@ exact LPs for the reachable directional stiffness), :mod:`.metrics` (per
 design), :mod:`.sweep_file` (TOML description; its axes in :mod:`.sweep_axes`, its
 settings in :mod:`.evaluation_settings`), :mod:`.store` (crash-safe JSON Lines results),
 :mod:`.design_evaluation` (one design's record), :mod:`.sweep` (parallel, resumable runner;
-processes or Dask, result in :mod:`.sweep_result`).
+processes or Dask, result in :mod:`.sweep_result`), :mod:`.interference` (cable-cable and
+cable-link distances, exit angles), :mod:`.optimisation` (IPOPT on the sweep's vocabulary, problem in
+:mod:`.optimise_problem`, settings in :mod:`.optimise_settings`, dense check in :mod:`.certify`).
 """
 
+from .certify import Check, certify
 from .geometry import (
     PAPER_DESIGN,
     PARAMETERS,
@@ -18,14 +21,19 @@ from .geometry import (
     design_holes,
     design_rig,
 )
+from .interference import Interference, interference, pose_interference, segment_distance
 from .metrics import DesignMetrics, LoadSet, MetricOptions, PoseMetrics, evaluate, evaluate_poses
+from .optimisation import OptimisationResult, OptimisedDesign, design_rig_of, optimise
+from .optimise_settings import OptimiseSettings, Requirements, read_optimise_file
 from .sampling import OrientationSampling, tilt_torsion_angles, tilt_torsion_rotations
 from .sweep import SweepResult, evaluate_design, run_sweep
 from .sweep_file import EvaluationSettings, SweepSpec
 
 __all__ = [
-    "DesignMetrics", "EvaluationSettings", "GeometryLimits", "LoadSet", "MetricOptions",
-    "OrientationSampling", "PAPER_DESIGN", "PARAMETERS", "PoseMetrics", "SweepResult", "SweepSpec",
-    "check_holes", "design_holes", "design_rig", "evaluate", "evaluate_design", "evaluate_poses",
-    "run_sweep", "tilt_torsion_angles", "tilt_torsion_rotations",
+    "Check", "DesignMetrics", "EvaluationSettings", "GeometryLimits", "Interference", "LoadSet", "MetricOptions",
+    "OptimisationResult", "OptimiseSettings", "OptimisedDesign", "OrientationSampling", "PAPER_DESIGN",
+    "PARAMETERS", "PoseMetrics", "Requirements", "SweepResult", "SweepSpec", "certify", "check_holes",
+    "design_holes", "design_rig", "design_rig_of", "evaluate", "evaluate_design", "evaluate_poses",
+    "interference", "optimise", "pose_interference", "read_optimise_file", "run_sweep", "segment_distance",
+    "tilt_torsion_angles", "tilt_torsion_rotations",
 ]

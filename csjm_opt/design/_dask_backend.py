@@ -10,8 +10,8 @@ from .design_evaluation import evaluate_design
 from .evaluation_settings import EvaluationSettings
 
 
-def _run_dask(todo: list[tuple[int, dict]], settings: EvaluationSettings, scheduler: str | None,
-              workers: int, timeout_s: float) -> Iterator[tuple[int, dict[str, Any]]]:
+def _run_dask(todo: list[tuple[int, dict]], settings: EvaluationSettings | Any, scheduler: str | None,
+              workers: int, timeout_s: float, fn: Callable = evaluate_design) -> Iterator[tuple[int, Any]]:
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError as exc:  # pragma: no cover - dask[distributed] is a dependency
@@ -29,21 +29,22 @@ def _run_dask(todo: list[tuple[int, dict]], settings: EvaluationSettings, schedu
             cluster.close()
         raise DesignError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}", "--scheduler") from exc
     try:
-        yield from dask_stream(client, todo, settings, as_completed)
+        yield from dask_stream(client, todo, settings, as_completed, fn)
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
 
 
-def dask_stream(client: Any, todo: list[tuple[int, dict]], settings: EvaluationSettings,
-                as_completed: Callable) -> Iterator[tuple[int, dict[str, Any]]]:
-    """Evaluate ``todo`` on a Dask ``client``; yields (index, record) as designs finish."""
+def dask_stream(client: Any, todo: list[tuple[int, dict]], settings: EvaluationSettings | Any,
+                as_completed: Callable, fn: Callable = evaluate_design) -> Iterator[tuple[int, Any]]:
+    """Evaluate ``todo`` on a Dask ``client`` (``fn(params, settings)``, default a sweep design's record);
+    yields (index, result) as they finish."""
     futures = {}
     try:
         shared = client.scatter(settings, broadcast=True)
         for i, p in todo:
-            futures[client.submit(evaluate_design, p, shared, pure=False)] = i
+            futures[client.submit(fn, p, shared, pure=False)] = i
         for future in as_completed(futures):
             yield futures[future], future.result()
     finally:

@@ -86,6 +86,10 @@ class DesignMetrics:
     shaping_range_Nm_per_rad: dict[str, tuple[float, float]]
     planner_fallbacks: int
     seconds: float
+    #: Interference over the feasible orientations (csjm_opt.design.interference); NaN without any.
+    min_cable_distance_m: float = math.nan
+    min_link_clearance_m: float = math.nan
+    max_exit_angle_deg: float = math.nan
 
     def as_dict(self) -> dict[str, Any]:
         """The metrics as a JSON-able dict (the ``metrics`` of a sweep record).

@@ -31,12 +31,12 @@ def _pool_context() -> Any:
     return multiprocessing.get_context("spawn")  # pragma: no cover - Windows
 
 
-def _run_processes(todo: list[tuple[int, dict]], settings: EvaluationSettings,
-                   workers: int) -> Iterator[tuple[int, dict[str, Any]]]:
+def _run_processes(todo: list[tuple[int, dict]], settings: EvaluationSettings | Any,
+                   workers: int, fn: Any = evaluate_design) -> Iterator[tuple[int, Any]]:
     pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context(),
                                                   initializer=_worker_init, initargs=(os.getpid(),))
     try:
-        futures = {pool.submit(evaluate_design, p, settings): i for i, p in todo}
+        futures = {pool.submit(fn, p, settings): i for i, p in todo}
         for future in concurrent.futures.as_completed(futures):
             yield futures[future], future.result()
     except concurrent.futures.process.BrokenProcessPool as exc:

@@ -53,6 +53,11 @@ def evaluate_design(params: dict[str, float], settings: EvaluationSettings) -> d
         return {"params": params, "status": "error", "error": f"{type(exc).__name__}: {exc}",
                 "metrics": None, "workspace_fraction": None, "min_stiffness_Nm_per_rad": None,
                 "seconds": time.perf_counter() - start}
+    broken = settings.interference.violation(m) if settings.interference is not None else None
+    if broken is not None:
+        return {"params": params, "status": "invalid", "error": f"interference: {broken}", "metrics": m,
+                "workspace_fraction": None, "min_stiffness_Nm_per_rad": None,
+                "seconds": time.perf_counter() - start}
     return {"params": params, "status": "ok", "error": None, "metrics": m,
             "workspace_fraction": m["workspace_fraction"],
             "min_stiffness_Nm_per_rad": m["min_stiffness_Nm_per_rad"],

@@ -18,6 +18,36 @@ from .metrics import LoadSet, MetricOptions
 from .sampling import OrientationSampling
 
 
+@dataclasses.dataclass(frozen=True)
+class InterferenceLimits:
+    """A sweep's interference validity rule over feasible poses (``[metrics]``; ``None``: not checked)."""
+
+    min_cable_distance_m: float | None = None
+    min_link_clearance_m: float | None = None
+    max_exit_angle_deg: float | None = None
+
+    def violation(self, metrics: dict[str, Any]) -> str | None:
+        """Why a design's metrics break the rule, or ``None``.
+
+        Parameters
+        ----------
+        metrics : dict
+            A sweep record's ``metrics``.
+
+        Returns
+        -------
+        str or None
+        """
+        checks = (("min_cable_distance_m", self.min_cable_distance_m, 1, "two cables come {:.4g} m apart"),
+                  ("min_link_clearance_m", self.min_link_clearance_m, 1, "a cable comes {:.4g} m from the link"),
+                  ("max_exit_angle_deg", self.max_exit_angle_deg, -1, "a cable leaves its hole at {:.4g} deg"))
+        for key, limit, sign, text in checks:
+            value = metrics.get(key)
+            if limit is not None and value is not None and sign * (value - limit) < 0:
+                return f"{text.format(value)} (metrics.{key} = {limit:g})"
+        return None
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class EvaluationSettings:
     """Everything that decides a design's metrics apart from its swept parameters."""
@@ -27,6 +57,7 @@ class EvaluationSettings:
     loads: LoadSet
     options: MetricOptions
     limits: GeometryLimits
+    interference: InterferenceLimits | None = None
 
     def digest(self) -> str:
         """Fingerprint of the settings; a result file made with other settings is refused.
@@ -36,9 +67,11 @@ class EvaluationSettings:
         str
             Hex digest of the base design, sampling, loads and metric options.
         """
-        data = {"base": self.base, "sampling": dataclasses.asdict(self.sampling),
+        data: dict[str, Any] = {"base": self.base, "sampling": dataclasses.asdict(self.sampling),
                 "loads": self.loads.taus_ext_A_Nm.tolist(), "options": dataclasses.asdict(self.options),
                 "limits": dataclasses.asdict(self.limits)}
+        if self.interference is not None:  # absent: the digest of files written before the rule existed
+            data["interference"] = dataclasses.asdict(self.interference)
         return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
 
 
@@ -85,4 +118,7 @@ def _settings(data: dict[str, Any], base: dict[str, Any], fail: Any) -> Evaluati
                                 float(m.get("min_cable_clearance_m", 5e-3)))
     except DesignError as exc:
         raise fail(str(exc).split("] ", 1)[-1], f"metrics.{exc.key}") from exc
-    return EvaluationSettings(base=base, sampling=sampling, loads=loads, options=options, limits=limits)
+    keys = ("min_cable_distance_m", "min_link_clearance_m", "max_exit_angle_deg")
+    rule = InterferenceLimits(**{k: float(m[k]) for k in keys if k in m}) if any(k in m for k in keys) else None
+    return EvaluationSettings(base=base, sampling=sampling, loads=loads, options=options, limits=limits,
+                              interference=rule)

@@ -35,6 +35,12 @@ Definitions (all over the orientations of an :class:`OrientationSampling`):
   tensions holding the stiffness load, for u = x, y (bending) and z
   (torsion) of {A}; reported as medians over those poses
   (:mod:`csjm_opt.design.shaping_range`).
+* Interference (:mod:`csjm_opt.design.interference`) over the feasible
+  poses: ``min_cable_distance_m`` between any two cables,
+  ``min_link_clearance_m`` from any cable to the link (the rig's, or the
+  documented default), ``max_exit_angle_deg`` of any cable against its hole's
+  axis. A sweep may make them a validity rule (``[metrics]``
+  ``min_cable_distance_m`` / ``min_link_clearance_m`` / ``max_exit_angle_deg``).
 """
 
 from __future__ import annotations
@@ -51,6 +57,7 @@ from ..model.numeric import Model
 from ..planning.planner import plan_tensions
 from ..model.rig import Rig
 from . import feasibility, shaping_range
+from .interference import interference
 from ._metric_types import DesignMetrics, LoadSet, MetricOptions, PoseMetrics, _json_safe  # noqa: F401
 from .sampling import OrientationSampling, tilt_torsion_angles, tilt_torsion_rotations
 
@@ -148,6 +155,7 @@ def evaluate(rig: Rig, sampling: OrientationSampling = OrientationSampling(),
     shaping = _shaping(rig, model, pm, loads, options.shaping_poses)
     home = evaluate_poses(rig, np.eye(3)[None], loads, options, model)
     t_home = home.tensions_N[0]
+    clash = interference(rig, pm.R[ok]) if np.any(ok) else None
     home_tension_margin = float(min(np.min(t_home - rig.t_min_N), np.min(rig.t_max_N - t_home))) \
         if home.feasible[0] else math.nan
     return DesignMetrics(
@@ -168,7 +176,10 @@ def evaluate(rig: Rig, sampling: OrientationSampling = OrientationSampling(),
         home_tension_margin_N=home_tension_margin,
         home_wrench_margin_Nm=float(home.wrench_margin_Nm[0].min()),
         shaping_range_Nm_per_rad=shaping, planner_fallbacks=pm.fallbacks,
-        seconds=time.perf_counter() - start)
+        seconds=time.perf_counter() - start,
+        min_cable_distance_m=clash.min_cable_distance_m if clash else math.nan,
+        min_link_clearance_m=clash.min_link_clearance_m if clash else math.nan,
+        max_exit_angle_deg=clash.max_exit_angle_deg if clash else math.nan)
 
 
 def _tilt_cone_deg(rig: Rig, model: Model, sampling: OrientationSampling, ok: np.ndarray,

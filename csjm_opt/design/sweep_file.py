@@ -30,6 +30,8 @@ Format (every section optional except ``[parameters]``; units in key names)::
     feasibility_tol_Nm = 1e-9
     min_hole_spacing_m = 0.001
     min_cable_clearance_m = 0.005
+    # optional interference rule over feasible poses (a design breaking it is "invalid"):
+    # min_cable_distance_m = 0.002; min_link_clearance_m = 0.002; max_exit_angle_deg = 75.0
 
 Errors name the file and the dotted key (:class:`~csjm_opt.errors.DesignError`).
 Sizes are bounded before anything is allocated: at most :data:`MAX_DESIGNS`
@@ -76,7 +78,9 @@ _SECTIONS = {
     "parameters": set(SCALAR_PARAMETERS),
     "sampling": {"orientations", "max_tilt_deg", "max_torsion_deg", "seed", "method"},
     "loads": {"tau_ext"},
-    "metrics": {"shaping_poses", "feasibility_tol_Nm", "min_hole_spacing_m", "min_cable_clearance_m"},
+    "metrics": {"shaping_poses", "feasibility_tol_Nm", "min_hole_spacing_m", "min_cable_clearance_m",
+                "min_cable_distance_m", "min_link_clearance_m", "max_exit_angle_deg"},
+    "optimise": set(),  # read by csjm_opt.design.optimise_settings; a sweep ignores it
 }
 
 
@@ -174,7 +178,7 @@ class SweepSpec:
                 raise fail(f"unknown section (expected one of {sorted(_SECTIONS)})", section)
             if not isinstance(table, dict):
                 raise fail("expected a table", section)
-            for key in table:
+            for key in table if section != "optimise" else ():
                 if key not in _SECTIONS[section]:
                     hint = "see csjm_opt.design.PARAMETERS" if section in ("base", "parameters") \
                         else f"expected one of {sorted(_SECTIONS[section])}"

@@ -27,7 +27,8 @@ def _check(data: Any, path: str | None) -> None:
         raise RigFileError(f"expected a table, got {type(data).__name__}", path)
     for section in data:
         if section not in _SCHEMA:
-            raise RigFileError(f"unknown section (expected one of {sorted([*_SCHEMA, 'dynamics'])})", path, section)
+            raise RigFileError(f"unknown section (expected one of {sorted([*_SCHEMA, 'dynamics', 'link'])})",
+                               path, section)
     for section, keys in _SCHEMA.items():
         table = data.get(section)
         if not isinstance(table, dict):

@@ -14,7 +14,9 @@ def _format_toml(data: dict[str, dict[str, Any]]) -> str:
     units = {"platform_holes": "m, A_i in {A}", "base_holes": "m, B_i in {B}",
              "stiffness": "N/m, cable with drive", "t_min": "N", "t_max": "N", "mass": "kg",
              "com": "m, in {A}", "gravity": "m/s^2, in {B}", "inertia": "kg m^2 about the COM, in {A}",
-             "joint_damping": "N m s/rad", "cable_damping": "N s/m"}
+             "joint_damping": "N m s/rad", "cable_damping": "N s/m",
+             "rod_radius": "m, rod from (0, 0, -rod_length) in {B} to O", "rod_length": "m",
+             "ball_radius": "m, the joint's ball at O"}
     lines = ["# csjm_opt rig file (SI units; frames per docs/conventions.md)"]
     for section, table in data.items():
         lines.append(f"\n[{section}]")

@@ -18,6 +18,10 @@ the TOML format of docs/conventions.md::
     inertia = [Ixx, Iyy, Izz]           # kg m^2 about the COM in {A} (or 3x3)
     joint_damping = 0.02                # N m s/rad
     cable_damping = 0.0                 # N s/m
+    [link]                              # optional, see csjm_opt.model.link
+    rod_radius = 0.004                  # m, rod from (0, 0, -rod_length) in {B} to O
+    rod_length = 0.08                   # m
+    ball_radius = 0.005                 # m, the joint's ball at O
 """
 
 from __future__ import annotations
@@ -33,6 +37,7 @@ from . import hexagon
 from ._rig_schema import _check
 from ._rig_toml import _format_toml
 from .dynamics import Dynamics
+from .link import DEFAULT_LINK, Link
 from ..errors import InvalidInput, RigFileError
 from .._fileio import atomic_write_text, read_text
 
@@ -72,10 +77,15 @@ class Rig:
     #: Inertia and damping for dynamic simulation; ``None``: the documented defaults
     #: (:func:`csjm_opt.model.dynamics.rig_dynamics`).
     dynamics: Dynamics | None = None
+    #: The central link the cables must clear; ``None``: :data:`csjm_opt.model.link.DEFAULT_LINK`.
+    link: Link | None = None
 
     def __post_init__(self) -> None:
         data = self.as_dict()
         data.pop("dynamics", None)
+        data.pop("link", None)
+        if self.link is not None and not isinstance(self.link, Link):
+            raise RigFileError(f"expected a Link, got {type(self.link).__name__}", None, "link")
         _check(data, path=None)
         if self.dynamics is not None and not isinstance(self.dynamics, Dynamics):
             raise RigFileError(f"expected a Dynamics, got {type(self.dynamics).__name__}", None, "dynamics")
@@ -91,6 +101,11 @@ class Rig:
     def weight_B_N(self) -> np.ndarray:
         """Platform weight force in {B} (N)."""
         return self.platform_mass_kg * self.gravity_B_m_per_s2
+
+    @property
+    def link_or_default(self) -> Link:
+        """The rig's link, or the documented default when the rig gives none."""
+        return DEFAULT_LINK if self.link is None else self.link
 
     @property
     def t_mid_N(self) -> np.ndarray:
@@ -129,7 +144,7 @@ class Rig:
         -------
         dict
             ``{"geometry": {...}, "cables": {...}, "platform": {...}}`` of plain Python numbers
-            (plus ``"dynamics"`` when set).
+            (plus ``"dynamics"`` and ``"link"`` when set).
         """
         tolist = lambda a: np.asarray(a, dtype=float).tolist()  # noqa: E731
         data = {
@@ -142,6 +157,8 @@ class Rig:
         }
         if self.dynamics is not None:
             data["dynamics"] = self.dynamics.as_dict()
+        if self.link is not None:
+            data["link"] = self.link.as_dict()
         return data
 
     @classmethod
@@ -166,7 +183,8 @@ class Rig:
             If a key is unknown or missing, a shape is wrong, a number is not finite, ``t_min >=
             t_max``, a stiffness is not positive or holes coincide (naming the key and file).
         """
-        statics = {key: value for key, value in data.items() if key != "dynamics"} if isinstance(data, dict) else data
+        statics = ({key: value for key, value in data.items() if key not in ("dynamics", "link")}
+                   if isinstance(data, dict) else data)
         _check(statics, path)
         g, c, p = data["geometry"], data["cables"], data["platform"]
         dynamics = None
@@ -174,10 +192,11 @@ class Rig:
             from .dynamics import default_dynamics
 
             dynamics = Dynamics.from_dict(data["dynamics"], default_dynamics(p["mass"], g["platform_holes"]), path)
+        link = Link.from_dict(data["link"], path) if "link" in data else None
         return cls(platform_holes_A_m=g["platform_holes"], base_holes_B_m=g["base_holes"],
                    cable_stiffness_N_per_m=c["stiffness"], t_min_N=c["t_min"], t_max_N=c["t_max"],
                    platform_mass_kg=p["mass"], com_A_m=p["com"], gravity_B_m_per_s2=p["gravity"],
-                   dynamics=dynamics)
+                   dynamics=dynamics, link=link)
 
     @classmethod
     def from_toml(cls, path: str | Path) -> "Rig":

@@ -1,0 +1,74 @@
+"""``csjm optimise``: hole-geometry optimisation on a sweep file's vocabulary, certified designs as rig files."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ._options import check_outputs, int_in
+
+#: Most design evaluations a run may be given.
+MAX_EVALUATIONS = 10_000_000
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "optimise", help="hole-geometry optimisation (guaranteed workspace, stiffness, no collisions)",
+        description="Optimise the swept parameters of a sweep file (same names and bounds) with IPOPT "
+        "and exact derivatives: every orientation of the required set holds every load with tensions in "
+        "range and a stiffness of at least the stated value, no cable touches another or the link. "
+        "Objective and requirements come from the optional [optimise] section (docs/guide/optimisation.md). "
+        "Every returned design is certified on a dense orientation set; DIR gets design_000.toml, ... "
+        "(rig files) and result.json.")
+    p.add_argument("sweep", metavar="DESIGN.toml", help="sweep file (with an optional [optimise] section)")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    p.add_argument("--max-evaluations", type=int_in(1, MAX_EVALUATIONS), default=None, metavar="N",
+                   help="bound on design evaluations (IPOPT's constraint evaluations plus certifications), checked "
+                   "between solves")
+    p.add_argument("--workers", type=int_in(1, 256), default=1,
+                   help="processes for the multi-start (default 1)")
+    p.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="run the starts on the Dask scheduler at ADDRESS (e.g. tcp://host:8786)")
+    p.add_argument("--dask", action="store_true", help="run the starts on a local Dask cluster")
+    p.add_argument("--starts-from", metavar="RESULTS", default=None,
+                   help="start from the best designs (largest workspace) of a csjm sweep result file "
+                   "instead of space-filling designs")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    p.add_argument("--json", metavar="PATH", help="also write result.json here ('-' = stdout)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from .._fileio import atomic_write_json
+    from ..design.optimisation import design_rig_of, optimise
+    from ..design.optimise_settings import read_optimise_file
+
+    out = Path(args.out)
+    check_outputs([args.sweep, args.starts_from], {"--json": args.json}, dirs={"--out": out})
+    _, settings = read_optimise_file(args.sweep)
+    starts = None
+    if args.starts_from:
+        from ..design.optimisation import sweep_starts
+        from ..design.store import read_records
+
+        starts = sweep_starts(settings, read_records(args.starts_from)[0])
+    result = optimise(settings, max_evaluations=args.max_evaluations, workers=args.workers,
+                      progress=False if args.no_progress else None, starts=starts, dask=args.dask,
+                      scheduler=args.scheduler)
+    out.mkdir(parents=True, exist_ok=True)
+    doc = result.as_json()
+    for k, d in enumerate(result.designs):
+        name = f"design_{k:03d}.toml"
+        design_rig_of(settings, d.params).to_toml(out / name, overwrite=True)
+        doc["designs"][k]["rig_file"] = name
+    atomic_write_json(out / "result.json", doc)
+    if args.json:
+        atomic_write_json(args.json, doc)
+    stream = sys.stderr if args.json == "-" else sys.stdout
+    for k, d in enumerate(result.designs):
+        obj = ", ".join(f"{n} {v:.4g}" for n, v in d.objectives.items())
+        print(f"design_{k:03d}: {obj}; {'certified' if d.ok else 'NOT certified'} on "
+              f"{settings.certify_orientations} + local-search orientations", file=stream)
+    print(f"{len(result.designs)} designs, {result.evaluations} evaluations, written to {out}", file=stream)
+    return 0

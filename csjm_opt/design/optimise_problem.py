@@ -1,0 +1,431 @@
+"""The hole-geometry optimisation problem as a CasADi NLP, solved by IPOPT with exact derivatives.
+
+Decision variables: the optimised design parameters (scaled to [0, 1] on their
+bounds), the objective's variable, and for every sampled orientation and every
+load but the first the six cable tensions. Constraints at every sampled
+orientation R_j of the required set (tilt <= s max_tilt, |torsion| <= s
+max_torsion; R = I always included):
+
+* load 0 (the stiffness load) is held by the planner's tensions, those closest
+  to mid-range. Where they lie inside the tension box they are the
+  least-squares tensions ``T0 = t_mid + J (J^T J)^-1 (w - J^T t_mid)``, a
+  smooth function of the design, and the constraint
+  ``t_min + margin <= T0 <= t_max - margin`` keeps them there, so the
+  optimiser's tensions are the planner's (and the sweep's) exactly;
+* ``K(T0) - lambda I`` positive semidefinite, written as its seven principal
+  minors >= 0 (smooth, exact for a 3 x 3 matrix): the smallest eigenvalue of K
+  is at least ``lambda``;
+* every other load k is held by some tensions ``T_jk`` in the margin box
+  (``J^T T_jk + tau_ext_k + tau_weight = 0``): the existence test the sweep's
+  exact zonotope check decides;
+* the angle of every cable at its holes at most the exit-angle limit;
+* the cable-cable and cable-link distances at least the required clearance at
+  the closest points found for the current design (the points are updated
+  between rounds of :mod:`csjm_opt.design.certify`, which checks the exact
+  distance);
+* holes of a body at least the hole spacing apart.
+
+The objective is one of :data:`OBJECTIVES`; the others are constraints at
+their required values, or at an epsilon value for a Pareto front. The model
+(J, K, weight moment) is :mod:`csjm_opt.model.casadi_model`, called
+symbolically so IPOPT gets exact first and second derivatives.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import json
+import math
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..errors import DesignError
+from ..model import hexagon
+from ..model.casadi_model import build_functions
+from .geometry import PAPER_DESIGN
+from .interference import PAIRS
+from .optimise_settings import OptimiseSettings
+
+#: Scales that make the objectives and constraints of order one.
+STIFFNESS_SCALE_NM_PER_RAD = 10.0
+MARGIN_SCALE_N = 10.0
+SIZE_SCALE_M = 0.1
+LENGTH_SCALE_M = 0.01
+MOMENT_SCALE_NM = 1.0
+#: IPOPT's Hessian: "limited-memory" (quasi-Newton on exact gradients) or "exact".
+HESSIAN = "exact"
+#: IPOPT iteration limit of one solve.
+MAX_ITER = 300
+
+
+@dataclasses.dataclass(frozen=True)
+class Contact:
+    """A cable pair (or cable and link part) to keep apart at one orientation, at fixed closest points."""
+
+    orientation: int      # index into the problem's orientation set
+    kind: str             # "pair", "rod" or "ball"
+    i: int                # cable (0-based)
+    j: int                # other cable (pair) or -1
+    s: float              # parameter of the closest point on cable i (0: platform hole, 1: base hole)
+    t: float              # parameter on cable j or on the rod (0: bottom, 1: O)
+
+
+def rotation_sym(tilt: Any, azimuth: Any, torsion: Any) -> Any:
+    """``Rz(phi) Ry(theta) Rz(sigma - phi)`` in CasADi (same as :func:`~.sampling.tilt_torsion_rotations`).
+
+    Parameters
+    ----------
+    tilt, azimuth, torsion : casadi.SX or float
+        Angles (rad).
+
+    Returns
+    -------
+    casadi.SX, shape (3, 3)
+    """
+    def rz(a: Any) -> Any:
+        c, s = ca.cos(a), ca.sin(a)
+        return ca.vertcat(ca.horzcat(c, -s, 0), ca.horzcat(s, c, 0), ca.horzcat(0, 0, 1))
+
+    c, s = ca.cos(tilt), ca.sin(tilt)
+    ry = ca.vertcat(ca.horzcat(c, 0, s), ca.horzcat(0, 1, 0), ca.horzcat(-s, 0, c))
+    return rz(azimuth) @ ry @ rz(torsion - azimuth)
+
+
+def holes_sym(p: dict[str, Any]) -> tuple[Any, Any]:
+    """Platform and base holes (3 x 6, columns) of a design whose parameters may be symbolic.
+
+    Same parametrisation as :func:`csjm_opt.design.geometry.design_holes` (hexagon on a circle of
+    radius r with chord 1-2 spanning gamma, rotated by theta0, at height +oo_a / -oo_b; per-hole
+    offsets; or free hole coordinates). Chords ``*_d12_m`` / ``*_d23_m`` must be numbers here.
+
+    Parameters
+    ----------
+    p : dict
+        Every parameter of the design (paper values filled in), numbers or CasADi symbols.
+
+    Returns
+    -------
+    A, B : casadi.SX, shape (3, 6)
+    """
+    out = []
+    for body, letter, height in (("platform", "A", "oo_a_m"), ("base", "B", "oo_b_m")):
+        if f"{body}_holes" in p:
+            xyz = ca.SX(np.asarray(p[f"{body}_holes"], float).T)
+        else:
+            if f"{body}_radius_m" in p:
+                r, gamma = p[f"{body}_radius_m"], p[f"{body}_gamma_deg"] * math.pi / 180
+            else:
+                d12, d23 = p[f"{body}_d12_m"], p[f"{body}_d23_m"]
+                if isinstance(d12, ca.SX) or isinstance(d23, ca.SX):
+                    raise DesignError("chords cannot be optimised: optimise the radius and gamma instead",
+                                      f"{body}_d12_m")
+                r, gamma = hexagon.circle_from_chords(float(d12), float(d23))
+            theta0 = p[f"{body}_theta0_deg"] * math.pi / 180
+            z = p[height] if body == "platform" else -p[height]
+            cols = []
+            for m in range(3):
+                for sign in (-1, 1):
+                    a = theta0 + 2 * math.pi / 3 * m + sign * gamma / 2
+                    cols.append(ca.vertcat(r * ca.cos(a), r * ca.sin(a), z))
+            xyz = ca.horzcat(*cols)
+        offsets = ca.vertcat(*[ca.horzcat(*[p.get(f"{letter}{i + 1}_d{ax}_m", 0.0) for i in range(6)])
+                               for ax in "xyz"])
+        out.append(xyz + offsets)
+    return out[0], out[1]
+
+
+@dataclasses.dataclass
+class Problem:
+    """A built NLP with its start, bounds and parameter values, and what is needed to read its solution."""
+
+    solver: Any
+    x0: np.ndarray
+    p: np.ndarray
+    lbx: np.ndarray
+    ubx: np.ndarray
+    lbg: np.ndarray
+    ubg: np.ndarray
+    n_design: int
+    objective_index: int
+    design_of: Any        # casadi Function: u -> design vector (natural units)
+    constraints_of: Any   # casadi Function: x, p -> g
+    n_slots: int = 0      # orientation slots (the pose constraints come first, slot by slot)
+
+
+@dataclasses.dataclass
+class _Built:
+    solver: Any
+    design: Any
+    design_of: Any
+    constraints_of: Any
+    lbg: np.ndarray
+    ubg: np.ndarray
+    n_slots: int
+    n_contacts: int
+
+
+def _quantity_values(settings: OptimiseSettings, epsilon: dict[str, float]) -> dict[str, float]:
+    req = settings.requirements
+    values = {"stiffness": req.min_stiffness_Nm_per_rad, "tension_margin": req.tension_margin_N,
+              "range": req.range_scale, "size": _NO_SIZE_LIMIT_M}
+    values.update(epsilon)
+    return values
+
+
+@functools.lru_cache(maxsize=16)
+def pose_constraints(n_loads: int, exit_limit: bool) -> Any:
+    """Constraints at one orientation, as a CasADi function (built once, mapped over orientations).
+
+    Inputs: ``A``, ``B`` (3 x 6), ``rig`` = [k, t_min, t_max, mass, com_z, g_x, g_y, g_z],
+    ``q`` = [margin, lambda, s, cos(exit limit)], ``ang`` = [tilt, azimuth, torsion] at scale 1,
+    ``load`` (3 x m), ``T`` (6 (m - 1), scaled by t_max). Output ``g`` (all >= 0 but the
+    equilibrium rows, == 0) and ``T0`` (the stiffness load's tensions).
+
+    Parameters
+    ----------
+    n_loads : int
+        Loads m of the set (row 0 the stiffness load).
+    exit_limit : bool
+        Include the exit-angle rows.
+
+    Returns
+    -------
+    casadi.Function
+    """
+    A, B = ca.SX.sym("A", 3, 6), ca.SX.sym("B", 3, 6)
+    rig, q, ang = ca.SX.sym("rig", 8), ca.SX.sym("q", 4), ca.SX.sym("ang", 3)
+    loads = ca.SX.sym("load", 3, n_loads)
+    tv = ca.SX.sym("T", 6 * (n_loads - 1))
+    f = build_functions()
+    k, t_min, t_max, mass, com_z = rig[0], rig[1], rig[2], rig[3], rig[4]
+    mu, lam, s_range, cos_exit = q[0], q[1], q[2], q[3]
+    R = rotation_sym(s_range * ang[0], ang[1], s_range * ang[2])
+    J = f["jacobian"](R, A, B)
+    tau_w = f["weight_moment"](R, mass, ca.vertcat(0, 0, com_z), rig[5:8])[0]
+    t_mid = 0.5 * (t_min + t_max) * ca.DM.ones(6)
+    T0 = t_mid + J @ ca.solve(J.T @ J, -(loads[:, 0] + tau_w) - J.T @ t_mid)
+    out = [(T0 - t_min - mu) / MARGIN_SCALE_N, (t_max - mu - T0) / MARGIN_SCALE_N]
+    M = (f["stiffness"](R, T0, k * ca.DM.ones(6), A, B) - lam * ca.DM.eye(3)) / STIFFNESS_SCALE_NM_PER_RAD
+    out.append(ca.vertcat(M[0, 0], M[1, 1], M[2, 2], M[0, 0] * M[1, 1] - M[0, 1] ** 2,
+                          M[0, 0] * M[2, 2] - M[0, 2] ** 2, M[1, 1] * M[2, 2] - M[1, 2] ** 2, ca.det(M)))
+    for kk in range(1, n_loads):
+        T = tv[6 * (kk - 1):6 * kk] * t_max
+        out += [(T - t_min - mu) / MARGIN_SCALE_N, (t_max - mu - T) / MARGIN_SCALE_N,
+                (J.T @ T + loads[:, kk] + tau_w) / MOMENT_SCALE_NM]
+    if exit_limit:
+        C = B - R @ A                                       # cables, platform to base, in {B}
+        U = C / ca.repmat(ca.sqrt(ca.sum1(C * C)), 3, 1)
+        out += [-(R[:, 2].T @ U).T - cos_exit, -U[2, :].T - cos_exit]
+    return ca.Function("pose_constraints", [A, B, rig, q, ang, loads, tv], [ca.vertcat(*out), T0],
+                       ["A", "B", "rig", "q", "ang", "load", "T"], ["g", "T0"])
+
+
+def _pose_bounds(n_loads: int, exit_limit: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper bounds of :func:`pose_constraints`'s ``g``."""
+    lo = [np.zeros(12 + 7)]
+    hi = [np.full(12 + 7, np.inf)]
+    for _ in range(1, n_loads):
+        lo += [np.zeros(12), np.zeros(3)]
+        hi += [np.full(12, np.inf), np.zeros(3)]
+    if exit_limit:
+        lo.append(np.zeros(12))
+        hi.append(np.full(12, np.inf))
+    return np.concatenate(lo), np.concatenate(hi)
+
+
+def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[str, float],
+                  contacts: list[Contact], epsilon: dict[str, float],
+                  objective_start: float | None = None) -> Problem:
+    """The NLP on the orientation set ``angles`` from ``start`` (see the module docstring).
+
+    The solver is built once per process for a number of orientation and contact slots
+    (rounded up to :data:`SLOT_STEP`) and reused: orientations, contacts and held values are its
+    parameters.
+
+    Parameters
+    ----------
+    settings : OptimiseSettings
+        Variables and bounds, fixed parameters, requirements, objective.
+    angles : ndarray, shape (N, 3)
+        Tilt, azimuth, torsion (rad) of the orientations at range scale 1.
+    start : dict of str to float
+        Initial values of the optimised parameters.
+    contacts : list of Contact
+        Cable distances to keep, at fixed closest points.
+    epsilon : dict of str to float
+        Quantities held at a value instead of their requirement (Pareto front).
+    objective_start : float, optional
+        Initial value of the objective's variable (natural units).
+
+    Returns
+    -------
+    Problem
+    """
+    n_slots = -(-angles.shape[0] // SLOT_STEP) * SLOT_STEP
+    n_contacts = max(-(-len(contacts) // SLOT_STEP) * SLOT_STEP, MIN_CONTACT_SLOTS)
+    built = _built_for(settings, n_slots, n_contacts)
+    padded = np.vstack([angles, np.zeros((n_slots - angles.shape[0], 3))])
+    values = _quantity_values(settings, epsilon)
+    p_q = [values["tension_margin"], values["stiffness"], values["range"], values["size"]]
+    p_c = np.zeros((n_contacts, _CONTACT_WIDTH))
+    p_c[:, -1] = -1.0                                   # unused slot: needs a negative distance
+    link, req = settings.link, settings.requirements
+    for row, c in zip(p_c, contacts):
+        row[:3] = padded[c.orientation]
+        row[3 + c.i] = 1.0
+        row[15], row[16] = c.s, c.t
+        if c.kind == "pair":
+            row[9 + c.j] = 1.0
+            row[18] = req.min_cable_distance_m
+        else:
+            row[17] = link.rod_length_m if c.kind == "rod" else 0.0
+            row[18] = req.min_link_clearance_m + (link.rod_radius_m if c.kind == "rod" else link.ball_radius_m)
+    p = np.concatenate([padded.ravel(), p_q, p_c.ravel()])
+    names, lo, hi = settings.names, settings.lower, settings.upper
+    obj = settings.objective
+    u0 = np.array([(start[n] - lo[k]) / (hi[k] - lo[k]) for k, n in enumerate(names)])
+    q_lo, q_hi = _objective_bounds(settings, _SCALE[obj])
+    q0 = objective_start if objective_start is not None else {"stiffness": req.min_stiffness_Nm_per_rad,
+                                                              "tension_margin": req.tension_margin_N,
+                                                              "range": 0.5, "size": SIZE_SCALE_M}[obj]
+    q0 = min(max(q0 / _SCALE[obj], q_lo), q_hi)
+    loads = np.asarray(req.loads, float)
+    n_t = 6 * (loads.shape[0] - 1) * n_slots
+    x0 = np.concatenate([u0, [q0], _initial_tensions(built.design, u0, q0, np.array(p_q), padded, loads)])
+    lbx = np.concatenate([np.zeros(len(names)), [q_lo], np.zeros(n_t)])
+    ubx = np.concatenate([np.ones(len(names)), [q_hi], np.full(n_t, np.inf)])
+    return Problem(solver=built.solver, x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=built.lbg, ubg=built.ubg,
+                   n_design=len(names), objective_index=len(names), design_of=built.design_of,
+                   constraints_of=built.constraints_of, n_slots=n_slots)
+
+
+_SCALE = {"stiffness": STIFFNESS_SCALE_NM_PER_RAD, "tension_margin": MARGIN_SCALE_N, "range": 1.0,
+          "size": SIZE_SCALE_M}
+#: Orientation and contact slots come in multiples of this (a solver is reused for all sizes below).
+SLOT_STEP = 16
+#: Contact slots of every solver (a round with more builds a larger one).
+MIN_CONTACT_SLOTS = 32
+_CONTACT_WIDTH = 19    # angles (3), one-hot cable i (6), one-hot cable j (6), s, t, rod length, need
+_NO_SIZE_LIMIT_M = 1e3
+
+
+_CACHE: dict[tuple[str, int, int], _Built] = {}
+_CACHE_SIZE = 8
+
+
+def _built_for(settings: OptimiseSettings, n_slots: int, n_contacts: int) -> _Built:
+    """The cached solver of settings with this content (a worker process reuses it across tasks)."""
+    key = (json.dumps([settings.names, settings.lower, settings.upper, settings.base, settings.requirements.as_dict(),
+                       settings.objective, settings.pareto_with, dataclasses.asdict(settings.link),
+                       settings.gravity_B_m_per_s2], sort_keys=True, default=str), n_slots, n_contacts)
+    if key not in _CACHE:
+        if len(_CACHE) >= _CACHE_SIZE:
+            _CACHE.pop(next(iter(_CACHE)))
+        _CACHE[key] = _built(settings, n_slots, n_contacts)
+    return _CACHE[key]
+
+
+def clear_cache() -> None:
+    """Forget the built solvers (benchmarks time fresh runs).
+
+    Returns
+    -------
+    None
+    """
+    _CACHE.clear()
+
+
+def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int) -> _Built:
+    """The solver for ``n_slots`` orientations and ``n_contacts`` contacts."""
+    names, lo, hi = settings.names, settings.lower, settings.upper
+    n_d = len(names)
+    req = settings.requirements
+    loads = np.asarray(req.loads, float)
+    n_l = loads.shape[0]
+    exit_limit = req.max_exit_angle_deg < 180
+    obj = settings.objective
+    u, q_var = ca.SX.sym("u", n_d), ca.SX.sym("q")
+    pq = ca.SX.sym("pq", 4)
+    held = {"tension_margin": pq[0], "stiffness": pq[1], "range": pq[2], "size": pq[3]}
+    q = {k: (q_var * _SCALE[k] if k == obj else v) for k, v in held.items()}
+    p: dict[str, Any] = {**PAPER_DESIGN, **settings.base}
+    for k, name in enumerate(names):
+        p[name] = lo[k] + u[k] * (hi[k] - lo[k])
+    A, B = holes_sym(p)
+    rig = ca.vertcat(p["cable_stiffness_N_per_m"], p["t_min_N"], p["t_max_N"], p["platform_mass_kg"],
+                     p["com_z_m"], *settings.gravity_B_m_per_s2)
+    qv = ca.vertcat(q["tension_margin"], q["stiffness"], q["range"], math.cos(math.radians(req.max_exit_angle_deg)))
+    design = ca.Function("design", [u, q_var, pq], [A, B, rig, qv])
+    pc = ca.SX.sym("pc", _CONTACT_WIDTH, n_contacts)
+    fixed: list[Any] = []
+    for c in range(n_contacts):
+        row = pc[:, c]
+        R = rotation_sym(q["range"] * row[0], row[1], q["range"] * row[2])
+        top, bottom = R @ A, B
+        point = (top + row[15] * (bottom - top)) @ row[3:9]
+        other = (top + row[16] * (bottom - top)) @ row[9:15] \
+            + ca.vertcat(0, 0, -row[17] * (1.0 - row[16]))
+        fixed.append((ca.sqrt(ca.sumsqr(point - other) + 1e-18) - row[18]) / LENGTH_SCALE_M)
+    for H in (A, B):
+        for a, b in PAIRS:
+            fixed.append((ca.norm_2(H[:, a] - H[:, b]) - req.min_hole_spacing_m) / LENGTH_SCALE_M)
+    if "size" in (obj, settings.pareto_with):
+        for H in (A, B):
+            fixed.append((q["size"] ** 2 - ca.sum1(H[:2, :] ** 2).T) / SIZE_SCALE_M ** 2)
+    g_fixed = ca.Function("fixed", [u, q_var, pq, pc], [ca.vertcat(*fixed)])
+
+    n_t = 6 * (n_l - 1) * n_slots
+    x = ca.MX.sym("x", n_d + 1 + n_t)
+    par = ca.MX.sym("p", 3 * n_slots + 4 + _CONTACT_WIDTH * n_contacts)
+    ux, qx = x[:n_d], x[n_d]
+    ang = ca.reshape(par[:3 * n_slots], 3, n_slots)
+    pq_m = par[3 * n_slots:3 * n_slots + 4]
+    pc_m = ca.reshape(par[3 * n_slots + 4:], _CONTACT_WIDTH, n_contacts)
+    A_m, B_m, rig_m, q_m = design(ux, qx, pq_m)
+    F = pose_constraints(n_l, exit_limit).map(n_slots, "serial")
+    g_pose, _ = F(A_m, B_m, rig_m, q_m, ang, ca.DM(loads.T), ca.reshape(x[n_d + 1:], 6 * (n_l - 1), n_slots))
+    g = ca.vertcat(ca.vec(g_pose), g_fixed(ux, qx, pq_m, pc_m))
+    lo_pose, hi_pose = _pose_bounds(n_l, exit_limit)
+    n_fixed = g_fixed.size1_out(0)
+    lbg = np.concatenate([np.tile(lo_pose, n_slots), np.zeros(n_fixed)])
+    ubg = np.concatenate([np.tile(hi_pose, n_slots), np.full(n_fixed, np.inf)])
+    sign = -1.0 if obj != "size" else 1.0
+    opts: dict[str, Any] = {"ipopt": {"print_level": 0, "max_iter": MAX_ITER, "tol": 1e-9, "acceptable_tol": 1e-7,
+                                      "constr_viol_tol": 1e-9, "mu_strategy": "adaptive", "sb": "yes",
+                                      "hessian_approximation": HESSIAN}, "print_time": False, "expand": True}
+    nlp: dict[str, Any] = {"x": x, "p": par, "f": sign * qx, "g": g}
+    solver = ca.nlpsol("csjm_optimise", "ipopt", nlp, opts)
+    design_of = ca.Function("design_of", [u], [ca.vertcat(*[p[n] for n in names])])
+    return _Built(solver=solver, design=design, design_of=design_of,
+                  constraints_of=ca.Function("constraints_of", [x, par], [g]), lbg=lbg, ubg=ubg,
+                  n_slots=n_slots, n_contacts=n_contacts)
+
+
+def _objective_bounds(settings: OptimiseSettings, scale: float) -> tuple[float, float]:
+    req, obj = settings.requirements, settings.objective
+    if obj == "stiffness":
+        return req.min_stiffness_Nm_per_rad / scale, math.inf
+    if obj == "tension_margin":
+        return req.tension_margin_N / scale, math.inf
+    if obj == "range":
+        return 1e-3, 1.0
+    return 0.0, math.inf
+
+
+def _initial_tensions(design: Any, u0: np.ndarray, q0: float, pq: np.ndarray, angles: np.ndarray,
+                      loads: np.ndarray) -> np.ndarray:
+    """Least-squares tensions of every load k >= 1 at the start, clipped to the tension box, scaled."""
+    n_l, n_o = loads.shape[0], angles.shape[0]
+    if n_l == 1:
+        return np.zeros(0)
+    A, B, rig, q = (np.array(v) for v in design(u0, q0, pq))
+    F = pose_constraints(n_l, False).map(n_o, "serial")
+    out = []
+    for k in range(1, n_l):
+        rows = np.repeat(loads[k:k + 1], n_l, axis=0)
+        _, T0 = F(A, B, rig, q, angles.T, rows.T, np.zeros((6 * (n_l - 1), n_o)))
+        out.append(np.clip(np.array(T0), rig[1, 0], rig[2, 0]) / rig[2, 0])
+    return np.stack(out, axis=1).transpose(2, 1, 0).reshape(-1)
