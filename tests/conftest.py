@@ -33,7 +33,9 @@ _WARM_UP = (
     "p = co.plan_tensions(rig, R)\n"
     "co.solve_equilibrium(rig, co.rest_lengths_for(rig, R, p.tensions_N), R_init=R)\n"
     "K = co.stiffness(rig, R, p.tensions_N)\n"
-    "simulate(rig, StiffnessShapingController(rig, R, K), Constant(np.zeros(3)), 0.002, 1e-3)\n",
+    "simulate(rig, StiffnessShapingController(rig, R, K), Constant(np.zeros(3)), 0.002, 1e-3)\n"
+    "co.MeasurementLog.from_text('sample,cycle,l1,l2,l3,l4,l5,l6,tau_x,tau_y,tau_z,rx,ry,rz\\n'\n"
+    "                            '0,0,.1,.1,.1,.1,.1,.1,0,0,0,0,0,0\\n1,0,.1,.1,.1,.1,.1,.1,0.5,0,0,1e-3,0,0\\n')\n",
 )
 
 
