@@ -86,6 +86,7 @@ class Plant:
     friction_platform_fraction: float = 0.1    # rho: compliance share of the platform-side segment
     friction_start: float = 0.0                # band position at a cycle's first row (0 settled, -1 pulled in)
     friction_coulomb_N: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(6))   # F_i at the guide
+    joint_friction_Nm: float = 0.0             # Coulomb friction moment of the ball joint, per axis of {A}
     link_compliance_rad_per_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((3, 3)))
     sensor_bias_A_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
     tracker_rotation_B: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))   # Q_B
