@@ -60,16 +60,21 @@ class Engine:
         self.F0 = np.array(self.m.tendon_frictionloss, float)
         self.M0 = np.array(self.m.dof_frictionloss, float)
         self.frictional = bool(self.capstan or np.any(self.F0 > 0) or np.any(self.M0 > 0))
-        self.busy = self.link or self.h != 0 or self.capstan      # forces to update every step
+        self.busy_always = self.link or self.h != 0 or self.capstan      # forces to update every step
+        self.busy = self.busy_always
+        self.g_B = np.asarray(rig.gravity_B_m_per_s2, float)
         self.l = np.asarray(l0, float).copy()
         self.tau = np.zeros(3)
+        self.mr = np.zeros(3)
         self.t = 0.0
 
     # ------------------------------------------------------------ forces
-    def set_inputs(self, l: np.ndarray, tau: np.ndarray) -> None:
-        """Rest lengths (through the tendon springs' dead band) and the load on the tool."""
+    def set_inputs(self, l: np.ndarray, tau: np.ndarray, mr: np.ndarray) -> None:
+        """Rest lengths (the tendon springs' dead band), the load on the tool, its dead weights' ``m p``."""
         self.l = np.asarray(l, float).copy()
         self.tau = np.asarray(tau, float).copy()
+        self.mr = np.asarray(mr, float).copy()
+        self.busy = self.busy_always or bool(np.any(self.mr != 0))
         self.m.tendon_lengthspring[:, 1] = self.l
 
     def applied(self) -> tuple[np.ndarray, np.ndarray]:
@@ -78,12 +83,16 @@ class Engine:
         e = np.maximum(np.asarray(d.ten_length) - self.l, 0.0)
         extra = self.k * self.h * e ** 2
         qfrc = np.zeros(self.nv)
-        qfrc[self.tool] += self.tau          # the load on the tool, fixed in its frame
+        R_link = _rotation(d.qpos[4:8]) if self.link else np.eye(3)
+        tau = self.tau
+        if np.any(self.mr != 0):             # dead weights: (m p) x (R_tool^T g)
+            R_tool = _rotation(d.qpos[:4]) @ R_link
+            tau = tau + np.cross(self.mr, R_tool.T @ self.g_B)
+        qfrc[self.tool] += tau               # the load on the tool, in its frame
         if self.h:
             qfrc -= np.asarray(d.ten_J).reshape(6, self.nv).T @ extra
         if self.link:                         # the load is external: it also acts on the platform's dofs
-            R_link = _rotation(d.qpos[4:8])
-            qfrc[0:3] += R_link @ self.tau
+            qfrc[0:3] += R_link @ tau
             qfrc[3:6] -= self.K_link @ so3.log(R_link)      # the link's spring (internal)
         return qfrc, self.k * e + extra
 
@@ -115,17 +124,17 @@ class Engine:
                 mujoco.mj_step2(m, d)
         self.t += steps * m.opt.timestep
 
-    def ramp(self, l: np.ndarray, tau: np.ndarray) -> None:
-        """Move the inputs from the current ones to ``(l, tau)`` over the plant's ``ramp_s``."""
-        l0, tau0 = self.l.copy(), self.tau.copy()
+    def ramp(self, l: np.ndarray, tau: np.ndarray, mr: np.ndarray) -> None:
+        """Move the inputs from the current ones to ``(l, tau, mr)`` over the plant's ``ramp_s``."""
+        l0, tau0, mr0 = self.l.copy(), self.tau.copy(), self.mr.copy()
         steps = max(1, int(round(self.mp.ramp_s / self.m.opt.timestep / RAMP_CHUNKS)))
         for q in range(1, RAMP_CHUNKS + 1):
             f = q / RAMP_CHUNKS
-            self.set_inputs(l0 + (l - l0) * f, tau0 + (tau - tau0) * f)
+            self.set_inputs(l0 + (l - l0) * f, tau0 + (tau - tau0) * f, mr0 + (mr - mr0) * f)
             self.run(steps)
-        self.set_inputs(l, tau)
+        self.set_inputs(l, tau, mr)
 
-    def relaxed_start(self, R: np.ndarray, l: np.ndarray, tau: np.ndarray) -> None:
+    def relaxed_start(self, R: np.ndarray, l: np.ndarray, tau: np.ndarray, mr: np.ndarray) -> None:
         """Start at ``R`` and settle without friction (nothing stuck), then switch friction on."""
         d = self.d
         d.qpos[:] = 0.0
@@ -133,7 +142,7 @@ class Engine:
         if self.link:
             d.qpos[4] = 1.0
         d.qvel[:] = 0.0
-        self.set_inputs(l, tau)
+        self.set_inputs(l, tau, mr)
         F, M, fr = self.F0.copy(), self.M0.copy(), self.frictional
         self.m.tendon_frictionloss[:] = 0.0
         self.m.dof_frictionloss[:] = 0.0

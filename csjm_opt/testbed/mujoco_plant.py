@@ -140,7 +140,7 @@ class MujocoPlant:
         return self.plant.measured_pose(R_true)
 
     def respond(self, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray, cycle: np.ndarray,
-                R_init: np.ndarray) -> np.ndarray:
+                R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None) -> np.ndarray:
         """True poses of the measured body (n, 3, 3), rows in time order (as :meth:`Plant.respond`).
 
         Parameters
@@ -150,6 +150,8 @@ class MujocoPlant:
         cycle : (n,) int array
         R_init : (n, 3, 3) array
             Start poses; used at the log's first row (and each cycle's without persistence).
+        load_first_moment_A_kgm : (n, 3) array, optional
+            Dead weights on the tool, ``mass * point`` in {A} (as :meth:`Plant.respond`).
 
         Returns
         -------
@@ -160,15 +162,16 @@ class MujocoPlant:
         NoEquilibrium
             A row does not settle (or the friction LP cannot certify it).
         """
-        return np.stack([r.R_tool for r in self.respond_rows(rest_lengths_m, tau_ext_A_Nm, cycle, R_init)])
+        rows = self.respond_rows(rest_lengths_m, tau_ext_A_Nm, cycle, R_init, load_first_moment_A_kgm)
+        return np.stack([r.R_tool for r in rows])
 
     def respond_rows(self, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray, cycle: np.ndarray,
-                     R_init: np.ndarray) -> list[MujocoRow]:
+                     R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None) -> list[MujocoRow]:
         """Like :meth:`respond`, with each row's platform pose, tensions and friction certificate.
 
         Parameters
         ----------
-        rest_lengths_m, tau_ext_A_Nm, cycle, R_init
+        rest_lengths_m, tau_ext_A_Nm, cycle, R_init, load_first_moment_A_kgm
             As :meth:`respond`.
 
         Returns
@@ -185,6 +188,8 @@ class MujocoPlant:
         l_all = np.asarray(rest_lengths_m, float)
         tau_all = np.asarray(tau_ext_A_Nm, float)
         cycle = np.asarray(cycle)
+        mr_all = (np.zeros((len(cycle), 3)) if load_first_moment_A_kgm is None
+                  else np.asarray(load_first_moment_A_kgm, float).reshape(len(cycle), 3))
         engine = Engine(self, l_all[0])
         rows: list[MujocoRow] = []
         slip = np.zeros(6)
@@ -193,9 +198,9 @@ class MujocoPlant:
             if first:
                 slip[:] = 0.0
             if i == 0 or (first and not self.persistent):
-                engine.relaxed_start(np.asarray(R_init[i], float), l_all[i], tau_all[i])
+                engine.relaxed_start(np.asarray(R_init[i], float), l_all[i], tau_all[i], mr_all[i])
             else:
-                engine.ramp(l_all[i] + slip, tau_all[i])
+                engine.ramp(l_all[i] + slip, tau_all[i], mr_all[i])
             row = engine.settle(i)
             rows.append(row)
             p = self.plant
