@@ -86,13 +86,16 @@ class MujocoPlant:
         Joint speed below which the engine has settled.
     noslip_iterations : int
         MuJoCo's noslip solver iterations (0: soft friction creeps).
+    noslip_tolerance : float
+        Its tolerance (MuJoCo's default 1e-6 leaves a stuck tendon creeping at ~2e-6 rad/s).
     """
 
     plant: Plant
     ramp_s: float = 0.3
     max_settle_s: float = 6.0
     speed_tol_rad_per_s: float = 1e-7
-    noslip_iterations: int = 30
+    noslip_iterations: int = 100
+    noslip_tolerance: float = 1e-12
 
     def __post_init__(self) -> None:
         if self.plant.eyelet_radius_m > 0:
