@@ -93,7 +93,7 @@ class MujocoPlant:
     plant: Plant
     ramp_s: float = 0.3
     max_settle_s: float = 6.0
-    speed_tol_rad_per_s: float = 1e-7
+    speed_tol_rad_per_s: float = 1e-6
     noslip_iterations: int = 100
     noslip_tolerance: float = 1e-12
 

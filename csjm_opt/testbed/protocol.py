@@ -219,7 +219,9 @@ def check_protocol(rig: Rig, protocol: Protocol) -> None:
         if T[k].max() > rig.t_max_N:
             raise DataFileError(f"outside the rig's limits: cable {int(T[k].argmax()) + 1} at {T[k].max():.1f} N "
                                 f"> t_max = {rig.t_max_N:g} N", where, line)
-        if protocol.planned_R is not None:
+    if protocol.planned_R is not None:
+        for k in range(len(protocol)):
+            line = int(protocol.lines[k])
             gap = float(so3.angle_between(R[k], protocol.planned_R[k]))
             if gap > PLANNED_POSE_TOL_RAD:
                 raise DataFileError(f"the planned pose is {gap:.3f} rad from this rig's equilibrium for the row's "
