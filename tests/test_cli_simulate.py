@@ -117,3 +117,20 @@ def test_dead_weight_rows_measure_the_weight_moment_at_the_reached_pose(rig):
     for i in range(1, len(log), 2):
         np.testing.assert_allclose(log.tau_ext_A_Nm[i], np.cross(0.2 * np.array([0.04, 0.0, 0.02]), log.R[i].T @ g),
                                    atol=1e-12)
+
+
+def test_after_starts_the_protocol_where_the_earlier_experiment_settled(rig, proto, tmp_path):
+    """With friction, running an earlier experiment first changes the protocol's poses; without, it does not."""
+    from csjm_opt.testbed import make_plant, simulate_experiment
+
+    earlier = simulate_experiment(rig, 2, np.random.default_rng(8), steps=2, noise=InstrumentNoise.none())
+    clean = InstrumentNoise.none()
+    for effect, differs in (("coulomb_friction", True), (None, False)):
+        truth = make_plant(rig, effect, 4.0, np.random.default_rng(9))
+        fresh = simulate_protocol(rig, proto, truth, noise=clean)
+        cont = simulate_protocol(rig, proto, truth, noise=clean, after=earlier)
+        gap = np.abs(fresh.rotvec_rad - cont.rotvec_rad).max()
+        assert (gap > 1e-4) if differs else (gap < 1e-9)
+    out = tmp_path / "after.csv"
+    earlier.to_csv(tmp_path / "earlier.csv")
+    assert main(["simulate", str(proto), "--after", str(tmp_path / "earlier.csv"), "-o", str(out)]) == 0
