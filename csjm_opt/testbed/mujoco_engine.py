@@ -151,10 +151,11 @@ class Engine:
                 mujoco.mj_step2(m, d)
         self.t += steps * m.opt.timestep
 
-    def ramp(self, l: np.ndarray, tau: np.ndarray, mr: np.ndarray) -> None:
-        """Move the inputs from the current ones to ``(l, tau, mr)`` over the plant's ``ramp_s``."""
+    def ramp(self, l: np.ndarray, tau: np.ndarray, mr: np.ndarray, seconds: float | None = None) -> None:
+        """Move the inputs to ``(l, tau, mr)`` over ``seconds`` (default the plant's ``ramp_s``)."""
         l0, tau0, mr0 = self.l.copy(), self.tau.copy(), self.mr.copy()
-        steps = max(1, int(round(self.mp.ramp_s / self.m.opt.timestep / RAMP_CHUNKS)))
+        seconds = self.mp.ramp_s if seconds is None else seconds
+        steps = max(1, int(round(seconds / self.m.opt.timestep / RAMP_CHUNKS)))
         for q in range(1, RAMP_CHUNKS + 1):
             f = q / RAMP_CHUNKS
             self.set_inputs(l0 + (l - l0) * f, tau0 + (tau - tau0) * f, mr0 + (mr - mr0) * f)

@@ -82,6 +82,9 @@ class MujocoPlant:
         The effects (true rig, friction, hardening, link, readings).
     ramp_s, max_settle_s : float
         Time over which a row's inputs move; longest wait for rest.
+    cycle_ramp_s : float
+        Time over which the inputs move to a new cycle's first row on a plant with
+        friction (large moves: slow enough to stay quasi-static).
     speed_tol_rad_per_s : float
         Joint speed below which the engine has settled.
     noslip_iterations : int
@@ -94,6 +97,7 @@ class MujocoPlant:
     ramp_s: float = 0.3
     max_settle_s: float = 6.0
     speed_tol_rad_per_s: float = 1e-6
+    cycle_ramp_s: float = 2.0
     noslip_iterations: int = 100
     noslip_tolerance: float = 1e-12
 
@@ -110,6 +114,11 @@ class MujocoPlant:
     def effects(self) -> tuple[str, ...]:
         """Names of the injected effects."""
         return self.plant.effects
+
+    @property
+    def frictional_plant(self) -> bool:
+        """Whether the plant has friction (cable or joint)."""
+        return self.plant.has_friction
 
     @property
     def persistent(self) -> bool:
@@ -203,7 +212,8 @@ class MujocoPlant:
             if i == 0 or (first and not self.persistent):
                 engine.relaxed_start(np.asarray(R_init[i], float), l_all[i], tau_all[i], mr_all[i])
             else:
-                engine.ramp(l_all[i] + slip, tau_all[i], mr_all[i])
+                engine.ramp(l_all[i] + slip, tau_all[i], mr_all[i],
+                            self.cycle_ramp_s if first and self.frictional_plant else None)
             row = engine.settle(i)
             rows.append(row)
             p = self.plant

@@ -64,7 +64,7 @@ SUBSTEPS_ROW = 8
 #: Stiffness of a stuck ball joint (N m/rad; joint friction) and the lever (m) turning SMOOTH_N into a moment.
 JOINT_STICK_NM_PER_RAD = 1e4
 JOINT_SMOOTH_M = 0.01
-SUBSTEPS_NEW_CYCLE = 8
+SUBSTEPS_NEW_CYCLE = 16
 
 
 def _softplus(z: np.ndarray, w: float) -> np.ndarray:
