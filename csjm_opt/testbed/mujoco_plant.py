@@ -46,6 +46,8 @@ from .plant import Plant
 
 #: The plants a study or ``csjm simulate`` can use.
 PLANTS = ("quasi-static", "mujoco")
+#: Effects of the quasi-static testbed the MuJoCo plant cannot realise.
+MUJOCO_UNSUPPORTED = ("eyelet_radius",)
 
 
 @dataclasses.dataclass(frozen=True)
