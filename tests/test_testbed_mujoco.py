@@ -158,3 +158,16 @@ def test_mujoco_friction_agrees_with_the_quasi_static_play_operator(rig, cycle):
         size = so3.angle_between(R_n[i], R_q[i])
         assert size > 3e-3
         assert so3.angle_between(R_m[i], R_q[i]) < 0.1 * size
+
+
+def test_joint_friction_agrees_between_the_plants(rig, cycle):
+    """Ball-joint friction: MuJoCo's per-axis frictionloss and the quasi-static per-axis play operator."""
+    args = _args(cycle)
+    plant = make_plant(rig, "joint_friction", 3.0, np.random.default_rng(7))
+    R_m = as_mujoco(plant).respond(*args)
+    R_q = plant.respond(*args)
+    R_n = Plant.nominal(rig).respond(*args)
+    for i in range(1, len(R_m)):
+        size = so3.angle_between(R_n[i], R_q[i])
+        assert size > 1e-3
+        assert so3.angle_between(R_m[i], R_q[i]) < 0.1 * size
