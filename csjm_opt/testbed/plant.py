@@ -48,6 +48,7 @@ Effects outside the diagnosis's vocabulary (to test that it says so):
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
@@ -218,6 +219,14 @@ class Plant:
             R_out[idx] = R
         return R_out
 
+    @functools.cached_property
+    def _has_link(self) -> bool:
+        return bool(np.any(np.asarray(self.link_compliance_rad_per_Nm) != 0))
+
+    @functools.cached_property
+    def _cable_friction(self) -> bool:
+        return bool(np.any(self.friction_mu_beta > 0) or np.any(np.asarray(self.friction_coulomb_N) > 0))
+
     @property
     def _slipping(self) -> bool:
         return bool(np.isfinite(self.drum_slip_threshold_N) and self.drum_slip_compliance_m_per_N > 0)
@@ -251,8 +260,11 @@ class Plant:
         rig = self.rig
         mr = rig.platform_mass_kg * np.asarray(rig.com_A_m) + mr_load
         tau_m = tau_ext + kin.weight_moment(R_m, mr, np.asarray(rig.gravity_B_m_per_s2))
-        E = so3.exp(tau_m @ self.link_compliance_rad_per_Nm)     # C symmetric
-        R_c = R_m @ np.swapaxes(E, 1, 2)
+        if self._has_link:
+            E = so3.exp(tau_m @ self.link_compliance_rad_per_Nm)     # C symmetric
+            R_c = R_m @ np.swapaxes(E, 1, 2)
+        else:
+            E, R_c = None, R_m
         c, J = kin.cable_terms(R_c, np.asarray(rig.platform_holes_A_m), self._base_holes(R_c))
         k = np.asarray(rig.cable_stiffness_N_per_m)
         e = c - l
@@ -260,7 +272,7 @@ class Plant:
         u_new = np.empty_like(u)
         u_new[:, :6] = c - self.friction_platform_fraction * T_p / k
         T = T_p * (1.0 + self.hardening_per_m * np.maximum(e, 0.0))
-        g = np.einsum("nij,ni->nj", J, T) + np.einsum("nij,nj->ni", E, tau_m)
+        g = np.einsum("nij,ni->nj", J, T) + (tau_m if E is None else np.einsum("nij,nj->ni", E, tau_m))
         if self.joint_friction_Nm > 0:     # per axis of {A}: stuck to an anchor pose, slips at the bound
             a = u[:, 6:]
             z = so3.log(np.swapaxes(so3.exp(np.nan_to_num(a)), 1, 2) @ R_c)
@@ -275,9 +287,8 @@ class Plant:
         return g, u_new
 
     def _friction(self, c, l, e, k, u, smooth_N):
-        T_free = k * e
-        if not self.has_friction:
-            return T_free
+        if not self._cable_friction:
+            return k * e
         rho = self.friction_platform_fraction
         r = np.exp(self.friction_mu_beta)
         F = (1 - rho) * np.asarray(self.friction_coulomb_N, float)
