@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 
 import numpy as np
@@ -114,7 +115,12 @@ def run(args: argparse.Namespace) -> int:
     noise = InstrumentNoise.paper() if args.noise == "paper" else InstrumentNoise.none()
     t0 = time.perf_counter()
     after = MeasurementLog.from_csv(args.after) if args.after else None
-    log = simulate_protocol(rig, proto, plant, rng=rng, noise=noise, persistent=not args.relaxed, after=after)
+    from tqdm import tqdm
+
+    with tqdm(total=len(proto) + (len(after) if after is not None else 0), file=sys.stderr, unit="row",
+              desc=f"simulate ({args.plant})", disable=None) as bar:
+        log = simulate_protocol(rig, proto, plant, rng=rng, noise=noise, persistent=not args.relaxed, after=after,
+                                progress=bar.update)
     seconds = time.perf_counter() - t0
     path = atomic_write_text(args.output, log.to_text())
     summary = {"output": str(path), "protocol": str(args.protocol), "rows": len(log), "cycles": len(log.cycle_ids),

@@ -36,6 +36,7 @@ starts where the previous one settled; otherwise each cycle starts from its
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 
@@ -154,7 +155,8 @@ class MujocoPlant:
         return self.plant.measured_pose(R_true)
 
     def respond(self, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray, cycle: np.ndarray,
-                R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None) -> np.ndarray:
+                R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None,
+                progress: Callable[[int], object] | None = None) -> np.ndarray:
         """True poses of the measured body (n, 3, 3), rows in time order (as :meth:`Plant.respond`).
 
         Parameters
@@ -166,6 +168,8 @@ class MujocoPlant:
             Start poses; used at the log's first row (and each cycle's without persistence).
         load_first_moment_A_kgm : (n, 3) array, optional
             Dead weights on the tool, ``mass * point`` in {A} (as :meth:`Plant.respond`).
+        progress : callable, optional
+            Called with the number of rows just settled (e.g. ``tqdm.update``).
 
         Returns
         -------
@@ -176,16 +180,17 @@ class MujocoPlant:
         NoEquilibrium
             A row does not settle (or the friction LP cannot certify it).
         """
-        rows = self.respond_rows(rest_lengths_m, tau_ext_A_Nm, cycle, R_init, load_first_moment_A_kgm)
+        rows = self.respond_rows(rest_lengths_m, tau_ext_A_Nm, cycle, R_init, load_first_moment_A_kgm, progress)
         return np.stack([r.R_tool for r in rows])
 
     def respond_rows(self, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray, cycle: np.ndarray,
-                     R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None) -> list[MujocoRow]:
+                     R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None,
+                     progress: Callable[[int], object] | None = None) -> list[MujocoRow]:
         """Like :meth:`respond`, with each row's platform pose, tensions and friction certificate.
 
         Parameters
         ----------
-        rest_lengths_m, tau_ext_A_Nm, cycle, R_init, load_first_moment_A_kgm
+        rest_lengths_m, tau_ext_A_Nm, cycle, R_init, load_first_moment_A_kgm, progress
             As :meth:`respond`.
 
         Returns
@@ -218,6 +223,8 @@ class MujocoPlant:
                             self.cycle_ramp_s if first and self.frictional_plant else None)
             row = engine.settle(i)
             rows.append(row)
+            if progress is not None:
+                progress(1)
             p = self.plant
             if np.isfinite(p.drum_slip_threshold_N) and p.drum_slip_compliance_m_per_N > 0:
                 slip += np.maximum(row.tensions_N - p.drum_slip_threshold_N, 0.0) * p.drum_slip_compliance_m_per_N

@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from collections.abc import Callable
 
 import numpy as np
 
@@ -129,7 +130,8 @@ class Plant:
 
     # ------------------------------------------------------------ simulation
     def respond(self, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray, cycle: np.ndarray,
-                R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None) -> np.ndarray:
+                R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None,
+                progress: Callable[[int], object] | None = None) -> np.ndarray:
         """True poses of the measured body (n, 3, 3) for rows in time order (noise-free).
 
         Path-dependent plants (friction, drum slip) step the rows in time order,
@@ -152,6 +154,8 @@ class Plant:
         load_first_moment_A_kgm : (n, 3) array, optional
             Dead weights hung on the measured body, ``mass * point`` in {A}
             (kg m): their moment ``(m p) x (R^T g)`` adds to ``tau_ext_A_Nm``.
+        progress : callable, optional
+            Called with the number of rows just settled (e.g. ``tqdm.update``).
 
         Returns
         -------
@@ -217,6 +221,8 @@ class Plant:
             mr_prev[live] = mr
             l_prev[live] = l
             R_out[idx] = R
+            if progress is not None:
+                progress(len(idx))
         return R_out
 
     @functools.cached_property

@@ -30,7 +30,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import io
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -231,7 +231,8 @@ def check_protocol(rig: Rig, protocol: Protocol) -> None:
 def simulate_protocol(rig: Rig, protocol: str | Path | Protocol, effects: Any = None, severity: float = 1.0,
                       plant: str = "quasi-static", rng: np.random.Generator | None = None,
                       noise: InstrumentNoise | None = None, persistent: bool = True,
-                      after: MeasurementLog | None = None) -> MeasurementLog:
+                      after: MeasurementLog | None = None,
+                      progress: Callable[[int], object] | None = None) -> MeasurementLog:
     """Run a protocol on a testbed plant: the measured log (noise added, extra columns kept).
 
     Parameters
@@ -257,6 +258,8 @@ def simulate_protocol(rig: Rig, protocol: str | Path | Protocol, effects: Any = 
         logged moments as the loads, logged poses as starts), so the protocol starts
         from the state where that experiment settled (friction state included).
         Only the protocol's rows are returned.
+    progress : callable, optional
+        Called with the number of rows just settled (``after``'s rows included).
 
     Returns
     -------
@@ -288,14 +291,14 @@ def simulate_protocol(rig: Rig, protocol: str | Path | Protocol, effects: Any = 
     R_start = proto.planned_R if proto.planned_R is not None else _nominal(rig, proto)[0]
     if after is None:
         R_true = truth.respond(proto.rest_lengths_m, proto.tau_fixed_A_Nm, proto.cycle, R_start,
-                               proto.load_first_moment_A_kgm)
+                               proto.load_first_moment_A_kgm, progress)
     else:       # one history: the earlier experiment, then the protocol (its cycles kept distinct)
         m = len(after)
         cycle = np.r_[after.cycle, proto.cycle + int(after.cycle.max()) - int(proto.cycle.min()) + 1]
         R_true = truth.respond(np.vstack([after.rest_lengths_m, proto.rest_lengths_m]),
                                np.vstack([after.tau_ext_A_Nm, proto.tau_fixed_A_Nm]), cycle,
                                np.concatenate([after.R, R_start]),
-                               np.vstack([np.zeros((m, 3)), proto.load_first_moment_A_kgm]))[m:]
+                               np.vstack([np.zeros((m, 3)), proto.load_first_moment_A_kgm]), progress)[m:]
     tau_true = proto.tau_fixed_A_Nm + kin.weight_moment(R_true, proto.load_first_moment_A_kgm,
                                                        np.asarray(truth.rig.gravity_B_m_per_s2))
     tau_meas = truth.measured_moment(tau_true) + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)
