@@ -16,8 +16,8 @@ from typing import NoReturn
 from ..errors import CsjmError, UsageError
 
 #: Modules that register subcommands, in help order.
-COMMAND_MODULES = ("core", "demo", "shape", "identify", "plan_experiment", "diagnose", "sweep", "optimise",
-                   "report", "export_mjcf", "codegen")
+COMMAND_MODULES = ("core", "demo", "shape", "identify", "plan_experiment", "diagnose", "simulate", "sweep",
+                   "optimise", "report", "export_mjcf", "codegen")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -68,9 +68,16 @@ class StiffnessEstimate:
 
     @property
     def relative_half_width(self) -> float:
-        """Largest CI half-width of an entry of K over ``||K||_2`` (the precision rule's measure)."""
-        scale = float(np.linalg.norm(self.K, 2))
-        return float(np.max(self.ci_quantile * self.K_std) / scale) if scale > 0 else float("inf")
+        """Largest CI half-width of an entry of K over ``||K||_2``, the better of the linear fit and K_ml.
+
+        The precision rule's measure (:data:`MAX_RELATIVE_HALF_WIDTH`): K is determined when either
+        estimate determines it.
+        """
+        rel = []
+        for K, half in ((self.K, self.ci_quantile * self.K_std), (self.K_ml, self.ml_quantile * self.K_ml_std)):
+            scale = float(np.linalg.norm(K, 2))
+            rel.append(float(np.max(half) / scale) if scale > 0 and np.all(np.isfinite(half)) else float("inf"))
+        return min(rel)
 
     # ----------------------------------------------------------- self-checks
     @property

@@ -16,6 +16,7 @@ from .._validate import as_array, as_rotations
 from ..errors import IllConditionedData, InvalidInput
 from ..measurement.instruments import InstrumentNoise
 from ..model.numeric import Model
+from .crlb import sym_to_full
 from .curvature import model_curvature, weight_slopes
 from .estimate import StiffnessEstimate
 from .excitation import (
@@ -137,9 +138,17 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
     else:
         q = _quantile(ci_level, n - p)
         chi2 = float("nan")
-    half = q * np.sqrt(np.maximum(np.diag(fit["cov_K"]), 0.0))
-    scale = float(np.linalg.norm(fit["K"], 2))
-    rel = float(half.max() / scale) if scale > 0 else float("inf")
+    if tracker_sigma_rad is None:
+        tracker_sigma_rad = InstrumentNoise.paper().angle_sigma_rad
+    ml, curv_used = _fit_ml(dzeta, tau_load, R, model, rest_lengths_m, noise, curvature, tracker_sigma_rad)
+    ml_quantile = _quantile(ci_level, 0 if noise is not None else max(ml.dof, 1))
+    # K is determined when either estimate determines it: the linear fit (its residual-based interval
+    # grows with unmodelled curvature) or K_ml (its bound, curvature subtracted, noise as stated)
+    half_lin = q * np.sqrt(np.maximum(np.diag(fit["cov_K"]), 0.0))
+    half_ml = ml_quantile * np.sqrt(np.maximum(np.diag(sym_to_full(ml.crlb6)), 0.0))
+    rel_lin, rel_ml = _relative(half_lin, fit["K"]), _relative(half_ml, ml.K)
+    half, scale, rel = ((half_lin, float(np.linalg.norm(fit["K"], 2)), rel_lin) if rel_lin <= rel_ml
+                        else (half_ml, float(np.linalg.norm(ml.K, 2)), rel_ml))
     if not rel <= MAX_RELATIVE_HALF_WIDTH:
         if not allow_ill_conditioned:
             raise IllConditionedData(
@@ -147,9 +156,6 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
                 f"half-widths up to {half.max():.3g} N m/rad against ||K|| = {scale:.3g} N m/rad "
                 f"({rel:.0%}); {_missing(u)}", cond, 3, u)
         ill = True
-    if tracker_sigma_rad is None:
-        tracker_sigma_rad = InstrumentNoise.paper().angle_sigma_rad
-    ml, curv_used = _fit_ml(dzeta, tau_load, R, model, rest_lengths_m, noise, curvature, tracker_sigma_rad)
     boot = None
     if bootstrap:
         boot = bootstrap_interval(dzeta, tau_load, order, noise, bootstrap, ci_level,
@@ -164,8 +170,14 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
         chi2_per_dof=chi2, bootstrap_K_ci=boot, design_condition=float(fit["design_condition"]),
         weakest_load_direction_A=u, ill_conditioned=ill,
         K_ml=ml.K, crlb6=ml.crlb6, cov6_ml=ml.cov6,
-        ml_quantile=_quantile(ci_level, 0 if noise is not None else max(ml.dof, 1)),
+        ml_quantile=ml_quantile,
         curvature=curv_used, noise_estimated=ml.noise_estimated)
+
+
+def _relative(half: np.ndarray, K: np.ndarray) -> float:
+    """Largest interval half-width over ``||K||_2`` (inf when undetermined)."""
+    scale = float(np.linalg.norm(K, 2))
+    return float(half.max() / scale) if scale > 0 and np.all(np.isfinite(half)) else float("inf")
 
 
 def _fit_ml(dzeta, tau_load, R, model, rest_lengths_m, noise, curvature, tracker_sigma_rad):

@@ -15,6 +15,15 @@ registration      axis (``marker=True`` in :func:`inject`: also the markers)
 stiffness_scale   every stiffness times exp(+-0.03 severity)
 ================  ===========================================================
 
+A further law of a vocabulary effect (:data:`~csjm_opt.testbed.plant.VARIANT_NAMES`
+gives the vocabulary name a diagnosis should give it):
+
+================  ===========================================================
+coulomb_friction  a constant friction force at each guide hole,
+                  F_i = 0.5 N * severity * U(0.7, 1.3) (MuJoCo's tendon
+                  ``frictionloss``), rho = 0.1; named ``friction``
+================  ===========================================================
+
 :data:`PLAUSIBLE_SEVERITY` is the largest severity of each effect whose injected
 magnitudes stay inside the diagnosis's default prior ranges
 (:meth:`csjm_opt.diagnose.effects.base.Effect.default_ranges`): hole
@@ -33,26 +42,28 @@ sensor_drift      F/T offset drifting by 0.5 mN m per row * severity, random
                   direction (0.1 N m over a 200-row log)
 drum_slip         cables slip on their drums above 55 % of the tension range,
                   by 20 um per N over the threshold * severity
+joint_friction    Coulomb friction at the ball joint, 0.03 N m * severity per
+                  axis of {A} (MuJoCo's ball-joint ``frictionloss``)
 ================  ===========================================================
 """
 
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Iterable
+from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 
 from .. import so3
 from ..errors import InvalidInput
 from ..model.rig import Rig
-from .plant import EFFECT_NAMES, OUTSIDE_NAMES, Plant
-
+from .plant import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, Plant
 
 #: Largest severity whose injected magnitudes stay within the diagnosis's default priors (see above).
 PLAUSIBLE_SEVERITY = {"hole_offsets": 1.2, "friction": 7.0, "cable_hardening": 15.0, "link_compliance": 8.0,
                       "sensor_bias": 4.0, "mass_com": 2.5, "tracker_registration": 15.0,
-                      "stiffness_scale": 15.0}
+                      "stiffness_scale": 15.0, "coulomb_friction": 10.0}
 
 
 def _unit(rng: np.random.Generator) -> np.ndarray:
@@ -60,8 +71,30 @@ def _unit(rng: np.random.Generator) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
-def inject(plant: Plant, effect: str, severity: float, rng: np.random.Generator) -> Plant:
-    """``plant`` with one more effect of ``severity`` (1 = typical)."""
+def inject(plant, effect: str, severity: float, rng: np.random.Generator):
+    """``plant`` with one more effect of ``severity`` (1 = typical).
+
+    Parameters
+    ----------
+    plant : Plant or MujocoPlant
+        A MuJoCo plant gets the effect in its :class:`Plant` description (same draws).
+    effect : str
+        A name of the module's tables.
+    severity : float
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    Plant or MujocoPlant
+        Of the same kind as ``plant``.
+
+    Raises
+    ------
+    InvalidInput
+        Unknown effect name (or one the MuJoCo plant cannot realise).
+    """
+    if not isinstance(plant, Plant):            # a MujocoPlant: inject into its description
+        return dataclasses.replace(plant, plant=inject(plant.plant, effect, severity, rng))
     s = float(severity)
     rig = plant.rig
     if effect == "hole_offsets":
@@ -70,6 +103,8 @@ def inject(plant: Plant, effect: str, severity: float, rng: np.random.Generator)
         changes: dict[str, Any] = {"rig": rig}
     elif effect == "friction":
         changes = {"friction_mu_beta": 0.03 * s * rng.uniform(0.7, 1.3, 6)}
+    elif effect == "coulomb_friction":
+        changes = {"friction_coulomb_N": 0.5 * s * rng.uniform(0.7, 1.3, 6)}
     elif effect == "cable_hardening":
         changes = {"hardening_per_m": 15.0 * s}
     elif effect == "link_compliance":
@@ -86,6 +121,8 @@ def inject(plant: Plant, effect: str, severity: float, rng: np.random.Generator)
     elif effect == "stiffness_scale":
         factor = np.exp(0.03 * s * rng.choice([-1.0, 1.0]))
         changes = {"rig": rig.replace(cable_stiffness_N_per_m=factor * np.asarray(rig.cable_stiffness_N_per_m))}
+    elif effect == "joint_friction":
+        changes = {"joint_friction_Nm": 0.03 * s}
     elif effect == "eyelet_radius":
         changes = {"eyelet_radius_m": 3e-3 * s}
     elif effect == "sensor_drift":
@@ -94,16 +131,47 @@ def inject(plant: Plant, effect: str, severity: float, rng: np.random.Generator)
         changes = {"drum_slip_threshold_N": rig.t_min_N + 0.55 * (rig.t_max_N - rig.t_min_N),
                    "drum_slip_compliance_m_per_N": 2e-5 * s}
     else:
-        raise InvalidInput(f"unknown effect {effect!r}; expected one of {EFFECT_NAMES + OUTSIDE_NAMES}", "effect")
+        known = EFFECT_NAMES + tuple(VARIANT_NAMES) + OUTSIDE_NAMES
+        raise InvalidInput(f"unknown effect {effect!r}; expected one of {known}", "effect")
     return dataclasses.replace(plant, effects=plant.effects + (effect,), **changes)
 
 
 def make_plant(rig: Rig, effects: str | Iterable[str] | None, severity: float,
-               rng: np.random.Generator) -> Plant:
-    """The nominal ``rig`` with the named effect(s) injected (``None`` or ``"none"``: nominal)."""
-    plant = Plant.nominal(rig)
-    if effects is None or effects == "none":
-        return plant
-    for name in ([effects] if isinstance(effects, str) else list(effects)):
-        plant = inject(plant, name, severity, rng)
-    return plant
+               rng: np.random.Generator, plant: str = "quasi-static", persistent: bool = True):
+    """The nominal ``rig`` with the named effect(s) injected (``None`` or ``"none"``: nominal).
+
+    Parameters
+    ----------
+    rig : Rig
+        The nominal rig.
+    effects : str, iterable of str or None
+        Effect names (module tables).
+    severity : float
+        Common severity (1 = typical).
+    rng : numpy.random.Generator
+        Draws of the effects (the same for both plants).
+    plant : {"quasi-static", "mujoco"}, optional
+        The quasi-static :class:`Plant` or the :class:`~csjm_opt.testbed.mujoco_plant.MujocoPlant`.
+    persistent : bool, optional
+        Cycles start where the previous one settled (default) or relaxed.
+
+    Returns
+    -------
+    Plant or MujocoPlant
+
+    Raises
+    ------
+    InvalidInput
+        Unknown effect or plant name.
+    """
+    if plant not in ("quasi-static", "mujoco"):
+        raise InvalidInput(f"unknown plant {plant!r}; expected 'quasi-static' or 'mujoco'", "plant")
+    made = dataclasses.replace(Plant.nominal(rig), persistent=bool(persistent))
+    if not (effects is None or effects == "none"):
+        for name in ([effects] if isinstance(effects, str) else list(effects)):
+            made = inject(made, name, severity, rng)
+    if plant == "mujoco":
+        from .mujoco_plant import as_mujoco
+
+        return as_mujoco(made)
+    return made

@@ -20,6 +20,7 @@ from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..measurement.protocol import Protocol
 from ..model.rig import Rig
+from .mujoco_plant import MujocoPlant
 from .plant import Plant
 
 #: Fixed-point iterations on the dead-weight moment before giving up.
@@ -42,8 +43,8 @@ def dead_weight_moments(R: np.ndarray, force_B_N: np.ndarray, point_A_m: np.ndar
     return np.cross(point_A_m, np.einsum("nji,nj->ni", R, force_B_N))
 
 
-def settle_protocol(plant: Plant, protocol: Protocol, R_start: np.ndarray | None = None) -> tuple[np.ndarray,
-                                                                                                   np.ndarray]:
+def settle_protocol(plant: Plant | MujocoPlant, protocol: Protocol,
+                    R_start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """True poses (n, 3, 3) and true external moments in {A} (n, 3) of every protocol row.
 
     Parameters
@@ -64,7 +65,8 @@ def settle_protocol(plant: Plant, protocol: Protocol, R_start: np.ndarray | None
         The plant cannot hold a row's load, or the load iteration does not settle.
     """
     n = len(protocol)
-    path = bool(np.any(plant.friction_mu_beta > 0)) or np.isfinite(plant.drum_slip_threshold_N)
+    base = plant.plant if isinstance(plant, MujocoPlant) else plant   # a MujocoPlant wraps its Plant
+    path = base.has_friction or bool(np.isfinite(base.drum_slip_threshold_N))
     cycle = protocol.cycle if path else np.arange(n)
     f, p, l = protocol.force_B_N, protocol.point_A_m, protocol.rest_lengths_m
     R = np.repeat((np.eye(3) if R_start is None else np.asarray(R_start, float))[None], n, 0)
@@ -81,7 +83,7 @@ def settle_protocol(plant: Plant, protocol: Protocol, R_start: np.ndarray | None
                         f"(last change {step:.3g} rad)", "diverged", step)
 
 
-def run_protocol(plant: Plant | Rig, protocol: Protocol, rng: np.random.Generator,
+def run_protocol(plant: Plant | MujocoPlant | Rig, protocol: Protocol, rng: np.random.Generator,
                  noise: InstrumentNoise | None = None) -> MeasurementLog:
     """The measurement log a lab would record running ``protocol`` on ``plant``.
 
@@ -105,7 +107,7 @@ def run_protocol(plant: Plant | Rig, protocol: Protocol, rng: np.random.Generato
     NoEquilibrium
         As :func:`settle_protocol`.
     """
-    plant = plant if isinstance(plant, Plant) else Plant(plant)
+    plant = plant if isinstance(plant, (Plant, MujocoPlant)) else Plant(plant)
     noise = InstrumentNoise.paper() if noise is None else noise
     R_true, tau = settle_protocol(plant, protocol)
     n = len(protocol)
