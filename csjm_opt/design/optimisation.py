@@ -153,7 +153,7 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
                     break
                 d = _certified_solve(settings, prev.params, {other: float(eps)}, budget)
                 bar.update(1)
-                if d.ok:
+                if d.ok and not _same(d, prev):
                     designs.append(d)
                     prev = d
     finally:
@@ -161,6 +161,12 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
     designs = [d for d in designs if d.ok] or designs[:1]
     return OptimisationResult(designs=designs, settings=settings, evaluations=budget.used,
                               ipopt_iterations=budget.iterations, certified_orientations=budget.dense)
+
+
+def _same(a: OptimisedDesign, b: OptimisedDesign, rtol: float = 1e-6) -> bool:
+    """Whether two front points are one design (no trade-off there: the front has collapsed)."""
+    return all(math.isclose(a.params[k], b.params[k], rel_tol=rtol, abs_tol=1e-12) for k in a.params) and all(
+        math.isclose(a.objectives[k], b.objectives[k], rel_tol=rtol, abs_tol=1e-9) for k in a.objectives)
 
 
 def _halved(name: str, value: float) -> float:
