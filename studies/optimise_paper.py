@@ -201,6 +201,8 @@ def main(argv: list[str] | None = None) -> int:
     paper_sweep_rec = evaluate_design({}, dataclasses.replace(spec.settings, base={}))
     designs = doc["designs"]
     front = np.array([[d["objectives"]["range"], d["objectives"]["stiffness"]] for d in designs])
+    order = np.argsort(front[:, 0])
+    monotone = bool(np.all(np.diff(front[order, 1]) <= 1e-9))   # a front: more range, less stiffness
     hv_opt, hv_sweep = hypervolume(front), hypervolume(certified_arr)
     hv_sweep_1000 = hypervolume(mapped_arr)
     # the sweep's own metrics of the optimised designs
@@ -226,7 +228,7 @@ def main(argv: list[str] | None = None) -> int:
         "optimised": {"designs": designs, "seconds": t_opt,
                       "evaluations": doc["evaluations"], "ipopt_iterations": doc["ipopt_iterations"],
                       "certified_orientations": doc["certified_orientations"],
-                      "all_certified": all(d["ok"] for d in designs),
+                      "all_certified": all(d["ok"] for d in designs), "front_monotone": monotone,
                       "hypervolume_range_stiffness": hv_opt, "hypervolume_workspace_stiffness": hv_opt_sw,
                       "sweep_metrics": [{"workspace_fraction": r["workspace_fraction"],
                                          "min_stiffness_Nm_per_rad": r["min_stiffness_Nm_per_rad"]}

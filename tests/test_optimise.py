@@ -13,8 +13,9 @@ from csjm_opt.cli.app import main
 from csjm_opt.design.certify import certify
 from csjm_opt.design.geometry import design_holes
 from csjm_opt.design.optimisation import design_rig_of
-from csjm_opt.design.optimise_problem import build_problem, holes_sym, rotation_sym
+from csjm_opt.design.optimise_problem import build_problem
 from csjm_opt.design.optimise_settings import read_optimise_file
+from csjm_opt.design.optimise_symbols import holes_sym, rotation_sym
 from csjm_opt.design.sampling import tilt_torsion_rotations
 from csjm_opt.errors import DesignError
 from csjm_opt.model.rig import Rig
@@ -99,6 +100,11 @@ def test_known_optimum_on_the_bound_certified_and_written_by_the_cli(tmp_path):
     assert set(d) >= {"params", "objectives", "certified", "rig_file"} and "requirements" in doc
     rig = Rig.from_toml(out / d["rig_file"])
     assert rig.link is not None and np.isclose(np.hypot(*rig.platform_holes_A_m[0, :2]), 0.06, atol=1e-6)
+    # csjm report renders the folder like a sweep result
+    assert main(["report", str(out), "--out", str(tmp_path / "rep")]) == 0
+    page = (tmp_path / "rep" / "index.md").read_text()
+    assert "design_000" in page and (tmp_path / "rep" / "front.png").is_file()
+    assert (tmp_path / "rep" / "geometry.png").is_file()
     # brute force over the radius: the certified stiffness of a grid never beats the optimum
     _, settings = read_optimise_file(path)
     lam = []

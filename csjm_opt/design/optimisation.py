@@ -21,18 +21,15 @@ from typing import Any
 import numpy as np
 from scipy.stats import qmc
 
-from ..errors import DesignError, InfeasibleRequirement
+from ..errors import DesignError
 from .certify import certify
 from .geometry import GeometryLimits, design_rig
-from .interference import PAIRS, cable_ends_B_m, point_segment_distance, segment_distance
+from .optimise_contacts import contacts_near
+from .optimise_diagnosis import infeasible, violation
 from .optimise_problem import Contact, build_problem
 from .optimise_settings import OptimiseSettings
-from .sampling import OrientationSampling, tilt_torsion_rotations
+from .sampling import OrientationSampling
 
-#: Extra distance (m) within which a cable pair or cable and link become a contact constraint.
-CONTACT_BUFFER_M = 0.005
-#: Orientations per cable pair (or cable and link part) kept as contact constraints in a round.
-CONTACTS_PER_PAIR = 4
 _INFEASIBLE = ("Infeasible_Problem_Detected", "Restoration_Failed", "Error_In_Step_Computation")
 
 
@@ -156,7 +153,7 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
                     break
                 d = _certified_solve(settings, prev.params, {other: float(eps)}, budget)
                 bar.update(1)
-                if d.ok:
+                if d.ok and not _same(d, prev):
                     designs.append(d)
                     prev = d
     finally:
@@ -164,6 +161,12 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
     designs = [d for d in designs if d.ok] or designs[:1]
     return OptimisationResult(designs=designs, settings=settings, evaluations=budget.used,
                               ipopt_iterations=budget.iterations, certified_orientations=budget.dense)
+
+
+def _same(a: OptimisedDesign, b: OptimisedDesign, rtol: float = 1e-6) -> bool:
+    """Whether two front points are one design (no trade-off there: the front has collapsed)."""
+    return all(math.isclose(a.params[k], b.params[k], rel_tol=rtol, abs_tol=1e-12) for k in a.params) and all(
+        math.isclose(a.objectives[k], b.objectives[k], rel_tol=rtol, abs_tol=1e-9) for k in a.objectives)
 
 
 def _halved(name: str, value: float) -> float:
@@ -232,7 +235,7 @@ def _best_start(settings: OptimiseSettings, starts: list[dict[str, float]], epsi
         budget.used += calls
     good = [r for r in results if r[0] is not None]
     if not good:
-        raise _infeasible(results[0][4])
+        raise infeasible(results[0][4])
     sign = 1.0 if settings.objective == "size" else -1.0
     best = min(good, key=lambda r: sign * r[1])
     return _certified_solve(settings, best[0], epsilon, budget)  # type: ignore[arg-type]
@@ -248,7 +251,7 @@ def _solve_start(start: dict[str, float], payload: tuple[OptimiseSettings, dict[
     x = np.array(sol["x"]).ravel()
     calls = int(stats.get("n_call_nlp_g", stats["iter_count"]))
     if not stats["success"] and stats["return_status"] != "Maximum_Iterations_Exceeded":
-        return None, math.nan, calls, stats["return_status"], _violation(settings, angles, pb, x, sol)
+        return None, math.nan, calls, stats["return_status"], violation(settings, angles, pb, x, sol)
     params = dict(zip(settings.names, np.array(pb.design_of(x[:pb.n_design])).ravel().tolist()))
     return params, float(x[pb.objective_index]), calls, stats["return_status"], None
 
@@ -276,7 +279,7 @@ def _certified_solve(settings: OptimiseSettings, start: dict[str, float], epsilo
         budget.iterations += int(stats["iter_count"])
         x = np.array(sol["x"]).ravel()
         if stats["return_status"] in _INFEASIBLE:
-            raise _infeasible(_violation(settings, angles, pb, x, sol))
+            raise infeasible(violation(settings, angles, pb, x, sol))
         params = dict(zip(settings.names, np.array(pb.design_of(x[:pb.n_design])).ravel().tolist()))
         q_obj = float(x[pb.objective_index]) * _scale(settings.objective)
         values = _values(settings, epsilon, q_obj)
@@ -289,7 +292,7 @@ def _certified_solve(settings: OptimiseSettings, start: dict[str, float], epsilo
             break
         angles = np.unique(np.vstack([angles, check.failing / np.array([values["range"], 1.0, values["range"]])]),
                            axis=0)
-        contacts = _contacts(settings, rig, angles, values["range"])
+        contacts = contacts_near(settings, rig, angles, values["range"])
     assert check is not None
     objectives = _objectives(settings, params, check, values)
     return OptimisedDesign(params=params, objectives=objectives, certified=check.as_dict(), epsilon=dict(epsilon),
@@ -336,74 +339,6 @@ def _objectives(settings: OptimiseSettings, params: dict[str, float], check: Any
             "stiffness": values["stiffness"] + check.worst["stiffness"][0],
             "tension_margin": values["tension_margin"] + check.worst["tension"][0],
             "size": size}
-
-
-def _contacts(settings: OptimiseSettings, rig: Any, angles: np.ndarray, scale: float) -> list[Contact]:
-    """Cable pairs and cable-link pairs closer than the requirement plus a buffer, at their closest points.
-
-    Per pair (or cable and link part) the :data:`CONTACTS_PER_PAIR` orientations where they come closest.
-    """
-    req, link = settings.requirements, settings.link
-    Rs = tilt_torsion_rotations(angles[:, 0] * scale, angles[:, 1], angles[:, 2] * scale)
-    top, bottom = cable_ends_B_m(rig, Rs)
-    i, j = PAIRS[:, 0], PAIRS[:, 1]
-    out: list[Contact] = []
-
-    def closest(gap: np.ndarray, limit: float, make: Any) -> None:
-        for col in range(gap.shape[1]):
-            rows = np.flatnonzero(gap[:, col] < limit)
-            out.extend(make(int(o), col) for o in rows[np.argsort(gap[rows, col])][:CONTACTS_PER_PAIR])
-
-    d, s, t = segment_distance(top[:, i], bottom[:, i], top[:, j], bottom[:, j])
-    closest(d, req.min_cable_distance_m + CONTACT_BUFFER_M,
-            lambda o, p: Contact(o, "pair", int(i[p]), int(j[p]), float(s[o, p]), float(t[o, p])))
-    r0, r1 = link.rod_ends_B_m
-    d2, s2, t2 = segment_distance(top, bottom, r0, r1)
-    closest(d2 - link.rod_radius_m, req.min_link_clearance_m + CONTACT_BUFFER_M,
-            lambda o, c: Contact(o, "rod", c, -1, float(s2[o, c]), float(t2[o, c])))
-    ball = point_segment_distance(np.zeros(3), top, bottom)
-    u = bottom - top
-    s_ball = np.clip(-np.einsum("nki,nki->nk", top, u) / np.einsum("nki,nki->nk", u, u), 0.0, 1.0)
-    closest(ball - link.ball_radius_m, req.min_link_clearance_m + CONTACT_BUFFER_M,
-            lambda o, c: Contact(o, "ball", c, -1, float(s_ball[o, c]), 0.0))
-    return out
-
-
-def _violation(settings: OptimiseSettings, angles: np.ndarray, pb: Any, x: np.ndarray, sol: Any) -> tuple:
-    """The most violated constraint at IPOPT's last point: (name, angles (deg) or None, amount)."""
-    g = np.array(sol["g"]).ravel()
-    viol = np.maximum(pb.lbg - g, 0.0) + np.maximum(g - pb.ubg, 0.0)
-    k = int(np.argmax(viol))
-    names = _pose_names(settings)
-    per = len(names)
-    n_pose = per * pb.n_slots
-    scale = settings.requirements.range_scale if settings.objective != "range" else float(x[pb.objective_index])
-    if k < n_pose:
-        o, c = divmod(k, per)
-        a = (angles[o] if o < angles.shape[0] else np.zeros(3)) * np.array([scale, 1.0, scale])
-        return names[c], tuple(math.degrees(v) for v in a), float(viol[k])
-    return "hole spacing or cable contact", None, float(viol[k])
-
-
-def _pose_names(settings: OptimiseSettings) -> list[str]:
-    n_l = np.asarray(settings.requirements.loads).shape[0]
-    names = ["tension range of load 1 (lower bound)"] * 6 + ["tension range of load 1 (upper bound)"] * 6
-    names += ["stiffness (smallest eigenvalue of K)"] * 7
-    for k in range(2, n_l + 1):
-        names += [f"tension range of load {k}"] * 12 + [f"equilibrium of load {k}"] * 3
-    if settings.requirements.max_exit_angle_deg < 180:
-        names += ["exit angle at a platform hole"] * 6 + ["exit angle at a base hole"] * 6
-    return names
-
-
-def _infeasible(info: tuple | None) -> InfeasibleRequirement:
-    if info is None:
-        return InfeasibleRequirement("no design within the bounds meets the requirements", "unknown")
-    name, angles, amount = info
-    where = "" if angles is None else \
-        f" at tilt {angles[0]:.1f} deg, azimuth {angles[1]:.1f} deg, torsion {angles[2]:.1f} deg"
-    return InfeasibleRequirement(f"no design within the bounds meets the requirements: {name} binds{where} "
-                                 "(the binding constraint at the best point IPOPT found)", name, angles)
 
 
 __all__ = ["OptimisationResult", "OptimisedDesign", "design_rig_of", "optimise", "sweep_starts"]
