@@ -150,7 +150,7 @@ def write_optimisation_report(result_dir: str | Path, out_dir: str | Path) -> Pa
     import matplotlib.pyplot as plt
 
     from ..design.sampling import tilt_torsion_rotations
-    from .demo import prepare_out_dir
+    from .folder import prepare_out_dir
 
     doc = load_result(result_dir)
     out = prepare_out_dir(Path(out_dir), "csjm optimisation report")
