@@ -10,19 +10,16 @@ Run: ``python benchmarks/bench_identify.py``; prints medians and ratios.
 
 from __future__ import annotations
 
-
 import numpy as np
-from scipy.optimize import least_squares
-
 from _common import median_time  # noqa: E402
-
-from csjm_opt.testbed.scripted import add_noise, load_directions, simulate_log
+from scipy.optimize import least_squares
 
 from csjm_opt import paper_rig, so3  # noqa: E402
 from csjm_opt.identification.identify import identify_stiffness  # noqa: E402
+from csjm_opt.identification.param_fit import fit_parameters  # noqa: E402
 from csjm_opt.measurement.instruments import InstrumentNoise  # noqa: E402
 from csjm_opt.model.numeric import Model  # noqa: E402
-from csjm_opt.identification.param_fit import fit_parameters  # noqa: E402
+from csjm_opt.testbed.scripted import add_noise, load_directions, simulate_log
 
 
 def main() -> None:

@@ -25,13 +25,12 @@ from pathlib import Path
 
 import numpy as np
 
-from csjm_opt.testbed.scripted import add_noise, load_directions, simulate_log
-
 from csjm_opt import cli, paper_rig  # noqa: E402
 from csjm_opt.identification.identify import identify_cycles, identify_stiffness  # noqa: E402
 from csjm_opt.measurement.instruments import InstrumentNoise  # noqa: E402
 from csjm_opt.measurement.logfile import MeasurementLog  # noqa: E402
 from csjm_opt.model.numeric import Model  # noqa: E402
+from csjm_opt.testbed.scripted import add_noise, load_directions, simulate_log
 
 ROWS_PER_CYCLE = 20
 

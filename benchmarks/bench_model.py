@@ -14,10 +14,10 @@ import argparse
 
 import casadi as ca
 import numpy as np
+from _common import median_time, row  # noqa: E402
 
 import csjm_opt as co  # noqa: E402
 from csjm_opt.model.casadi_model import build_functions  # noqa: E402
-from _common import median_time, row  # noqa: E402
 
 
 def fd_stiffness(rig, Rs, T, h=1e-4):

@@ -27,8 +27,11 @@ import numpy as np
 
 from csjm_opt import so3  # noqa: E402
 from csjm_opt.control import simulate  # noqa: E402
-from csjm_opt.control.controllers import (InverseDynamicsController, SO3FeedbackController,  # noqa: E402
-                                          StiffnessShapingController)
+from csjm_opt.control.controllers import (  # noqa: E402
+    InverseDynamicsController,
+    SO3FeedbackController,
+    StiffnessShapingController,
+)
 from csjm_opt.control.controllers.reference import reference_rates  # noqa: E402
 from csjm_opt.control.load_profiles import Step  # noqa: E402
 from csjm_opt.control.plants import MujocoPlant, QuasiStaticPlant  # noqa: E402

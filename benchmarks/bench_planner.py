@@ -11,9 +11,9 @@ import argparse
 import time
 
 import numpy as np
+from _common import median_time, row, slsqp_plan  # noqa: E402
 
 import csjm_opt as co  # noqa: E402
-from _common import median_time, row, slsqp_plan  # noqa: E402
 
 
 def main() -> None:

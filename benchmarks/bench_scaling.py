@@ -29,9 +29,9 @@ import tracemalloc
 from pathlib import Path
 
 import numpy as np
+from _common import median_time, slsqp_plan  # noqa: E402
 
 import csjm_opt as co  # noqa: E402
-from _common import median_time, slsqp_plan  # noqa: E402
 from csjm_opt.design.sweep import run_sweep  # noqa: E402
 from csjm_opt.design.sweep_file import SweepSpec  # noqa: E402
 

@@ -28,14 +28,14 @@ import json
 import sys
 
 import numpy as np
+from _common import median_time  # noqa: E402
 from scipy.optimize import minimize
 
-from _common import median_time  # noqa: E402
 from csjm_opt import so3
 from csjm_opt.control.closed_loop import simulate
 from csjm_opt.control.controllers import StiffnessShapingController
-from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.control.load_profiles import Constant, Sinusoid
+from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.model.rig import paper_rig
 from csjm_opt.shaping.shaper import Shaper, make_objective, qp_matrices, shape_stiffness
 

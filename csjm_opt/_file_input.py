@@ -8,7 +8,6 @@ import stat
 from pathlib import Path
 from typing import Callable
 
-
 #: Largest input file read (bytes): 1 GiB, about 7 million log rows. Bounded so a
 #: mistaken path (a disk image, /dev/zero) fails at once instead of filling memory.
 MAX_INPUT_BYTES = 1 << 30

@@ -23,8 +23,8 @@ from pathlib import Path
 
 from csjm_opt._fileio import atomic_write_json
 from csjm_opt._plotting import save
-from csjm_opt.model.rig import paper_rig
 from csjm_opt.demo.mujoco_step import compare, plot_errors, stiffness_switch
+from csjm_opt.model.rig import paper_rig
 
 
 def table(rows: list[dict]) -> str:

@@ -25,17 +25,17 @@ from pathlib import Path
 import numpy as np
 
 from csjm_opt import so3
+from csjm_opt._fileio import atomic_write_json
 from csjm_opt._plotting import save
+from csjm_opt._validate import as_rotation
 from csjm_opt.control.closed_loop import plot_closed_loop, plot_closed_loop_stiffness, simulate
 from csjm_opt.control.controllers import StiffnessShapingController
-from csjm_opt.demo.shaping_step import DEMO_TAU_EXT, PAPER_R0, soft_stiff_targets
-from csjm_opt._fileio import atomic_write_json
-from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.control.load_profiles import Constant, Sinusoid, Step
+from csjm_opt.demo.shaping_step import DEMO_TAU_EXT, PAPER_R0, soft_stiff_targets
+from csjm_opt.measurement.instruments import InstrumentNoise
+from csjm_opt.model.rig import paper_rig
 from csjm_opt.shaping.figures import plot_reachable_set
 from csjm_opt.shaping.reachable import reachable_set
-from csjm_opt.model.rig import paper_rig
-from csjm_opt._validate import as_rotation
 
 
 def disturbance(duration_s: float, amplitude_Nm: float = 0.15, every_s: float = 0.125):

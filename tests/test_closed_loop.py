@@ -9,10 +9,15 @@ import csjm_opt as co
 from csjm_opt import so3
 from csjm_opt._plotting import save
 from csjm_opt.control.closed_loop import plot_closed_loop, plot_closed_loop_stiffness, simulate
-from csjm_opt.control.controllers import (Command, Controller, Observation, StiffnessShapingController,
-                                  TensionPlanningController)
-from csjm_opt.measurement.instruments import InstrumentNoise
+from csjm_opt.control.controllers import (
+    Command,
+    Controller,
+    Observation,
+    StiffnessShapingController,
+    TensionPlanningController,
+)
 from csjm_opt.control.load_profiles import Constant, Ramp, Sinusoid, Step
+from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.shaping.shaper import shape_stiffness
 
 R_REF = so3.exp(np.array([0.08, 0.05, -0.03]))

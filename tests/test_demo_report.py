@@ -10,12 +10,11 @@ import json
 import shutil
 
 import pytest
+from report_figures import problems, record_figures
+from report_html import mismatches, parse, unresolved
 
 from csjm_opt.cli import main
 from csjm_opt.demo.pipeline import STEPS
-
-from report_figures import problems, record_figures
-from report_html import mismatches, parse, unresolved
 
 STEP_TITLES = {"plan tensions and stiffness": "Tensions and stiffness",
                "stiffness shaping and closed loop": "Stiffness shaping and closed loop",

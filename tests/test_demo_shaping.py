@@ -8,9 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
+from csjm_opt._validate import as_rotation
 from csjm_opt.demo.shaping_step import DEMO_TAU_EXT, PAPER_R0, run_demo, soft_stiff_targets
 from csjm_opt.shaping.reachable import reachable_set
-from csjm_opt._validate import as_rotation
 
 
 def test_soft_stiff_targets_are_reachable_and_ordered(rig):

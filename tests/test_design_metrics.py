@@ -11,11 +11,11 @@ from scipy.spatial import ConvexHull
 
 import csjm_opt as co
 from csjm_opt.design import LoadSet, MetricOptions, OrientationSampling, design_rig, evaluate, evaluate_poses
+from csjm_opt.design.geometry import GeometryLimits
 from csjm_opt.design.metrics import stiffness_affine_parts
 from csjm_opt.design.shaping_range import directional_stiffness_range
 from csjm_opt.design.sweep import evaluate_design
 from csjm_opt.design.sweep_file import EvaluationSettings
-from csjm_opt.design.geometry import GeometryLimits
 
 #: The load set of studies/paper_sweep.toml (N m, {A}, weight excluded).
 LOADS = LoadSet(np.array([[0, 0, 0], [3, 0, 0], [-3, 0, 0], [0, 3, 0], [0, -3, 0], [0, 0, 1], [0, 0, -1.0]]))

@@ -12,11 +12,19 @@ from csjm_opt import design as ds
 from csjm_opt import identification as idf
 from csjm_opt import measurement as ms
 from csjm_opt import shaping as sh
-from csjm_opt.control import simulate
 from csjm_opt.control import load_profiles as lp
+from csjm_opt.control import simulate
 from csjm_opt.control.controllers import StiffnessShapingController, TensionPlanningController
-from csjm_opt.errors import (CsjmError, DataFileError, DesignError, IllConditionedData, InfeasibleLoad,
-                             InvalidInput, NotARotation, RigFileError)
+from csjm_opt.errors import (
+    CsjmError,
+    DataFileError,
+    DesignError,
+    IllConditionedData,
+    InfeasibleLoad,
+    InvalidInput,
+    NotARotation,
+    RigFileError,
+)
 
 RIG = co.paper_rig()
 EYE = np.eye(3)

@@ -14,12 +14,11 @@ import json
 import numpy as np
 import pytest
 
-from csjm_opt.testbed.scripted import add_noise, load_directions, simulate_log
-
 from csjm_opt import cli
 from csjm_opt.errors import IllConditionedData
 from csjm_opt.identification.identify import MAX_RELATIVE_HALF_WIDTH, identify_log
 from csjm_opt.measurement.instruments import InstrumentNoise
+from csjm_opt.testbed.scripted import add_noise, load_directions, simulate_log
 
 ROTVEC_REF = np.array([0.1, -0.05, 0.02])
 TAU_PRE = np.array([0.2, -0.5, 0.3])

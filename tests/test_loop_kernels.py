@@ -7,10 +7,10 @@ import numpy as np
 import csjm_opt as co
 from csjm_opt import so3
 from csjm_opt.control import loop_kernels as loop_kernels
-from csjm_opt.planning import dense_qp as dense_qp
 from csjm_opt.model.cable_terms import CableTerms
-from csjm_opt.shaping.shaper import Shaper, make_objective, qp_matrices
 from csjm_opt.model.statics import EquilibriumSolver, rest_lengths_for
+from csjm_opt.planning import dense_qp as dense_qp
+from csjm_opt.shaping.shaper import Shaper, make_objective, qp_matrices
 
 
 def test_basis_and_exp_match(rig, model):

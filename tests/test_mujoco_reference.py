@@ -6,10 +6,9 @@ import numpy as np
 import pytest
 
 import csjm_opt as co
+import csjm_opt.testbed.mujoco_reference as ref
 from csjm_opt import so3
 from csjm_opt.model.perturbation import stiffness_from_engine
-
-import csjm_opt.testbed.mujoco_reference as ref
 
 
 def _angle(Ra, Rb):

@@ -5,10 +5,10 @@ import json
 import numpy as np
 import pytest
 
-from csjm_opt.identification import paper_data as pd
 from csjm_opt import so3
 from csjm_opt.cli import main
 from csjm_opt.errors import NotARotation
+from csjm_opt.identification import paper_data as pd
 from csjm_opt.identification.paper_tables import check_printed_R0, paper_report, table3, table4
 
 

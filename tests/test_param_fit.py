@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from csjm_opt.errors import IllConditionedData
+from csjm_opt.identification.param_fit import check_fit, fit_parameters
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.measurement.logfile import MeasurementLog
-from csjm_opt.identification.param_fit import check_fit, fit_parameters
 from csjm_opt.testbed.scripted import add_noise, load_directions, simulate_log
 
 K_TRUE = np.array([4300.0, 4700.0, 4500.0, 4900.0, 4400.0, 4800.0])

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 import qpsolvers
-from hypothesis import assume, given, settings, strategies as st
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 from scipy.optimize import linprog, minimize
 
 import csjm_opt as co

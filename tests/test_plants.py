@@ -8,10 +8,14 @@ import pytest
 import csjm_opt as co
 from csjm_opt import so3
 from csjm_opt.control import simulate
-from csjm_opt.control.controllers import (InverseDynamicsController, SO3FeedbackController,
-                                          StiffnessShapingController, TensionPlanningController)
-from csjm_opt.control.controllers.reference import reference_rates
+from csjm_opt.control.controllers import (
+    InverseDynamicsController,
+    SO3FeedbackController,
+    StiffnessShapingController,
+    TensionPlanningController,
+)
 from csjm_opt.control.controllers.base import Observation
+from csjm_opt.control.controllers.reference import reference_rates
 from csjm_opt.control.load_profiles import Constant, Step
 from csjm_opt.control.plants import MujocoPlant, QuasiStaticPlant
 

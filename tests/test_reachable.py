@@ -3,15 +3,18 @@
 from __future__ import annotations
 
 import numpy as np
-
-from csjm_opt._plotting import save
+from scipy.optimize import minimize
 
 from csjm_opt import so3
+from csjm_opt._plotting import save
 from csjm_opt.design import shaping_range
 from csjm_opt.shaping.figures import plot_reachable_set
-from csjm_opt.shaping.reachable import (directional_range, directional_stiffness_range, feasible_vertices,
-                                        reachable_set)
-from scipy.optimize import minimize
+from csjm_opt.shaping.reachable import (
+    directional_range,
+    directional_stiffness_range,
+    feasible_vertices,
+    reachable_set,
+)
 
 R_POSE = so3.exp(np.array([-0.08, 0.12, 0.05]))
 TAU = np.array([-0.2, 0.35, 0.05])

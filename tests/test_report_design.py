@@ -6,13 +6,12 @@ import json
 
 import numpy as np
 import pytest
+from report_figures import problems, record_figures
+from report_html import mismatches, parse, unresolved
 
 from csjm_opt.cli import main
 from csjm_opt.model import hexagon
 from csjm_opt.report.design import pareto_layers, pareto_mask
-
-from report_figures import problems, record_figures
-from report_html import mismatches, parse, unresolved
 
 
 def brute_force_front(x, y):

@@ -5,11 +5,10 @@ from __future__ import annotations
 import copy
 
 import pytest
+from report_html import mismatches, parse
 
 from csjm_opt.report.diagnosis import document, headline, unit_of
 from csjm_opt.report.render import render_html, render_markdown
-
-from report_html import mismatches, parse
 
 LOC = {"by_axis": {"x": {"rms_before_rad": 0.005, "rms_after_rad": 0.0015}},
        "by_tilt": [{"group": "[0.05, 0.1] rad", "rows": 14, "rms_before_rad": 0.0128, "rms_after_rad": 0.0032}],

@@ -5,12 +5,21 @@ from __future__ import annotations
 import math
 
 import pytest
-
-from csjm_opt.report.document import (Cell, Column, Document, Figure, Link, Links, Paragraph, Section, Table,
-                                      format_number)
-from csjm_opt.report.render import render_html, render_markdown, write_document
-
 from report_html import mismatches, parse, unresolved
+
+from csjm_opt.report.document import (
+    Cell,
+    Column,
+    Document,
+    Figure,
+    Link,
+    Links,
+    Paragraph,
+    Section,
+    Table,
+    format_number,
+)
+from csjm_opt.report.render import render_html, render_markdown, write_document
 
 
 @pytest.mark.parametrize("value, fmt, scale, text", [

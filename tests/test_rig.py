@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import csjm_opt as co
-from csjm_opt.model.rig import Rig
 from csjm_opt._validate import as_rotation
+from csjm_opt.model.rig import Rig
 from tests.conftest import R0_CORRECTED, TAU0_TABLE3
 
 ROOT = Path(__file__).resolve().parents[1]

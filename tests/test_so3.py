@@ -2,7 +2,8 @@
 
 import casadi as ca
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from csjm_opt import so3
 from tests.conftest import rodrigues

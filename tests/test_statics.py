@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import cable_energy, fd_gradient, fd_hessian, rodrigues
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -16,8 +17,6 @@ import csjm_opt as co
 from csjm_opt import so3
 from csjm_opt.model.cable_terms import CableTerms, point_force_terms
 from csjm_opt.model.statics import EquilibriumSolver, rest_lengths_for, solve_equilibrium
-
-from conftest import cable_energy, fd_gradient, fd_hessian, rodrigues
 
 ROTVEC = np.array([0.12, -0.07, 0.05])
 TAU_EXT = np.array([0.4, -0.3, 0.15])

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from csjm_opt import so3
-from csjm_opt.model import kinematics as kin
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.measurement.logfile import MeasurementLog
+from csjm_opt.model import kinematics as kin
 from csjm_opt.model.numeric import Model
 from csjm_opt.model.statics import solve_equilibrium
 from csjm_opt.testbed import Plant, design_cycles, make_plant, simulate_experiment, up_down

@@ -1,16 +1,20 @@
 """Verification (61)-(65) on simulator data: K_D is the right first-order predictor, K is not."""
 
 import numpy as np
-
-from csjm_opt._plotting import save
 import pytest
 
 from csjm_opt import so3
+from csjm_opt._plotting import save
 from csjm_opt.errors import InvalidInput
-from csjm_opt.identification.identify import identify_log, identify_stiffness
 from csjm_opt.identification.figures import plot_verification
-from csjm_opt.identification.verify import (estimation_error, predict_pose, predict_pose_external,
-                             verify_increments, verify_log)
+from csjm_opt.identification.identify import identify_log, identify_stiffness
+from csjm_opt.identification.verify import (
+    estimation_error,
+    predict_pose,
+    predict_pose_external,
+    verify_increments,
+    verify_log,
+)
 from csjm_opt.testbed.scripted import load_directions, simulate_cycle, simulate_log
 
 ROTVEC_REF = np.array([0.1, 0.05, -0.08])

@@ -8,12 +8,12 @@ import sys
 import numpy as np
 
 from .. import so3
-from ..model.stiffness import stiffness
 from .._fileio import atomic_write_json
-from ..model.numeric import Model
-from ..planning.planner import TensionPlan, plan_tensions
-from ..model.rig import load_rig
 from .._validate import as_vector3
+from ..model.numeric import Model
+from ..model.rig import load_rig
+from ..model.stiffness import stiffness
+from ..planning.planner import TensionPlan, plan_tensions
 from ._options import check_outputs, check_rotvec, quantity, rotvec_component
 
 

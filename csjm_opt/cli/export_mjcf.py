@@ -10,8 +10,8 @@ from .. import so3
 from .._fileio import atomic_write_json, atomic_write_text
 from .._validate import as_vector3
 from ..model.mjcf import ACTUATIONS
-from ..planning.mjcf_export import export_mjcf
 from ..model.rig import load_rig
+from ..planning.mjcf_export import export_mjcf
 from ._options import check_outputs, check_rotvec, float_in, quantity, rotvec_component
 
 

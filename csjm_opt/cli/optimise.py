@@ -13,6 +13,13 @@ MAX_EVALUATIONS = 10_000_000
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``csjm optimise`` parser to ``sub``.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subparsers of the ``csjm`` parser.
+    """
     p = sub.add_parser(
         "optimise", help="hole-geometry optimisation (guaranteed workspace, stiffness, no collisions)",
         description="Optimise the swept parameters of a sweep file (same names and bounds) with IPOPT "
@@ -40,6 +47,24 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run ``csjm optimise`` with parsed ``args``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status (0 on success).
+
+    Raises
+    ------
+    CsjmError
+        A bad design file (the key named), or a requirement no design meets (``InfeasibleRequirement``,
+        naming the binding constraint and an orientation where it binds).
+    """
     from .._fileio import atomic_write_json
     from ..design.optimisation import design_rig_of, optimise
     from ..design.optimise_settings import read_optimise_file

@@ -8,14 +8,14 @@ import sys
 import numpy as np
 
 from .. import so3
-from .core import add_rig_pose_load
-from ..errors import InvalidInput
 from .._fileio import atomic_write_json
+from .._validate import as_vector3
+from ..errors import InvalidInput
 from ..model.numeric import Model
 from ..model.rig import load_rig
 from ..shaping.shaper import OBJECTIVES, shape_stiffness
-from .._validate import as_vector3
 from ._options import check_outputs, check_rotvec, finite_float, quantity
+from .core import add_rig_pose_load
 
 
 def register(sub: argparse._SubParsersAction) -> None:

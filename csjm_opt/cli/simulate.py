@@ -23,6 +23,13 @@ KNOWN = EFFECT_NAMES + tuple(VARIANT_NAMES) + OUTSIDE_NAMES
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``csjm simulate`` parser to ``sub``.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subparsers of the ``csjm`` parser.
+    """
     p = sub.add_parser("simulate", help="run a protocol on a simulated rig (testbed plant with effects)",
                        description="Run a protocol (the log format with planned rest lengths, intended loads "
                        "and empty measured columns) on a testbed plant with injected effects, and write the "
@@ -104,6 +111,24 @@ def truth(plant) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run ``csjm simulate`` with parsed ``args``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status (0 on success).
+
+    Raises
+    ------
+    CsjmError
+        A malformed protocol, one outside the rig's limits or written for another rig (file and line
+        named), an unknown effect, or a row the simulated plant cannot hold.
+    """
     check_outputs([args.rig, args.protocol, args.after], {"-o/--output": args.output, "--json": args.json})
     effects = parse_effects(args.effect)
     rig = load_rig(args.rig)

@@ -5,13 +5,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..design.sweep import run_sweep
-from ..design.sweep_file import SweepSpec
-from ..errors import DesignError
 from .._fileio import atomic_write_json
-from ..design.sweep_file import MAX_DESIGNS
+from ..design.sweep import run_sweep
+from ..design.sweep_file import MAX_DESIGNS, SweepSpec
+from ..errors import DesignError
 from ._options import check_outputs, int_in
-
 
 #: Most local worker processes (more than any workstation has cores).
 MAX_WORKERS = 256

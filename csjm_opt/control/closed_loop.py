@@ -31,13 +31,13 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 
 from .. import so3
-from .controllers.base import Controller, Observation
-from .plants import Plant, QuasiStaticPlant
 from ..errors import CsjmError, InvalidInput
 from ..measurement.instruments import InstrumentNoise
-from .load_profiles import LoadProfile
 from ..model.rig import Rig
 from ..model.statics import PointForce
+from .controllers.base import Controller, Observation
+from .load_profiles import LoadProfile
+from .plants import Plant, QuasiStaticPlant
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _plotting as plots, so3
+from .. import _plotting as plots
+from .. import so3
 from ..model.numeric import Model
 from ..planning.planner import plan_tensions_batch
-from ._step import DemoContext, StepOutput
 from ..report.document import Cell, Column, Figure, Section, Table, quantity_table, sig
+from ._step import DemoContext, StepOutput
 
 NAME = "plan tensions and stiffness"
 TILTS_DEG = (5.0, 10.0, 15.0, 20.0)

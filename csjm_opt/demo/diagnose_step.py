@@ -8,12 +8,23 @@ from pathlib import Path
 import numpy as np
 
 from ..diagnose import diagnose
-from ..report.diagnosis import write_report
 from ..model.rig import Rig
+from ..report.diagnosis import write_report
+from ..report.document import (
+    Block,
+    Cell,
+    Column,
+    Figure,
+    Link,
+    Links,
+    Section,
+    Table,
+    format_number,
+    quantity_table,
+    sig,
+)
 from ..testbed import simulate_experiment
 from ._step import DemoContext, StepOutput
-from ..report.document import (Block, Cell, Column, Figure, Link, Links, Section, Table, format_number,
-                               quantity_table, sig)
 
 NAME = "diagnose model-rig gap"
 #: The effect the demo injects (friction: the paper's first suspect, Section IV-D).

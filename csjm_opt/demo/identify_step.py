@@ -14,22 +14,21 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import CsjmError
 from .._fileio import atomic_write_json, atomic_write_text
 from .._plotting import save
+from ..errors import CsjmError
+from ..identification.figures import convergence_curve, plot_convergence, plot_verification
 from ..identification.identify import identify_stiffness
-from ..identification.figures import convergence_curve, plot_convergence
-from ..measurement.logfile import MeasurementLog
-from ..model.numeric import Model
 from ..identification.param_fit import check_fit, fit_parameters
-from ..model.rig import Rig
 from ..identification.stiffness_fits import n_parameters
-from ._step import DemoContext, StepOutput
-from ..report.document import Cell, Column, Document, Figure, Link, Section, Table, sig
-from ..report.render import write_document
-from ..identification.figures import plot_verification
 from ..identification.verify import verify_log
 from ..measurement.instruments import InstrumentNoise
+from ..measurement.logfile import MeasurementLog
+from ..model.numeric import Model
+from ..model.rig import Rig
+from ..report.document import Cell, Column, Document, Figure, Link, Section, Table, sig
+from ..report.render import write_document
+from ._step import DemoContext, StepOutput
 
 #: Rows per cycle from which the quadratic (order 2) fit is used.
 ORDER2_MIN_ROWS = 16

@@ -28,15 +28,15 @@ import numpy as np
 from .. import so3
 from .._plotting import figure, save
 from ..control.closed_loop import ClosedLoopLog, simulate
-from ..control.controllers import (InverseDynamicsController, SO3FeedbackController, StiffnessShapingController)
+from ..control.controllers import InverseDynamicsController, SO3FeedbackController, StiffnessShapingController
 from ..control.controllers.base import Controller, Observation
 from ..control.controllers.reference import reference_rates
 from ..control.load_profiles import Step
 from ..control.plants import MujocoPlant, QuasiStaticPlant
 from ..model.rig import Rig
 from ..planning.planner import plan_tensions
-from ._step import DemoContext, StepOutput
 from ..report.document import Cell, Column, Figure, Section, Table, quantity_table, sig
+from ._step import DemoContext, StepOutput
 
 #: The unknown external moment that steps on mid-run (N m, in {A}).
 STEP_MOMENT_A_NM = np.array([0.3, -0.2, 0.1])

@@ -22,11 +22,11 @@ import numpy as np
 
 from .._fileio import atomic_write_json
 from ..model.rig import Rig, paper_rig
-from . import core_step, diagnose_step, identify_step, mujoco_step, shaping_step
-from ._step import DemoContext, StepOutput
 from ..report.document import Document, Link
 from ..report.folder import prepare_out_dir
 from ..report.render import write_document
+from . import core_step, diagnose_step, identify_step, mujoco_step, shaping_step
+from ._step import DemoContext, StepOutput
 
 #: The demo's steps: (name = key in summary.json, step function), in order.
 STEPS: list[tuple[str, Callable[[DemoContext], StepOutput]]] = [

@@ -11,19 +11,19 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import so3
+from .._fileio import atomic_write_json
 from .._plotting import save
+from .._validate import as_rotation
 from ..control.closed_loop import plot_closed_loop, plot_closed_loop_stiffness, simulate
 from ..control.controllers import StiffnessShapingController
-from .._fileio import atomic_write_json
 from ..control.load_profiles import Constant, Sinusoid, Step
 from ..model.numeric import Model
-from ..shaping.figures import plot_reachable_set
-from ..shaping.reachable import tension_lp, reachable_set
 from ..model.rig import Rig
-from ..shaping.shaper import shape_stiffness, stiffness_basis
-from .._validate import as_rotation
-from ._step import DemoContext, StepOutput
 from ..report.document import Cell, Column, Figure, Section, Table, quantity_table, sig
+from ..shaping.figures import plot_reachable_set
+from ..shaping.reachable import reachable_set, tension_lp
+from ..shaping.shaper import shape_stiffness, stiffness_basis
+from ._step import DemoContext, StepOutput
 
 #: Table 3's original pose R0 with erratum 3 applied (element (3,2) = -0.300).
 PAPER_R0 = np.array([[0.992, -0.060, -0.111], [0.090, 0.952, 0.292], [0.088, -0.300, 0.950]])

@@ -38,8 +38,10 @@ def _run_dask(todo: list[tuple[int, dict]], settings: EvaluationSettings | Any, 
 
 def dask_stream(client: Any, todo: list[tuple[int, dict]], settings: EvaluationSettings | Any,
                 as_completed: Callable, fn: Callable = evaluate_design) -> Iterator[tuple[int, Any]]:
-    """Evaluate ``todo`` on a Dask ``client`` (``fn(params, settings)``, default a sweep design's record);
-    yields (index, result) as they finish."""
+    """Evaluate ``todo`` on a Dask ``client``, yielding ``(index, result)`` as they finish.
+
+    ``fn(params, settings)`` is run per design (default: a sweep design's record).
+    """
     futures = {}
     try:
         shared = client.scatter(settings, broadcast=True)

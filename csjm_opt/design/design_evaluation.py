@@ -12,7 +12,6 @@ from .evaluation_settings import EvaluationSettings
 from .geometry import design_rig
 from .metrics import evaluate
 
-
 #: Record keys that depend on the machine, not on the design (left out of comparisons).
 TIMING_KEYS = ("seconds",)
 

@@ -9,8 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DesignError
 from .._limits import LIMITS
+from ..errors import DesignError
 from ._sweep_limits import MAX_LOADS, MAX_ORIENTATIONS, MAX_SEED, MAX_SHAPING_POSES
 from ._sweep_numbers import _check_base_value, _float, _int
 from .geometry import GeometryLimits

@@ -32,9 +32,9 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import DesignError, InvalidInput
 from ..model import hexagon
 from ..model.cable_terms import cable_lengths
-from ..errors import DesignError, InvalidInput
 from ..model.rig import PAPER_CABLE_STIFFNESS_N_PER_M, PAPER_COM_A_M, PAPER_MASS_KG, Rig, paper_rig
 
 _BODIES = {"platform": "A", "base": "B"}

@@ -51,14 +51,14 @@ from typing import Any
 
 import numpy as np
 
-from ..planning import active_set as active_set
 from ..errors import InfeasibleLoad
 from ..model.numeric import Model
-from ..planning.planner import plan_tensions
 from ..model.rig import Rig
+from ..planning import active_set as active_set
+from ..planning.planner import plan_tensions
 from . import feasibility, shaping_range
-from .interference import interference
 from ._metric_types import DesignMetrics, LoadSet, MetricOptions, PoseMetrics, _json_safe  # noqa: F401
+from .interference import interference
 from .sampling import OrientationSampling, tilt_torsion_angles, tilt_torsion_rotations
 
 #: Infeasible samples refined by bisection for the tilt cone, and bisection steps

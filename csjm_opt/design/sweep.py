@@ -35,8 +35,8 @@ from __future__ import annotations
 
 import sys
 import time
-from pathlib import Path
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -45,8 +45,8 @@ from ..errors import DesignError
 from ._dask_backend import _run_dask, dask_stream
 from ._worker_processes import _run_processes
 from .design_evaluation import TIMING_KEYS, design_id, evaluate_design
-from .store import ResultStore
 from .evaluation_settings import EvaluationSettings
+from .store import ResultStore
 from .sweep_file import SweepSpec
 from .sweep_result import SweepResult
 

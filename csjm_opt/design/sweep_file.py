@@ -53,8 +53,8 @@ from typing import Any
 import numpy as np
 from scipy.stats import qmc
 
-from ..errors import DesignError
 from .._fileio import read_text
+from ..errors import DesignError
 from ._sweep_limits import (
     MAX_DESIGNS,
     MAX_LOADS,

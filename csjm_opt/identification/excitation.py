@@ -10,7 +10,6 @@ import numpy as np
 from ..errors import IllConditionedData
 from ..measurement.instruments import InstrumentNoise
 
-
 #: Default largest accepted condition number of the (centred) excitation. A
 #: load cycle along one direction gives 100-500 with the paper's noise (its
 #: weakest "direction" is noise), a designed multi-direction cycle 1.5-4.

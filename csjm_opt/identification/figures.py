@@ -17,9 +17,9 @@ from typing import TYPE_CHECKING, Any, Sequence
 import numpy as np
 
 from ..errors import IllConditionedData
+from ..model.numeric import Model
 from .identify import identify_stiffness
 from .verify import Verification
-from ..model.numeric import Model
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

@@ -15,10 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from . import paper_data as pd
 from .. import so3
-from ..errors import NotARotation
 from .._validate import as_rotation, as_rotations
+from ..errors import NotARotation
+from . import paper_data as pd
 from .verify import estimation_error, predict_pose
 
 

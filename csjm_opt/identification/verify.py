@@ -26,12 +26,11 @@ from typing import Any, Sequence
 import numpy as np
 
 from .. import so3
+from .._validate import as_array, as_rotation, as_rotations
 from ..errors import InvalidInput
-from .identify import StiffnessEstimate
 from ..measurement.logfile import MeasurementLog
 from ..model.numeric import Model
-from .._validate import as_array, as_rotation, as_rotations
-
+from .identify import StiffnessEstimate
 
 
 def predict_pose(R0: np.ndarray, K: np.ndarray, dtau_A_Nm: np.ndarray) -> np.ndarray:

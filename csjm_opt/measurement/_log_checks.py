@@ -6,8 +6,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import DataFileError, InvalidInput
 from .._limits import LIMITS, MAX_EXACT_INT, ROTVEC_MAX_NORM_RAD
+from ..errors import DataFileError, InvalidInput
 
 if TYPE_CHECKING:
     from .logfile import MeasurementLog

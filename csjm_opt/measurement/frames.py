@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import IllConditionedData, InvalidInput
 from .._validate import as_array
+from ..errors import IllConditionedData, InvalidInput
 from ..model.cable_terms import weight_moment
 from ..model.rig import Rig
 

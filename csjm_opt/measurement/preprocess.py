@@ -47,12 +47,12 @@ from typing import Any
 import numpy as np
 
 from .. import so3
-from ..errors import DataFileError, IllConditionedData, InvalidInput
 from .._fileio import read_text
+from ..errors import DataFileError, IllConditionedData, InvalidInput
+from ..model.rig import Rig
 from .frames import fit_rigid_transform, weight_moment_A, wrench_to_A
 from .logfile import MeasurementLog
 from .raw_file import RAW_COLUMNS, parse_raw
-from ..model.rig import Rig
 
 __all__ = ["DEFAULT_ORIGIN_TOL_M", "MAX_ORIGIN_TOL_M", "RAW_COLUMNS", "fit_rigid_transform", "parse_raw",
            "preprocess_file", "preprocess_text", "weight_moment_A", "wrench_to_A"]

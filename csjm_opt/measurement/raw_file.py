@@ -12,10 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DataFileError
 from .._limits import LIMITS, ROTVEC_MAX_NORM_RAD
+from ..errors import DataFileError
 from ._log_checks import parse_number
-
 
 RAW_COLUMNS = ("record", "sample", "cycle", "name", "x", "y", "z", "rx", "ry", "rz", "px", "py", "pz",
                "fx", "fy", "fz", "mx", "my", "mz", "l1", "l2", "l3", "l4", "l5", "l6")

@@ -6,9 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import RigFileError
 from .._limits import LIMITS, MIN_HOLE_RADIUS_M, MIN_HOLE_SPACING_M
-
+from ..errors import RigFileError
 
 #: Bound (csjm_opt._limits.LIMITS key) of each rig entry.
 _QUANTITY = {"platform_holes": "position_m", "base_holes": "position_m", "stiffness": "cable_stiffness_N_per_m",

@@ -16,7 +16,6 @@ from ._descent import rotation_angle as _angle
 from .cable_terms import CableTerms, point_force_terms
 from .rig import Rig
 
-
 PointForce = tuple[np.ndarray, np.ndarray]  # (force in {B}, N; point in {A}, m)
 
 #: Largest rotation (rad) away from the start before a Newton run is called diverged.

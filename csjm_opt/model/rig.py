@@ -33,13 +33,13 @@ from typing import Any
 
 import numpy as np
 
+from .._fileio import atomic_write_text, read_text
+from ..errors import InvalidInput, RigFileError
 from . import hexagon
 from ._rig_schema import _check
 from ._rig_toml import _format_toml
 from .dynamics import Dynamics
 from .link import DEFAULT_LINK, Link
-from ..errors import InvalidInput, RigFileError
-from .._fileio import atomic_write_text, read_text
 
 #: Shared cable-plus-drive stiffness of the built-in paper rig (N/m). The paper
 #: gives none. K is affine in k for fixed tensions, so k was chosen by least

@@ -40,6 +40,7 @@ from typing import Sequence
 import numpy as np
 import numpy.typing as npt
 
+from .._validate import as_array, as_rotation, as_vector3
 from ..errors import InvalidInput, NoEquilibrium
 from . import statics_kernels
 from ._statics_newton import (
@@ -53,7 +54,6 @@ from ._statics_newton import (
 from .equilibrium import Equilibrium
 from .numeric import Model
 from .rig import Rig
-from .._validate import as_array, as_rotation, as_vector3
 
 __all__ = ["Equilibrium", "EquilibriumSolver", "MAX_EXCURSION_RAD", "PointForce", "cable_terms_for",
            "rest_lengths_for", "solve_equilibrium"]

@@ -11,14 +11,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .._fileio import atomic_write_json
 from .. import _plotting as plots
+from .._fileio import atomic_write_json
 from ..errors import DesignError
 from .design_figures import geometry_figure, pareto_figure
 from .design_page import document
-from .folder import prepare_out_dir
 from .design_study import X_KEY, Y_KEY, DesignStudy, load_study, paper_value
 from .document import sig
+from .folder import prepare_out_dir
 from .pareto import pareto_layers, pareto_mask
 from .render import write_document
 

@@ -13,7 +13,6 @@ from ..design.store import read_records, unique_records
 from ..errors import CsjmError, DesignError
 from .pareto import pareto_layers
 
-
 X_KEY, Y_KEY = "workspace_fraction", "min_stiffness_Nm_per_rad"
 
 

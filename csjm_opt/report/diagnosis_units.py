@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from .document import Cell
 
-
 #: Unit of a parameter from its name's suffix: (suffix, unit shown, scale, format).
 _UNITS = (("_rad_per_Nm", "rad/(N m)", 1.0, "sig3"), ("_per_m", "1/m", 1.0, "sig3"), ("_Nm", "N m", 1.0, "sig3"),
           ("_kgm", "kg m", 1.0, "sig3"), ("_mm", "mm", 1.0, "sig3"), ("_m", "mm", 1e3, "sig3"),

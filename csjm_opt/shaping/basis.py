@@ -11,7 +11,6 @@ from ..model.cable_terms import CableTerms, point_force_terms
 from ..model.rig import Rig
 from .objectives import StiffnessObjective
 
-
 #: Default tie-breaking regulariser, relative to the mean curvature of the objective.
 REGULARIZATION = 1e-10
 

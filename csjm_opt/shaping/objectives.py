@@ -21,9 +21,9 @@ import dataclasses
 
 import numpy as np
 
-from ..errors import InvalidInput
-from .._validate import as_array
 from .._limits import check_array
+from .._validate import as_array
+from ..errors import InvalidInput
 
 OBJECTIVES = ("frobenius", "eigen", "directional")
 

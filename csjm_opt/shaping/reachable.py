@@ -31,14 +31,12 @@ import itertools
 
 import numpy as np
 import numpy.typing as npt
-
 from scipy.optimize import linprog
 
+from .._validate import as_array, as_rotation, as_vector3
 from ..errors import InfeasibleLoad, InvalidInput, SolverError
 from ..model.rig import Rig
 from .shaper import StiffnessBasis, stiffness_basis
-from .._validate import as_array, as_rotation, as_vector3
-
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

@@ -39,19 +39,20 @@ import numpy as np
 import qpsolvers
 from scipy import sparse
 
+from .._validate import as_array, as_rotation, as_vector3
+from ..errors import InfeasibleLoad, InvalidInput, SolverError
 from ..model import statics_kernels
+from ..model.cable_terms import point_force_terms
+from ..model.numeric import Model
+from ..model.rig import Rig
 from ..planning import dense_qp as dense_qp
 from ..planning import kernels as _qp_kernels
-from . import shaping_kernels
-from ..model.cable_terms import point_force_terms
-from ..errors import InfeasibleLoad, InvalidInput, SolverError
-from ..model.numeric import Model
 from ..planning.planner import feasibility_distance_Nm
-from ..model.rig import Rig
-from .objectives import OBJECTIVES, StiffnessObjective, make_objective  # noqa: F401 (re-export)
+from . import shaping_kernels
 from .basis import REGULARIZATION, StiffnessBasis, _terms, qp_matrices, stiffness_basis  # noqa: F401 (re-export)
+from .objectives import OBJECTIVES, StiffnessObjective, make_objective  # noqa: F401 (re-export)
 from .result import ShapingResult
-from .._validate import as_array, as_rotation, as_vector3
+
 
 def build_shaping_qp(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray, K_target: np.ndarray,
                      weights: np.ndarray | None = None, objective: str = "frobenius",

@@ -61,8 +61,10 @@ def _net_moment(m, d, q0, z):
 
 
 def polish(m, d, max_iter=20, h=1e-7):
-    """Newton on MuJoCo's own net moment (``qfrc_smooth`` at rest, Jacobian by central differences
-    under ``mj_integratePos``) from the current pose: ``(moved_rad, stable)``."""
+    """Newton on MuJoCo's own net moment from the current pose: ``(moved_rad, stable)``.
+
+    The moment is ``qfrc_smooth`` at rest, its Jacobian central differences under ``mj_integratePos``.
+    """
     q_start, moved = d.qpos.copy(), 0.0
     for _ in range(max_iter):
         q0 = d.qpos.copy()

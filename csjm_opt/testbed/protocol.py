@@ -41,9 +41,9 @@ from .._fileio import read_text
 from ..errors import DataFileError, InvalidInput, NoEquilibrium
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import COLUMNS, MeasurementLog, parse_number
+from ..measurement.protocol import Protocol as LoadProtocol
 from ..model import kinematics as kin
 from ..model.rig import Rig
-from ..measurement.protocol import Protocol as LoadProtocol
 from .plant import Plant
 from .protocol_run import run_protocol
 

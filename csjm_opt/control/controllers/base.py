@@ -13,9 +13,9 @@ from typing import Callable, Union
 import numpy as np
 
 from ... import so3
+from ..._validate import as_rotation
 from ...model.numeric import model_for
 from ...model.rig import Rig
-from ..._validate import as_rotation
 
 #: A pose reference: a fixed rotation or a function of time returning one.
 PoseReference = Union[np.ndarray, Callable[[float], np.ndarray]]

@@ -6,10 +6,10 @@ import numpy as np
 
 from ...model.dynamics import Dynamics
 from ...model.rig import Rig
-from .reference import MemoReference
 from ._rigid_body import RigidBody
 from ._tensions import TensionQP
 from .base import Observation, PoseHoldingController, PoseReference
+from .reference import MemoReference
 
 
 class InverseDynamicsController(PoseHoldingController):

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..loop_kernels import log_so3
 from ...model.dynamics import Dynamics
 from ...model.rig import Rig
-from .reference import reference_rates
+from ..loop_kernels import log_so3
 from .base import Observation, PoseReference
 from .inverse_dynamics import InverseDynamicsController
+from .reference import reference_rates
 
 
 class SO3FeedbackController(InverseDynamicsController):

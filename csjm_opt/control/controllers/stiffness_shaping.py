@@ -6,13 +6,13 @@ from typing import Callable, Union
 
 import numpy as np
 
+from ..._validate import as_array
 from ...model.dynamics import Dynamics
 from ...model.rig import Rig
 from ...shaping.shaper import REGULARIZATION, Shaper, StiffnessObjective, make_objective
-from ..._validate import as_array
-from .reference import MemoReference
 from ._rigid_body import RigidBody
 from .base import Observation, PoseHoldingController, PoseReference
+from .reference import MemoReference
 
 #: A stiffness target: a fixed (3, 3) matrix (N m/rad) or a function of time returning one.
 StiffnessReference = Union[np.ndarray, Callable[[float], np.ndarray]]

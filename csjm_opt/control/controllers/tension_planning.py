@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ...model.numeric import Model
-from ...planning.planner import plan_tensions
 from ...model.rig import Rig
+from ...planning.planner import plan_tensions
 from .base import Observation, PoseHoldingController, PoseReference
 
 

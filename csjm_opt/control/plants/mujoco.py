@@ -26,11 +26,11 @@ import mujoco
 import numpy as np
 
 from ...errors import InvalidInput
-from .. import loop_kernels as loop_kernels
 from ...model.cable_terms import CableTerms
 from ...model.mjcf import quat_wxyz, rig_to_mjcf
 from ...model.perturbation import LOAD_FRAMES, stiffness_from_engine
 from ...model.rig import Rig
+from .. import loop_kernels as loop_kernels
 from .base import LoadFunction, Plant, PlantState
 
 #: Default winch speed limit (m/s) of the rest-length actuation.
