@@ -63,7 +63,9 @@ from ..errors import CsjmError, SolverError
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import Rig
+from .augmented import AugmentedModel
 from .effects import EFFECTS, make_effect
+from .fit import fit_model
 from .localisation import localise
 from .noise import systematic
 from .pairs import all_separabilities
@@ -75,8 +77,10 @@ from ._decision import (  # noqa: F401 (ALPHA and the thresholds are re-exported
     PAIR_SEEDS,
     SHORT_LOG_SHARE,
     CLOSE_FRACTION,
+    EVIDENCE_MIN,
     HELDOUT_ALPHA,
     IMPROVE_MULT,
+    MATERIAL_SHARE,
     _Context,
     combine_scales,
 )
@@ -144,22 +148,29 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     tick(1)
     singles: dict[str, CandidateScore] = {}
     failed: dict[str, str] = {}
+    options: dict[str, dict] = {}
     for name in names:
         try:
-            singles[name] = ctx.score([make_effect(name, rig, ranges)])
+            options[name] = _variant(ctx, rig, name, ranges)
+            singles[name] = ctx.score([make_effect(name, rig, ranges, **options[name])])
         except (np.linalg.LinAlgError, CsjmError, FloatingPointError) as exc:   # reported, not fatal
             failed[name] = f"fit failed: {exc}"
         tick(1)
     m = max(len(singles), 1)
-    floor0 = ctx.noise_floor(baseline)
+    # the noise: the smallest of the estimates (a misfit, e.g. friction hysteresis, only inflates one)
+    floor0 = min([ctx.noise_floor(baseline)] + [ctx.scale(sc) * baseline.instrument_floor_rad
+                                                for sc in singles.values()])
     tests = {n: ctx.compare(baseline, sc, ALPHA / m, floor0) for n, sc in singles.items()}
+    ctx.sigma = floor0 / baseline.instrument_floor_rad       # one noise scale for every model's evidence
+    for n, sc in singles.items():
+        tests[n]["log_evidence"] = ctx.evidence(sc)
     detected = [n for n in singles if tests[n]["significant"]]
     for n, sc in singles.items():
         tests[n]["closes_gap"] = ctx.closes(sc)
         tests[n]["residual_signature_p"] = ctx.signature(sc)["p_value"]
     plausible = [n for n in detected if tests[n]["plausible"]]
     closers = [n for n in plausible if tests[n]["closes_gap"]]
-    first = (min(closers or plausible, key=lambda n: singles[n].fit.bic) if plausible
+    first = (max(closers or plausible, key=lambda n: tests[n]["log_evidence"]) if plausible
              else min(detected, key=lambda n: singles[n].heldout_mse) if detected else None)
 
     gap_sig = ctx.signature(baseline)
@@ -169,7 +180,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     seeds = ([] if first is None and not masked else
              ([first] if first is not None else []) + [n for n in by_error if n != first])[:PAIR_SEEDS]
     pairs, pair_scores = _pairs(ctx, rig, names, singles, seeds, secondary, ranges, tick, planned_pairs,
-                                baseline if masked else None, first)
+                                baseline if masked else None, first, options)
     if bar:
         bar.close()
     selected, second, final, verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_there)
@@ -180,7 +191,8 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
             f"{final.name} has {final.fit.p_eff:.0f} effective parameters against {3 * n_cycles} cycle-level "
             f"pose offsets in this log ({n_cycles} cycles): flexible enough to stand in for an effect outside the "
             "vocabulary; confirm with a longer log (more cycles at other poses)")
-    if selected not in ("none", "unexplained") and remaining["significant"]:
+    if selected not in ("none", "unexplained") and remaining["significant"] \
+            and remaining["systematic_rad"] >= MATERIAL_SHARE * ctx.floor(final):
         verdict["warnings"].append(
             f"the residual left by {final.name} still holds structure within cycles (signature test p = "
             f"{remaining['p_value']:.1e}): the named effect may be a stand-in for one outside the vocabulary; "
@@ -225,7 +237,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
 
 
 def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, tick, planned: int,
-           masked_base: CandidateScore | None, first: str | None) -> tuple[list, dict]:
+           masked_base: CandidateScore | None, first: str | None, options: dict) -> tuple[list, dict]:
     """Every pair's separability; each seed + each other effect fitted and tested (rule 3 / rule 6).
 
     A pair is tested against the best of its two singles and the first effect (``masked_base``,
@@ -248,7 +260,8 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
     for a, b in todo:
         entry = next(p for p in pairs if set(p["effects"]) == {a, b})
         try:
-            sc = ctx.score([make_effect(a, rig, ranges), make_effect(b, rig, ranges)])
+            sc = ctx.score([make_effect(a, rig, ranges, **options.get(a, {})),
+                            make_effect(b, rig, ranges, **options.get(b, {}))])
         except (np.linalg.LinAlgError, CsjmError, FloatingPointError) as exc:
             entry["error"] = f"fit failed: {exc}"
             tick(1)
@@ -258,11 +271,37 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
         rivals = [singles[a], singles[b]] + ([singles[first]] if first is not None else [])
         base = masked_base or min(rivals, key=lambda c: c.heldout_mse)
         t = ctx.compare(base, sc, level, ctx.noise_floor(base))
+        ev = ctx.evidence(sc)
+        gain = ev - max(ctx.evidence(c) for c in ([masked_base] if masked_base is not None else rivals))
+        # the evidence route (rule 3b): decisive Bayes factor over every rival, confirmed on held-out cycles
+        by_evidence = bool(gain >= EVIDENCE_MIN and t["p_value"] < HELDOUT_ALPHA and t["improvement_rad"] > 0)
         entry.update({"fitted": True, "effects": [a, b], "heldout_rms_rad": sc.heldout_rms_rad,
                       "fraction_explained": ctx.fraction(sc), "bic": sc.fit.bic, "closes_gap": ctx.closes(sc),
+                      "log_evidence": ev, "evidence_gain": gain, "supported_by_evidence": by_evidence,
                       "tested_against": base.name, "p_value_vs_first": t["p_value"],
-                      **{k: t[k] for k in ("improvement_rad", "significant", "plausible", "implausible_params")}})
+                      "significant_heldout": t["significant"],
+                      **{k: t[k] for k in ("improvement_rad", "plausible", "implausible_params")},
+                      "significant": bool(t["significant"] or by_evidence)})
     return pairs, scores
+
+
+#: Variants of an effect the data choose between (same number of parameters: the best training fit wins).
+VARIANTS: dict[str, list[dict]] = {"friction": [{"law": law, "memory": mem} for law in ("capstan", "coulomb")
+                                                for mem in ("carried", "reset")]}
+
+
+def _variant(ctx: _Context, rig: Rig, name: str, ranges) -> dict:
+    """The variant of ``name`` (e.g. friction's law and memory) whose training fit is best."""
+    options = VARIANTS.get(name, [])
+    if len(options) < 2:
+        return options[0] if options else {}
+    cost = []
+    for opt in options:
+        try:
+            cost.append(fit_model(AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), ctx.train).rss)
+        except (np.linalg.LinAlgError, CsjmError, FloatingPointError):
+            cost.append(np.inf)
+    return options[int(np.argmin(cost))]
 
 
 def _n_pair_fits(n_seeds: int, n: int) -> int:
@@ -284,7 +323,7 @@ def _verdict(ctx: _Context, baseline, singles, tests, first, pairs, pair_scores,
     warnings: list[str] = []
     none2 = {"effect": "none"}
     ok = [p for p in pairs if p.get("fitted") and p["significant"] and p["plausible"] and p["closes_gap"]]
-    best = min(ok, key=lambda p: p["bic"]) if ok else None
+    best = max(ok, key=lambda p: p["log_evidence"]) if ok else None
     if best is not None:                           # a pair (rule 5), or a masked pair (rule 6)
         a, b = best["effects"]
         sc = pair_scores[(a, b)]
