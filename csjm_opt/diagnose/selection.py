@@ -65,6 +65,7 @@ from ..measurement.logfile import MeasurementLog
 from ..model.rig import Rig
 from .augmented import AugmentedModel
 from .effects import EFFECTS, make_effect
+from .extra import append_log
 from .fit import fit_model
 from .localisation import localise
 from .noise import systematic
@@ -88,7 +89,8 @@ from ._decision import (  # noqa: F401 (ALPHA and the thresholds are re-exported
 def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
              effects: Sequence[str] | None = None, noise: InstrumentNoise | None = None,
              progress: Callable | None = None, secondary: bool = True,
-             ranges: Mapping[str, tuple[float, float]] | None = None) -> Diagnosis:
+             ranges: Mapping[str, tuple[float, float]] | None = None,
+             extra: MeasurementLog | None = None) -> Diagnosis:
     """Residuals, noise floor, every candidate and pair scored, the verdict, localisation.
 
     Parameters
@@ -109,6 +111,9 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
         Search pairs (a second effect) too.
     ranges : mapping, optional
         Prior-range overrides for plausibility: parameter name or fnmatch pattern -> ``(lo, hi)``.
+    extra : MeasurementLog, optional
+        Further rows (e.g. a suggested experiment, run after ``log``): appended to the training
+        log as later cycles, after checking that they come from this rig.
 
     Returns
     -------
@@ -117,7 +122,8 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     Raises
     ------
     InvalidInput
-        Fewer than two cycles and no test log, an unknown effect name, or a malformed log.
+        Fewer than two cycles and no test log, an unknown effect name, a malformed log, or an
+        ``extra`` log that does not belong to this rig.
     SolverError
         The nominal model cannot be evaluated on the log (singular tangents: slack cables).
 
@@ -127,6 +133,8 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     only contend for the cores there; parallelism belongs one level up, across logs).
     """
     with threadpool_limits(1), np.errstate(all="ignore"):   # trial steps may overflow; fits guard themselves
+        if extra is not None:
+            log = append_log(rig, log, extra)
         try:
             return _diagnose(rig, log, test, effects, noise, progress, secondary, ranges)
         except np.linalg.LinAlgError as exc:      # e.g. rows where every cable is slack at the measured pose
@@ -229,7 +237,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
                     "candidates) and systematic improvement sqrt(MSE_null - MSE) >= improve_mult noise floors"}
     d = Diagnosis(ctx.train, ctx.test, baseline, singles, floor, estimates, tests, selected, confounded,
                   localise(ctx.held, ctx.held.zeta_rad, final.heldout_zeta_rad, floor),
-                  remaining, second, failed, pairs, steps, verdict, gap_sig, final, rule)
+                  remaining, second, failed, pairs, steps, verdict, gap_sig, final, rule, pair_scores)
     for s in d.steps:
         sc = final if "+" in s["model"] else singles.get(s["model"], baseline)
         s["fraction_explained"] = d.fraction(sc)

@@ -36,6 +36,7 @@ Nine parameters: six band sizes, ``f``, ``w``, ``first_row_state``.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from .base import Effect
 
@@ -53,6 +54,25 @@ def _clip_band(s: np.ndarray) -> np.ndarray:
     """``clip(s, -1, 1)`` with corners rounded over ``CORNER`` (forward solves need continuity of slope)."""
     w = CORNER
     return -1.0 + w * np.logaddexp(0.0, (s + 1.0) / w) - w * np.logaddexp(0.0, (s - 1.0) / w)
+
+
+@njit(cache=True)
+def _carried_band(step: np.ndarray, s0: float, w: float) -> np.ndarray:   # pragma: no cover (compiled)
+    """The play operator over the whole log in order (compiled; same rounding as :func:`_clip_band`)."""
+    n, m = step.shape
+    s = np.empty((n, m))
+    for j in range(m):
+        prev = s0
+        s[0, j] = s0
+        for i in range(1, n):
+            x = prev + step[i, j]
+            a = (x + 1.0) / w
+            b = (x - 1.0) / w
+            sp_a = a + np.log1p(np.exp(-a)) if a > 0 else np.log1p(np.exp(a))
+            sp_b = b + np.log1p(np.exp(-b)) if b > 0 else np.log1p(np.exp(b))
+            prev = -1.0 + w * sp_a - w * sp_b
+            s[i, j] = prev
+    return s
 
 
 def band_position(rows, travel_m: np.ndarray, s0: float = 0.0, rest_weight: float = 0.0,
@@ -83,11 +103,7 @@ def band_position(rows, travel_m: np.ndarray, s0: float = 0.0, rest_weight: floa
         for idx in rows.sequence:
             s[idx] = _clip_band(s[idx - 1] + step[idx])
         return s
-    prev = np.full(step.shape[1], float(s0))
-    for i in range(1, len(step)):
-        prev = _clip_band(prev + step[i])
-        s[i] = prev
-    return s
+    return _carried_band(np.ascontiguousarray(step, dtype=np.float64), float(s0), CORNER)
 
 
 class Friction(Effect):
