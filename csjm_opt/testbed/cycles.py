@@ -18,9 +18,9 @@ import numpy as np
 from .. import so3
 from ..errors import CsjmError
 from ..model.numeric import Model
-from ..planning.planner import plan_tensions
 from ..model.rig import Rig
 from ..model.statics import rest_lengths_for, solve_equilibrium
+from ..planning.planner import plan_tensions
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

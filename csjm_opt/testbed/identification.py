@@ -11,7 +11,7 @@ The first row of each cycle is the reference (pre-load only).
 
 from __future__ import annotations
 
-from typing import Iterable
+from collections.abc import Iterable
 
 import numpy as np
 
@@ -20,9 +20,9 @@ from ..errors import CsjmError, InvalidInput
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..model.numeric import Model
-from ..planning.planner import plan_tensions
 from ..model.rig import Rig
 from ..model.statics import rest_lengths_for, solve_equilibrium
+from ..planning.planner import plan_tensions
 from .injection import make_plant
 from .plant import Plant
 

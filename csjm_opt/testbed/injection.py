@@ -15,6 +15,15 @@ registration      axis (``marker=True`` in :func:`inject`: also the markers)
 stiffness_scale   every stiffness times exp(+-0.03 severity)
 ================  ===========================================================
 
+A further law of a vocabulary effect (:data:`~csjm_opt.testbed.plant.VARIANT_NAMES`
+gives the vocabulary name a diagnosis should give it):
+
+================  ===========================================================
+coulomb_friction  a constant friction force at each guide hole,
+                  F_i = 0.5 N * severity * U(0.7, 1.3) (MuJoCo's tendon
+                  ``frictionloss``), rho = 0.1; named ``friction``
+================  ===========================================================
+
 :data:`PLAUSIBLE_SEVERITY` is the largest severity of each effect whose injected
 magnitudes stay inside the diagnosis's default prior ranges
 (:meth:`csjm_opt.diagnose.effects.base.Effect.default_ranges`): hole
@@ -39,20 +48,20 @@ drum_slip         cables slip on their drums above 55 % of the tension range,
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Iterable
+from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 
 from .. import so3
 from ..errors import InvalidInput
 from ..model.rig import Rig
-from .plant import EFFECT_NAMES, OUTSIDE_NAMES, Plant
-
+from .plant import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, Plant
 
 #: Largest severity whose injected magnitudes stay within the diagnosis's default priors (see above).
 PLAUSIBLE_SEVERITY = {"hole_offsets": 1.2, "friction": 7.0, "cable_hardening": 15.0, "link_compliance": 8.0,
                       "sensor_bias": 4.0, "mass_com": 2.5, "tracker_registration": 15.0,
-                      "stiffness_scale": 15.0}
+                      "stiffness_scale": 15.0, "coulomb_friction": 10.0}
 
 
 def _unit(rng: np.random.Generator) -> np.ndarray:
@@ -70,6 +79,8 @@ def inject(plant: Plant, effect: str, severity: float, rng: np.random.Generator)
         changes: dict[str, Any] = {"rig": rig}
     elif effect == "friction":
         changes = {"friction_mu_beta": 0.03 * s * rng.uniform(0.7, 1.3, 6)}
+    elif effect == "coulomb_friction":
+        changes = {"friction_coulomb_N": 0.5 * s * rng.uniform(0.7, 1.3, 6)}
     elif effect == "cable_hardening":
         changes = {"hardening_per_m": 15.0 * s}
     elif effect == "link_compliance":
@@ -94,7 +105,8 @@ def inject(plant: Plant, effect: str, severity: float, rng: np.random.Generator)
         changes = {"drum_slip_threshold_N": rig.t_min_N + 0.55 * (rig.t_max_N - rig.t_min_N),
                    "drum_slip_compliance_m_per_N": 2e-5 * s}
     else:
-        raise InvalidInput(f"unknown effect {effect!r}; expected one of {EFFECT_NAMES + OUTSIDE_NAMES}", "effect")
+        known = EFFECT_NAMES + tuple(VARIANT_NAMES) + OUTSIDE_NAMES
+        raise InvalidInput(f"unknown effect {effect!r}; expected one of {known}", "effect")
     return dataclasses.replace(plant, effects=plant.effects + (effect,), **changes)
 
 

@@ -10,8 +10,16 @@ Physics (independent of the diagnosis's fitting models where it can be):
   length ``u`` is fixed, ``T_p = (k / rho)(c - u)``; it slips when
   ``T_p / T_d`` leaves ``[exp(-mu_beta), exp(+mu_beta)]`` (capstan law), and
   then ``T_p`` sits on the band's edge (a play operator: rate independent,
-  path dependent). A cycle starts settled (``T_p = T_d``) unless
-  ``friction_start`` says otherwise;
+  path dependent). A Coulomb law (a constant friction force ``F_i`` at the
+  guide, as MuJoCo's tendon ``frictionloss``) bounds ``|T_p - T_d| <= F_i``
+  instead: the band is ``T_p in [k e - (1 - rho) F_i, k e + (1 - rho) F_i]``
+  (with both laws the two bands add). The log's first row starts settled
+  (``T_p = T_d``) unless ``friction_start`` says otherwise; with
+  ``persistent`` (the default, as in a real experiment: nobody relaxes the
+  cables between cycles) every later cycle starts from the state where the
+  previous one settled (pose and stuck segments), the rest lengths and the
+  load moving to the new cycle's first row quasi-statically; without it
+  every cycle starts settled;
 * link compliance: the loaded, tracked body is joined to the cable platform
   by a symmetric compliance ``C``, ``R_meas = R_cable exp(hat(C tau_m))``;
 * sensor bias: the F/T reading is offset by a constant ``b`` in {A};
@@ -29,7 +37,7 @@ Effects outside the diagnosis's vocabulary (to test that it says so):
 * drum slip: a cable slips on its drum when its tension exceeds a threshold
   ``T_s``, lengthening its rest length by ``(T - T_s) c_slip`` for the rest
   of the cycle (irreversible, accumulated row after row; the drives re-home
-  between cycles).
+  between cycles, also with ``persistent``).
 """
 
 from __future__ import annotations
@@ -44,7 +52,11 @@ from ..model import kinematics as kin
 from ..model.rig import Rig
 
 #: Width (N) of the rounding of the play operator's corners (keeps Newton's method happy).
-SMOOTH_N = 0.02
+SMOOTH_N = 0.002
+#: Quasi-static steps from one row's load to the next (friction plants), and from a cycle's last row to
+#: the next cycle's first (rest lengths and load) when cycles persist.
+SUBSTEPS_ROW = 8
+SUBSTEPS_NEW_CYCLE = 8
 
 
 def _softplus(z: np.ndarray, w: float) -> np.ndarray:
@@ -58,6 +70,8 @@ def _smooth_clip(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, w: float) -> np.
 
 EFFECT_NAMES = ("hole_offsets", "friction", "cable_hardening", "link_compliance", "sensor_bias", "mass_com",
                 "tracker_registration", "stiffness_scale")
+#: Further laws of a vocabulary effect the testbed can inject, and the vocabulary name a diagnosis should give.
+VARIANT_NAMES = {"coulomb_friction": "friction"}
 #: Effects the testbed simulates that the diagnosis has no model for.
 OUTSIDE_NAMES = ("eyelet_radius", "sensor_drift", "drum_slip")
 
@@ -71,6 +85,7 @@ class Plant:
     friction_mu_beta: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(6))
     friction_platform_fraction: float = 0.1    # rho: compliance share of the platform-side segment
     friction_start: float = 0.0                # band position at a cycle's first row (0 settled, -1 pulled in)
+    friction_coulomb_N: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(6))   # F_i at the guide
     link_compliance_rad_per_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((3, 3)))
     sensor_bias_A_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
     tracker_rotation_B: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))   # Q_B
@@ -80,43 +95,91 @@ class Plant:
     drum_slip_threshold_N: float = np.inf
     drum_slip_compliance_m_per_N: float = 0.0
     effects: tuple[str, ...] = ()
+    persistent: bool = True                    # cycles start where the previous one settled
 
     @classmethod
-    def nominal(cls, rig: Rig) -> "Plant":
+    def nominal(cls, rig: Rig) -> Plant:
+        """The rig without effects.
+
+        Parameters
+        ----------
+        rig : Rig
+
+        Returns
+        -------
+        Plant
+        """
         return cls(rig)
+
+    @property
+    def has_friction(self) -> bool:
+        """Whether any cable has friction at its guide (the response is path dependent)."""
+        return bool(np.any(self.friction_mu_beta > 0) or np.any(np.asarray(self.friction_coulomb_N) > 0))
 
     # ------------------------------------------------------------ simulation
     def respond(self, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray, cycle: np.ndarray,
                 R_init: np.ndarray) -> np.ndarray:
         """True poses of the measured body (n, 3, 3) for rows in time order (noise-free).
 
-        Rows are stepped in order within each cycle (all cycles in parallel), so
-        path-dependent effects see the history of their cycle.
+        Path-dependent plants (friction, drum slip) step the rows in time order,
+        the load (and, between cycles, the rest lengths) moving from one row's
+        to the next in small steps. With :attr:`persistent` the whole log is one
+        history (each cycle starts where the previous one settled); otherwise
+        every cycle starts settled at ``R_init`` of its first row (cycles in
+        parallel). Path-independent plants solve each row from ``R_init`` and the
+        previous row of its cycle.
+
+        Parameters
+        ----------
+        rest_lengths_m : (n, 6) array
+        tau_ext_A_Nm : (n, 3) array
+            True external moments in {A}.
+        cycle : (n,) int array
+            Cycle ids (rows of a cycle contiguous).
+        R_init : (n, 3, 3) array
+            Starting guesses; only each cycle's first row is used.
+
+        Returns
+        -------
+        (n, 3, 3) array
+
+        Raises
+        ------
+        NoEquilibrium
+            The plant has no equilibrium for some row.
         """
+        rest_lengths_m = np.asarray(rest_lengths_m, float)
+        tau_ext_A_Nm = np.asarray(tau_ext_A_Nm, float)
+        cycle = np.asarray(cycle)
         n = len(cycle)
-        starts = np.flatnonzero(np.r_[True, cycle[1:] != cycle[:-1]])
+        new_cycle = np.r_[True, cycle[1:] != cycle[:-1]]
+        path = self.has_friction
+        chain_one = self.persistent and path
+        starts = np.array([0]) if chain_one else np.flatnonzero(new_cycle)
         ends = np.r_[starts[1:], n]
         R_out = np.empty((n, 3, 3))
         R_prev = np.array(R_init[starts], float)
         u_state = np.full((len(starts), 6), np.nan)           # stuck platform-side lengths
         tau_prev = np.array(tau_ext_A_Nm[starts], float)
-        path = bool(np.any(self.friction_mu_beta > 0))
+        l_prev = np.array(rest_lengths_m[starts], float)
         slip = np.zeros((len(starts), 6))           # drum slip so far in each cycle
-        slipping = np.isfinite(self.drum_slip_threshold_N) and self.drum_slip_compliance_m_per_N > 0
         for j in range(int((ends - starts).max())):
             live = np.flatnonzero(starts + j < ends)
             idx = starts[live] + j
+            if chain_one and new_cycle[idx[0]]:
+                slip[:] = 0.0                       # the drives re-home between cycles
             l, tau = rest_lengths_m[idx], tau_ext_A_Nm[idx]
-            if slipping:
-                l = l + slip[live]
-            # path-dependent plants are loaded quasi-statically: the load moves
-            # from the previous row's to this row's in small steps
-            substeps = 8 if (path and j > 0) else 1
+            # path-dependent plants are loaded quasi-statically: the load (and
+            # the rest lengths) move from the previous row's to this row's in small steps
+            boundary = chain_one and bool(new_cycle[idx[0]])
+            substeps = 1 if not (path and j > 0) else (SUBSTEPS_NEW_CYCLE if boundary else SUBSTEPS_ROW)
             R, u = R_prev[live], u_state[live]
             for q in range(1, substeps + 1):
-                tau_q = tau_prev[live] + (tau - tau_prev[live]) * q / substeps
+                f = q / substeps
+                tau_q = tau_prev[live] + (tau - tau_prev[live]) * f
+                l_q = l_prev[live] + (l - l_prev[live]) * f + (slip[live] if self._slipping else 0.0)
 
-                def g(R, l=l, tau_q=tau_q, u=u):
+                def g(R, l=l_q, tau_q=tau_q, u=u):
                     return self._balance(R, l, tau_q, u)[0]
 
                 sol = kin.solve_poses(g, R, tol_Nm=1e-10)
@@ -125,16 +188,21 @@ class Plant:
                     raise NoEquilibrium(f"plant has no equilibrium for rows {bad.tolist()}", "diverged",
                                         float(sol.residual_Nm.max()))
                 R = sol.R
-                _, u = self._balance(R, l, tau_q, u)
+                _, u = self._balance(R, l_q, tau_q, u, smooth_N=0.0)   # the state follows the exact play
             u_state[live] = u
-            if slipping:       # after this row's equilibrium, over-tensioned cables slip
+            if self._slipping:       # after this row's equilibrium, over-tensioned cables slip
                 k = np.asarray(self.rig.cable_stiffness_N_per_m)
-                over = np.maximum(k * (self._lengths(R) - l) - self.drum_slip_threshold_N, 0.0)
+                over = np.maximum(k * (self._lengths(R) - l - slip[live]) - self.drum_slip_threshold_N, 0.0)
                 slip[live] += over * self.drum_slip_compliance_m_per_N
             R_prev[live] = R
             tau_prev[live] = tau
+            l_prev[live] = l
             R_out[idx] = R
         return R_out
+
+    @property
+    def _slipping(self) -> bool:
+        return bool(np.isfinite(self.drum_slip_threshold_N) and self.drum_slip_compliance_m_per_N > 0)
 
     def measured_moment(self, tau_ext_A_Nm: np.ndarray) -> np.ndarray:
         """What the F/T sensor reads without noise (N m): bias plus drift over the rows (time order)."""
@@ -161,7 +229,7 @@ class Plant:
         c, _ = kin.cable_terms(R_m, np.asarray(self.rig.platform_holes_A_m), self._base_holes(R_m))
         return c
 
-    def _balance(self, R_m, l, tau_ext, u):
+    def _balance(self, R_m, l, tau_ext, u, smooth_N=SMOOTH_N):
         rig = self.rig
         mr = rig.platform_mass_kg * np.asarray(rig.com_A_m)
         tau_m = tau_ext + kin.weight_moment(R_m, mr, np.asarray(rig.gravity_B_m_per_s2))
@@ -170,20 +238,23 @@ class Plant:
         c, J = kin.cable_terms(R_c, np.asarray(rig.platform_holes_A_m), self._base_holes(R_c))
         k = np.asarray(rig.cable_stiffness_N_per_m)
         e = c - l
-        T_p = np.maximum(self._friction(c, l, e, k, u), 0.0)
+        T_p = np.maximum(self._friction(c, l, e, k, u, smooth_N), 0.0)
         u_new = c - self.friction_platform_fraction * T_p / k
         T = T_p * (1.0 + self.hardening_per_m * np.maximum(e, 0.0))
         g = np.einsum("nij,ni->nj", J, T) + np.einsum("nij,nj->ni", E, tau_m)
         return g, u_new
 
-    def _friction(self, c, l, e, k, u):
+    def _friction(self, c, l, e, k, u, smooth_N):
         T_free = k * e
-        if not np.any(self.friction_mu_beta > 0):
+        if not self.has_friction:
             return T_free
         rho = self.friction_platform_fraction
         r = np.exp(self.friction_mu_beta)
-        lo = k * e / (rho + (1 - rho) * r)        # r_- = 1/r
-        hi = k * e / (rho + (1 - rho) / r)
-        start = k * e * np.exp(self.friction_start * self.friction_mu_beta)   # first row: T_p = T_d r^s0
+        F = (1 - rho) * np.asarray(self.friction_coulomb_N, float)
+        lo = k * e / (rho + (1 - rho) * r) - F      # r_- = 1/r
+        hi = k * e / (rho + (1 - rho) / r) + F
+        s0 = self.friction_start                    # first row: T_p = T_d r^s0 + s0 (1 - rho) F
+        start = k * e * np.exp(s0 * self.friction_mu_beta) + s0 * F
         stick = np.where(np.isnan(u), start, (k / rho) * (c - np.nan_to_num(u)))
-        return _smooth_clip(stick, np.minimum(lo, hi), np.maximum(lo, hi), SMOOTH_N)
+        lo, hi = np.minimum(lo, hi), np.maximum(lo, hi)
+        return _smooth_clip(stick, lo, hi, smooth_N) if smooth_N > 0 else np.clip(stick, lo, hi)

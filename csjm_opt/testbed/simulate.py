@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Iterable
+import dataclasses
+from collections.abc import Iterable
 
 import numpy as np
 
@@ -19,19 +20,24 @@ from .plant import Plant
 def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
                         effect: str | Iterable[str] | Plant | None = None, severity: float = 1.0,
                         noise: InstrumentNoise | None = None, steps: int = 4,
-                        first_cycle: int = 0) -> MeasurementLog:
+                        first_cycle: int = 0, persistent: bool | None = None) -> MeasurementLog:
     """A log of ``n_cycles`` load cycles (``2 * steps + 1`` rows each) on ``rig``.
 
     ``effect``: ``None``/``"none"`` (nominal plant), an effect name from the
     documented vocabulary, several names, or a ready :class:`Plant`. Rest lengths are
     commanded with the *nominal* rig (as an experimenter would); the plant
     responds; the F/T reading (plus any bias) and the tracked pose get the
-    instrument noise (``InstrumentNoise.paper()`` by default).
+    instrument noise (``InstrumentNoise.paper()`` by default). ``persistent``
+    (default: the plant's own setting, ``True`` unless changed) makes each cycle
+    start where the previous one settled, friction state included; ``False``
+    starts every cycle relaxed.
     """
     if int(n_cycles) < 1 or int(steps) < 1:
         raise InvalidInput(f"need n_cycles >= 1 and steps >= 1 (got {n_cycles}, {steps})", "n_cycles")
     noise = InstrumentNoise.paper() if noise is None else noise
     plant = effect if isinstance(effect, Plant) else make_plant(rig, effect, severity, rng)
+    if persistent is not None:
+        plant = dataclasses.replace(plant, persistent=bool(persistent))
     cycles = design_cycles(rig, n_cycles, rng, steps=steps)
     cycle = np.concatenate([np.full(len(c.alphas), first_cycle + i) for i, c in enumerate(cycles)])
     l = np.concatenate([np.repeat(c.rest_lengths_m[None], len(c.alphas), 0) for c in cycles])
