@@ -54,7 +54,7 @@ def test_folds_are_grouped_by_cycle():
 def test_noise_floor_matches_the_instrument_noise(none_table):
     t = none_table
     floor, dof = noise_floor(t)
-    assert dof > 15
+    assert dof >= 10              # per cycle: offset, load slopes per branch, branch step, first row
     assert floor == pytest.approx(t.instrument_floor_rad, rel=0.35)
 
 

@@ -143,9 +143,9 @@ class Friction(Effect):
         return np.r_[np.full(8, np.inf), 1.0]
 
     def default_ranges(self):
-        """Capstan factors up to 0.3 (35 % tension band: a badly worn guide), or Coulomb forces up to 20 % of
+        """Capstan factors up to 0.3 (35 % tension band: a badly worn guide), or Coulomb forces up to 10 % of
         the rig's largest tension; stick factor and drive-side weight up to 2."""
-        top = 0.3 if self.law == "capstan" else 0.2 * self.t_max_N
+        top = 0.3 if self.law == "capstan" else 0.1 * self.t_max_N
         return {**{n: (0.0, top) for n in self.param_names[:6]},
                 "stick_travel_factor": (0.0, 2.0), "rest_step_weight": (0.0, 2.0), "first_row_state": (-1.0, 1.0)}
 
