@@ -23,6 +23,8 @@ CLOSE_FRACTION = 0.8
 HELDOUT_ALPHA = 0.10
 #: Log Bayes factor (nats) by which a pair must beat every rival on the evidence route (>100: decisive).
 EVIDENCE_MIN = 5.0
+#: Models within this many nats of log evidence of the best are leading hypotheses (alternatives, --suggest).
+LEAD_NATS = 10.0
 #: Remaining structure matters (a stand-in warning) when its systematic part is this share of the floor.
 MATERIAL_SHARE = 0.5
 #: Singles a pair search starts from (the first effect, then the lowest held-out errors).

@@ -18,6 +18,8 @@ from ..model.rig import Rig
 
 #: Largest share of rows whose nominal tensions at the measured pose are implausible.
 MAX_BAD_SHARE = 0.25
+#: The extra rows' nominal pose residual may exceed the log's (or 10 mrad) by at most this factor.
+RESIDUAL_FACTOR = 5.0
 #: Nominal tension beyond this multiple of ``t_max`` (or a slack below ``-t_max``) is implausible.
 TENSION_FACTOR = 3.0
 
@@ -48,6 +50,31 @@ def check_rows_belong(rig: Rig, log: MeasurementLog, what: str) -> None:
                            f"{rig.t_max_N:g}] N); is it a log of another rig?", "extra")
 
 
+def check_same_rig(rig: Rig, log: MeasurementLog, extra: MeasurementLog, what: str) -> None:
+    """Raise when the nominal model misses the extra rows far more than it misses the log's.
+
+    Parameters
+    ----------
+    rig : Rig
+    log, extra : MeasurementLog
+    what : str
+        Name of the extra log in the message.
+
+    Raises
+    ------
+    InvalidInput
+        The extra rows' nominal pose residual RMS exceeds ``RESIDUAL_FACTOR`` x max(the log's, 10 mrad):
+        the same unmodelled effects cannot make that difference, another rig can.
+    """
+    from .residuals import compute_residuals      # noqa: PLC0415 (residuals import augmented, heavy)
+
+    own = compute_residuals(rig, log).rms_rad
+    theirs = compute_residuals(rig, extra).rms_rad
+    if not theirs <= RESIDUAL_FACTOR * max(own, 0.01):
+        raise InvalidInput(f"{what}: the rig file's model misses its poses by {1e3 * theirs:.0f} mrad RMS against "
+                           f"{1e3 * own:.0f} mrad on the log; is it a log of another rig?", "extra")
+
+
 def append_log(rig: Rig, log: MeasurementLog, extra: MeasurementLog, what: str = "extra log") -> MeasurementLog:
     """``log`` followed by ``extra`` (cycles renumbered after the log's; samples renumbered).
 
@@ -65,9 +92,10 @@ def append_log(rig: Rig, log: MeasurementLog, extra: MeasurementLog, what: str =
     Raises
     ------
     InvalidInput
-        ``extra`` does not belong to ``rig`` (:func:`check_rows_belong`).
+        ``extra`` does not belong to ``rig`` (:func:`check_rows_belong`, :func:`check_same_rig`).
     """
     check_rows_belong(rig, extra, what)
+    check_same_rig(rig, log, extra, what)
     ids = {c: i for i, c in enumerate(dict.fromkeys(int(c) for c in extra.cycle))}
     start = int(np.max(log.cycle)) + 1
     cyc = np.r_[np.asarray(log.cycle), [start + ids[int(c)] for c in extra.cycle]]

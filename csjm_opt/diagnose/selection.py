@@ -80,6 +80,7 @@ from ._decision import (  # noqa: F401 (ALPHA and the thresholds are re-exported
     CLOSE_FRACTION,
     EVIDENCE_MIN,
     HELDOUT_ALPHA,
+    LEAD_NATS,
     IMPROVE_MULT,
     MATERIAL_SHARE,
     _Context,
@@ -194,7 +195,14 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     selected, second, final, verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_there)
     remaining = ctx.signature(final)
     n_cycles = len(np.unique(ctx.held.cycle))
-    if selected not in ("none", "unexplained") and final.fit.p_eff > SHORT_LOG_SHARE * 3 * n_cycles:
+    ev_final = ctx.evidence(final)
+    rivals_ev = [ctx.evidence(sc) for n, sc in singles.items() if sc is not final and tests[n]["plausible"]] + \
+                [ctx.evidence(sc) for k, sc in pair_scores.items() if sc is not final
+                 and next((p["plausible"] for p in pairs if tuple(p["effects"]) == k), False)]
+    decisive = bool(ev_final - max(rivals_ev, default=-np.inf) >= EVIDENCE_MIN)
+    verdict["evidence_margin"] = float(ev_final - max(rivals_ev, default=-np.inf))
+    if selected not in ("none", "unexplained") and final.fit.p_eff > SHORT_LOG_SHARE * 3 * n_cycles \
+            and not decisive:
         verdict["warnings"].append(
             f"{final.name} has {final.fit.p_eff:.0f} effective parameters against {3 * n_cycles} cycle-level "
             f"pose offsets in this log ({n_cycles} cycles): flexible enough to stand in for an effect outside the "
@@ -219,8 +227,10 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
             if n != selected and paired_heldout_test(singles[n], singles[selected]) >= HELDOUT_ALPHA \
                     and (sep is None or not sep["separable"]):
                 confounded.append(n)
+    # rivals the log cannot tell from the selected: detected, not separable, and not decisively worse
     alternatives = [n for n in detected if n != selected and selected in singles
-                    and any(set(p["effects"]) == {n, selected} and not p["separable"] for p in pairs)]
+                    and any(set(p["effects"]) == {n, selected} and not p["separable"] for p in pairs)
+                    and tests[n]["log_evidence"] >= tests[selected]["log_evidence"] - LEAD_NATS]
     verdict["alternatives"] = alternatives
     if alternatives:
         verdict["warnings"].append(f"{selected} is not separable on this log from {', '.join(alternatives)} "

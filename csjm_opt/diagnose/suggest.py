@@ -46,6 +46,7 @@ from ..model.numeric import Model
 from ..model.rig import Rig
 from ..model.statics import rest_lengths_for, solve_equilibrium
 from ..planning.planner import plan_tensions
+from ._decision import LEAD_NATS
 from .augmented import Rows, with_entry
 from .loads import Load, default_load_set
 from .result import Diagnosis
@@ -57,8 +58,6 @@ MAX_TWIST_RAD = 0.3
 PRETENSION_SHARE = (0.25, 0.75)
 N_CANDIDATES = 40
 MAX_HYPOTHESES = 5
-#: Models within this many nats of log evidence of the best are leading hypotheses.
-LEAD_NATS = 10.0
 #: Two hypotheses no candidate row can separate by this many noise sd are reported as equivalent.
 EQUIVALENT_SD = 1.0
 #: An effect is "near the floor" when the systematic gap it explains is below this many floors.
