@@ -16,7 +16,7 @@ from typing import NoReturn
 from ..errors import CsjmError, UsageError
 
 #: Modules that register subcommands, in help order.
-COMMAND_MODULES = ("core", "demo", "shape", "identify", "diagnose", "sweep", "report", "export_mjcf")
+COMMAND_MODULES = ("core", "demo", "shape", "identify", "diagnose", "sweep", "report", "export_mjcf", "simulate")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -42,6 +42,8 @@ sensor_drift      F/T offset drifting by 0.5 mN m per row * severity, random
                   direction (0.1 N m over a 200-row log)
 drum_slip         cables slip on their drums above 55 % of the tension range,
                   by 20 um per N over the threshold * severity
+joint_friction    Coulomb friction at the ball joint, 0.03 N m * severity per
+                  axis of {A} (MuJoCo's ball-joint ``frictionloss``)
 ================  ===========================================================
 """
 
@@ -69,8 +71,30 @@ def _unit(rng: np.random.Generator) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
-def inject(plant: Plant, effect: str, severity: float, rng: np.random.Generator) -> Plant:
-    """``plant`` with one more effect of ``severity`` (1 = typical)."""
+def inject(plant, effect: str, severity: float, rng: np.random.Generator):
+    """``plant`` with one more effect of ``severity`` (1 = typical).
+
+    Parameters
+    ----------
+    plant : Plant or MujocoPlant
+        A MuJoCo plant gets the effect in its :class:`Plant` description (same draws).
+    effect : str
+        A name of the module's tables.
+    severity : float
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    Plant or MujocoPlant
+        Of the same kind as ``plant``.
+
+    Raises
+    ------
+    InvalidInput
+        Unknown effect name (or one the MuJoCo plant cannot realise).
+    """
+    if not isinstance(plant, Plant):            # a MujocoPlant: inject into its description
+        return dataclasses.replace(plant, plant=inject(plant.plant, effect, severity, rng))
     s = float(severity)
     rig = plant.rig
     if effect == "hole_offsets":
@@ -97,6 +121,8 @@ def inject(plant: Plant, effect: str, severity: float, rng: np.random.Generator)
     elif effect == "stiffness_scale":
         factor = np.exp(0.03 * s * rng.choice([-1.0, 1.0]))
         changes = {"rig": rig.replace(cable_stiffness_N_per_m=factor * np.asarray(rig.cable_stiffness_N_per_m))}
+    elif effect == "joint_friction":
+        changes = {"joint_friction_Nm": 0.03 * s}
     elif effect == "eyelet_radius":
         changes = {"eyelet_radius_m": 3e-3 * s}
     elif effect == "sensor_drift":
@@ -111,11 +137,41 @@ def inject(plant: Plant, effect: str, severity: float, rng: np.random.Generator)
 
 
 def make_plant(rig: Rig, effects: str | Iterable[str] | None, severity: float,
-               rng: np.random.Generator) -> Plant:
-    """The nominal ``rig`` with the named effect(s) injected (``None`` or ``"none"``: nominal)."""
-    plant = Plant.nominal(rig)
-    if effects is None or effects == "none":
-        return plant
-    for name in ([effects] if isinstance(effects, str) else list(effects)):
-        plant = inject(plant, name, severity, rng)
-    return plant
+               rng: np.random.Generator, plant: str = "quasi-static", persistent: bool = True):
+    """The nominal ``rig`` with the named effect(s) injected (``None`` or ``"none"``: nominal).
+
+    Parameters
+    ----------
+    rig : Rig
+        The nominal rig.
+    effects : str, iterable of str or None
+        Effect names (module tables).
+    severity : float
+        Common severity (1 = typical).
+    rng : numpy.random.Generator
+        Draws of the effects (the same for both plants).
+    plant : {"quasi-static", "mujoco"}, optional
+        The quasi-static :class:`Plant` or the :class:`~csjm_opt.testbed.mujoco_plant.MujocoPlant`.
+    persistent : bool, optional
+        Cycles start where the previous one settled (default) or relaxed.
+
+    Returns
+    -------
+    Plant or MujocoPlant
+
+    Raises
+    ------
+    InvalidInput
+        Unknown effect or plant name.
+    """
+    if plant not in ("quasi-static", "mujoco"):
+        raise InvalidInput(f"unknown plant {plant!r}; expected 'quasi-static' or 'mujoco'", "plant")
+    made = dataclasses.replace(Plant.nominal(rig), persistent=bool(persistent))
+    if not (effects is None or effects == "none"):
+        for name in ([effects] if isinstance(effects, str) else list(effects)):
+            made = inject(made, name, severity, rng)
+    if plant == "mujoco":
+        from .mujoco_plant import as_mujoco
+
+        return as_mujoco(made)
+    return made

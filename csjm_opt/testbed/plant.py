@@ -25,7 +25,12 @@ Physics (independent of the diagnosis's fitting models where it can be):
 * sensor bias: the F/T reading is offset by a constant ``b`` in {A};
 * tracker registration: the tracker reports ``Q_B R Q_A`` (its frame rotated
   against {B}, the markers against {A});
-* a common stiffness error: a :class:`Rig` with scaled stiffnesses.
+* a common stiffness error: a :class:`Rig` with scaled stiffnesses;
+* joint friction: a Coulomb friction moment ``|tau_f,j| <= M`` per axis of
+  {A} at the ball joint (MuJoCo's ball-joint ``frictionloss``): the platform
+  sticks to an anchor pose (stiffly, ``JOINT_STICK_NM_PER_RAD``) until the
+  moment needed reaches ``M`` on an axis, then slips (a play operator, with
+  memory like the cable friction).
 
 Effects outside the diagnosis's vocabulary (to test that it says so):
 
@@ -56,6 +61,9 @@ SMOOTH_N = 0.002
 #: Quasi-static steps from one row's load to the next (friction plants), and from a cycle's last row to
 #: the next cycle's first (rest lengths and load) when cycles persist.
 SUBSTEPS_ROW = 8
+#: Stiffness of a stuck ball joint (N m/rad; joint friction) and the lever (m) turning SMOOTH_N into a moment.
+JOINT_STICK_NM_PER_RAD = 1e4
+JOINT_SMOOTH_M = 0.01
 SUBSTEPS_NEW_CYCLE = 8
 
 
@@ -73,7 +81,7 @@ EFFECT_NAMES = ("hole_offsets", "friction", "cable_hardening", "link_compliance"
 #: Further laws of a vocabulary effect the testbed can inject, and the vocabulary name a diagnosis should give.
 VARIANT_NAMES = {"coulomb_friction": "friction"}
 #: Effects the testbed simulates that the diagnosis has no model for.
-OUTSIDE_NAMES = ("eyelet_radius", "sensor_drift", "drum_slip")
+OUTSIDE_NAMES = ("eyelet_radius", "sensor_drift", "drum_slip", "joint_friction")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -86,6 +94,7 @@ class Plant:
     friction_platform_fraction: float = 0.1    # rho: compliance share of the platform-side segment
     friction_start: float = 0.0                # band position at a cycle's first row (0 settled, -1 pulled in)
     friction_coulomb_N: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(6))   # F_i at the guide
+    joint_friction_Nm: float = 0.0             # Coulomb friction moment of the ball joint, per axis of {A}
     link_compliance_rad_per_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((3, 3)))
     sensor_bias_A_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
     tracker_rotation_B: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))   # Q_B
@@ -114,11 +123,12 @@ class Plant:
     @property
     def has_friction(self) -> bool:
         """Whether any cable has friction at its guide (the response is path dependent)."""
-        return bool(np.any(self.friction_mu_beta > 0) or np.any(np.asarray(self.friction_coulomb_N) > 0))
+        return bool(np.any(self.friction_mu_beta > 0) or np.any(np.asarray(self.friction_coulomb_N) > 0)
+                    or self.joint_friction_Nm > 0)
 
     # ------------------------------------------------------------ simulation
     def respond(self, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray, cycle: np.ndarray,
-                R_init: np.ndarray) -> np.ndarray:
+                R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None) -> np.ndarray:
         """True poses of the measured body (n, 3, 3) for rows in time order (noise-free).
 
         Path-dependent plants (friction, drum slip) step the rows in time order,
@@ -138,6 +148,9 @@ class Plant:
             Cycle ids (rows of a cycle contiguous).
         R_init : (n, 3, 3) array
             Starting guesses; only each cycle's first row is used.
+        load_first_moment_A_kgm : (n, 3) array, optional
+            Dead weights hung on the measured body, ``mass * point`` in {A}
+            (kg m): their moment ``(m p) x (R^T g)`` adds to ``tau_ext_A_Nm``.
 
         Returns
         -------
@@ -152,6 +165,8 @@ class Plant:
         tau_ext_A_Nm = np.asarray(tau_ext_A_Nm, float)
         cycle = np.asarray(cycle)
         n = len(cycle)
+        mr_load = (np.zeros((n, 3)) if load_first_moment_A_kgm is None
+                   else np.asarray(load_first_moment_A_kgm, float).reshape(n, 3))
         new_cycle = np.r_[True, cycle[1:] != cycle[:-1]]
         path = self.has_friction
         chain_one = self.persistent and path
@@ -159,8 +174,9 @@ class Plant:
         ends = np.r_[starts[1:], n]
         R_out = np.empty((n, 3, 3))
         R_prev = np.array(R_init[starts], float)
-        u_state = np.full((len(starts), 6), np.nan)           # stuck platform-side lengths
+        u_state = np.full((len(starts), 9), np.nan)    # stuck platform-side lengths, joint anchor (rotvec)
         tau_prev = np.array(tau_ext_A_Nm[starts], float)
+        mr_prev = np.array(mr_load[starts], float)
         l_prev = np.array(rest_lengths_m[starts], float)
         slip = np.zeros((len(starts), 6))           # drum slip so far in each cycle
         for j in range(int((ends - starts).max())):
@@ -168,7 +184,7 @@ class Plant:
             idx = starts[live] + j
             if chain_one and new_cycle[idx[0]]:
                 slip[:] = 0.0                       # the drives re-home between cycles
-            l, tau = rest_lengths_m[idx], tau_ext_A_Nm[idx]
+            l, tau, mr = rest_lengths_m[idx], tau_ext_A_Nm[idx], mr_load[idx]
             # path-dependent plants are loaded quasi-statically: the load (and
             # the rest lengths) move from the previous row's to this row's in small steps
             boundary = chain_one and bool(new_cycle[idx[0]])
@@ -177,10 +193,11 @@ class Plant:
             for q in range(1, substeps + 1):
                 f = q / substeps
                 tau_q = tau_prev[live] + (tau - tau_prev[live]) * f
+                mr_q = mr_prev[live] + (mr - mr_prev[live]) * f
                 l_q = l_prev[live] + (l - l_prev[live]) * f + (slip[live] if self._slipping else 0.0)
 
-                def g(R, l=l_q, tau_q=tau_q, u=u):
-                    return self._balance(R, l, tau_q, u)[0]
+                def g(R, l=l_q, tau_q=tau_q, u=u, mr_q=mr_q):
+                    return self._balance(R, l, tau_q, u, mr_q)[0]
 
                 sol = kin.solve_poses(g, R, tol_Nm=1e-10)
                 if not np.all(sol.converged(1e-7)):
@@ -188,7 +205,7 @@ class Plant:
                     raise NoEquilibrium(f"plant has no equilibrium for rows {bad.tolist()}", "diverged",
                                         float(sol.residual_Nm.max()))
                 R = sol.R
-                _, u = self._balance(R, l_q, tau_q, u, smooth_N=0.0)   # the state follows the exact play
+                _, u = self._balance(R, l_q, tau_q, u, mr_q, smooth_N=0.0)   # the state follows the exact play
             u_state[live] = u
             if self._slipping:       # after this row's equilibrium, over-tensioned cables slip
                 k = np.asarray(self.rig.cable_stiffness_N_per_m)
@@ -196,6 +213,7 @@ class Plant:
                 slip[live] += over * self.drum_slip_compliance_m_per_N
             R_prev[live] = R
             tau_prev[live] = tau
+            mr_prev[live] = mr
             l_prev[live] = l
             R_out[idx] = R
         return R_out
@@ -229,19 +247,31 @@ class Plant:
         c, _ = kin.cable_terms(R_m, np.asarray(self.rig.platform_holes_A_m), self._base_holes(R_m))
         return c
 
-    def _balance(self, R_m, l, tau_ext, u, smooth_N=SMOOTH_N):
+    def _balance(self, R_m, l, tau_ext, u, mr_load, smooth_N=SMOOTH_N):
         rig = self.rig
-        mr = rig.platform_mass_kg * np.asarray(rig.com_A_m)
+        mr = rig.platform_mass_kg * np.asarray(rig.com_A_m) + mr_load
         tau_m = tau_ext + kin.weight_moment(R_m, mr, np.asarray(rig.gravity_B_m_per_s2))
         E = so3.exp(tau_m @ self.link_compliance_rad_per_Nm)     # C symmetric
         R_c = R_m @ np.swapaxes(E, 1, 2)
         c, J = kin.cable_terms(R_c, np.asarray(rig.platform_holes_A_m), self._base_holes(R_c))
         k = np.asarray(rig.cable_stiffness_N_per_m)
         e = c - l
-        T_p = np.maximum(self._friction(c, l, e, k, u, smooth_N), 0.0)
-        u_new = c - self.friction_platform_fraction * T_p / k
+        T_p = np.maximum(self._friction(c, l, e, k, u[:, :6], smooth_N), 0.0)
+        u_new = np.empty_like(u)
+        u_new[:, :6] = c - self.friction_platform_fraction * T_p / k
         T = T_p * (1.0 + self.hardening_per_m * np.maximum(e, 0.0))
         g = np.einsum("nij,ni->nj", J, T) + np.einsum("nij,nj->ni", E, tau_m)
+        if self.joint_friction_Nm > 0:     # per axis of {A}: stuck to an anchor pose, slips at the bound
+            a = u[:, 6:]
+            z = so3.log(np.swapaxes(so3.exp(np.nan_to_num(a)), 1, 2) @ R_c)
+            stick = np.where(np.isnan(a), 0.0, -JOINT_STICK_NM_PER_RAD * z)
+            M = np.full_like(stick, self.joint_friction_Nm)
+            w = smooth_N * JOINT_SMOOTH_M
+            tau_f = _smooth_clip(stick, -M, M, w) if w > 0 else np.clip(stick, -M, M)
+            g = g + tau_f
+            u_new[:, 6:] = so3.log(R_c @ so3.exp(tau_f / JOINT_STICK_NM_PER_RAD))
+        else:
+            u_new[:, 6:] = np.nan
         return g, u_new
 
     def _friction(self, c, l, e, k, u, smooth_N):

@@ -14,17 +14,19 @@ from ..measurement.logfile import MeasurementLog
 from ..model.rig import Rig
 from .cycles import design_cycles
 from .injection import make_plant
+from .mujoco_plant import MujocoPlant
 from .plant import Plant
 
 
 def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
-                        effect: str | Iterable[str] | Plant | None = None, severity: float = 1.0,
+                        effect: str | Iterable[str] | Plant | MujocoPlant | None = None, severity: float = 1.0,
                         noise: InstrumentNoise | None = None, steps: int = 4,
                         first_cycle: int = 0, persistent: bool | None = None) -> MeasurementLog:
     """A log of ``n_cycles`` load cycles (``2 * steps + 1`` rows each) on ``rig``.
 
     ``effect``: ``None``/``"none"`` (nominal plant), an effect name from the
-    documented vocabulary, several names, or a ready :class:`Plant`. Rest lengths are
+    documented vocabulary, several names, or a ready :class:`Plant` or
+    :class:`~csjm_opt.testbed.mujoco_plant.MujocoPlant`. Rest lengths are
     commanded with the *nominal* rig (as an experimenter would); the plant
     responds; the F/T reading (plus any bias) and the tracked pose get the
     instrument noise (``InstrumentNoise.paper()`` by default). ``persistent``
@@ -35,9 +37,9 @@ def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
     if int(n_cycles) < 1 or int(steps) < 1:
         raise InvalidInput(f"need n_cycles >= 1 and steps >= 1 (got {n_cycles}, {steps})", "n_cycles")
     noise = InstrumentNoise.paper() if noise is None else noise
-    plant = effect if isinstance(effect, Plant) else make_plant(rig, effect, severity, rng)
+    plant = effect if isinstance(effect, (Plant, MujocoPlant)) else make_plant(rig, effect, severity, rng)
     if persistent is not None:
-        plant = dataclasses.replace(plant, persistent=bool(persistent))
+        plant = with_persistence(plant, bool(persistent))
     cycles = design_cycles(rig, n_cycles, rng, steps=steps)
     cycle = np.concatenate([np.full(len(c.alphas), first_cycle + i) for i, c in enumerate(cycles)])
     l = np.concatenate([np.repeat(c.rest_lengths_m[None], len(c.alphas), 0) for c in cycles])
@@ -48,3 +50,20 @@ def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
     tau_meas = plant.measured_moment(tau) + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)
     R_meas = plant.measured_pose(R_true) @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
     return MeasurementLog.from_arrays(cycle, l, tau_meas, R_meas)
+
+
+def with_persistence(plant, persistent: bool):
+    """``plant`` (a :class:`Plant` or a MuJoCo plant) with its ``persistent`` setting changed.
+
+    Parameters
+    ----------
+    plant : Plant or MujocoPlant
+    persistent : bool
+
+    Returns
+    -------
+    Plant or MujocoPlant
+    """
+    if isinstance(plant, Plant):
+        return dataclasses.replace(plant, persistent=persistent)
+    return dataclasses.replace(plant, plant=dataclasses.replace(plant.plant, persistent=persistent))

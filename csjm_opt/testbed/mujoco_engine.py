@@ -1,0 +1,234 @@
+"""One MuJoCo run of a :class:`~csjm_opt.testbed.mujoco_plant.MujocoPlant` (its state carries across rows)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import mujoco
+import numpy as np
+
+from .. import so3
+from ..errors import NoEquilibrium
+from ..model.dynamics import rig_dynamics
+from ..model.mjcf import quat_wxyz
+from .certify import certify_static
+from .mujoco_model import has_link, plant_mjcf
+
+if TYPE_CHECKING:
+    from .mujoco_plant import MujocoPlant, MujocoRow
+
+#: Inputs are changed in this many chunks over a ramp.
+RAMP_CHUNKS = 30
+#: Steps between checks of the joint speed while settling.
+CHECK_STEPS = 25
+#: Joint speed (rad/s) at which a frictionless plant hands over to Newton's method.
+FRICTIONLESS_SPEED_TOL = 1e-4
+#: Relative excess over a friction bound still counted as within it (a slipping element sits on its bound).
+BOUND_SLACK = 1e-4
+
+
+def _rotation(q: np.ndarray) -> np.ndarray:
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, np.asarray(q, float))
+    return R.reshape(3, 3)
+
+
+class Engine:
+    """MuJoCo model and data of a plant, with the run-time forces (hardening, link spring, load)."""
+
+    def __init__(self, mp: MujocoPlant, l0: np.ndarray) -> None:
+        from .mujoco_plant import critical_damping
+
+        self.mp, self.p = mp, mp.plant
+        rig = self.p.rig
+        self.link = has_link(self.p)
+        I = rig_dynamics(rig).inertia_com_A_kgm2
+        lam_I = np.linalg.eigvalsh(I)
+        damping = critical_damping(self.p)
+        timestep = 1e-3
+        if self.link:
+            self.K_link = np.linalg.inv(np.asarray(self.p.link_compliance_rad_per_Nm, float))
+            k_max = float(np.linalg.eigvalsh(0.5 * (self.K_link + self.K_link.T)).max())
+            timestep = min(timestep, 0.3 / np.sqrt(k_max / lam_I[0]))
+        self.m = mujoco.MjModel.from_xml_string(plant_mjcf(self.p, l0, damping, timestep,
+                                                           noslip_iterations=mp.noslip_iterations))
+        if self.link:
+            self.m.dof_damping[3:6] = 2.0 * np.sqrt(k_max * lam_I[-1])
+        # tight solver and noslip tolerances: at the defaults (1e-8, 1e-6) a stuck tendon still creeps (~2e-6 rad/s)
+        self.m.opt.tolerance = 1e-12
+        self.m.opt.iterations = 200
+        self.m.opt.noslip_tolerance = mp.noslip_tolerance
+        self.d = mujoco.MjData(self.m)
+        self.nv = self.m.nv
+        self.tool = slice(3, 6) if self.link else slice(0, 3)
+        self.k = np.asarray(rig.cable_stiffness_N_per_m, float)
+        self.h = float(self.p.hardening_per_m)
+        self.mu = np.asarray(self.p.friction_mu_beta, float)
+        self.capstan = bool(np.any(self.mu > 0))
+        self.F0 = np.array(self.m.tendon_frictionloss, float)
+        self.M0 = np.array(self.m.dof_frictionloss, float)
+        self.frictional = bool(self.capstan or np.any(self.F0 > 0) or np.any(self.M0 > 0))
+        self.busy_always = self.link or self.h != 0 or self.capstan      # forces to update every step
+        self.busy = self.busy_always
+        self.g_B = np.asarray(rig.gravity_B_m_per_s2, float)
+        self.l = np.asarray(l0, float).copy()
+        self.tau = np.zeros(3)
+        self.mr = np.zeros(3)
+        self.t = 0.0
+
+    # ------------------------------------------------------------ forces
+    def set_inputs(self, l: np.ndarray, tau: np.ndarray, mr: np.ndarray) -> None:
+        """Rest lengths (the tendon springs' dead band), the load on the tool, its dead weights' ``m p``."""
+        self.l = np.asarray(l, float).copy()
+        self.tau = np.asarray(tau, float).copy()
+        self.mr = np.asarray(mr, float).copy()
+        self.busy = self.busy_always or bool(np.any(self.mr != 0))
+        self.m.tendon_lengthspring[:, 1] = self.l
+
+    def applied(self) -> tuple[np.ndarray, np.ndarray]:
+        """Run-time generalised forces at the data's current kinematics, and the cable tensions."""
+        d = self.d
+        e = np.maximum(np.asarray(d.ten_length) - self.l, 0.0)
+        extra = self.k * self.h * e ** 2
+        qfrc = np.zeros(self.nv)
+        R_link = _rotation(d.qpos[4:8]) if self.link else np.eye(3)
+        tau = self.tau
+        if np.any(self.mr != 0):             # dead weights: (m p) x (R_tool^T g)
+            R_tool = _rotation(d.qpos[:4]) @ R_link
+            tau = tau + np.cross(self.mr, R_tool.T @ self.g_B)
+        qfrc[self.tool] += tau               # the load on the tool, in its frame
+        if self.h:
+            qfrc -= np.asarray(d.ten_J).reshape(6, self.nv).T @ extra
+        if self.link:                         # the load is external: it also acts on the platform's dofs
+            qfrc[0:3] += R_link @ tau
+            qfrc[3:6] -= self.K_link @ so3.log(R_link)      # the link's spring (internal)
+        return qfrc, self.k * e + extra
+
+    def net(self, qpos: np.ndarray) -> np.ndarray:
+        """Frictionless generalised net force at rest at ``qpos`` (MuJoCo's ``qfrc_smooth`` plus run-time forces)."""
+        m, d = self.m, self.d
+        d.qpos[:] = qpos
+        d.qvel[:] = 0.0
+        d.qfrc_applied[:] = 0.0
+        mujoco.mj_forward(m, d)
+        qfrc, _ = self.applied()
+        return np.asarray(d.qfrc_smooth) + qfrc
+
+    # ------------------------------------------------------------ motion
+    def run(self, steps: int) -> None:
+        """``steps`` engine steps with the current inputs."""
+        m, d = self.m, self.d
+        if not self.busy:
+            d.qfrc_applied[:] = 0.0
+            d.qfrc_applied[self.tool] = self.tau
+            mujoco.mj_step(m, d, nstep=int(steps))
+        else:
+            for _ in range(int(steps)):
+                mujoco.mj_step1(m, d)
+                qfrc, T = self.applied()
+                d.qfrc_applied[:] = qfrc
+                if self.capstan and self.frictional:
+                    m.tendon_frictionloss[:] = self.F0 + self.mu * T
+                mujoco.mj_step2(m, d)
+        self.t += steps * m.opt.timestep
+
+    def ramp(self, l: np.ndarray, tau: np.ndarray, mr: np.ndarray) -> None:
+        """Move the inputs from the current ones to ``(l, tau, mr)`` over the plant's ``ramp_s``."""
+        l0, tau0, mr0 = self.l.copy(), self.tau.copy(), self.mr.copy()
+        steps = max(1, int(round(self.mp.ramp_s / self.m.opt.timestep / RAMP_CHUNKS)))
+        for q in range(1, RAMP_CHUNKS + 1):
+            f = q / RAMP_CHUNKS
+            self.set_inputs(l0 + (l - l0) * f, tau0 + (tau - tau0) * f, mr0 + (mr - mr0) * f)
+            self.run(steps)
+        self.set_inputs(l, tau, mr)
+
+    def relaxed_start(self, R: np.ndarray, l: np.ndarray, tau: np.ndarray, mr: np.ndarray) -> None:
+        """Start at ``R`` and settle without friction (nothing stuck), then switch friction on."""
+        d = self.d
+        d.qpos[:] = 0.0
+        d.qpos[:4] = quat_wxyz(R)
+        if self.link:
+            d.qpos[4] = 1.0
+        d.qvel[:] = 0.0
+        self.set_inputs(l, tau, mr)
+        F, M, fr = self.F0.copy(), self.M0.copy(), self.frictional
+        self.m.tendon_frictionloss[:] = 0.0
+        self.m.dof_frictionloss[:] = 0.0
+        self.frictional = False
+        try:
+            self._wait()
+            self.polish(np.arange(self.nv))
+        finally:
+            self.m.tendon_frictionloss[:] = F
+            self.m.dof_frictionloss[:] = M
+            self.frictional = fr
+        mujoco.mj_forward(self.m, self.d)
+
+    def _wait(self) -> None:
+        m, d = self.m, self.d
+        q_start = d.qpos[:4].copy()
+        # without friction Newton's method finishes the settling: the engine only has to reach the basin
+        tol = self.mp.speed_tol_rad_per_s if self.frictional else FRICTIONLESS_SPEED_TOL
+        for _ in range(int(self.mp.max_settle_s / (m.opt.timestep * CHECK_STEPS))):
+            self.run(CHECK_STEPS)
+            if np.linalg.norm(d.qvel) < tol:
+                return
+            if not np.all(np.isfinite(d.qpos)) or abs(float(np.dot(q_start, d.qpos[:4]))) < np.cos(np.pi / 4):
+                raise NoEquilibrium("the MuJoCo plant fell over (more than 90 deg from the row's start)",
+                                    "fell", np.nan)
+
+    def polish(self, dofs: np.ndarray, max_iter: int = 20, h: float = 1e-7) -> float:
+        """Newton's method on :meth:`net` over ``dofs`` (others held); returns the largest net force left."""
+        q = self.d.qpos.copy()
+
+        def moved(z_sub: np.ndarray) -> np.ndarray:
+            z = np.zeros(self.nv)
+            z[dofs] = z_sub
+            out = q.copy()
+            mujoco.mj_integratePos(self.m, out, z, 1.0)
+            return out
+
+        r = self.net(q)[dofs]
+        for _ in range(max_iter):
+            if np.abs(r).max() < 1e-12:
+                break
+            E = np.eye(len(dofs))
+            D = np.column_stack([(self.net(moved(h * e))[dofs] - self.net(moved(-h * e))[dofs]) / (2 * h) for e in E])
+            q = moved(-np.linalg.solve(D, r))
+            r = self.net(q)[dofs]
+        self.d.qpos[:] = q
+        self.d.qvel[:] = 0.0
+        self.d.qfrc_applied[:] = 0.0
+        mujoco.mj_forward(self.m, self.d)
+        return float(np.abs(r).max())
+
+    def settle(self, row: int) -> MujocoRow:
+        """Run until at rest; polish (no friction) or certify (friction); the row's record."""
+        from .mujoco_plant import MujocoRow
+
+        t0 = self.t
+        self._wait()
+        cert = None
+        if not self.frictional:
+            left = self.polish(np.arange(self.nv))
+            if left > 1e-8:
+                raise NoEquilibrium(f"MuJoCo plant: row {row} did not settle (net force {left:.2e} N m left)",
+                                    "diverged", left)
+        else:
+            if self.link:
+                self.polish(np.arange(3, 6))
+            q = self.d.qpos.copy()
+            net = self.net(q)
+            _, T = self.applied()
+            F = self.F0 + self.mu * T if self.capstan else self.F0
+            A = np.column_stack([np.asarray(self.d.ten_J).reshape(6, self.nv).T, np.eye(self.nv)[:, :3]])
+            cert = certify_static(net, A, np.r_[F, self.M0[:3]] * (1.0 + BOUND_SLACK))
+            self.d.qpos[:] = q
+            if not cert.certified:
+                raise NoEquilibrium(f"MuJoCo plant: row {row} is not held by friction within its bounds "
+                                    f"(utilisation {cert.utilisation:.6g})", "not certified", cert.residual_Nm)
+        mujoco.mj_forward(self.m, self.d)
+        _, T = self.applied()
+        R_p = _rotation(self.d.qpos[:4])
+        R_tool = R_p @ _rotation(self.d.qpos[4:8]) if self.link else R_p
+        return MujocoRow(R_tool, R_p, T, cert, self.t - t0)

@@ -1,0 +1,250 @@
+"""MuJoCo as the testbed's plant: the same effects, realised in the engine's model.
+
+:class:`MujocoPlant` wraps a :class:`~csjm_opt.testbed.plant.Plant` (the
+effect parameters drawn by :func:`~csjm_opt.testbed.injection.inject`, so both
+plants share effect names, parameters and random draws) and answers the same
+calls (``respond``, ``measured_moment``, ``measured_pose``). The engine model is
+:func:`~csjm_opt.testbed.mujoco_model.plant_mjcf`; what MuJoCo computes:
+
+* hole offsets, mass/COM, stiffness scale: the true rig's sites, inertial and
+  tendon springs;
+* Coulomb friction at the guides: tendon ``frictionloss`` (MuJoCo's friction
+  acts on the tendon length: the platform-side segment is rigid, ``rho = 0``);
+  the capstan law: ``frictionloss = mu_beta_i T_i``, updated every step;
+* joint friction: the ball joint's ``frictionloss`` (per axis of {A});
+* cable hardening: the extra tension ``k h e^2`` of each taut cable through
+  the tendon's Jacobian (``qfrc_applied``, every step);
+* link compliance: the ``tool`` body on a ball joint, spring ``C^{-1}`` on its
+  rotation vector (``qfrc_applied``); the load, the weight and the measured
+  pose are the tool's;
+* drum slip: rest lengths lengthened after each row (re-homed every cycle);
+* sensor bias, drift and tracker registration: on the readings, as the
+  quasi-static plant. A finite eyelet radius is not available here.
+
+Settling a row: the rest lengths and the load move from the previous row's
+to this row's over ``ramp_s`` (quasi-statically; heavy damping, implicit
+integration), then the engine runs until the joint speed is below
+``speed_tol_rad_per_s``. Without friction the pose is then polished by Newton's
+method on MuJoCo's own net force to round-off; with friction it is certified
+by :func:`~csjm_opt.testbed.certify.certify_static` (friction forces within
+their bounds hold it), and MuJoCo's noslip iterations stop the soft friction
+from creeping. With ``persistent`` (the plant's setting, default) a cycle
+starts where the previous one settled; otherwise each cycle starts from its
+``R_init``, settled without friction first (a relaxed start).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..errors import InvalidInput
+from ..model.dynamics import rig_dynamics
+from .certify import FrictionCertificate
+from .plant import Plant
+
+#: The plants a study or ``csjm simulate`` can use.
+PLANTS = ("quasi-static", "mujoco")
+
+
+@dataclasses.dataclass(frozen=True)
+class MujocoRow:
+    """How one row settled on the MuJoCo plant.
+
+    Attributes
+    ----------
+    R_tool : (3, 3) array
+        Pose of the measured body (the tool; the platform without a link).
+    R_platform : (3, 3) array
+        Pose of the cable platform.
+    tensions_N : (6,) array
+        Spring tensions (hardening included, friction excluded).
+    certificate : FrictionCertificate or None
+        The friction LP (``None`` without friction: polished to round-off).
+    seconds_simulated : float
+    """
+
+    R_tool: np.ndarray
+    R_platform: np.ndarray
+    tensions_N: np.ndarray
+    certificate: FrictionCertificate | None
+    seconds_simulated: float
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class MujocoPlant:
+    """A :class:`Plant` realised in MuJoCo (see the module doc).
+
+    Attributes
+    ----------
+    plant : Plant
+        The effects (true rig, friction, hardening, link, readings).
+    ramp_s, max_settle_s : float
+        Time over which a row's inputs move; longest wait for rest.
+    speed_tol_rad_per_s : float
+        Joint speed below which the engine has settled.
+    noslip_iterations : int
+        MuJoCo's noslip solver iterations (0: soft friction creeps).
+    noslip_tolerance : float
+        Its tolerance (MuJoCo's default 1e-6 leaves a stuck tendon creeping at ~2e-6 rad/s).
+    """
+
+    plant: Plant
+    ramp_s: float = 0.3
+    max_settle_s: float = 6.0
+    speed_tol_rad_per_s: float = 1e-7
+    noslip_iterations: int = 100
+    noslip_tolerance: float = 1e-12
+
+    def __post_init__(self) -> None:
+        if self.plant.eyelet_radius_m > 0:
+            raise InvalidInput("the MuJoCo plant has no eyelet radius (quasi-static plant only)", "effect")
+
+    @property
+    def rig(self):
+        """The plant's *true* rig (:attr:`Plant.rig`)."""
+        return self.plant.rig
+
+    @property
+    def effects(self) -> tuple[str, ...]:
+        """Names of the injected effects."""
+        return self.plant.effects
+
+    @property
+    def persistent(self) -> bool:
+        """Whether cycles start where the previous one settled."""
+        return self.plant.persistent
+
+    def measured_moment(self, tau_ext_A_Nm: np.ndarray) -> np.ndarray:
+        """F/T reading without noise (as :meth:`Plant.measured_moment`).
+
+        Parameters
+        ----------
+        tau_ext_A_Nm : (n, 3) or (3,) array
+
+        Returns
+        -------
+        ndarray
+        """
+        return self.plant.measured_moment(tau_ext_A_Nm)
+
+    def measured_pose(self, R_true: np.ndarray) -> np.ndarray:
+        """Tracker reading without noise (as :meth:`Plant.measured_pose`).
+
+        Parameters
+        ----------
+        R_true : (n, 3, 3) array
+
+        Returns
+        -------
+        ndarray
+        """
+        return self.plant.measured_pose(R_true)
+
+    def respond(self, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray, cycle: np.ndarray,
+                R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None) -> np.ndarray:
+        """True poses of the measured body (n, 3, 3), rows in time order (as :meth:`Plant.respond`).
+
+        Parameters
+        ----------
+        rest_lengths_m : (n, 6) array
+        tau_ext_A_Nm : (n, 3) array
+        cycle : (n,) int array
+        R_init : (n, 3, 3) array
+            Start poses; used at the log's first row (and each cycle's without persistence).
+        load_first_moment_A_kgm : (n, 3) array, optional
+            Dead weights on the tool, ``mass * point`` in {A} (as :meth:`Plant.respond`).
+
+        Returns
+        -------
+        (n, 3, 3) array
+
+        Raises
+        ------
+        NoEquilibrium
+            A row does not settle (or the friction LP cannot certify it).
+        """
+        rows = self.respond_rows(rest_lengths_m, tau_ext_A_Nm, cycle, R_init, load_first_moment_A_kgm)
+        return np.stack([r.R_tool for r in rows])
+
+    def respond_rows(self, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray, cycle: np.ndarray,
+                     R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None) -> list[MujocoRow]:
+        """Like :meth:`respond`, with each row's platform pose, tensions and friction certificate.
+
+        Parameters
+        ----------
+        rest_lengths_m, tau_ext_A_Nm, cycle, R_init, load_first_moment_A_kgm
+            As :meth:`respond`.
+
+        Returns
+        -------
+        list of MujocoRow
+
+        Raises
+        ------
+        NoEquilibrium
+            A row does not settle (or the friction LP cannot certify it).
+        """
+        from .mujoco_engine import Engine
+
+        l_all = np.asarray(rest_lengths_m, float)
+        tau_all = np.asarray(tau_ext_A_Nm, float)
+        cycle = np.asarray(cycle)
+        mr_all = (np.zeros((len(cycle), 3)) if load_first_moment_A_kgm is None
+                  else np.asarray(load_first_moment_A_kgm, float).reshape(len(cycle), 3))
+        engine = Engine(self, l_all[0])
+        rows: list[MujocoRow] = []
+        slip = np.zeros(6)
+        for i in range(len(cycle)):
+            first = i == 0 or cycle[i] != cycle[i - 1]
+            if first:
+                slip[:] = 0.0
+            if i == 0 or (first and not self.persistent):
+                engine.relaxed_start(np.asarray(R_init[i], float), l_all[i], tau_all[i], mr_all[i])
+            else:
+                engine.ramp(l_all[i] + slip, tau_all[i], mr_all[i])
+            row = engine.settle(i)
+            rows.append(row)
+            p = self.plant
+            if np.isfinite(p.drum_slip_threshold_N) and p.drum_slip_compliance_m_per_N > 0:
+                slip += np.maximum(row.tensions_N - p.drum_slip_threshold_N, 0.0) * p.drum_slip_compliance_m_per_N
+        return rows
+
+
+def as_mujoco(plant: Plant, **options) -> MujocoPlant:
+    """The same plant realised in MuJoCo.
+
+    Parameters
+    ----------
+    plant : Plant
+    **options
+        :class:`MujocoPlant` settings (``ramp_s``, ``noslip_iterations``, ...).
+
+    Returns
+    -------
+    MujocoPlant
+
+    Raises
+    ------
+    InvalidInput
+        An effect MuJoCo cannot realise (eyelet radius).
+    """
+    return MujocoPlant(plant, **options)
+
+
+def critical_damping(plant: Plant) -> float:
+    """A ball-joint damping (N m s/rad) near critical for the rig's cable stiffness and inertia.
+
+    Parameters
+    ----------
+    plant : Plant
+
+    Returns
+    -------
+    float
+    """
+    rig = plant.rig
+    K = float(np.sum(np.asarray(rig.cable_stiffness_N_per_m) * np.sum(np.asarray(rig.platform_holes_A_m) ** 2, 1)))
+    I_max = float(np.linalg.eigvalsh(rig_dynamics(rig).inertia_com_A_kgm2).max())
+    return 2.0 * np.sqrt(K * I_max)

@@ -1,0 +1,147 @@
+"""The MuJoCo plant: agreement with the toolkit's statics, each effect's physics, certified friction settling."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from csjm_opt import so3
+from csjm_opt.model.statics import solve_equilibrium
+from csjm_opt.testbed import Plant, as_mujoco, certify_static, design_cycles, make_plant
+from csjm_opt.testbed.mujoco_engine import Engine
+
+
+@pytest.fixture(scope="module")
+def cycle(rig):
+    """One designed load cycle on the paper rig (5 rows: up and down)."""
+    return design_cycles(rig, 1, np.random.default_rng(21), steps=2)[0]
+
+
+def _args(c, repeat=1):
+    m = len(c.alphas)
+    n = m * repeat
+    return (np.repeat(c.rest_lengths_m[None], n, 0), np.tile(c.tau_ext_A_Nm, (repeat, 1)), np.repeat(np.arange(repeat), m),
+            np.repeat(c.R_ref[None], n, 0))
+
+
+def test_nominal_mujoco_plant_agrees_with_the_toolkit_statics(rig, cycle):
+    args = _args(cycle)
+    rows = as_mujoco(Plant.nominal(rig)).respond_rows(*args)
+    for i, row in enumerate(rows):
+        eq = solve_equilibrium(rig, cycle.rest_lengths_m, cycle.tau_ext_A_Nm[i], R_init=cycle.R_ref)
+        assert so3.angle_between(row.R_tool, eq.R) < 1e-9
+        np.testing.assert_allclose(row.tensions_N, eq.tensions_N, atol=1e-6)
+        assert row.certificate is None                      # frictionless: polished, not certified
+
+
+@pytest.mark.parametrize("what", ["stiffness", "mass"])
+def test_small_changes_move_the_pose_by_the_tangent_stiffness(rig, cycle, what):
+    """Stiffness x (1 + eps): delta = K_t^-1 eps tau_cable; mass x (1 + eps): delta = K_t^-1 eps tau_weight."""
+    i, eps = 2, (2e-3 if what == "stiffness" else 2e-2)
+    eq = solve_equilibrium(rig, cycle.rest_lengths_m, cycle.tau_ext_A_Nm[i], R_init=cycle.R_ref)
+    if what == "stiffness":
+        true = rig.replace(cable_stiffness_N_per_m=(1 + eps) * np.asarray(rig.cable_stiffness_N_per_m))
+        push = eps * eq.tau_cable_A_Nm
+    else:
+        true = rig.replace(platform_mass_kg=(1 + eps) * rig.platform_mass_kg)
+        push = eps * eq.tau_points_A_Nm                     # the weight's moment (no other point forces)
+    row = as_mujoco(Plant(true)).respond_rows(cycle.rest_lengths_m[None], cycle.tau_ext_A_Nm[i:i + 1],
+                                              np.zeros(1, int), eq.R[None])[0]
+    moved = so3.log(eq.R.T @ row.R_tool)
+    predicted = np.linalg.solve(eq.K_tangent, push)
+    assert np.linalg.norm(predicted) > 1e-5
+    np.testing.assert_allclose(moved, predicted, rtol=0, atol=3 * eps * np.linalg.norm(predicted))   # O(eps^2)
+
+
+def test_hole_offsets_hardening_and_link_match_the_quasi_static_plant(rig, cycle):
+    """Two independent implementations (MuJoCo's tendons and the toolkit's kinematics) of the same physics."""
+    args = _args(cycle)
+    for effect, severity in (("hole_offsets", 1.0), ("cable_hardening", 3.0), ("link_compliance", 2.0)):
+        plant = make_plant(rig, effect, severity, np.random.default_rng(3))
+        R_q = plant.respond(*args)
+        rows = as_mujoco(plant).respond_rows(*args)
+        nominal = Plant.nominal(rig).respond(*args)
+        for i, row in enumerate(rows):
+            assert so3.angle_between(row.R_tool, nominal[i]) > 1e-4, effect      # the effect shows
+            assert so3.angle_between(row.R_tool, R_q[i]) < 1e-9, effect
+
+
+def test_link_turns_the_tool_by_the_compliance_times_the_tool_moment(rig, cycle):
+    C = np.diag([0.006, 0.004, 0.008])
+    plant = dataclasses.replace(Plant.nominal(rig), link_compliance_rad_per_Nm=C)
+    rows = as_mujoco(plant).respond_rows(*_args(cycle))
+    g = np.asarray(rig.gravity_B_m_per_s2)
+    for i, row in enumerate(rows):
+        tau_m = cycle.tau_ext_A_Nm[i] + np.cross(rig.platform_mass_kg * np.asarray(rig.com_A_m), row.R_tool.T @ g)
+        np.testing.assert_allclose(so3.log(row.R_platform.T @ row.R_tool), C @ tau_m, atol=1e-10)
+
+
+def test_dead_weight_equals_a_point_force_in_the_toolkit_statics(rig, cycle):
+    mass, point = 0.3, np.array([0.03, -0.02, 0.01])
+    g = np.asarray(rig.gravity_B_m_per_s2)
+    eq = solve_equilibrium(rig, cycle.rest_lengths_m, cycle.tau_ext_A_Nm[1], point_forces=[(mass * g, point)],
+                           R_init=cycle.R_ref)
+    args = (cycle.rest_lengths_m[None], cycle.tau_ext_A_Nm[1:2], np.zeros(1, int), cycle.R_ref[None],
+            (mass * point)[None])
+    assert so3.angle_between(Plant.nominal(rig).respond(*args)[0], eq.R) < 1e-9
+    assert so3.angle_between(as_mujoco(Plant.nominal(rig)).respond(*args)[0], eq.R) < 1e-9
+
+
+def test_certify_static_against_the_closed_form():
+    """One coordinate, two friction elements pushing along it: the smallest share is |q| / (b1 + b2)."""
+    cert = certify_static(np.array([0.3]), np.array([[1.0, 2.0]]), np.array([0.1, 0.2]))
+    assert cert.certified and cert.utilisation == pytest.approx(0.3 / (0.1 + 2 * 0.2), rel=1e-6)
+    too_much = certify_static(np.array([0.6]), np.array([[1.0, 2.0]]), np.array([0.1, 0.2]))
+    assert not too_much.certified and too_much.utilisation == pytest.approx(0.6 / 0.5, rel=1e-6)
+    # a frictionless coordinate must balance on its own
+    assert not certify_static(np.array([0.0, 1e-3]), np.array([[1.0], [0.0]]), np.array([1.0])).certified
+
+
+def test_friction_settle_is_certified_and_holds_when_simulated_longer(rig, cycle):
+    plant = make_plant(rig, "coulomb_friction", 3.0, np.random.default_rng(4))
+    mp = as_mujoco(plant)
+    engine = Engine(mp, cycle.rest_lengths_m)
+    engine.relaxed_start(cycle.R_ref, cycle.rest_lengths_m, cycle.tau_ext_A_Nm[0], np.zeros(3))
+    engine.settle(0)
+    engine.ramp(cycle.rest_lengths_m, cycle.tau_ext_A_Nm[2], np.zeros(3))
+    row = engine.settle(1)
+    assert row.certificate is not None and row.certificate.certified
+    assert row.certificate.utilisation > 0.5                 # friction carries a real share of the load
+    q = engine.d.qpos.copy()
+    engine.run(int(2.0 / engine.m.opt.timestep))             # two more seconds at the same inputs
+    assert so3.angle_between(so3.exp(np.zeros(3)) @ row.R_platform,
+                             _rot(engine.d.qpos[:4])) < 1e-8
+    assert np.abs(engine.d.qpos - q).max() < 1e-8
+
+
+def _rot(quat):
+    from csjm_opt.testbed.mujoco_engine import _rotation
+
+    return _rotation(quat)
+
+
+@pytest.mark.parametrize("effect", ["coulomb_friction", "joint_friction"])
+def test_mujoco_hysteresis_and_memory_across_cycles(rig, cycle, effect):
+    """Loading then unloading does not return to the start with friction, and the next cycle starts there."""
+    args = _args(cycle, repeat=2)
+    m = len(cycle.alphas)
+    R = as_mujoco(make_plant(rig, effect, 3.0, np.random.default_rng(5))).respond(*args)
+    assert so3.angle_between(R[0], R[m - 1]) > 1e-3
+    assert so3.angle_between(R[m], R[m - 1]) < 1e-6            # nothing changed: nothing moves
+    R0 = as_mujoco(Plant.nominal(rig)).respond(*args)
+    assert so3.angle_between(R0[0], R0[m - 1]) < 1e-10
+
+
+def test_mujoco_friction_agrees_with_the_quasi_static_play_operator(rig, cycle):
+    """MuJoCo's tendon friction is the quasi-static Coulomb law with a rigid platform-side segment (rho -> 0)."""
+    args = _args(cycle)
+    plant = make_plant(rig, "coulomb_friction", 3.0, np.random.default_rng(6))
+    R_m = as_mujoco(plant).respond(*args)
+    R_q = dataclasses.replace(plant, friction_platform_fraction=0.01).respond(*args)
+    R_n = Plant.nominal(rig).respond(*args)
+    for i in range(1, len(R_m)):
+        size = so3.angle_between(R_n[i], R_q[i])
+        assert size > 3e-3
+        assert so3.angle_between(R_m[i], R_q[i]) < 0.1 * size
