@@ -104,9 +104,9 @@ def study_plant(job: dict, plant):
     """The job's plant: the testbed's quasi-static ``plant``, or the MuJoCo plant with the same effects."""
     if job.get("plant", "quasistatic") != "mujoco":
         return plant
-    from csjm_opt.testbed import mujoco_plant  # type: ignore[attr-defined]  # the MuJoCo testbed
+    from csjm_opt.testbed.mujoco_plant import as_mujoco
 
-    return mujoco_plant.MujocoPlant(plant)
+    return as_mujoco(plant)
 
 
 def build_plant(job: dict):

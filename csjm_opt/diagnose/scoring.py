@@ -59,9 +59,15 @@ class CandidateScore:
         return {int(c): float(sq[self.heldout_cycle == c].mean()) for c in np.unique(self.heldout_cycle)}
 
     def implausible(self) -> list[str]:
-        """Names of fitted effect parameters outside their prior ranges by more than their uncertainty."""
+        """Names of fitted effect parameters outside their prior ranges by more than their uncertainty.
+
+        A free parameter the data do not determine at all (no information: zero variance from the
+        pseudo-inverse) is not evidence against the effect wherever it drifts."""
         m = self.fit.model
-        return [n for e, p, sd in zip(m.effects, m.effect_params(self.fit.theta), m.effect_params(self.fit.stderr))
+        sd_all = self.fit.stderr.copy()
+        if self.fit.free is not None:
+            sd_all[self.fit.free & (sd_all <= 0)] = np.inf
+        return [n for e, p, sd in zip(m.effects, m.effect_params(self.fit.theta), m.effect_params(sd_all))
                 for n in e.implausible(p, sd)]
 
 
