@@ -174,7 +174,8 @@ def _run_one(job: dict) -> dict:
     d = diagnose(rig, log)
     j = d.as_json()
     sel_cand = next((c for c in j["candidates"] if c["effect"] == j["selected"]), None)
-    return {**job, "truth": sorted(truth(job)), "severities": severities, "noise_factor": factor, "rows": len(log), "selected": j["selected"],
+    return {**job, "truth": sorted(truth(job)), "severities": severities, "noise_factor": factor, "rows": len(log),
+            "selected": j["selected"],
             "secondary": j["secondary"]["effect"], "secondary_separable": j["secondary"].get("separable"),
             "pair_separable": next((p["separable"] for p in j["pairs"] if set(p["effects"]) == truth(job)),
                                    None) if job["kind"] == "pair" else None,
@@ -377,7 +378,8 @@ def main(argv: list[str] | None = None) -> int:
                 rec = json.loads(line)
                 done[rec["id"]] = rec
     if not args.summarise:
-        todo = [j for plant in args.plants for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs, plant)
+        todo = [j for plant in args.plants
+                for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs, plant)
                 if j["id"] not in done and j["kind"] in args.kinds
                 and (args.multiples is None or j["multiple"] in args.multiples)]
         todo = todo[:args.limit] if args.limit else todo

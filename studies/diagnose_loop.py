@@ -170,7 +170,8 @@ def summarise(records: list[dict]) -> str:
                   f"Ambiguous logs whose truth was among the hypotheses separated: "
                   f"{rate(amb, lambda r: r.get('truth_in_hypotheses', False))}.",
                   f"Median time of --suggest: {np.median([r['seconds_suggest'] for r in rp]):.1f} s.", "",
-                  "| case | truth | before | hypotheses | rows | expected sep. (sd) | after |", "|---|---|---|---|---|---|---|"]
+                  "| case | truth | before | hypotheses | rows | expected sep. (sd) | after |",
+                  "|---|---|---|---|---|---|---|"]
         for r in sorted(amb, key=lambda r: r["id"]):
             lines.append(f"| {r['group']} rig {r['rig']} | {'+'.join(r['truth'])} | {'+'.join(r['before'])} | "
                          f"{', '.join(r['hypotheses'])} | {r['extra_rows']} | {r['expected_separation_sd'] or 0:.1f} | "

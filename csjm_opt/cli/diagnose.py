@@ -12,12 +12,12 @@ import argparse
 import sys
 from pathlib import Path
 
+from .._fileio import atomic_write_json
 from ..diagnose import EFFECTS
 from ..errors import InvalidInput, UsageError
-from .._fileio import atomic_write_json
-from ._options import check_outputs
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import load_rig
+from ._options import check_outputs
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -15,7 +15,14 @@ from .evidence import log_evidence
 from .localisation import remaining_signature
 from .noise import noise_floor, systematic
 from .residuals import ResidualTable
-from .scoring import CandidateScore, folds_by_cycle, improvement_rad, nested_f_test, paired_heldout_test, score
+from .scoring import (
+    CandidateScore,
+    folds_by_cycle,
+    improvement_rad,
+    nested_f_test,
+    paired_heldout_test,
+    score,
+)
 
 ALPHA = 0.01
 IMPROVE_MULT = 1.0

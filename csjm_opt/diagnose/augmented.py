@@ -25,8 +25,8 @@ from typing import Sequence
 
 import numpy as np
 
-from ..model.rig import Rig
 from ..model import kinematics as kin
+from ..model.rig import Rig
 from .effects import Effect
 
 NUISANCE_NAMES = ("dl_common_m",)

@@ -15,6 +15,7 @@ from ..errors import InvalidInput
 from ..measurement.logfile import MeasurementLog
 from ..model import kinematics as kin
 from ..model.rig import Rig
+from .residuals import compute_residuals
 
 #: Largest share of rows whose nominal tensions at the measured pose are implausible.
 MAX_BAD_SHARE = 0.25
@@ -66,7 +67,6 @@ def check_same_rig(rig: Rig, log: MeasurementLog, extra: MeasurementLog, what: s
         The extra rows' nominal pose residual RMS exceeds ``RESIDUAL_FACTOR`` x max(the log's, 10 mrad):
         the same unmodelled effects cannot make that difference, another rig can.
     """
-    from .residuals import compute_residuals      # noqa: PLC0415 (residuals import augmented, heavy)
 
     own = compute_residuals(rig, log).rms_rad
     theirs = compute_residuals(rig, extra).rms_rad

@@ -116,5 +116,6 @@ def load_load_set(path: str | Path) -> list[Load]:
                 and np.all(np.isfinite(point))):
             raise InvalidInput(f"{where} key 'point_A_m': expected 3 finite numbers (m, in {{A}}), got {point!r}",
                                "point_A_m")
-        out.append(Load(str(item.get("name", f"load {i + 1}")), float(mass), tuple(float(v) for v in point)))
+        x, y, z = (float(v) for v in point)
+        out.append(Load(str(item.get("name", f"load {i + 1}")), float(mass), (x, y, z)))
     return out

@@ -24,8 +24,8 @@ import numpy as np
 from .. import so3
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
-from ..model.rig import Rig
 from ..model import kinematics as kin
+from ..model.rig import Rig
 from .augmented import AugmentedModel, Rows, cable_steps, log_steps
 
 

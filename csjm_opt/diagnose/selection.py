@@ -63,6 +63,19 @@ from ..errors import CsjmError, SolverError
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import Rig
+from ._decision import (  # noqa: F401 (ALPHA and the thresholds are re-exported)
+    ALPHA,
+    CLOSE_FRACTION,
+    EVIDENCE_MIN,
+    HELDOUT_ALPHA,
+    IMPROVE_MULT,
+    LEAD_NATS,
+    MATERIAL_SHARE,
+    PAIR_SEEDS,
+    SHORT_LOG_SHARE,
+    _Context,
+    combine_scales,
+)
 from .augmented import AugmentedModel
 from .effects import EFFECTS, make_effect
 from .extra import append_log
@@ -73,19 +86,7 @@ from .pairs import all_separabilities
 from .residuals import compute_residuals
 from .result import Diagnosis
 from .scoring import CandidateScore, paired_heldout_test
-from ._decision import (  # noqa: F401 (ALPHA and the thresholds are re-exported)
-    ALPHA,
-    PAIR_SEEDS,
-    SHORT_LOG_SHARE,
-    CLOSE_FRACTION,
-    EVIDENCE_MIN,
-    HELDOUT_ALPHA,
-    LEAD_NATS,
-    IMPROVE_MULT,
-    MATERIAL_SHARE,
-    _Context,
-    combine_scales,
-)
+
 
 def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
              effects: Sequence[str] | None = None, noise: InstrumentNoise | None = None,

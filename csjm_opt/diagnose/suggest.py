@@ -47,7 +47,7 @@ from ..model.rig import Rig
 from ..model.statics import rest_lengths_for, solve_equilibrium
 from ..planning.planner import plan_tensions
 from ._decision import LEAD_NATS
-from .augmented import Rows, with_entry
+from .augmented import Rows, cable_steps, log_steps, with_entry
 from .loads import Load, default_load_set
 from .result import Diagnosis
 from .scoring import CandidateScore
@@ -267,7 +267,6 @@ def _predict(sc: CandidateScore, d: Diagnosis, cands: list[dict], rig: Rig) -> n
     entry_l = np.full((n, 6), np.nan)
     if last_state is not None:
         entry_s[first], entry_l[first] = last_state, last_len
-    from .augmented import cable_steps, log_steps   # noqa: PLC0415 (same package)
 
     rows = Rows(l, tau, cyc, cable_steps(cyc, lengths), log_steps_m=log_steps(lengths), rest_steps_m=rest,
                 entry_state=entry_s, entry_lengths_m=entry_l)
