@@ -17,5 +17,5 @@ from .suggest import Suggestion, protocol_text, suggest_experiment
 #: The words ``selected`` can take.
 VOCABULARY = ("none",) + tuple(EFFECTS) + ("unexplained",)
 
-__all__ = ["ALPHA", "EFFECTS", "VOCABULARY", "Diagnosis", "Effect", "Load", "Suggestion", "append_log", "default_load_set",
-           "diagnose", "load_load_set", "log_evidence", "make_effect", "protocol_text", "suggest_experiment"]
+__all__ = ["ALPHA", "Diagnosis", "EFFECTS", "Effect", "Load", "Suggestion", "VOCABULARY", "append_log",
+           "default_load_set", "diagnose", "load_load_set", "log_evidence", "make_effect", "protocol_text", "suggest_experiment"]
