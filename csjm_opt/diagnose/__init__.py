@@ -18,4 +18,5 @@ from .suggest import Suggestion, protocol_text, suggest_experiment
 VOCABULARY = ("none",) + tuple(EFFECTS) + ("unexplained",)
 
 __all__ = ["ALPHA", "Diagnosis", "EFFECTS", "Effect", "Load", "Suggestion", "VOCABULARY", "append_log",
-           "default_load_set", "diagnose", "load_load_set", "log_evidence", "make_effect", "protocol_text", "suggest_experiment"]
+           "default_load_set", "diagnose", "load_load_set", "log_evidence", "make_effect",
+           "protocol_text", "suggest_experiment"]
