@@ -18,14 +18,16 @@ rows within the rig's limits:
   singles and pairs when the verdict is ``unexplained`` (at most ``MAX_HYPOTHESES``),
   each with its fitted parameters. Each predicts every candidate row (forward
   statics, path state carried on from the end of the log);
-* **design**: the separation of hypotheses ``a`` and ``b`` on a row is the squared
-  Mahalanobis distance of their predicted poses under the measurement noise
-  (``||log(R_a^T R_b)||^2 / (floor^2 / 3)``, the log's noise floor per
-  component); cycles are added greedily, each time the one that most raises the
-  *smallest* separation over all pairs of hypotheses, until ``N`` rows are used.
-  The expected separation ``sqrt(min_ab d_ab^2)`` (in noise standard deviations)
-  is reported per pair. The hypotheses' parameter uncertainty is not added to the
-  noise (the separation is optimistic where a hypothesis is poorly determined).
+* **design**: if ``b`` is true, the new rows show ``b``'s predictions; ``a`` refitted to
+  the log and the new rows absorbs what its parameters can (linearised: its pose
+  sensitivities on the new rows, with the information the log and the prior already
+  give it). The separation of ``a`` and ``b`` is what it cannot absorb, in noise
+  units (``delta^T delta - r^T N^-1 r``, whitened by the floor per component), the
+  smaller of the two directions. Cycles are added greedily, each time the one that
+  most raises the *smallest* separation over all pairs of hypotheses, until ``N``
+  rows are used; ``sqrt`` of it (noise sd) is reported per pair. A plain distance
+  between the fitted predictions would be optimistic: 36 hole offsets refitted
+  to the new rows mimic much of what they did not predict.
 
 The protocol (:func:`protocol_text`) is the log format (docs/conventions.md) with
 the planned rest lengths and empty measured columns, plus the intended loads.
@@ -35,6 +37,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+from types import SimpleNamespace
 from typing import Callable, Sequence
 
 import numpy as np
@@ -48,6 +51,8 @@ from ..model.statics import rest_lengths_for, solve_equilibrium
 from ..planning.planner import plan_tensions
 from ._decision import LEAD_NATS
 from .augmented import Rows, cable_steps, log_steps, with_entry
+from .evidence import prior_of
+from .fit import data_jacobian
 from .loads import Load, default_load_set
 from .result import Diagnosis
 from .scoring import CandidateScore
@@ -244,8 +249,9 @@ def _within(rig: Rig, T: np.ndarray) -> bool:
     return bool(np.all(T >= rig.t_min_N - 1e-9) and np.all(T <= rig.t_max_N + 1e-9))
 
 
-def _predict(sc: CandidateScore, d: Diagnosis, cands: list[dict], rig: Rig) -> np.ndarray:
-    """Poses (n, 3, 3) hypothesis ``sc`` predicts for every candidate row, path state from the log's end."""
+def _predict(sc: CandidateScore, d: Diagnosis, cands: list[dict], rig: Rig) -> tuple[np.ndarray, Rows]:
+    """Poses (n, 3, 3) hypothesis ``sc`` predicts for every candidate row (path state from the log's end),
+    and the candidate rows."""
     model, theta = sc.fit.model, sc.fit.theta
     train = d.train
     full = with_entry(model, train.rows, train.R_meas, theta)
@@ -270,8 +276,22 @@ def _predict(sc: CandidateScore, d: Diagnosis, cands: list[dict], rig: Rig) -> n
 
     rows = Rows(l, tau, cyc, cable_steps(cyc, lengths), log_steps_m=log_steps(lengths), rest_steps_m=rest,
                 entry_state=entry_s, entry_lengths_m=entry_l)
-    return model.predict_poses(rows, theta, R0).R
+    return model.predict_poses(rows, theta, R0).R, rows
 
+
+def _information(sc: CandidateScore, noise_scale: float) -> np.ndarray:
+    """What the log and the prior already say about ``sc``'s scaled parameters (precision matrix)."""
+    fit = sc.fit
+    m, sd = prior_of(fit)
+    J = fit.jac_x[:fit.n_obs] if fit.jac_x is not None else np.zeros((1, len(m)))
+    return J.T @ J / noise_scale ** 2 + np.diag((fit.model.scales / sd) ** 2)
+
+
+def _row_jacobian(sc: CandidateScore, rows: Rows, R: np.ndarray, sigma: float) -> np.ndarray:
+    """(n, 3, p) sensitivity of ``sc``'s predicted poses on ``rows`` to its scaled parameters, over ``sigma``."""
+    table = SimpleNamespace(rows=rows, R_meas=R, whiten=np.broadcast_to(np.eye(3) / sigma, (len(rows), 3, 3)))
+    J = data_jacobian(sc.fit.model, table, sc.fit.theta)       # type: ignore[arg-type]
+    return J.reshape(len(rows), 3, -1)
 
 def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[Load] | None = None,
                        seed: int = 0, progress: Callable | None = None) -> Suggestion | None:
@@ -314,23 +334,48 @@ def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[Lo
         if bar:
             bar.close()
         return None
-    preds = []
+    sigma = d.noise_floor_rad / np.sqrt(3.0)          # per pose component
+    scale = float(d.noise_estimates.get("noise_scale", 1.0))
+    preds, jacs, info = [], [], []
     for _, sc in hyps:
-        preds.append(_predict(sc, d, cands, rig))
+        R, rows = _predict(sc, d, cands, rig)
+        preds.append(R)
+        jacs.append(_row_jacobian(sc, rows, R, sigma))
+        info.append(_information(sc, scale))
         if bar:
             bar.update(1)
     sizes = [len(c["loads"]) for c in cands]
     bounds = np.cumsum([0] + sizes)
-    var = d.noise_floor_rad ** 2 / 3.0
     names = [n for n, _ in hyps]
     pairs = list(itertools.combinations(range(len(hyps)), 2))
-    D = np.zeros((len(cands), len(pairs)))
-    for k, (a, b) in enumerate(pairs):
-        dz = so3.log(np.swapaxes(preds[a], 1, 2) @ preds[b])
-        per_row = np.sum(dz ** 2, axis=1) / var
-        D[:, k] = np.add.reduceat(per_row, bounds[:-1])
+    # per candidate cycle and direction (truth b, refit a): J^T J, J^T delta, delta^T delta (whitened)
+    terms = {}
+    for a, b in pairs:
+        dz = so3.log(np.swapaxes(preds[a], 1, 2) @ preds[b]) / sigma
+        for t, f in ((b, a), (a, b)):          # truth t, refitted hypothesis f
+            delta = dz if f == a else -dz
+            J = jacs[f]
+            A = np.stack([np.einsum("nij,nik->jk", J[lo:hi], J[lo:hi]) for lo, hi in zip(bounds[:-1], bounds[1:])])
+            bvec = np.stack([np.einsum("nij,ni->j", J[lo:hi], delta[lo:hi]) for lo, hi in zip(bounds[:-1], bounds[1:])])
+            e = np.add.reduceat(np.sum(delta ** 2, axis=1), bounds[:-1])
+            terms[(t, f)] = (A, bvec, e)
+
+    def separation(sel: list[int]) -> np.ndarray:
+        """Per pair: the smaller, over which is true, of what the other's refit cannot absorb (squared sd)."""
+        out = np.empty(len(pairs))
+        for k, (a, b) in enumerate(pairs):
+            vals = []
+            for t, f in ((b, a), (a, b)):
+                A, bvec, e = terms[(t, f)]
+                N = info[f] + A[sel].sum(axis=0)
+                r = bvec[sel].sum(axis=0)
+                vals.append(float(e[sel].sum() - r @ np.linalg.lstsq(N, r, rcond=None)[0]))
+            out[k] = max(min(vals), 0.0)
+        return out
+
     # hypotheses no feasible experiment of this size can tell apart are equivalent here: not a target
-    reach = np.sort(D, axis=0)[::-1][:max(1, max_rows // max(min(sizes), 1))].sum(axis=0)
+    reach = separation(list(np.argsort(-np.sum([terms[(b, a)][2] for a, b in pairs], axis=0))
+                            [:max(1, max_rows // max(min(sizes), 1))]))
     target = np.sqrt(reach) >= EQUIVALENT_SD
     if not target.any():
         target[:] = True
@@ -341,14 +386,15 @@ def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[Lo
         options = [i for i in range(len(cands)) if i not in chosen and used + sizes[i] <= max_rows]
         if not options:
             break
-        best = max(options, key=lambda i: (np.min((total + D[i])[target]), -sizes[i]))
+        scores = {i: separation(chosen + [i]) for i in options}
+        best = max(options, key=lambda i: (np.min(scores[i][target]), -sizes[i]))
         chosen.append(best)
-        total += D[best]
+        total = scores[best]
         used += sizes[best]
     if bar:
         bar.update(1)
         bar.close()
-    before = _separation_on_log(d, hyps, var)
+    before = _separation_on_log(d, hyps, sigma ** 2)
     first_cycle = int(np.max(d.train.cycle)) + 1
     sel = [cands[i] for i in chosen]
     cyc = np.concatenate([np.full(len(c["loads"]), first_cycle + j) for j, c in enumerate(sel)])
