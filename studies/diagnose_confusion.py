@@ -363,6 +363,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--dask", action="store_true", help="a local Dask cluster instead of a process pool")
     ap.add_argument("--limit", type=int, default=None, help="stop after this many new logs")
     ap.add_argument("--multiples", nargs="+", type=float, default=None, help="only these severities")
+    ap.add_argument("--only", nargs="+", default=None, help="only logs injecting these effects")
     ap.add_argument("--kinds", nargs="+", default=["none", "single", "pair", "outside"],
                     help="kinds of log to run (several runs may append to the same OUT.jsonl)")
     ap.add_argument("--out", default="studies/diagnose_confusion")
@@ -381,7 +382,8 @@ def main(argv: list[str] | None = None) -> int:
         todo = [j for plant in args.plants
                 for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs, plant)
                 if j["id"] not in done and j["kind"] in args.kinds
-                and (args.multiples is None or j["multiple"] in args.multiples)]
+                and (args.multiples is None or j["multiple"] in args.multiples)
+                and (args.only is None or set(j["effects"]) <= set(args.only))]
         todo = todo[:args.limit] if args.limit else todo
         bar = tqdm(total=len(todo), file=sys.stderr, desc="confusion study", disable=args.no_progress or None)
         with path.open("a") as fh:
