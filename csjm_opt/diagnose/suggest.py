@@ -62,7 +62,7 @@ MAX_TWIST_RAD = 0.3
 #: Reference tensions of a candidate cycle: this share range of [t_min, t_max].
 PRETENSION_SHARE = (0.25, 0.75)
 N_CANDIDATES = 40
-MAX_HYPOTHESES = 5
+MAX_HYPOTHESES = 6
 #: Two hypotheses no candidate row can separate by this many noise sd are reported as equivalent.
 EQUIVALENT_SD = 1.0
 #: An effect is "near the floor" when the systematic gap it explains is below this many floors.
@@ -160,11 +160,12 @@ def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
         improvement = d.tests.get(sel, {}).get("improvement_rad", np.inf)
         if improvement < NEAR_FLOOR * floor:
             reasons.append(f"{sel} improves on the nominal model by only {improvement / floor:.1f} noise floors")
-            out["none"] = d.baseline
     for n in lead:
         if n not in out:
             out[n] = pool[n][1] if n in pool else d.candidates[n]
-    items = list(out.items())[:MAX_HYPOTHESES]
+    items = list(out.items())[:MAX_HYPOTHESES - (1 if any("noise floors" in r for r in reasons) else 0)]
+    if any("noise floors" in r for r in reasons):       # the null model last: the effect may be noise
+        items.append(("none", d.baseline))
     if not reasons or len(items) < 2:
         return "", []
     return "; ".join(reasons) + ": the rows separate these models", items
