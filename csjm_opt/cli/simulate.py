@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 
 import numpy as np
@@ -10,6 +11,7 @@ import numpy as np
 from .._fileio import atomic_write_json, atomic_write_text
 from ..errors import InvalidInput
 from ..measurement.instruments import InstrumentNoise
+from ..measurement.logfile import MeasurementLog
 from ..model.rig import load_rig
 from ..testbed.injection import inject, make_plant
 from ..testbed.mujoco_plant import PLANTS
@@ -36,6 +38,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--noise", choices=("paper", "none"), default="paper",
                    help="instrument noise: the paper's F/T and tracker (default) or none")
     p.add_argument("--relaxed", action="store_true", help="start every cycle relaxed (friction state reset)")
+    p.add_argument("--after", metavar="LOG.csv", default=None,
+                   help="a log run just before on the same plant (same --effect and --seed): the protocol "
+                   "starts from the state where it settled")
     p.add_argument("-o", "--output", required=True, metavar="LOG.csv", help="measured log to write")
     p.add_argument("--json", metavar="PATH", help="write a summary (with the injected truth) as JSON ('-' = stdout)")
     p.set_defaults(func=run)
@@ -99,7 +104,7 @@ def truth(plant) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
-    check_outputs([args.rig, args.protocol], {"-o/--output": args.output, "--json": args.json})
+    check_outputs([args.rig, args.protocol, args.after], {"-o/--output": args.output, "--json": args.json})
     effects = parse_effects(args.effect)
     rig = load_rig(args.rig)
     proto = read_protocol(args.protocol)
@@ -109,7 +114,13 @@ def run(args: argparse.Namespace) -> int:
         plant = inject(plant, name, severity, rng)
     noise = InstrumentNoise.paper() if args.noise == "paper" else InstrumentNoise.none()
     t0 = time.perf_counter()
-    log = simulate_protocol(rig, proto, plant, rng=rng, noise=noise, persistent=not args.relaxed)
+    after = MeasurementLog.from_csv(args.after) if args.after else None
+    from tqdm import tqdm
+
+    with tqdm(total=len(proto) + (len(after) if after is not None else 0), file=sys.stderr, unit="row",
+              desc=f"simulate ({args.plant})", disable=None) as bar:
+        log = simulate_protocol(rig, proto, plant, rng=rng, noise=noise, persistent=not args.relaxed, after=after,
+                                progress=bar.update)
     seconds = time.perf_counter() - t0
     path = atomic_write_text(args.output, log.to_text())
     summary = {"output": str(path), "protocol": str(args.protocol), "rows": len(log), "cycles": len(log.cycle_ids),

@@ -7,7 +7,6 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
-from .. import so3
 from ..errors import NoEquilibrium
 from ..model.dynamics import rig_dynamics
 from ..model.mjcf import quat_wxyz
@@ -19,6 +18,8 @@ if TYPE_CHECKING:
 
 #: Inputs are changed in this many chunks over a ramp.
 RAMP_CHUNKS = 30
+#: Highest natural frequency (rad/s) of the tool on its link (its inertia is raised to keep it there).
+LINK_OMEGA_RAD_PER_S = 300.0
 #: Steps between checks of the joint speed while settling.
 CHECK_STEPS = 25
 #: Joint speed (rad/s) at which a frictionless plant hands over to Newton's method.
@@ -49,11 +50,13 @@ class Engine:
         if self.link:
             self.K_link = np.linalg.inv(np.asarray(self.p.link_compliance_rad_per_Nm, float))
             k_max = float(np.linalg.eigvalsh(0.5 * (self.K_link + self.K_link.T)).max())
-            timestep = min(timestep, 0.3 / np.sqrt(k_max / lam_I[0]))
+            timestep = min(timestep, 0.3 / np.sqrt(k_max / max(lam_I[0], k_max / LINK_OMEGA_RAD_PER_S ** 2)))
         self.m = mujoco.MjModel.from_xml_string(plant_mjcf(self.p, l0, damping, timestep,
                                                            noslip_iterations=mp.noslip_iterations))
-        if self.link:
-            self.m.dof_damping[3:6] = 2.0 * np.sqrt(k_max * lam_I[-1])
+        if self.link:       # inertia does not change statics: the tool's is raised so the link is not stiff
+            I_tool = np.maximum(self.m.body_inertia[-1], k_max / LINK_OMEGA_RAD_PER_S ** 2)
+            self.m.body_inertia[-1] = I_tool
+            self.m.dof_damping[3:6] = 2.0 * np.sqrt(k_max * I_tool.max())
         # tight solver and noslip tolerances: at the defaults (1e-8, 1e-6) a stuck tendon still creeps (~2e-6 rad/s)
         self.m.opt.tolerance = 1e-12
         self.m.opt.iterations = 200
@@ -68,12 +71,15 @@ class Engine:
         self.F0 = np.array(self.m.tendon_frictionloss, float)
         self.M0 = np.array(self.m.dof_frictionloss, float)
         self.frictional = bool(self.capstan or np.any(self.F0 > 0) or np.any(self.M0 > 0))
-        self.busy_always = self.link or self.h != 0 or self.capstan      # forces to update every step
+        self.busy_always = self.link or self.h != 0      # forces to update every step
         self.busy = self.busy_always
         self.g_B = np.asarray(rig.gravity_B_m_per_s2, float)
         self.l = np.asarray(l0, float).copy()
         self.tau = np.zeros(3)
         self.mr = np.zeros(3)
+        self.has_weights = False
+        self._v3 = np.zeros(3)
+        self.tool_body = self.m.nbody - 1          # 'tool' with a link, else 'platform'
         self.t = 0.0
 
     # ------------------------------------------------------------ forces
@@ -82,27 +88,35 @@ class Engine:
         self.l = np.asarray(l, float).copy()
         self.tau = np.asarray(tau, float).copy()
         self.mr = np.asarray(mr, float).copy()
-        self.busy = self.busy_always or bool(np.any(self.mr != 0))
+        self.has_weights = bool(np.any(self.mr != 0))
+        self.busy = self.busy_always or self.has_weights
         self.m.tendon_lengthspring[:, 1] = self.l
 
     def applied(self) -> tuple[np.ndarray, np.ndarray]:
         """Run-time generalised forces at the data's current kinematics, and the cable tensions."""
         d = self.d
-        e = np.maximum(np.asarray(d.ten_length) - self.l, 0.0)
-        extra = self.k * self.h * e ** 2
+        e = np.maximum(d.ten_length - self.l, 0.0)
         qfrc = np.zeros(self.nv)
-        R_link = _rotation(d.qpos[4:8]) if self.link else np.eye(3)
         tau = self.tau
-        if np.any(self.mr != 0):             # dead weights: (m p) x (R_tool^T g)
-            R_tool = _rotation(d.qpos[:4]) @ R_link
-            tau = tau + np.cross(self.mr, R_tool.T @ self.g_B)
-        qfrc[self.tool] += tau               # the load on the tool, in its frame
+        if self.has_weights:                 # dead weights: (m p) x (R_tool^T g)
+            q_tool = d.xquat[self.tool_body]
+            g_tool = np.zeros(3)
+            mujoco.mju_rotVecQuat(g_tool, self.g_B, np.array([q_tool[0], -q_tool[1], -q_tool[2], -q_tool[3]]))
+            tau = tau + np.cross(self.mr, g_tool)
+        qfrc[self.tool] = tau                # the load on the tool, in its frame
         if self.h:
-            qfrc -= np.asarray(d.ten_J).reshape(6, self.nv).T @ extra
+            extra = self.k * self.h * e * e
+            qfrc -= d.ten_J.reshape(6, self.nv).T @ extra
+            e_T = self.k * e + extra
+        else:
+            e_T = self.k * e
         if self.link:                         # the load is external: it also acts on the platform's dofs
-            qfrc[0:3] += R_link @ tau
-            qfrc[3:6] -= self.K_link @ so3.log(R_link)      # the link's spring (internal)
-        return qfrc, self.k * e + extra
+            q_link = d.qpos[4:8]
+            mujoco.mju_rotVecQuat(self._v3, tau, q_link)
+            qfrc[0:3] += self._v3
+            mujoco.mju_quat2Vel(self._v3, q_link, 1.0)             # the link's rotation vector
+            qfrc[3:6] -= self.K_link @ self._v3                      # its spring (internal)
+        return qfrc, e_T
 
     def net(self, qpos: np.ndarray) -> np.ndarray:
         """Frictionless generalised net force at rest at ``qpos`` (MuJoCo's ``qfrc_smooth`` plus run-time forces)."""
@@ -116,8 +130,16 @@ class Engine:
 
     # ------------------------------------------------------------ motion
     def run(self, steps: int) -> None:
-        """``steps`` engine steps with the current inputs."""
+        """``steps`` engine steps with the current inputs.
+
+        Forces that follow the state within a step (hardening, the link's
+        spring, dead weights) are set every step; a capstan law's friction
+        bounds follow the tensions once per call (every 10-25 steps).
+        """
         m, d = self.m, self.d
+        if self.capstan and self.frictional:
+            e = np.maximum(np.asarray(d.ten_length) - self.l, 0.0)
+            m.tendon_frictionloss[:] = self.F0 + self.mu * (self.k * e * (1.0 + self.h * e))
         if not self.busy:
             d.qfrc_applied[:] = 0.0
             d.qfrc_applied[self.tool] = self.tau
@@ -125,17 +147,15 @@ class Engine:
         else:
             for _ in range(int(steps)):
                 mujoco.mj_step1(m, d)
-                qfrc, T = self.applied()
-                d.qfrc_applied[:] = qfrc
-                if self.capstan and self.frictional:
-                    m.tendon_frictionloss[:] = self.F0 + self.mu * T
+                d.qfrc_applied[:] = self.applied()[0]
                 mujoco.mj_step2(m, d)
         self.t += steps * m.opt.timestep
 
-    def ramp(self, l: np.ndarray, tau: np.ndarray, mr: np.ndarray) -> None:
-        """Move the inputs from the current ones to ``(l, tau, mr)`` over the plant's ``ramp_s``."""
+    def ramp(self, l: np.ndarray, tau: np.ndarray, mr: np.ndarray, seconds: float | None = None) -> None:
+        """Move the inputs to ``(l, tau, mr)`` over ``seconds`` (default the plant's ``ramp_s``)."""
         l0, tau0, mr0 = self.l.copy(), self.tau.copy(), self.mr.copy()
-        steps = max(1, int(round(self.mp.ramp_s / self.m.opt.timestep / RAMP_CHUNKS)))
+        seconds = self.mp.ramp_s if seconds is None else seconds
+        steps = max(1, int(round(seconds / self.m.opt.timestep / RAMP_CHUNKS)))
         for q in range(1, RAMP_CHUNKS + 1):
             f = q / RAMP_CHUNKS
             self.set_inputs(l0 + (l - l0) * f, tau0 + (tau - tau0) * f, mr0 + (mr - mr0) * f)

@@ -36,6 +36,7 @@ starts where the previous one settled; otherwise each cycle starts from its
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 
@@ -46,6 +47,8 @@ from .plant import Plant
 
 #: The plants a study or ``csjm simulate`` can use.
 PLANTS = ("quasi-static", "mujoco")
+#: Effects of the quasi-static testbed the MuJoCo plant cannot realise.
+MUJOCO_UNSUPPORTED = ("eyelet_radius",)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -82,6 +85,9 @@ class MujocoPlant:
         The effects (true rig, friction, hardening, link, readings).
     ramp_s, max_settle_s : float
         Time over which a row's inputs move; longest wait for rest.
+    cycle_ramp_s : float
+        Time over which the inputs move to a new cycle's first row on a plant with
+        friction (large moves: slow enough to stay quasi-static).
     speed_tol_rad_per_s : float
         Joint speed below which the engine has settled.
     noslip_iterations : int
@@ -93,7 +99,8 @@ class MujocoPlant:
     plant: Plant
     ramp_s: float = 0.3
     max_settle_s: float = 6.0
-    speed_tol_rad_per_s: float = 1e-7
+    speed_tol_rad_per_s: float = 1e-6
+    cycle_ramp_s: float = 2.0
     noslip_iterations: int = 100
     noslip_tolerance: float = 1e-12
 
@@ -110,6 +117,11 @@ class MujocoPlant:
     def effects(self) -> tuple[str, ...]:
         """Names of the injected effects."""
         return self.plant.effects
+
+    @property
+    def frictional_plant(self) -> bool:
+        """Whether the plant has friction (cable or joint)."""
+        return self.plant.has_friction
 
     @property
     def persistent(self) -> bool:
@@ -143,7 +155,8 @@ class MujocoPlant:
         return self.plant.measured_pose(R_true)
 
     def respond(self, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray, cycle: np.ndarray,
-                R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None) -> np.ndarray:
+                R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None,
+                progress: Callable[[int], object] | None = None) -> np.ndarray:
         """True poses of the measured body (n, 3, 3), rows in time order (as :meth:`Plant.respond`).
 
         Parameters
@@ -155,6 +168,8 @@ class MujocoPlant:
             Start poses; used at the log's first row (and each cycle's without persistence).
         load_first_moment_A_kgm : (n, 3) array, optional
             Dead weights on the tool, ``mass * point`` in {A} (as :meth:`Plant.respond`).
+        progress : callable, optional
+            Called with the number of rows just settled (e.g. ``tqdm.update``).
 
         Returns
         -------
@@ -165,16 +180,17 @@ class MujocoPlant:
         NoEquilibrium
             A row does not settle (or the friction LP cannot certify it).
         """
-        rows = self.respond_rows(rest_lengths_m, tau_ext_A_Nm, cycle, R_init, load_first_moment_A_kgm)
+        rows = self.respond_rows(rest_lengths_m, tau_ext_A_Nm, cycle, R_init, load_first_moment_A_kgm, progress)
         return np.stack([r.R_tool for r in rows])
 
     def respond_rows(self, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray, cycle: np.ndarray,
-                     R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None) -> list[MujocoRow]:
+                     R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None,
+                     progress: Callable[[int], object] | None = None) -> list[MujocoRow]:
         """Like :meth:`respond`, with each row's platform pose, tensions and friction certificate.
 
         Parameters
         ----------
-        rest_lengths_m, tau_ext_A_Nm, cycle, R_init, load_first_moment_A_kgm
+        rest_lengths_m, tau_ext_A_Nm, cycle, R_init, load_first_moment_A_kgm, progress
             As :meth:`respond`.
 
         Returns
@@ -203,9 +219,12 @@ class MujocoPlant:
             if i == 0 or (first and not self.persistent):
                 engine.relaxed_start(np.asarray(R_init[i], float), l_all[i], tau_all[i], mr_all[i])
             else:
-                engine.ramp(l_all[i] + slip, tau_all[i], mr_all[i])
+                engine.ramp(l_all[i] + slip, tau_all[i], mr_all[i],
+                            self.cycle_ramp_s if first and self.frictional_plant else None)
             row = engine.settle(i)
             rows.append(row)
+            if progress is not None:
+                progress(1)
             p = self.plant
             if np.isfinite(p.drum_slip_threshold_N) and p.drum_slip_compliance_m_per_N > 0:
                 slip += np.maximum(row.tensions_N - p.drum_slip_threshold_N, 0.0) * p.drum_slip_compliance_m_per_N

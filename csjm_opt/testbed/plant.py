@@ -48,6 +48,8 @@ Effects outside the diagnosis's vocabulary (to test that it says so):
 from __future__ import annotations
 
 import dataclasses
+import functools
+from collections.abc import Callable
 
 import numpy as np
 
@@ -64,7 +66,7 @@ SUBSTEPS_ROW = 8
 #: Stiffness of a stuck ball joint (N m/rad; joint friction) and the lever (m) turning SMOOTH_N into a moment.
 JOINT_STICK_NM_PER_RAD = 1e4
 JOINT_SMOOTH_M = 0.01
-SUBSTEPS_NEW_CYCLE = 8
+SUBSTEPS_NEW_CYCLE = 16
 
 
 def _softplus(z: np.ndarray, w: float) -> np.ndarray:
@@ -128,7 +130,8 @@ class Plant:
 
     # ------------------------------------------------------------ simulation
     def respond(self, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray, cycle: np.ndarray,
-                R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None) -> np.ndarray:
+                R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None,
+                progress: Callable[[int], object] | None = None) -> np.ndarray:
         """True poses of the measured body (n, 3, 3) for rows in time order (noise-free).
 
         Path-dependent plants (friction, drum slip) step the rows in time order,
@@ -151,6 +154,8 @@ class Plant:
         load_first_moment_A_kgm : (n, 3) array, optional
             Dead weights hung on the measured body, ``mass * point`` in {A}
             (kg m): their moment ``(m p) x (R^T g)`` adds to ``tau_ext_A_Nm``.
+        progress : callable, optional
+            Called with the number of rows just settled (e.g. ``tqdm.update``).
 
         Returns
         -------
@@ -216,7 +221,17 @@ class Plant:
             mr_prev[live] = mr
             l_prev[live] = l
             R_out[idx] = R
+            if progress is not None:
+                progress(len(idx))
         return R_out
+
+    @functools.cached_property
+    def _has_link(self) -> bool:
+        return bool(np.any(np.asarray(self.link_compliance_rad_per_Nm) != 0))
+
+    @functools.cached_property
+    def _cable_friction(self) -> bool:
+        return bool(np.any(self.friction_mu_beta > 0) or np.any(np.asarray(self.friction_coulomb_N) > 0))
 
     @property
     def _slipping(self) -> bool:
@@ -251,8 +266,11 @@ class Plant:
         rig = self.rig
         mr = rig.platform_mass_kg * np.asarray(rig.com_A_m) + mr_load
         tau_m = tau_ext + kin.weight_moment(R_m, mr, np.asarray(rig.gravity_B_m_per_s2))
-        E = so3.exp(tau_m @ self.link_compliance_rad_per_Nm)     # C symmetric
-        R_c = R_m @ np.swapaxes(E, 1, 2)
+        if self._has_link:
+            E = so3.exp(tau_m @ self.link_compliance_rad_per_Nm)     # C symmetric
+            R_c = R_m @ np.swapaxes(E, 1, 2)
+        else:
+            E, R_c = None, R_m
         c, J = kin.cable_terms(R_c, np.asarray(rig.platform_holes_A_m), self._base_holes(R_c))
         k = np.asarray(rig.cable_stiffness_N_per_m)
         e = c - l
@@ -260,7 +278,7 @@ class Plant:
         u_new = np.empty_like(u)
         u_new[:, :6] = c - self.friction_platform_fraction * T_p / k
         T = T_p * (1.0 + self.hardening_per_m * np.maximum(e, 0.0))
-        g = np.einsum("nij,ni->nj", J, T) + np.einsum("nij,nj->ni", E, tau_m)
+        g = np.einsum("nij,ni->nj", J, T) + (tau_m if E is None else np.einsum("nij,nj->ni", E, tau_m))
         if self.joint_friction_Nm > 0:     # per axis of {A}: stuck to an anchor pose, slips at the bound
             a = u[:, 6:]
             z = so3.log(np.swapaxes(so3.exp(np.nan_to_num(a)), 1, 2) @ R_c)
@@ -275,9 +293,8 @@ class Plant:
         return g, u_new
 
     def _friction(self, c, l, e, k, u, smooth_N):
-        T_free = k * e
-        if not self.has_friction:
-            return T_free
+        if not self._cable_friction:
+            return k * e
         rho = self.friction_platform_fraction
         r = np.exp(self.friction_mu_beta)
         F = (1 - rho) * np.asarray(self.friction_coulomb_N, float)

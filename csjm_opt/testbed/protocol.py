@@ -30,7 +30,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import io
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -219,7 +219,9 @@ def check_protocol(rig: Rig, protocol: Protocol) -> None:
         if T[k].max() > rig.t_max_N:
             raise DataFileError(f"outside the rig's limits: cable {int(T[k].argmax()) + 1} at {T[k].max():.1f} N "
                                 f"> t_max = {rig.t_max_N:g} N", where, line)
-        if protocol.planned_R is not None:
+    if protocol.planned_R is not None:
+        for k in range(len(protocol)):
+            line = int(protocol.lines[k])
             gap = float(so3.angle_between(R[k], protocol.planned_R[k]))
             if gap > PLANNED_POSE_TOL_RAD:
                 raise DataFileError(f"the planned pose is {gap:.3f} rad from this rig's equilibrium for the row's "
@@ -228,7 +230,9 @@ def check_protocol(rig: Rig, protocol: Protocol) -> None:
 
 def simulate_protocol(rig: Rig, protocol: str | Path | Protocol, effects: Any = None, severity: float = 1.0,
                       plant: str = "quasi-static", rng: np.random.Generator | None = None,
-                      noise: InstrumentNoise | None = None, persistent: bool = True) -> MeasurementLog:
+                      noise: InstrumentNoise | None = None, persistent: bool = True,
+                      after: MeasurementLog | None = None,
+                      progress: Callable[[int], object] | None = None) -> MeasurementLog:
     """Run a protocol on a testbed plant: the measured log (noise added, extra columns kept).
 
     Parameters
@@ -248,6 +252,14 @@ def simulate_protocol(rig: Rig, protocol: str | Path | Protocol, effects: Any = 
         Default ``InstrumentNoise.paper()``; ``InstrumentNoise.none()`` for clean logs.
     persistent : bool, optional
         Each cycle starts where the previous one settled (default).
+    after : MeasurementLog, optional
+        An experiment run on the same plant just before (e.g. the log a diagnosis
+        suggested this protocol for): the plant first runs its rows (rest lengths,
+        logged moments as the loads, logged poses as starts), so the protocol starts
+        from the state where that experiment settled (friction state included).
+        Only the protocol's rows are returned.
+    progress : callable, optional
+        Called with the number of rows just settled (``after``'s rows included).
 
     Returns
     -------
@@ -277,8 +289,16 @@ def simulate_protocol(rig: Rig, protocol: str | Path | Protocol, effects: Any = 
     noise = InstrumentNoise.paper() if noise is None else noise
     n = len(proto)
     R_start = proto.planned_R if proto.planned_R is not None else _nominal(rig, proto)[0]
-    R_true = truth.respond(proto.rest_lengths_m, proto.tau_fixed_A_Nm, proto.cycle, R_start,
-                           proto.load_first_moment_A_kgm)
+    if after is None:
+        R_true = truth.respond(proto.rest_lengths_m, proto.tau_fixed_A_Nm, proto.cycle, R_start,
+                               proto.load_first_moment_A_kgm, progress)
+    else:       # one history: the earlier experiment, then the protocol (its cycles kept distinct)
+        m = len(after)
+        cycle = np.r_[after.cycle, proto.cycle + int(after.cycle.max()) - int(proto.cycle.min()) + 1]
+        R_true = truth.respond(np.vstack([after.rest_lengths_m, proto.rest_lengths_m]),
+                               np.vstack([after.tau_ext_A_Nm, proto.tau_fixed_A_Nm]), cycle,
+                               np.concatenate([after.R, R_start]),
+                               np.vstack([np.zeros((m, 3)), proto.load_first_moment_A_kgm]), progress)[m:]
     tau_true = proto.tau_fixed_A_Nm + kin.weight_moment(R_true, proto.load_first_moment_A_kgm,
                                                        np.asarray(truth.rig.gravity_B_m_per_s2))
     tau_meas = truth.measured_moment(tau_true) + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)

@@ -1,0 +1,136 @@
+"""``csjm simulate``: protocols run on either plant, logs written atomically, bad protocols refused."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from csjm_opt import so3
+from csjm_opt.cli import main
+from csjm_opt.measurement.instruments import InstrumentNoise
+from csjm_opt.measurement.logfile import MeasurementLog
+from csjm_opt.model.statics import solve_equilibrium
+from csjm_opt.testbed import design_cycles, random_rig, read_protocol, simulate_protocol
+
+EXTRA = ",intended_tau_x,intended_tau_y,intended_tau_z,planned_rx,planned_ry,planned_rz"
+
+
+def protocol_text(rig, seed=31, n_cycles=2, planned=True):
+    """A protocol: designed cycles, measured columns empty, intended moments and planned poses."""
+    rows = ["sample,cycle,l1,l2,l3,l4,l5,l6,tau_x,tau_y,tau_z,rx,ry,rz" + (EXTRA if planned else
+                                                                           EXTRA[:EXTRA.index(",planned")])]
+    k = 0
+    for c, d in enumerate(design_cycles(rig, n_cycles, np.random.default_rng(seed), steps=1)):
+        for tau in d.tau_ext_A_Nm:
+            eq = solve_equilibrium(rig, d.rest_lengths_m, tau, R_init=d.R_ref)
+            cells = [str(k), str(c), *map(_num, d.rest_lengths_m), "", "", "", "", "", "", *map(_num, tau)]
+            rows.append(",".join(cells + (list(map(_num, so3.log(eq.R))) if planned else [])))
+            k += 1
+    return "\n".join(rows) + "\n"
+
+
+def _num(x) -> str:
+    return repr(float(x))
+
+
+@pytest.fixture(scope="module")
+def proto(tmp_path_factory, rig):
+    path = tmp_path_factory.mktemp("sim") / "protocol.csv"
+    path.write_text(protocol_text(rig))
+    return path
+
+
+def test_protocol_on_both_plants_gives_the_toolkit_statics(proto, rig, tmp_path):
+    """Without effects or noise both plants settle where the toolkit's statics say; extra columns are kept."""
+    p = read_protocol(proto)
+    for plant in ("quasi-static", "mujoco"):
+        out, js = tmp_path / f"{plant}.csv", tmp_path / f"{plant}.json"
+        assert main(["simulate", str(proto), "--plant", plant, "--noise", "none", "-o", str(out),
+                     "--json", str(js)]) == 0
+        log = MeasurementLog.from_csv(out)
+        assert len(log) == len(p) == json.loads(js.read_text())["rows"]
+        assert "planned_rx" in log.extra and "intended_tau_z" in log.extra
+        np.testing.assert_allclose(log.tau_ext_A_Nm, p.tau_fixed_A_Nm, atol=1e-12)
+        for i in range(len(p)):
+            eq = solve_equilibrium(rig, p.rest_lengths_m[i], p.tau_fixed_A_Nm[i], R_init=p.planned_R[i])
+            assert so3.angle_between(log.R[i], eq.R) < 1e-8
+
+
+def test_effects_and_seed_are_reported_and_change_the_log(proto, tmp_path):
+    a, b, c = (tmp_path / f"{x}.csv" for x in "abc")
+    assert main(["simulate", str(proto), "--effect", "sensor_bias=2", "--noise", "none", "-o", str(a),
+                 "--json", str(tmp_path / "a.json")]) == 0
+    assert main(["simulate", str(proto), "--noise", "none", "-o", str(b)]) == 0
+    truth = json.loads((tmp_path / "a.json").read_text())["truth"]
+    bias = np.asarray(truth["sensor_bias_A_Nm"])
+    assert np.linalg.norm(bias) == pytest.approx(2 * 0.12)
+    la, lb = MeasurementLog.from_csv(a), MeasurementLog.from_csv(b)
+    np.testing.assert_allclose(la.tau_ext_A_Nm - lb.tau_ext_A_Nm, np.tile(bias, (len(la), 1)), atol=1e-12)
+    assert main(["simulate", str(proto), "-o", str(c), "--seed", "3"]) == 0           # paper noise
+    assert np.abs(MeasurementLog.from_csv(c).rotvec_rad - lb.rotvec_rad).max() > 1e-5
+
+
+def test_never_writes_over_the_input_and_bad_effects_are_one_line(proto, tmp_path, capsys):
+    before = proto.read_text()
+    assert main(["simulate", str(proto), "-o", str(proto)]) == 2
+    assert proto.read_text() == before
+    assert main(["simulate", str(proto), "--effect", "gremlins=1", "-o", str(tmp_path / "x.csv")]) == 2
+    assert main(["simulate", str(proto), "--effect", "friction=-1", "-o", str(tmp_path / "x.csv")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 3 and "gremlins" in err[1] and not (tmp_path / "x.csv").exists()
+
+
+def test_protocol_of_another_rig_or_outside_the_limits_is_refused(proto, rig, tmp_path, capsys):
+    other, _ = random_rig(np.random.default_rng(7))
+    other_path = tmp_path / "other.toml"
+    other.to_toml(other_path)
+    assert main(["simulate", str(proto), "--rig", str(other_path), "-o", str(tmp_path / "x.csv")]) == 2
+    assert "protocol.csv" in capsys.readouterr().err
+    # rest lengths 30 mm shorter: the cables pull beyond t_max
+    lines = proto.read_text().splitlines()
+    cells = lines[3].split(",")
+    cells[2:8] = [repr(float(v) - 0.03) for v in cells[2:8]]
+    bad = tmp_path / "short.csv"
+    bad.write_text("\n".join(lines[:3] + [",".join(cells)] + lines[4:]) + "\n")
+    assert main(["simulate", str(bad), "-o", str(tmp_path / "x.csv")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "short.csv:4" in err and "outside the rig's limits" in err
+    # a half-filled measured group, an empty rest length
+    cells = lines[2].split(",")
+    cells[3] = ""
+    bad.write_text("\n".join(lines[:2] + [",".join(cells)] + lines[3:]) + "\n")
+    assert main(["simulate", str(bad), "-o", str(tmp_path / "x.csv")]) == 2
+    assert "short.csv:3" in capsys.readouterr().err
+    assert not (tmp_path / "x.csv").exists()
+
+
+def test_dead_weight_rows_measure_the_weight_moment_at_the_reached_pose(rig):
+    """A dead weight's moment follows the pose: the log's moment is (m p) x (R^T g) at the measured pose."""
+    text = protocol_text(rig, planned=False)
+    lines = text.splitlines()
+    lines[0] += ",load_kg,load_x_A_m,load_y_A_m,load_z_A_m"
+    lines[1:] = [ln + (",0.2,0.04,0.0,0.02" if i % 2 else ",0,0,0,0") for i, ln in enumerate(lines[1:])]
+    log = simulate_protocol(rig, "\n".join(lines) + "\n", None, noise=InstrumentNoise.none())
+    g = np.asarray(rig.gravity_B_m_per_s2)
+    for i in range(1, len(log), 2):
+        np.testing.assert_allclose(log.tau_ext_A_Nm[i], np.cross(0.2 * np.array([0.04, 0.0, 0.02]), log.R[i].T @ g),
+                                   atol=1e-12)
+
+
+def test_after_starts_the_protocol_where_the_earlier_experiment_settled(rig, proto, tmp_path):
+    """With friction, running an earlier experiment first changes the protocol's poses; without, it does not."""
+    from csjm_opt.testbed import make_plant, simulate_experiment
+
+    earlier = simulate_experiment(rig, 2, np.random.default_rng(8), steps=2, noise=InstrumentNoise.none())
+    clean = InstrumentNoise.none()
+    for effect, differs in (("coulomb_friction", True), (None, False)):
+        truth = make_plant(rig, effect, 4.0, np.random.default_rng(9))
+        fresh = simulate_protocol(rig, proto, truth, noise=clean)
+        cont = simulate_protocol(rig, proto, truth, noise=clean, after=earlier)
+        gap = np.abs(fresh.rotvec_rad - cont.rotvec_rad).max()
+        assert (gap > 1e-4) if differs else (gap < 1e-9)
+    out = tmp_path / "after.csv"
+    earlier.to_csv(tmp_path / "earlier.csv")
+    assert main(["simulate", str(proto), "--after", str(tmp_path / "earlier.csv"), "-o", str(out)]) == 0
