@@ -91,10 +91,11 @@ def test_suggest_writes_a_protocol_and_extra_reads_it_back(logs, tmp_path, capsy
     data, _ = logs
     out, proto = tmp_path / "s.json", tmp_path / "proto.csv"
     assert main(["diagnose", str(data), "--json", str(out), "--effects", "sensor_bias", "tracker_registration",
-                 "--suggest", "20", "--protocol", str(proto), "--no-progress"]) == 0
+                 "--suggest", "20", "--protocol", str(proto), "--report", str(tmp_path / "rep"), "--no-progress"]) == 0
     j = json.loads(out.read_text())
     assert "suggestion" in j
     if j["suggestion"] is not None:
+        assert "Suggested experiment" in (tmp_path / "rep" / "suggestion.md").read_text()
         lines = proto.read_text().splitlines()
         assert lines[0].startswith("sample,cycle,l1,l2,l3,l4,l5,l6,tau_x,tau_y,tau_z,rx,ry,rz,load_kg")
         assert 3 <= len(lines) - 1 <= 20 and len(lines) - 1 == j["suggestion"]["rows"]

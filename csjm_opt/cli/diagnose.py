@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
         report = Path(args.report)
         for item in inputs:
             if item is not None and Path(item).resolve().parent == report.resolve() \
-                    and Path(item).name in ("index.md", "diagnosis.json"):
+                    and Path(item).name in ("index.md", "diagnosis.json", "suggestion.md"):
                 raise InvalidInput(f"--report {report} would overwrite input {item}", "--report")
         if report.exists() and not report.is_dir():
             raise InvalidInput(f"--report {report} exists and is not a folder", "--report")
@@ -106,6 +106,11 @@ def run(args: argparse.Namespace) -> int:
         atomic_write_json(args.json, result)
     if args.report:
         write_report(diagnosis, args.report, Path(args.data).name)
+        if suggestion is not None:
+            from .._atomic_write import atomic_write_text
+            from ..diagnose.suggest import suggestion_markdown
+
+            atomic_write_text(Path(args.report) / "suggestion.md", suggestion_markdown(suggestion, args.protocol))
     if args.json != "-":
         g = result["gap"]
         sec = result["secondary"]["effect"]

@@ -12,11 +12,11 @@ from .extra import append_log
 from .loads import Load, default_load_set, load_load_set
 from .result import Diagnosis
 from .selection import ALPHA, diagnose
-from .suggest import Suggestion, protocol_text, suggest_experiment
+from .suggest import Suggestion, protocol_text, suggest_experiment, suggestion_markdown
 
 #: The words ``selected`` can take.
 VOCABULARY = ("none",) + tuple(EFFECTS) + ("unexplained",)
 
 __all__ = ["ALPHA", "Diagnosis", "EFFECTS", "Effect", "Load", "Suggestion", "VOCABULARY", "append_log",
            "default_load_set", "diagnose", "load_load_set", "log_evidence", "make_effect",
-           "protocol_text", "suggest_experiment"]
+           "protocol_text", "suggest_experiment", "suggestion_markdown"]

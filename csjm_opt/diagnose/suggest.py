@@ -436,3 +436,30 @@ def protocol_text(s: Suggestion) -> str:
                               + ["", "", "", "", "", ""] + load + [f"{v:.6g}" for v in s.intended_tau_A_Nm[i]]
                               + [f"{v:.6g}" for v in rv[i]]))
     return "\n".join(lines) + "\n"
+
+
+def suggestion_markdown(s: Suggestion, protocol: str | None = None) -> str:
+    """A short Markdown account of a suggested experiment: what the rows are for, and what they should show.
+
+    Parameters
+    ----------
+    s : Suggestion
+    protocol : str, optional
+        Path of the protocol file, to name it.
+
+    Returns
+    -------
+    str
+    """
+    sj = s.as_json()
+    lines = ["# Suggested experiment", "", f"**Why:** {s.purpose}.", "",
+             f"**Rows:** {sj['rows']} in {sj['cycles']} load cycles"
+             + (f" (protocol: `{protocol}`)" if protocol else "") + "; run them after the log, fill the measured "
+             "columns, then `csjm diagnose LOG --extra MEASURED.csv`.", "",
+             "| hypotheses | expected separation (noise sd) | on this log |", "|---|---|---|"]
+    for k, v in sj["expected_separation_sd"].items():
+        note = " (equivalent: no feasible rows tell them apart)" if k in s.equivalent else ""
+        lines.append(f"| {k}{note} | {v:.1f} | {sj['separation_on_log_sd'].get(k, float('nan')):.1f} |")
+    lines += ["", "The separation is what the other hypothesis, refitted to the log and the new rows, cannot "
+              "absorb (linearised); above about 3 sd the new rows should tell the two apart."]
+    return "\n".join(lines) + "\n"
