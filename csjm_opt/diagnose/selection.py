@@ -197,12 +197,12 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     remaining = ctx.signature(final)
     n_cycles = len(np.unique(ctx.held.cycle))
     ev_final = ctx.evidence(final)
-    # rivals: other explanations (a pair that only adds to the named model is no rival to it)
+    # rivals: other plausible explanations of the gap (a pair that only adds to the named model is none)
     named = set(final.name.split("+"))
     rivals_ev = [ctx.evidence(sc) for n, sc in singles.items() if sc is not final and tests[n]["plausible"]
-                 and n not in named] + \
+                 and tests[n]["closes_gap"] and n not in named] + \
                 [ctx.evidence(sc) for k, sc in pair_scores.items() if sc is not final and not named <= set(k)
-                 and next((p["plausible"] for p in pairs if tuple(p["effects"]) == k), False)]
+                 and next((p["plausible"] and p["closes_gap"] for p in pairs if tuple(p["effects"]) == k), False)]
     decisive = bool(ev_final - max(rivals_ev, default=-np.inf) >= EVIDENCE_MIN)
     verdict["evidence_margin"] = float(ev_final - max(rivals_ev, default=-np.inf))
     if selected not in ("none", "unexplained") and final.fit.p_eff > SHORT_LOG_SHARE * 3 * n_cycles \
