@@ -1,4 +1,5 @@
-"""Diagnosis speed: 200-row logs, all eight candidates and the pair search (target: under 30 s on 2 cores).
+"""Diagnosis speed: 200-row logs, all eight candidates and the pair search (target: under 30 s on 2 cores),
+and ``--suggest 60`` on an ambiguous log (target: under 60 s).
 
 Run: python benchmarks/bench_diagnose.py [--cycles 22] [--repeat 1] [--no-progress]
 
@@ -27,6 +28,7 @@ from csjm_opt.diagnose.augmented import AugmentedModel
 from csjm_opt.diagnose.effects import make_effect
 from csjm_opt.diagnose.fit import fit_model
 from csjm_opt.diagnose.residuals import compute_residuals, pose_residuals
+from csjm_opt.diagnose.suggest import suggest_experiment
 from csjm_opt.testbed import simulate_experiment
 
 
@@ -58,7 +60,7 @@ def main() -> int:
     args = ap.parse_args()
     bar = None if args.no_progress else partial(tqdm, file=sys.stderr, leave=False)
     rig = co.paper_rig()
-    for effect in ("none", ["friction", "sensor_bias"], "hole_offsets"):
+    for effect in ("none", ["friction", "sensor_bias"], "coulomb_friction", "hole_offsets"):
         log = simulate_experiment(rig, args.cycles, np.random.default_rng(0), effect=effect)
         full, single = [], []
         for _ in range(args.repeat):
@@ -73,6 +75,14 @@ def main() -> int:
               f"(target < 30 s); singles only {sw:.1f} s wall / {sc:.1f} s CPU; ratio {fc / sc:.2f}x CPU "
               f"-> selected {j['selected']} + {j['secondary']['effect']}, "
               f"gap {1e3 * j['gap']['before_rad']:.2f} -> {1e3 * j['gap']['after_rad']:.2f} mrad")
+
+    log_s = simulate_experiment(rig, 12, np.random.default_rng(2), effect=["tracker_registration", "sensor_bias"])
+    d = diagnose(rig, log_s)
+    s, wall, cpu = timed(lambda: suggest_experiment(rig, d, 60, progress=bar))
+    sj = s.as_json() if s is not None else {}
+    print(f"--suggest 60 after {d.selected} + {d.secondary.get('effect')} on {len(log_s)} rows: {wall:.1f} s wall / "
+          f"{cpu:.1f} s CPU (target < 60 s) -> {sj.get('rows', 0)} rows, smallest expected separation "
+          f"{sj.get('smallest_expected_separation_sd') or 0:.1f} noise sd")
 
     log_b = simulate_experiment(rig, args.cycles, np.random.default_rng(1), effect="sensor_bias")
     table = compute_residuals(rig, log_b)

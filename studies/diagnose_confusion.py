@@ -48,21 +48,23 @@ MULTIPLES = (1.5, 3.0, 6.0, 10.0)
 OUTSIDE_MULTIPLES = (3.0, 6.0)
 
 
-def jobs(n_rigs: int, none_per_rig: int, cycles: int, pair_rigs: int) -> list[dict]:
+def jobs(n_rigs: int, none_per_rig: int, cycles: int, pair_rigs: int, plant: str = "quasistatic") -> list[dict]:
     """The study's logs, most informative first (a partial run still answers the main questions)."""
-    from csjm_opt.testbed import EFFECT_NAMES, OUTSIDE_NAMES
+    from csjm_opt.testbed import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES
 
     out: list[dict] = []
+    singles = EFFECT_NAMES + tuple(VARIANT_NAMES)
 
     def add(kind, effects, mult, rig, rep=0):
-        out.append({"id": f"{kind}:{'+'.join(effects) or '-'}:{mult:g}:{rig}:{rep}", "kind": kind,
-                    "effects": list(effects), "multiple": mult, "rig": rig, "rep": rep, "cycles": cycles})
+        out.append({"id": f"{plant}:{kind}:{'+'.join(effects) or '-'}:{mult:g}:{rig}:{rep}", "kind": kind,
+                    "effects": list(effects), "multiple": mult, "rig": rig, "rep": rep, "cycles": cycles,
+                    "plant": plant})
 
     for rig in range(n_rigs):
         for rep in range(none_per_rig):
             add("none", [], 0.0, rig, rep)
     for rig in range(n_rigs):
-        for e in EFFECT_NAMES:
+        for e in singles:
             add("single", [e], 3.0, rig)
         for e in OUTSIDE_NAMES:
             add("outside", [e], 3.0, rig)
@@ -70,10 +72,10 @@ def jobs(n_rigs: int, none_per_rig: int, cycles: int, pair_rigs: int) -> list[di
         for r in range(pair_rigs):
             add("pair", list(pair), 3.0, (i + r * 7) % n_rigs)
     for rig in range(n_rigs):
-        for e in EFFECT_NAMES:
+        for e in singles:
             add("single", [e], 10.0, rig)
     for rig in range(n_rigs):
-        for e in EFFECT_NAMES:
+        for e in singles:
             add("single", [e], 1.5, rig)
             add("single", [e], 6.0, rig)
         for e in OUTSIDE_NAMES:
@@ -91,8 +93,24 @@ def run_one(job: dict) -> dict:
         return {**job, "error": f"{type(exc).__name__}: {exc}"}
 
 
-def simulate_job(job: dict):
-    """``(rig, noise, log, severities, noise_factor)`` of one study log (deterministic in ``job``)."""
+def truth(job: dict) -> set[str]:
+    """The vocabulary names a diagnosis should give the job's injected effects."""
+    from csjm_opt.testbed import VARIANT_NAMES
+
+    return {VARIANT_NAMES.get(e, e) for e in job["effects"]}
+
+
+def study_plant(job: dict, plant):
+    """The job's plant: the testbed's quasi-static ``plant``, or the MuJoCo plant with the same effects."""
+    if job.get("plant", "quasistatic") != "mujoco":
+        return plant
+    from csjm_opt.testbed.mujoco_plant import as_mujoco
+
+    return as_mujoco(plant)
+
+
+def build_plant(job: dict):
+    """``(rig, noise, plant, severities, noise_factor)`` of one study log (deterministic in ``job``)."""
     from csjm_opt.diagnose.augmented import AugmentedModel
     from csjm_opt.diagnose.fit import fit_model
     from csjm_opt.diagnose.residuals import compute_residuals, pose_residuals, rms
@@ -101,7 +119,7 @@ def simulate_job(job: dict):
     from csjm_opt.testbed.injection import PLAUSIBLE_SEVERITY
 
     rig, noise = random_rig(np.random.default_rng([1234, job["rig"]]))
-    seed = [job["rig"], job["rep"], int(10 * job["multiple"]), *[hash_name(e) for e in job["effects"]]]
+    seed = job_seed(job)
     severities = []
     for k, e in enumerate(job["effects"]):       # calibrate each effect to its multiple of the floor
         plant = make_plant(rig, e, 1.0, np.random.default_rng(seed + [k]))
@@ -119,7 +137,17 @@ def simulate_job(job: dict):
     plant = make_plant(rig, None, 1.0, np.random.default_rng(0))
     for k, (e, s) in enumerate(zip(job["effects"], severities)):
         plant = inject(plant, e, s, np.random.default_rng(seed + [k]))
-    log = _simulate(rig, job["cycles"], seed + [7], plant, noise)
+    return rig, noise, study_plant(job, plant), severities, factor
+
+
+def job_seed(job: dict) -> list[int]:
+    return [job["rig"], job["rep"], int(10 * job["multiple"]), *[hash_name(e) for e in job["effects"]]]
+
+
+def simulate_job(job: dict):
+    """``(rig, noise, log, severities, noise_factor)`` of one study log (deterministic in ``job``)."""
+    rig, noise, plant, severities, factor = build_plant(job)
+    log = _simulate(rig, job["cycles"], job_seed(job) + [7], plant, noise)
     return rig, noise, log, severities, factor
 
 
@@ -146,14 +174,15 @@ def _run_one(job: dict) -> dict:
     d = diagnose(rig, log)
     j = d.as_json()
     sel_cand = next((c for c in j["candidates"] if c["effect"] == j["selected"]), None)
-    return {**job, "severities": severities, "noise_factor": factor, "rows": len(log), "selected": j["selected"],
+    return {**job, "truth": sorted(truth(job)), "severities": severities, "noise_factor": factor, "rows": len(log),
+            "selected": j["selected"],
             "secondary": j["secondary"]["effect"], "secondary_separable": j["secondary"].get("separable"),
-            "pair_separable": next((p["separable"] for p in j["pairs"] if set(p["effects"]) == set(job["effects"])),
+            "pair_separable": next((p["separable"] for p in j["pairs"] if set(p["effects"]) == truth(job)),
                                    None) if job["kind"] == "pair" else None,
             "gap": j["gap"], "noise_floor_rad": j["noise_floor_rad"],
             "warnings": j["verdict"]["warnings"], "alternatives": j["verdict"].get("alternatives", []),
             "selected_plausible": sel_cand["plausible"] if sel_cand else None,
-            "true_plausible": all(c.get("plausible", False) for c in j["candidates"] if c["effect"] in job["effects"]),
+            "true_plausible": all(c.get("plausible", False) for c in j["candidates"] if c["effect"] in truth(job)),
             "remaining_p": j["remaining_signature"]["p_value"], "gap_signature_p": j["gap_signature"]["p_value"],
             "detected": [c["effect"] for c in j["candidates"] if c.get("significant")],
             "seconds_diagnose": time.perf_counter() - t1, "seconds": time.perf_counter() - t0}
@@ -206,24 +235,24 @@ def summarise(records: list[dict]) -> str:
              f"{_rate(none, lambda r: (r['remaining_p'] or 1) < 0.01)} |"]
     inr = [r for r in records if r["kind"] == "single" and r["multiple"] >= 3.0 and r.get("true_plausible")]
     lines.append(f"| single effects >= 3x floor whose true fit is within the prior ranges: named right | >= 95 % | "
-                 f"{_rate(inr, lambda r: r['selected'] == r['effects'][0])} |")
-    inr = [r for r in inr if r["effects"][0] != "hole_offsets"]
+                 f"{_rate(inr, lambda r: r['selected'] == r['truth'][0])} |")
+    inr = [r for r in inr if r["truth"][0] != "hole_offsets"]
     lines.append(f"| the same without hole_offsets | >= 95 % | "
-                 f"{_rate(inr, lambda r: r['selected'] == r['effects'][0])} |")
-    right = [r for r in records if r["kind"] == "single" and r["selected"] == r["effects"][0]]
+                 f"{_rate(inr, lambda r: r['selected'] == r['truth'][0])} |")
+    right = [r for r in records if r["kind"] == "single" and r["selected"] == r["truth"][0]]
     lines.append(f"| correctly named single effects: remaining-signature test significant | about alpha = 1 % | "
                  f"{_rate(right, lambda r: (r['remaining_p'] or 1) < 0.01)} |")
     for lo in (3.0, 1.5):
         s = [r for r in records if r["kind"] == "single" and r["multiple"] >= lo]
         lines.append(f"| single effects >= {lo:g}x floor named right | >= 95 % (at >= 3x) | "
-                     f"{_rate(s, lambda r: r['selected'] == r['effects'][0])} |")
+                     f"{_rate(s, lambda r: r['selected'] == r['truth'][0])} |")
     s3 = [r for r in records if r["kind"] == "single" and r["multiple"] >= 3.0]
     lines.append(f"| single effects >= 3x floor: named right, or named as a non-separable alternative | - | "
-                 f"{_rate(s3, lambda r: r['effects'][0] in [r['selected'], *r.get('alternatives', [])])} |")
+                 f"{_rate(s3, lambda r: r['truth'][0] in [r['selected'], *r.get('alternatives', [])])} |")
     pairs = [r for r in records if r["kind"] == "pair"]
     sep = [r for r in pairs if r["pair_separable"]]
     lines += [f"| pairs at 3x each, separable on the log: both named | >= 80 % | "
-              f"{_rate(sep, lambda r: {r['selected'], r['secondary']} == set(r['effects']))} |",
+              f"{_rate(sep, lambda r: {r['selected'], r['secondary']} == set(r['truth']))} |",
               f"| pairs at 3x each, not separable: reported so (warning or one named) | all | "
               f"{_rate([r for r in pairs if not r['pair_separable']], lambda r: r['pair_separable'] is False)} |"]
     out = [r for r in records if r["kind"] == "outside"]
@@ -232,6 +261,14 @@ def summarise(records: list[dict]) -> str:
     lines.append(f"| outside the vocabulary: `unexplained`, or a warning that the named model is implausible "
                  f"or leaves structure | >= 80 % | "
                  f"{_rate(out, honest)} |")
+    coul = [r for r in records if r["kind"] == "single" and r["effects"] == ["coulomb_friction"] and r["multiple"] >= 3]
+    lines.append(f"| Coulomb cable friction (>= 3x) named `friction` | >= 95 % | "
+                 f"{_rate(coul, lambda r: r['selected'] == 'friction')} |")
+    clear = [r for r in records if (r["kind"] == "none" and r["selected"] == "none")
+             or (r["kind"] == "single" and r["multiple"] >= 3 and r["selected"] == r["truth"][0])]
+    lines.append(f"| warnings on effect-free logs | rare | {_rate(none, lambda r: bool(r['warnings']))} |")
+    lines.append(f"| warnings on correctly named single effects (>= 3x) and `none` verdicts | rare | "
+                 f"{_rate([r for r in clear if r['kind'] == 'single'], lambda r: bool(r['warnings']))} |")
     lines.append(f"| outside the vocabulary: a confident wrong name with the gap closed | never | "
                  f"{_rate(out, lambda r: r['selected'] not in ('none', 'unexplained') and not r['warnings'])} |")
     nm = [r for r in records if r["selected"] not in ("none", "unexplained")]
@@ -250,7 +287,7 @@ def summarise(records: list[dict]) -> str:
         cells = []
         for m in MULTIPLES:
             rs = [r for r in records if r["kind"] == "single" and r["effects"][0] == eff and r["multiple"] == m]
-            ok = [r for r in rs if r["selected"] == eff]
+            ok = [r for r in rs if r["selected"] == r["truth"][0]]
             fr = np.median([r["gap"]["fraction_explained"] for r in ok]) if ok else float("nan")
             cells.append(f"{len(ok)}/{len(rs)} ({fr:.2f})" if rs else "-")
         lines.append(f"| {eff} | " + " | ".join(cells) + " |")
@@ -299,7 +336,7 @@ def figure(records: list[dict], path: Path) -> None:
             rs = [r for r in records if r["kind"] == "single" and r["effects"][0] == eff and r["multiple"] == m]
             if rs:
                 xs.append(m)
-                ys.append(np.mean([r["selected"] == eff for r in rs]))
+                ys.append(np.mean([r["selected"] == r["truth"][0] for r in rs]))
         ax.plot(xs, ys, "o-", label=eff)
     ax.axhline(0.95, color="k", ls=":", lw=1)
     ax.set_xscale("log")
@@ -319,11 +356,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--none-per-rig", type=int, default=10)
     ap.add_argument("--pair-rigs", type=int, default=2, help="rigs per pair of effects")
     ap.add_argument("--cycles", type=int, default=12, help="9 rows per cycle")
+    ap.add_argument("--plants", nargs="+", default=["quasistatic"], choices=["quasistatic", "mujoco"],
+                    help="plants to simulate on (the testbed's quasi-static plant, the MuJoCo plant)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--scheduler", default=None, help="Dask scheduler address (as csjm sweep --scheduler)")
     ap.add_argument("--dask", action="store_true", help="a local Dask cluster instead of a process pool")
     ap.add_argument("--limit", type=int, default=None, help="stop after this many new logs")
     ap.add_argument("--multiples", nargs="+", type=float, default=None, help="only these severities")
+    ap.add_argument("--only", nargs="+", default=None, help="only logs injecting these effects")
     ap.add_argument("--kinds", nargs="+", default=["none", "single", "pair", "outside"],
                     help="kinds of log to run (several runs may append to the same OUT.jsonl)")
     ap.add_argument("--out", default="studies/diagnose_confusion")
@@ -339,9 +379,11 @@ def main(argv: list[str] | None = None) -> int:
                 rec = json.loads(line)
                 done[rec["id"]] = rec
     if not args.summarise:
-        todo = [j for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs)
+        todo = [j for plant in args.plants
+                for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs, plant)
                 if j["id"] not in done and j["kind"] in args.kinds
-                and (args.multiples is None or j["multiple"] in args.multiples)]
+                and (args.multiples is None or j["multiple"] in args.multiples)
+                and (args.only is None or set(j["effects"]) <= set(args.only))]
         todo = todo[:args.limit] if args.limit else todo
         bar = tqdm(total=len(todo), file=sys.stderr, desc="confusion study", disable=args.no_progress or None)
         with path.open("a") as fh:
@@ -352,15 +394,19 @@ def main(argv: list[str] | None = None) -> int:
                 bar.update(1)
         bar.close()
     failed = [r for r in done.values() if "error" in r]
-    records = [r for r in done.values() if "error" not in r]
+    records = [r for r in done.values() if "error" not in r and "truth" in r]
     if failed:
         print(f"{len(failed)} logs failed (recorded in {path}): " + "; ".join(r["error"] for r in failed[:3]),
               file=sys.stderr)
     if not records:
         return 0
-    text = summarise(records)
+    plants = sorted({r.get("plant", "quasistatic") for r in records})
+    text = "".join(f"## Plant: {p}\n\n" + summarise([r for r in records if r.get("plant", "quasistatic") == p]) + "\n"
+                   for p in plants)
     out.with_suffix(".md").write_text(text)
-    figure(records, out.with_suffix(".png"))
+    for p in plants:
+        figure([r for r in records if r.get("plant", "quasistatic") == p],
+               out.with_suffix(".png") if p == "quasistatic" else Path(f"{out}_{p}.png"))
     print(text)
     return 0
 

@@ -84,3 +84,56 @@ def test_demo_step_contract(rig, tmp_path):
     json.dumps(out)                                   # JSON-able
     assert out["injected"] == "sensor_bias" and out["selected"] in out["candidates"] | {"none": 0}
     assert (tmp_path / "diagnosis" / out["report"]).exists() and (tmp_path / "diagnosis" / out["log"]).exists()
+
+
+def test_suggest_writes_a_protocol_and_extra_reads_it_back(logs, tmp_path, capsys):
+    """--suggest writes the protocol (measured columns empty); --extra takes a measured log of it."""
+    data, _ = logs
+    out, proto = tmp_path / "s.json", tmp_path / "proto.csv"
+    assert main(["diagnose", str(data), "--json", str(out), "--effects", "sensor_bias", "tracker_registration",
+                 "--suggest", "20", "--protocol", str(proto), "--report", str(tmp_path / "rep"), "--no-progress"]) == 0
+    j = json.loads(out.read_text())
+    assert "suggestion" in j
+    if j["suggestion"] is not None:
+        assert "Suggested experiment" in (tmp_path / "rep" / "suggestion.md").read_text()
+        lines = proto.read_text().splitlines()
+        assert lines[0].startswith("sample,cycle,l1,l2,l3,l4,l5,l6,tau_x,tau_y,tau_z,rx,ry,rz,load_kg")
+        assert 3 <= len(lines) - 1 <= 20 and len(lines) - 1 == j["suggestion"]["rows"]
+        assert all(row.split(",")[8:14] == [""] * 6 for row in lines[1:])
+    capsys.readouterr()
+
+
+def test_suggest_refuses_bad_inputs_without_writing(logs, tmp_path, capsys, rig):
+    data, _ = logs
+    before = data.read_text()
+    # the protocol would overwrite the data
+    assert main(["diagnose", str(data), "--suggest", "20", "--protocol", str(data), "--no-progress"]) == 2
+    assert capsys.readouterr().err.count("\n") == 1 and data.read_text() == before
+    # a load set with a bad key
+    loads = tmp_path / "loads.toml"
+    loads.write_text('[[load]]\nmass_kg = "heavy"\npoint_A_m = [0.05, 0.0, 0.0]\n')
+    assert main(["diagnose", str(data), "--suggest", "20", "--loads", str(loads), "--protocol",
+                 str(tmp_path / "p.csv"), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "mass_kg" in err and not (tmp_path / "p.csv").exists()
+    # a load set the rig cannot hold
+    loads.write_text('[[load]]\nmass_kg = 500.0\npoint_A_m = [0.05, 0.0, 0.0]\n')
+    assert main(["diagnose", str(data), "--effects", "sensor_bias", "tracker_registration", "--suggest", "20",
+                 "--loads", str(loads), "--protocol", str(tmp_path / "p.csv"), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cannot hold" in err
+    assert not (tmp_path / "p.csv").exists()
+
+
+def test_extra_log_from_another_rig_is_refused(logs, tmp_path, capsys):
+    from csjm_opt.testbed import random_rig
+
+    data, _ = logs
+    other, _ = random_rig(np.random.default_rng([1234, 3]))
+    foreign = simulate_experiment(other, 2, np.random.default_rng(5), steps=2).to_csv(tmp_path / "more.csv")
+    before = foreign.read_text()
+    assert main(["diagnose", str(data), "--extra", str(foreign), "--json", str(tmp_path / "o.json"),
+                 "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "another rig" in err
+    assert foreign.read_text() == before and not (tmp_path / "o.json").exists()

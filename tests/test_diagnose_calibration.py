@@ -94,7 +94,9 @@ def _true_params(effect: str, rig, plant: Plant) -> np.ndarray:
         return np.r_[(plant.rig.platform_holes_A_m - rig.platform_holes_A_m).ravel(),
                      (plant.rig.base_holes_B_m - rig.base_holes_B_m).ravel()]
     if effect == "friction":
-        return np.r_[plant.friction_mu_beta, 0.5, 0.0]
+        return np.r_[plant.friction_mu_beta, 0.5, 0.1, 0.0]
+    if effect == "coulomb_friction":
+        return np.r_[plant.friction_coulomb_N, 0.5, 0.1, 0.0]
     if effect == "cable_hardening":
         return np.array([plant.hardening_per_m])
     if effect == "link_compliance":
@@ -122,7 +124,7 @@ def test_plausible_severity_stays_inside_the_priors(effect):
     inside, outside = [], []
     for k in range(120):
         rig = rigs[k % 3]
-        e = make_effect(effect, rig)
+        e = make_effect("friction", rig, law="coulomb") if effect == "coulomb_friction" else make_effect(effect, rig)
         for s, out in ((cap, inside), (2 * cap, outside)):
             try:
                 plant = inject(Plant.nominal(rig), effect, s, rng)

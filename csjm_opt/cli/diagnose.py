@@ -1,4 +1,5 @@
-"""``csjm diagnose DATA.csv --rig RIG [--test TEST.csv] --json OUT [--report DIR]``.
+"""``csjm diagnose DATA.csv --rig RIG [--test TEST.csv] [--extra MORE.csv] --json OUT [--report DIR]
+[--suggest N --protocol OUT.csv [--loads LOADS.toml]]``.
 
 Where the nominal model and the rig disagree, which unmodelled effect explains
 it, and how much of the gap it closes on held-out cycles (docs/conventions.md keys and
@@ -11,12 +12,12 @@ import argparse
 import sys
 from pathlib import Path
 
+from .._fileio import atomic_write_json
 from ..diagnose import EFFECTS
 from ..errors import InvalidInput, UsageError
-from .._fileio import atomic_write_json
-from ._options import check_outputs
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import load_rig
+from ._options import check_outputs
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -36,6 +37,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--prior", action="append", default=[], metavar="NAME=LO:HI",
                    help="override an effect parameter's plausible range (SI units; NAME may be a pattern such "
                         "as 'dA*_m'); repeatable")
+    p.add_argument("--extra", metavar="MORE.csv", default=None,
+                   help="rows of a further experiment run after DATA.csv (e.g. a suggested protocol, measured): "
+                        "appended to the training rows")
+    p.add_argument("--suggest", metavar="N", type=int, default=None,
+                   help="when the log cannot tell (non-separable alternatives, unexplained, an effect near the "
+                        "floor), design up to N rows that best separate the leading hypotheses")
+    p.add_argument("--protocol", metavar="OUT.csv", default="suggested_protocol.csv",
+                   help="where --suggest writes the protocol (log columns, measured ones empty; default "
+                        "%(default)s)")
+    p.add_argument("--loads", metavar="LOADS.toml", default=None,
+                   help="the lab's load set for --suggest ([[load]] name, mass_kg, point_A_m; default: 0.1, 0.2, "
+                        "0.5 kg at +-x, +-y of the platform)")
+    p.add_argument("--seed", type=int, default=0, help="seed of --suggest's candidate draw")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -44,19 +58,30 @@ def run(args: argparse.Namespace) -> int:
     from ..diagnose import diagnose
     from ..report.diagnosis import write_report
 
-    inputs = [args.data, args.test, args.rig]
-    check_outputs(inputs, {"--json": args.json}, {"--report": args.report})
+    inputs = [args.data, args.test, args.rig, args.extra, args.loads]
+    outputs = {"--json": args.json}
+    if args.suggest is not None:
+        if args.suggest < 3:
+            raise UsageError(f"--suggest {args.suggest}: at least 3 rows (one load cycle)", "--suggest")
+        outputs["--protocol"] = args.protocol
+    check_outputs(inputs, outputs, {"--report": args.report})
     if args.report:
         report = Path(args.report)
         for item in inputs:
             if item is not None and Path(item).resolve().parent == report.resolve() \
-                    and Path(item).name in ("index.md", "diagnosis.json"):
+                    and Path(item).name in ("index.md", "diagnosis.json", "suggestion.md"):
                 raise InvalidInput(f"--report {report} would overwrite input {item}", "--report")
         if report.exists() and not report.is_dir():
             raise InvalidInput(f"--report {report} exists and is not a folder", "--report")
     rig = load_rig(args.rig)
     log = MeasurementLog.from_csv(args.data)
     test = MeasurementLog.from_csv(args.test) if args.test else None
+    extra = MeasurementLog.from_csv(args.extra) if args.extra else None
+    loads = None
+    if args.suggest is not None:
+        from ..diagnose.loads import load_load_set
+
+        loads = load_load_set(args.loads) if args.loads else None
     progress = None
     if not args.no_progress:
         from functools import partial
@@ -64,12 +89,28 @@ def run(args: argparse.Namespace) -> int:
         from tqdm import tqdm
 
         progress = partial(tqdm, file=sys.stderr, disable=None, leave=False)
-    diagnosis = diagnose(rig, log, test, effects=args.effects, progress=progress, ranges=_priors(args.prior))
+    diagnosis = diagnose(rig, log, test, effects=args.effects, progress=progress, ranges=_priors(args.prior),
+                         extra=extra)
     result = diagnosis.as_json()
+    suggestion = None
+    if args.suggest is not None:
+        from .._atomic_write import atomic_write_text
+        from ..diagnose.suggest import protocol_text, suggest_experiment
+
+        suggestion = suggest_experiment(rig, diagnosis, args.suggest, loads, seed=args.seed, progress=progress)
+        result["suggestion"] = suggestion.as_json() if suggestion else None
+        if suggestion is not None:
+            atomic_write_text(args.protocol, protocol_text(suggestion))
+            result["suggestion"]["protocol"] = str(args.protocol)
     if args.json:
         atomic_write_json(args.json, result)
     if args.report:
         write_report(diagnosis, args.report, Path(args.data).name)
+        if suggestion is not None:
+            from .._atomic_write import atomic_write_text
+            from ..diagnose.suggest import suggestion_markdown
+
+            atomic_write_text(Path(args.report) / "suggestion.md", suggestion_markdown(suggestion, args.protocol))
     if args.json != "-":
         g = result["gap"]
         sec = result["secondary"]["effect"]
@@ -88,6 +129,16 @@ def run(args: argparse.Namespace) -> int:
             print(f" {mark} {c['effect']:16s} held-out {1e3 * c['heldout_rms_rad']:8.3f} mrad  BIC {c['bic']:9.1f}  "
                   f"p {c['p_value']:.2g}{'  significant' if c['significant'] else ''}"
                   f"{'' if c['plausible'] else '  implausible: ' + ', '.join(c['implausible_params'][:4])}")
+        if args.suggest is not None:
+            if suggestion is None:
+                print("suggest: the verdict needs no further experiment (clear, separable, above the floor)")
+            else:
+                sj = suggestion.as_json()
+                print(f"suggest: {sj['rows']} rows in {sj['cycles']} cycles written to {args.protocol}")
+                print(f"  why: {suggestion.purpose}")
+                for k, v in sj["expected_separation_sd"].items():
+                    print(f"  {k}: expected separation {v:.1f} noise sd (this log: "
+                          f"{sj['separation_on_log_sd'].get(k, float('nan')):.1f})")
     return 0
 
 

@@ -1,15 +1,22 @@
 """Sim-to-real gap diagnosis: residuals, localisation, effects, selection, report.
 
-Entry point: :func:`csjm_opt.diagnose.selection.diagnose` (``csjm diagnose``).
+Entry points: :func:`csjm_opt.diagnose.selection.diagnose` (``csjm diagnose``) and
+:func:`csjm_opt.diagnose.suggest.suggest_experiment` (``csjm diagnose --suggest N``).
 """
 
 from __future__ import annotations
 
 from .effects import EFFECTS, Effect, make_effect
+from .evidence import log_evidence
+from .extra import append_log
+from .loads import Load, default_load_set, load_load_set
 from .result import Diagnosis
 from .selection import ALPHA, diagnose
+from .suggest import Suggestion, protocol_text, suggest_experiment, suggestion_markdown
 
 #: The words ``selected`` can take.
 VOCABULARY = ("none",) + tuple(EFFECTS) + ("unexplained",)
 
-__all__ = ["ALPHA", "EFFECTS", "VOCABULARY", "Diagnosis", "Effect", "diagnose", "make_effect"]
+__all__ = ["ALPHA", "Diagnosis", "EFFECTS", "Effect", "Load", "Suggestion", "VOCABULARY", "append_log",
+           "default_load_set", "diagnose", "load_load_set", "log_evidence", "make_effect",
+           "protocol_text", "suggest_experiment", "suggestion_markdown"]

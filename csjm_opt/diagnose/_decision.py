@@ -11,15 +11,29 @@ import numpy as np
 
 from ..model.rig import Rig
 from .augmented import AugmentedModel
+from .evidence import log_evidence
 from .localisation import remaining_signature
 from .noise import noise_floor, systematic
 from .residuals import ResidualTable
-from .scoring import CandidateScore, folds_by_cycle, improvement_rad, nested_f_test, paired_heldout_test, score
+from .scoring import (
+    CandidateScore,
+    folds_by_cycle,
+    improvement_rad,
+    nested_f_test,
+    paired_heldout_test,
+    score,
+)
 
 ALPHA = 0.01
 IMPROVE_MULT = 1.0
 CLOSE_FRACTION = 0.8
 HELDOUT_ALPHA = 0.10
+#: Log Bayes factor (nats) by which a pair must beat every rival on the evidence route (>100: decisive).
+EVIDENCE_MIN = 5.0
+#: Models within this many nats of log evidence of the best are leading hypotheses (alternatives, --suggest).
+LEAD_NATS = 10.0
+#: Remaining structure matters (a stand-in warning) when its systematic part is this share of the floor.
+MATERIAL_SHARE = 0.5
 #: Singles a pair search starts from (the first effect, then the lowest held-out errors).
 PAIR_SEEDS = 3
 #: A named model with more effective parameters than this share of 3 x cycles gets a short-log warning.
@@ -47,6 +61,14 @@ class _Context:
         self.held = test if test is not None else train
         self.local, self.local_dof = noise_floor(train)
         self.instrument = train.instrument_floor_rad
+        self.sigma = 1.0                          # noise scale of the evidence (set once the floor is known)
+        self._evidence: dict[int, float] = {}
+
+    def evidence(self, sc: CandidateScore) -> float:
+        """Laplace log evidence of ``sc`` at the diagnosis's noise scale (:mod:`.evidence`)."""
+        if id(sc) not in self._evidence:
+            self._evidence[id(sc)] = log_evidence(sc.fit, self.sigma)
+        return self._evidence[id(sc)]
 
     def score(self, effects: Sequence) -> CandidateScore:
         return score(AugmentedModel(self.rig, effects), self.train, self.test, self.folds)

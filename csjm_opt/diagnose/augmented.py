@@ -25,8 +25,8 @@ from typing import Sequence
 
 import numpy as np
 
-from ..model.rig import Rig
 from ..model import kinematics as kin
+from ..model.rig import Rig
 from .effects import Effect
 
 NUISANCE_NAMES = ("dl_common_m",)
@@ -47,15 +47,34 @@ class Rows:
     # path state and cable lengths (NaN on a cycle's first row), else None.
     state_prev: np.ndarray | None = None
     lengths_prev_m: np.ndarray | None = None
+    # Changes since the previous row *of the log* (across cycle boundaries too; 0 on the
+    # log's first row): cable lengths at the measured poses, and commanded rest lengths.
+    log_steps_m: np.ndarray | None = None
+    rest_steps_m: np.ndarray | None = None
+    # Path state and cable lengths the measured history leaves at the row before each
+    # cycle's first row (NaN where there is none): where a predicted cycle starts.
+    entry_state: np.ndarray | None = None
+    entry_lengths_m: np.ndarray | None = None
 
     def __len__(self) -> int:
         return self.rest_lengths_m.shape[0]
 
     def take(self, idx: np.ndarray) -> "Rows":
         """Rows ``idx`` (whole cycles, in order, for the sequence to stay meaningful)."""
-        opt = [None if a is None else a[idx] for a in (self.state_prev, self.lengths_prev_m)]
+        def sub(a):
+            return None if a is None else a[idx]
+
         return Rows(self.rest_lengths_m[idx], self.tau_meas_A_Nm[idx], self.cycle[idx],
-                    self.cable_steps_m[idx], *opt)
+                    self.cable_steps_m[idx], sub(self.state_prev), sub(self.lengths_prev_m),
+                    sub(self.log_steps_m), sub(self.rest_steps_m), sub(self.entry_state),
+                    sub(self.entry_lengths_m))
+
+    @property
+    def steps_since_previous(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(cable, rest)`` length changes (n, 6) since the previous row of the log (m)."""
+        c = self.cable_steps_m if self.log_steps_m is None else self.log_steps_m
+        r = np.zeros_like(c) if self.rest_steps_m is None else self.rest_steps_m
+        return c, r
 
     @functools.cached_property
     def positions(self) -> np.ndarray:
@@ -204,9 +223,13 @@ class AugmentedModel:
         for j in range(int(pos.max(initial=0)) + 1):
             idx = np.flatnonzero(pos == j)
             prev = idx - 1 if j > 0 else None
-            sub = dataclasses.replace(rows.take(idx),
-                                      state_prev=np.zeros((len(idx), 6)) if prev is None else state[prev],
-                                      lengths_prev_m=np.full((len(idx), 6), np.nan) if prev is None else lengths[prev])
+            if prev is None:          # a cycle's first row: where the measured history left the path state
+                has = rows.entry_state is not None and rows.entry_lengths_m is not None
+                s_prev = rows.entry_state[idx] if has else np.zeros((len(idx), 6))          # type: ignore[index]
+                c_prev = rows.entry_lengths_m[idx] if has else np.full((len(idx), 6), np.nan)  # type: ignore[index]
+            else:
+                s_prev, c_prev = state[prev], lengths[prev]
+            sub = dataclasses.replace(rows.take(idx), state_prev=np.nan_to_num(s_prev), lengths_prev_m=c_prev)
             R0 = R_init[idx] if prev is None else R_out[prev]
             sol = kin.solve_poses(lambda R, sub=sub: self.balance(R, sub, theta), R0)  # type: ignore[misc]
             _, ev = self.evaluate(sol.R, sub, theta)
@@ -215,6 +238,31 @@ class AugmentedModel:
             lengths[idx] = ev.lengths_m
             it = max(it, sol.iterations)
         return kin.PoseSolution(R_out, res, it)
+
+
+def with_entry(model: "AugmentedModel", rows: Rows, R_meas: np.ndarray, theta: np.ndarray) -> Rows:
+    """``rows`` with the path state the measured history leaves before each cycle (for prediction).
+
+    The model is evaluated at the measured poses over the whole log (in log order); a cycle's
+    first row gets the state and cable lengths of the log's previous row. Predicting a cycle
+    then uses the measured past, never the cycle's own measurements."""
+    if not model.path_dependent or any(getattr(e, "memory", "carried") != "carried" for e in model.effects):
+        return rows
+    _, ev = model.evaluate(R_meas, rows, theta)
+    n = len(rows)
+    state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
+    first = np.flatnonzero(np.r_[False, rows.cycle[1:] != rows.cycle[:-1]])
+    if ev.state_out is not None and ev.lengths_m is not None:
+        state[first] = ev.state_out[first - 1]
+        lengths[first] = ev.lengths_m[first - 1]
+    return dataclasses.replace(rows, entry_state=state, entry_lengths_m=lengths)
+
+
+def log_steps(lengths_m: np.ndarray) -> np.ndarray:
+    """Change of each length since the previous row of the log (0 on the first row)."""
+    d = np.zeros_like(lengths_m)
+    d[1:] = lengths_m[1:] - lengths_m[:-1]
+    return d
 
 
 def cable_steps(cycle: np.ndarray, cable_lengths_m: np.ndarray) -> np.ndarray:

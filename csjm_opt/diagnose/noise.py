@@ -3,7 +3,9 @@
 Within one cycle the rest lengths are fixed and only the load changes, so a
 smooth systematic residual is close to affine in the load, with a step
 between the loading and unloading branches (hysteresis). Fitting
-``zeta ~ a + B s + d [unloading]`` per cycle, where ``s`` are the measured
+``zeta ~ a + B s + d [unloading] + B' s [unloading] + e [first row]`` per cycle (each branch its own
+slope, and the first row its own offset: dry friction with memory bends the branches apart and
+shifts the row where the previous cycle's state enters), where ``s`` are the measured
 moment's coordinates along the directions in which the cycle's load really
 varies (principal directions with spread well above the F/T noise: regressing
 on pure-noise directions would absorb the noise the floor is meant to measure), and pooling the residual
@@ -34,11 +36,18 @@ def noise_floor(table: ResidualTable, zeta: np.ndarray | None = None) -> tuple[f
         cols = [np.ones(m)]
         centred = tau - tau.mean(axis=0)
         _, sv, Vt = np.linalg.svd(centred, full_matrices=False)
+        loads = []
         for k in range(len(sv)):
             if sv[k] / np.sqrt(m) > LOAD_SPREAD_NM and m - len(cols) >= 3:
-                cols.append(centred @ Vt[k])
+                loads.append(centred @ Vt[k])
+                cols.append(loads[-1])
         if m - len(cols) >= 3 and 2 <= down.sum() <= m - 2:
             cols.append(down)
+            for s_k in loads:          # each branch its own slope: friction makes them differ
+                if m - len(cols) >= 3:
+                    cols.append(s_k * down)
+        if m - len(cols) >= 3:         # the first row: where friction carried from the last cycle shows
+            cols.append((np.arange(m) == 0).astype(float))
         X = np.column_stack(cols)
         rank = np.linalg.matrix_rank(X)
         if m - rank < 1:

@@ -24,9 +24,9 @@ import numpy as np
 from .. import so3
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
-from ..model.rig import Rig
 from ..model import kinematics as kin
-from .augmented import AugmentedModel, Rows, cable_steps
+from ..model.rig import Rig
+from .augmented import AugmentedModel, Rows, cable_steps, log_steps
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -118,7 +118,8 @@ def compute_residuals(rig: Rig, log: MeasurementLog, noise: InstrumentNoise | No
     rows0 = Rows(log.rest_lengths_m, log.tau_ext_A_Nm, np.asarray(log.cycle), np.zeros((n, 6)))
     sol = model.predict_poses(rows0, theta, R_meas)
     lengths, _ = kin.cable_terms(R_meas, np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m))
-    rows = Rows(log.rest_lengths_m, log.tau_ext_A_Nm, np.asarray(log.cycle), cable_steps(log.cycle, lengths))
+    rows = Rows(log.rest_lengths_m, log.tau_ext_A_Nm, np.asarray(log.cycle), cable_steps(log.cycle, lengths),
+                log_steps_m=log_steps(lengths), rest_steps_m=log_steps(np.asarray(log.rest_lengths_m, float)))
     g = model.balance(R_meas, rows, theta)
     G = kin.tangent(lambda R: model.balance(R, rows, theta), R_meas, g)
     whiten = np.linalg.inv(np.linalg.cholesky(pose_noise_cov(G, noise)))

@@ -72,6 +72,7 @@ class Diagnosis:
     gap_signature: dict = dataclasses.field(default_factory=dict)
     final: CandidateScore | None = None    # model behind gap["after_rad"] (selected, or selected + secondary)
     rule: dict = dataclasses.field(default_factory=dict)
+    pair_scores: dict = dataclasses.field(default_factory=dict)   # (a, b) -> CandidateScore of fitted pairs
 
     @property
     def selected_score(self) -> CandidateScore:

@@ -20,7 +20,7 @@ from scipy import stats
 
 from ..errors import InvalidInput
 from ..model import kinematics as kin
-from .augmented import AugmentedModel
+from .augmented import AugmentedModel, with_entry
 from .fit import FitResult, data_jacobian, fit_model
 from .residuals import ResidualTable, pose_noise_cov, pose_residuals, rms
 
@@ -59,9 +59,15 @@ class CandidateScore:
         return {int(c): float(sq[self.heldout_cycle == c].mean()) for c in np.unique(self.heldout_cycle)}
 
     def implausible(self) -> list[str]:
-        """Names of fitted effect parameters outside their prior ranges by more than their uncertainty."""
+        """Names of fitted effect parameters outside their prior ranges by more than their uncertainty.
+
+        A free parameter the data do not determine at all (no information: zero variance from the
+        pseudo-inverse) is not evidence against the effect wherever it drifts."""
         m = self.fit.model
-        return [n for e, p, sd in zip(m.effects, m.effect_params(self.fit.theta), m.effect_params(self.fit.stderr))
+        sd_all = self.fit.stderr.copy()
+        if self.fit.free is not None:
+            sd_all[self.fit.free & (sd_all <= 0)] = np.inf
+        return [n for e, p, sd in zip(m.effects, m.effect_params(self.fit.theta), m.effect_params(sd_all))
                 for n in e.implausible(p, sd)]
 
 
@@ -84,12 +90,12 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
           folds: list[np.ndarray] | None) -> CandidateScore:
     """Fit on all training rows; held-out residuals from ``test`` or the folds."""
     full = fit_model(model, train)
-    sol = model.predict_poses(train.rows, full.theta, train.R_meas)
+    sol = model.predict_poses(with_entry(model, train.rows, train.R_meas, full.theta), full.theta, train.R_meas)
     train_zeta = pose_residuals(sol.R, train.R_meas)
     failed = int(np.sum(~sol.converged(1e-6)))
     blocks: list[tuple[np.ndarray, np.ndarray]] = []
     if test is not None:
-        ho = model.predict_poses(test.rows, full.theta, test.R_meas)
+        ho = model.predict_poses(with_entry(model, test.rows, test.R_meas, full.theta), full.theta, test.R_meas)
         zeta, cyc = pose_residuals(ho.R, test.R_meas), test.cycle
         failed += int(np.sum(~ho.converged(1e-6)))
         blocks.append((np.arange(len(test)), full.prediction_cov(None, data_jacobian(model, test, full.theta))))
@@ -99,7 +105,7 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
             keep = np.setdiff1d(np.arange(len(train)), held)
             theta = full.refit_rows(keep)
             part = train.take(held)
-            ho = model.predict_poses(part.rows, theta, part.R_meas)
+            ho = model.predict_poses(with_entry(model, train.rows, train.R_meas, theta).take(held), theta, part.R_meas)
             zeta[held] = pose_residuals(ho.R, part.R_meas)
             failed += int(np.sum(~ho.converged(1e-6)))
             blocks.append((held, full.prediction_cov(keep, full.held_rows_jacobian(held))))

@@ -63,28 +63,36 @@ from ..errors import CsjmError, SolverError
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import Rig
+from ._decision import (  # noqa: F401 (ALPHA and the thresholds are re-exported)
+    ALPHA,
+    CLOSE_FRACTION,
+    EVIDENCE_MIN,
+    HELDOUT_ALPHA,
+    IMPROVE_MULT,
+    LEAD_NATS,
+    MATERIAL_SHARE,
+    PAIR_SEEDS,
+    SHORT_LOG_SHARE,
+    _Context,
+    combine_scales,
+)
+from .augmented import AugmentedModel
 from .effects import EFFECTS, make_effect
+from .extra import append_log
+from .fit import fit_model
 from .localisation import localise
 from .noise import systematic
 from .pairs import all_separabilities
 from .residuals import compute_residuals
 from .result import Diagnosis
 from .scoring import CandidateScore, paired_heldout_test
-from ._decision import (  # noqa: F401 (ALPHA and the thresholds are re-exported)
-    ALPHA,
-    PAIR_SEEDS,
-    SHORT_LOG_SHARE,
-    CLOSE_FRACTION,
-    HELDOUT_ALPHA,
-    IMPROVE_MULT,
-    _Context,
-    combine_scales,
-)
+
 
 def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
              effects: Sequence[str] | None = None, noise: InstrumentNoise | None = None,
              progress: Callable | None = None, secondary: bool = True,
-             ranges: Mapping[str, tuple[float, float]] | None = None) -> Diagnosis:
+             ranges: Mapping[str, tuple[float, float]] | None = None,
+             extra: MeasurementLog | None = None) -> Diagnosis:
     """Residuals, noise floor, every candidate and pair scored, the verdict, localisation.
 
     Parameters
@@ -105,6 +113,9 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
         Search pairs (a second effect) too.
     ranges : mapping, optional
         Prior-range overrides for plausibility: parameter name or fnmatch pattern -> ``(lo, hi)``.
+    extra : MeasurementLog, optional
+        Further rows (e.g. a suggested experiment, run after ``log``): appended to the training
+        log as later cycles, after checking that they come from this rig.
 
     Returns
     -------
@@ -113,7 +124,8 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     Raises
     ------
     InvalidInput
-        Fewer than two cycles and no test log, an unknown effect name, or a malformed log.
+        Fewer than two cycles and no test log, an unknown effect name, a malformed log, or an
+        ``extra`` log that does not belong to this rig.
     SolverError
         The nominal model cannot be evaluated on the log (singular tangents: slack cables).
 
@@ -123,6 +135,8 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     only contend for the cores there; parallelism belongs one level up, across logs).
     """
     with threadpool_limits(1), np.errstate(all="ignore"):   # trial steps may overflow; fits guard themselves
+        if extra is not None:
+            log = append_log(rig, log, extra)
         try:
             return _diagnose(rig, log, test, effects, noise, progress, secondary, ranges)
         except np.linalg.LinAlgError as exc:      # e.g. rows where every cable is slack at the measured pose
@@ -144,22 +158,29 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     tick(1)
     singles: dict[str, CandidateScore] = {}
     failed: dict[str, str] = {}
+    options: dict[str, dict] = {}
     for name in names:
         try:
-            singles[name] = ctx.score([make_effect(name, rig, ranges)])
+            options[name] = _variant(ctx, rig, name, ranges)
+            singles[name] = ctx.score([make_effect(name, rig, ranges, **options[name])])
         except (np.linalg.LinAlgError, CsjmError, FloatingPointError) as exc:   # reported, not fatal
             failed[name] = f"fit failed: {exc}"
         tick(1)
     m = max(len(singles), 1)
-    floor0 = ctx.noise_floor(baseline)
+    # the noise: the smallest of the estimates (a misfit, e.g. friction hysteresis, only inflates one)
+    floor0 = min([ctx.noise_floor(baseline)] + [ctx.scale(sc) * baseline.instrument_floor_rad
+                                                for sc in singles.values()])
     tests = {n: ctx.compare(baseline, sc, ALPHA / m, floor0) for n, sc in singles.items()}
+    ctx.sigma = floor0 / baseline.instrument_floor_rad       # one noise scale for every model's evidence
+    for n, sc in singles.items():
+        tests[n]["log_evidence"] = ctx.evidence(sc)
     detected = [n for n in singles if tests[n]["significant"]]
     for n, sc in singles.items():
         tests[n]["closes_gap"] = ctx.closes(sc)
         tests[n]["residual_signature_p"] = ctx.signature(sc)["p_value"]
     plausible = [n for n in detected if tests[n]["plausible"]]
     closers = [n for n in plausible if tests[n]["closes_gap"]]
-    first = (min(closers or plausible, key=lambda n: singles[n].fit.bic) if plausible
+    first = (max(closers or plausible, key=lambda n: tests[n]["log_evidence"]) if plausible
              else min(detected, key=lambda n: singles[n].heldout_mse) if detected else None)
 
     gap_sig = ctx.signature(baseline)
@@ -169,18 +190,29 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     seeds = ([] if first is None and not masked else
              ([first] if first is not None else []) + [n for n in by_error if n != first])[:PAIR_SEEDS]
     pairs, pair_scores = _pairs(ctx, rig, names, singles, seeds, secondary, ranges, tick, planned_pairs,
-                                baseline if masked else None, first)
+                                baseline if masked else None, first, options)
     if bar:
         bar.close()
     selected, second, final, verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_there)
     remaining = ctx.signature(final)
     n_cycles = len(np.unique(ctx.held.cycle))
-    if selected not in ("none", "unexplained") and final.fit.p_eff > SHORT_LOG_SHARE * 3 * n_cycles:
+    ev_final = ctx.evidence(final)
+    # rivals: other plausible explanations of the gap (a pair that only adds to the named model is none)
+    named = set(final.name.split("+"))
+    rivals_ev = [ctx.evidence(sc) for n, sc in singles.items() if sc is not final and tests[n]["plausible"]
+                 and tests[n]["closes_gap"] and n not in named] + \
+                [ctx.evidence(sc) for k, sc in pair_scores.items() if sc is not final and not named <= set(k)
+                 and next((p["plausible"] and p["closes_gap"] for p in pairs if tuple(p["effects"]) == k), False)]
+    decisive = bool(ev_final - max(rivals_ev, default=-np.inf) >= EVIDENCE_MIN)
+    verdict["evidence_margin"] = float(ev_final - max(rivals_ev, default=-np.inf))
+    if selected not in ("none", "unexplained") and final.fit.p_eff > SHORT_LOG_SHARE * 3 * n_cycles \
+            and not decisive:
         verdict["warnings"].append(
             f"{final.name} has {final.fit.p_eff:.0f} effective parameters against {3 * n_cycles} cycle-level "
             f"pose offsets in this log ({n_cycles} cycles): flexible enough to stand in for an effect outside the "
             "vocabulary; confirm with a longer log (more cycles at other poses)")
-    if selected not in ("none", "unexplained") and remaining["significant"]:
+    if selected not in ("none", "unexplained") and remaining["significant"] \
+            and remaining["systematic_rad"] >= MATERIAL_SHARE * ctx.floor(final):
         verdict["warnings"].append(
             f"the residual left by {final.name} still holds structure within cycles (signature test p = "
             f"{remaining['p_value']:.1e}): the named effect may be a stand-in for one outside the vocabulary; "
@@ -199,8 +231,10 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
             if n != selected and paired_heldout_test(singles[n], singles[selected]) >= HELDOUT_ALPHA \
                     and (sep is None or not sep["separable"]):
                 confounded.append(n)
+    # rivals the log cannot tell from the selected: detected, not separable, and not decisively worse
     alternatives = [n for n in detected if n != selected and selected in singles
-                    and any(set(p["effects"]) == {n, selected} and not p["separable"] for p in pairs)]
+                    and any(set(p["effects"]) == {n, selected} and not p["separable"] for p in pairs)
+                    and tests[n]["log_evidence"] >= tests[selected]["log_evidence"] - LEAD_NATS]
     verdict["alternatives"] = alternatives
     if alternatives:
         verdict["warnings"].append(f"{selected} is not separable on this log from {', '.join(alternatives)} "
@@ -217,7 +251,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
                     "candidates) and systematic improvement sqrt(MSE_null - MSE) >= improve_mult noise floors"}
     d = Diagnosis(ctx.train, ctx.test, baseline, singles, floor, estimates, tests, selected, confounded,
                   localise(ctx.held, ctx.held.zeta_rad, final.heldout_zeta_rad, floor),
-                  remaining, second, failed, pairs, steps, verdict, gap_sig, final, rule)
+                  remaining, second, failed, pairs, steps, verdict, gap_sig, final, rule, pair_scores)
     for s in d.steps:
         sc = final if "+" in s["model"] else singles.get(s["model"], baseline)
         s["fraction_explained"] = d.fraction(sc)
@@ -225,7 +259,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
 
 
 def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, tick, planned: int,
-           masked_base: CandidateScore | None, first: str | None) -> tuple[list, dict]:
+           masked_base: CandidateScore | None, first: str | None, options: dict) -> tuple[list, dict]:
     """Every pair's separability; each seed + each other effect fitted and tested (rule 3 / rule 6).
 
     A pair is tested against the best of its two singles and the first effect (``masked_base``,
@@ -248,7 +282,8 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
     for a, b in todo:
         entry = next(p for p in pairs if set(p["effects"]) == {a, b})
         try:
-            sc = ctx.score([make_effect(a, rig, ranges), make_effect(b, rig, ranges)])
+            sc = ctx.score([make_effect(a, rig, ranges, **options.get(a, {})),
+                            make_effect(b, rig, ranges, **options.get(b, {}))])
         except (np.linalg.LinAlgError, CsjmError, FloatingPointError) as exc:
             entry["error"] = f"fit failed: {exc}"
             tick(1)
@@ -258,11 +293,37 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
         rivals = [singles[a], singles[b]] + ([singles[first]] if first is not None else [])
         base = masked_base or min(rivals, key=lambda c: c.heldout_mse)
         t = ctx.compare(base, sc, level, ctx.noise_floor(base))
+        ev = ctx.evidence(sc)
+        gain = ev - max(ctx.evidence(c) for c in ([masked_base] if masked_base is not None else rivals))
+        # the evidence route (rule 3b): decisive Bayes factor over every rival, confirmed on held-out cycles
+        by_evidence = bool(gain >= EVIDENCE_MIN and t["p_value"] < HELDOUT_ALPHA and t["improvement_rad"] > 0)
         entry.update({"fitted": True, "effects": [a, b], "heldout_rms_rad": sc.heldout_rms_rad,
                       "fraction_explained": ctx.fraction(sc), "bic": sc.fit.bic, "closes_gap": ctx.closes(sc),
+                      "log_evidence": ev, "evidence_gain": gain, "supported_by_evidence": by_evidence,
                       "tested_against": base.name, "p_value_vs_first": t["p_value"],
-                      **{k: t[k] for k in ("improvement_rad", "significant", "plausible", "implausible_params")}})
+                      "significant_heldout": t["significant"],
+                      **{k: t[k] for k in ("improvement_rad", "plausible", "implausible_params")},
+                      "significant": bool(t["significant"] or by_evidence)})
     return pairs, scores
+
+
+#: Variants of an effect the data choose between (same number of parameters: the best training fit wins).
+VARIANTS: dict[str, list[dict]] = {"friction": [{"law": law, "memory": mem} for law in ("capstan", "coulomb")
+                                                for mem in ("carried", "reset")]}
+
+
+def _variant(ctx: _Context, rig: Rig, name: str, ranges) -> dict:
+    """The variant of ``name`` (e.g. friction's law and memory) whose training fit is best."""
+    options = VARIANTS.get(name, [])
+    if len(options) < 2:
+        return options[0] if options else {}
+    cost = []
+    for opt in options:
+        try:
+            cost.append(fit_model(AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), ctx.train).rss)
+        except (np.linalg.LinAlgError, CsjmError, FloatingPointError):
+            cost.append(np.inf)
+    return options[int(np.argmin(cost))]
 
 
 def _n_pair_fits(n_seeds: int, n: int) -> int:
@@ -284,7 +345,7 @@ def _verdict(ctx: _Context, baseline, singles, tests, first, pairs, pair_scores,
     warnings: list[str] = []
     none2 = {"effect": "none"}
     ok = [p for p in pairs if p.get("fitted") and p["significant"] and p["plausible"] and p["closes_gap"]]
-    best = min(ok, key=lambda p: p["bic"]) if ok else None
+    best = max(ok, key=lambda p: p["log_evidence"]) if ok else None
     if best is not None:                           # a pair (rule 5), or a masked pair (rule 6)
         a, b = best["effects"]
         sc = pair_scores[(a, b)]

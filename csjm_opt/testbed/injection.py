@@ -63,7 +63,7 @@ from .plant import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, Plant
 #: Largest severity whose injected magnitudes stay within the diagnosis's default priors (see above).
 PLAUSIBLE_SEVERITY = {"hole_offsets": 1.2, "friction": 7.0, "cable_hardening": 15.0, "link_compliance": 8.0,
                       "sensor_bias": 4.0, "mass_com": 2.5, "tracker_registration": 15.0,
-                      "stiffness_scale": 15.0, "coulomb_friction": 10.0}
+                      "stiffness_scale": 15.0, "coulomb_friction": 15.0}
 
 
 def _unit(rng: np.random.Generator) -> np.ndarray:

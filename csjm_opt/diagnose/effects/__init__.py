@@ -28,7 +28,8 @@ EFFECTS: dict[str, type[Effect]] = {
 }
 
 
-def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] | None = None) -> Effect:
+def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] | None = None,
+                **options) -> Effect:
     """An effect instance by vocabulary name.
 
     Parameters
@@ -39,6 +40,8 @@ def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] |
         Supplies the nominal mass (``mass_com``) and gravity (``tracker_registration``).
     ranges : mapping, optional
         Prior-range overrides, parameter name or fnmatch pattern -> ``(lo, hi)``.
+    **options
+        Variant of the effect (``friction``: ``law``, ``memory``).
 
     Returns
     -------
@@ -57,6 +60,8 @@ def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] |
         effect = MassCom(rig.platform_mass_kg)
     elif cls is TrackerRegistration and rig is not None:
         effect = TrackerRegistration(rig.gravity_B_m_per_s2)
+    elif cls is Friction:
+        effect = Friction(t_max_N=rig.t_max_N if rig is not None else 100.0, **options)
     else:
         effect = cls()
     return effect.with_ranges(ranges)

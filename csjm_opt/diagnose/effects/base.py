@@ -32,7 +32,6 @@ from typing import ClassVar, Mapping
 
 import numpy as np
 
-
 #: Standard errors by which a fitted parameter must leave its prior range to be implausible.
 PLAUSIBLE_Z = 2.0
 

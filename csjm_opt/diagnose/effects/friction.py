@@ -1,33 +1,42 @@
-"""``friction``: Coulomb (capstan) friction of the cables at the base guide holes.
+"""``friction``: dry friction of the cables at their guides, with memory across rows and cycles.
 
-Where a cable slides through its guide hole, the tension on the platform side
-is the drive-side tension ``T_d`` times ``exp(+mu_beta)`` when the cable is
-drawn out towards the platform (its length ``c_i`` grows) and
-``exp(-mu_beta)`` when it is pulled back; while it sticks, the ratio lies
-inside that band. So ``T_p = T_d exp(mu_beta_i s_i)`` with a band position
-``s_i in [-1, 1]`` that follows the cable's motion as a play (stop) operator::
+Where a cable slides through its guide (or its drive), the tension the platform
+feels, ``T_p``, differs from the elastic tension ``T = k e`` by a friction term
+whose sign follows the cable's motion and which holds any value in between
+while the cable sticks. Two laws, chosen by the data
+(:func:`csjm_opt.diagnose.selection.diagnose` fits both and keeps the better):
 
-    s_i[j] = clip(s_i[j-1] + dc_i[j] / travel_i[j], -1, 1),   s_i[first row] = 0
-    travel_i = f mu_beta_i T_d,i / k_i
+* ``capstan`` (friction over the hole's curved surface): ``T_p = T exp(mu_beta_i s_i)``;
+* ``coulomb`` (a constant force at the drive or guide): ``T_p = T + F_i s_i`` (N).
 
-While a cable sticks, only its platform-side segment (a fraction ``rho`` of
-the cable's compliance) stretches, so a length change ``dc`` moves ``T_p`` by
-``k dc / rho``, and half the band is crossed after ``rho mu_beta T / k``.
-The factor ``f >= 0`` (about ``rho``) is fitted (``f -> 0``: pure sliding,
-``s = sign(dc)``). Path-dependent: the order of rows within a
-cycle matters, and loading and unloading branches differ (hysteresis). The
-length changes ``dc`` come from the measured poses when fitting, and from
-the model's own predicted poses, row after row, when predicting held-out
-cycles (:meth:`AugmentedModel.predict_poses`), so predictions need only
-the log's inputs. A cycle's first row starts at a fitted band position ``s_0`` shared by all
-cables (0: settled; -1: every cable last pulled in by its drive, as when the
-drives have just tensioned the cables). Eight parameters
-(``mu_beta_1..6 >= 0``, ``f >= 0``, ``-1 <= s_0 <= 1``).
+The band position ``s_i in [-1, 1]`` follows the cable as a play (stop) operator::
+
+    s_i[j] = clip(s_i[j-1] + (dc_i[j] + w dl_i[j]) / travel_i[j], -1, 1)
+    travel_i = f * band_i / k_i        (band_i = mu_beta_i T_i or F_i)
+
+``dc`` is the change of the cable's geometric length since the previous row and
+``dl`` the change of its commanded rest length: while the cable sticks at the
+guide, drawing it out (``dc > 0``) raises the platform side's tension and
+paying out the drive (``dl > 0``) lowers the drive side's, both moving ``s``
+up; ``w >= 0`` weighs the drive side (the compliance share on either side of
+the sticking point). ``f -> 0`` is pure sliding (``s = sign(dc)``).
+
+Memory: rows are in time order, and nobody relaxes the cables between load
+cycles, so the state is carried through the whole log: a cycle's first row
+continues from the previous cycle's last row, stepped by the changes between
+them (``memory="carried"``, the default). Only the log's first row starts at a
+fitted ``first_row_state``. ``memory="reset"`` starts every cycle there (a rig
+that is re-homed between cycles). The length changes come from the measured
+poses when fitting, and from the model's own predicted poses, row after row,
+when predicting a held-out cycle, which starts where the measured history before
+it leaves the state (:func:`csjm_opt.diagnose.augmented.with_entry`).
+Nine parameters: six band sizes, ``f``, ``w``, ``first_row_state``.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from .base import Effect
 
@@ -36,6 +45,9 @@ from .base import Effect
 MIN_TRAVEL_M = 5e-6
 #: Rounding of the band's edges (in units of the half band).
 CORNER = 0.02
+#: Friction laws and memory modes.
+LAWS = ("capstan", "coulomb")
+MEMORIES = ("carried", "reset")
 
 
 def _clip_band(s: np.ndarray) -> np.ndarray:
@@ -44,60 +56,123 @@ def _clip_band(s: np.ndarray) -> np.ndarray:
     return -1.0 + w * np.logaddexp(0.0, (s + 1.0) / w) - w * np.logaddexp(0.0, (s - 1.0) / w)
 
 
-def band_position(rows, travel_m: np.ndarray, s0: float = 0.0) -> np.ndarray:
-    """``s`` (n, 6) of the play operator over each cycle's rows (``travel_m`` (n, 6) > 0)."""
-    s = np.full_like(rows.cable_steps_m, s0)
-    gain = 1.0 / travel_m
-    for idx in rows.sequence:
-        s[idx] = _clip_band(s[idx - 1] + rows.cable_steps_m[idx] * gain[idx])
+@njit(cache=True)
+def _carried_band(step: np.ndarray, s0: float, w: float) -> np.ndarray:   # pragma: no cover (compiled)
+    """The play operator over the whole log in order (compiled; same rounding as :func:`_clip_band`)."""
+    n, m = step.shape
+    s = np.empty((n, m))
+    for j in range(m):
+        prev = s0
+        s[0, j] = s0
+        for i in range(1, n):
+            x = prev + step[i, j]
+            a = (x + 1.0) / w
+            b = (x - 1.0) / w
+            sp_a = a + np.log1p(np.exp(-a)) if a > 0 else np.log1p(np.exp(a))
+            sp_b = b + np.log1p(np.exp(-b)) if b > 0 else np.log1p(np.exp(b))
+            prev = -1.0 + w * sp_a - w * sp_b
+            s[i, j] = prev
     return s
 
 
+def band_position(rows, travel_m: np.ndarray, s0: float = 0.0, rest_weight: float = 0.0,
+                  carried: bool = True) -> np.ndarray:
+    """``s`` (n, 6) of the play operator over the log's rows (``travel_m`` (n, 6) > 0).
+
+    Parameters
+    ----------
+    rows : Rows
+        The log's rows in time order (steps at the measured poses).
+    travel_m : numpy.ndarray
+        Stick travel of each row and cable (m).
+    s0 : float, optional
+        State of the log's first row (and of every cycle's first row unless ``carried``).
+    rest_weight : float, optional
+        Weight ``w`` of the rest-length change.
+    carried : bool, optional
+        Carry the state across cycle boundaries.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    dc, dl = rows.steps_since_previous
+    step = (dc + rest_weight * dl) / travel_m
+    s = np.full_like(step, s0)
+    if not carried:
+        for idx in rows.sequence:
+            s[idx] = _clip_band(s[idx - 1] + step[idx])
+        return s
+    return _carried_band(np.ascontiguousarray(step, dtype=np.float64), float(s0), CORNER)
+
+
 class Friction(Effect):
-    """Capstan factor ``mu_i beta_i`` of each guide hole and the stick travel (m)."""
+    """Dry cable friction: six band sizes, the stick travel factor, the drive-side weight, the first state."""
 
     name = "friction"
     path_dependent = True
-    description = ("capstan friction at guide holes: T_platform = T_drive exp(mu_beta_i s_i), "
-                   "s_i a play operator of the cable's motion")
+    description = ("dry cable friction with memory: T_platform = T exp(mu_beta_i s_i) (capstan) or "
+                   "T + F_i s_i (Coulomb), s_i a play operator of the cable's motion carried over the log")
+
+    def __init__(self, law: str = "capstan", memory: str = "carried", t_max_N: float = 100.0):
+        if law not in LAWS or memory not in MEMORIES:
+            raise ValueError(f"law must be one of {LAWS} and memory one of {MEMORIES}")
+        self.law, self.memory, self.t_max_N = law, memory, float(t_max_N)
+
+    @property
+    def _band(self) -> str:
+        return "mu_beta" if self.law == "capstan" else "F"
 
     @property
     def param_names(self):
-        return tuple(f"mu_beta_{i + 1}" for i in range(6)) + ("stick_travel_factor", "first_row_state")
+        unit = "" if self.law == "capstan" else "_N"
+        return (tuple(f"{self._band}_{i + 1}{unit}" for i in range(6))
+                + ("stick_travel_factor", "rest_step_weight", "first_row_state"))
 
     @property
     def scales(self):
-        return np.r_[np.full(6, 0.03), 0.5, 0.5]
+        band = 0.03 if self.law == "capstan" else 0.02 * self.t_max_N
+        return np.r_[np.full(6, band), 0.5, 0.5, 0.5]
 
     @property
     def lower_bounds(self):
-        return np.r_[np.zeros(7), -1.0]
+        return np.r_[np.zeros(8), -1.0]
 
     @property
     def upper_bounds(self):
-        return np.r_[np.full(7, np.inf), 1.0]
+        return np.r_[np.full(8, np.inf), 1.0]
 
     def default_ranges(self):
-        """Capstan factors up to 0.3 (35 % tension band: a badly worn guide), stick factor up to 2."""
-        return {**{f"mu_beta_{i + 1}": (0.0, 0.3) for i in range(6)},
-                "stick_travel_factor": (0.0, 2.0), "first_row_state": (-1.0, 1.0)}
+        """Capstan factors up to 0.3 (35 % tension band: a badly worn guide), or Coulomb forces up to 10 % of
+        the rig's largest tension; stick factor and drive-side weight up to 2."""
+        top = 0.3 if self.law == "capstan" else 0.1 * self.t_max_N
+        return {**{n: (0.0, top) for n in self.param_names[:6]},
+                "stick_travel_factor": (0.0, 2.0), "rest_step_weight": (0.0, 2.0), "first_row_state": (-1.0, 1.0)}
 
     def x0(self) -> np.ndarray:
-        return np.r_[np.zeros(6), 0.5, 0.0]
+        return np.r_[np.zeros(6), 0.5, 0.1, 0.0]
 
     def adjust_tension(self, ev, stretch_m, T_N, p):
-        mu_beta, factor, s0 = p[:6], p[6], p[7]
+        band, factor, w, s0 = p[:6], p[6], p[7], p[8]
         k = ev.cable_stiffness_N_per_m
-        travel = np.maximum(factor * mu_beta * np.maximum(T_N, 1e-3) / k, MIN_TRAVEL_M)
+        size = band * np.maximum(T_N, 1e-3) if self.law == "capstan" else band * np.ones_like(T_N)
+        travel = np.maximum(factor * size / k, MIN_TRAVEL_M)
         rows = ev.rows
         if rows.state_prev is None:                  # whole log at measured poses
-            s = band_position(rows, travel, s0)
+            s = band_position(rows, travel, s0, w, self.memory == "carried")
         else:                                        # one row per cycle, sequential prediction
             first = np.isnan(rows.lengths_prev_m)
-            step = np.where(first, 0.0, ev.lengths_m - np.nan_to_num(rows.lengths_prev_m))
+            _, dl = rows.steps_since_previous
+            step = np.where(first, 0.0, ev.lengths_m - np.nan_to_num(rows.lengths_prev_m) + w * dl)
             s = np.where(first, s0, _clip_band(rows.state_prev + step / travel))
         ev.state_out = s
-        return T_N * np.exp(s * mu_beta)
+        if self.law == "capstan":
+            return T_N * np.exp(s * band)
+        return np.maximum(T_N + s * band, 0.0)
 
     def describe(self, p):
-        return {"tension_band_percent": (100 * (np.exp(np.asarray(p[:6])) - 1)).tolist()}
+        p = np.asarray(p, float)
+        if self.law == "capstan":
+            return {"law": self.law, "memory": self.memory,
+                    "tension_band_percent": (100 * (np.exp(p[:6]) - 1)).tolist()}
+        return {"law": self.law, "memory": self.memory, "friction_force_N": p[:6].tolist()}

@@ -2,8 +2,9 @@
 
 36 parameters, ``dA_i`` (in {A}) and ``dB_i`` (in {B}), m. Several directions
 are weakly determined by moment data (e.g. moving a hole along its cable),
-so the fit carries a weak zero-mean ridge prior (``prior_sd``, 5 mm) and the
-information criterion counts the effective number of parameters.
+so the fit carries the prior range as a proper zero-mean Gaussian prior (``prior_sd``: the
++-4 mm range is +-2 sd), and the selection prices only the subspace the log identifies
+(:mod:`csjm_opt.diagnose.evidence`).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ class HoleOffsets(Effect):
     name = "hole_offsets"
     description = "hole position errors dA_i (in {A}), dB_i (in {B}), m"
 
-    def __init__(self, prior_sd_m: float = 5e-3):
+    def __init__(self, prior_sd_m: float = RANGE_M / 2):
         self.prior_sd_m = float(prior_sd_m)
 
     @property

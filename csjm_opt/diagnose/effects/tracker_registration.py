@@ -16,7 +16,6 @@ from __future__ import annotations
 import numpy as np
 
 from ... import so3
-
 from .base import Effect
 
 #: Plausible registration error per rotation-vector component (rad): about 3 degrees.

@@ -1,0 +1,465 @@
+"""The next experiment: rows that best tell the leading hypotheses of a diagnosis apart.
+
+When a verdict has non-separable alternatives, is ``unexplained``, or names an
+effect near the noise floor, :func:`suggest_experiment` proposes up to ``N`` new
+rows within the rig's limits:
+
+* **candidate cycles**: a reference pose (tilt up to ``MAX_TILT_RAD``, any azimuth,
+  twist up to ``MAX_TWIST_RAD``), a pretension (rest lengths planned for reference
+  tensions anywhere in the middle of the tension range: changes of pretension
+  go through the rest lengths), and one load point of the load set
+  (:mod:`.loads`) with its masses hung in increasing then decreasing order
+  (``0, m1, m2, ..., m2, m1, 0``: both branches, for friction). A cycle is kept
+  only where the nominal rig holds every row with tensions in ``[t_min, t_max]``
+  (:func:`csjm_opt.model.statics.solve_equilibrium` with the weights as point
+  forces); a load the rig cannot hold at a pose is left out of that cycle;
+* **hypotheses**: the selected model, its non-separable alternatives and the
+  pairs they form, the null model when the effect is near the floor, the best
+  singles and pairs when the verdict is ``unexplained`` (at most ``MAX_HYPOTHESES``),
+  each with its fitted parameters. Each predicts every candidate row (forward
+  statics, path state carried on from the end of the log);
+* **design**: if ``b`` is true, the new rows show ``b``'s predictions; ``a`` refitted to
+  the log and the new rows absorbs what its parameters can (linearised: its pose
+  sensitivities on the new rows, with the information the log and the prior already
+  give it). The separation of ``a`` and ``b`` is what it cannot absorb, in noise
+  units (``delta^T delta - r^T N^-1 r``, whitened by the floor per component), the
+  smaller of the two directions. Cycles are added greedily, each time the one that
+  most raises the *smallest* separation over all pairs of hypotheses, until ``N``
+  rows are used; ``sqrt`` of it (noise sd) is reported per pair. A plain distance
+  between the fitted predictions would be optimistic: 36 hole offsets refitted
+  to the new rows mimic much of what they did not predict.
+
+The protocol (:func:`protocol_text`) is the log format (docs/conventions.md) with
+the planned rest lengths and empty measured columns, plus the intended loads.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from types import SimpleNamespace
+from typing import Callable, Sequence
+
+import numpy as np
+
+from .. import so3
+from ..errors import CsjmError, InvalidInput
+from ..model import kinematics as kin
+from ..model.numeric import Model
+from ..model.rig import Rig
+from ..model.statics import rest_lengths_for, solve_equilibrium
+from ..planning.planner import plan_tensions
+from ._decision import LEAD_NATS
+from .augmented import Rows, cable_steps, log_steps, with_entry
+from .evidence import prior_of
+from .fit import data_jacobian
+from .loads import Load, default_load_set
+from .result import Diagnosis
+from .scoring import CandidateScore
+
+MAX_TILT_RAD = 0.5
+MAX_TWIST_RAD = 0.3
+#: Reference tensions of a candidate cycle: this share range of [t_min, t_max].
+PRETENSION_SHARE = (0.25, 0.75)
+N_CANDIDATES = 40
+MAX_HYPOTHESES = 6
+#: Two hypotheses no candidate row can separate by this many noise sd are reported as equivalent.
+EQUIVALENT_SD = 1.0
+#: An effect is "near the floor" when the systematic gap it explains is below this many floors.
+NEAR_FLOOR = 3.0
+
+PROTOCOL_COLUMNS = ("sample,cycle,l1,l2,l3,l4,l5,l6,tau_x,tau_y,tau_z,rx,ry,rz,load_kg,load_x_A_m,load_y_A_m,"
+                    "load_z_A_m,intended_tau_x,intended_tau_y,intended_tau_z,planned_rx,planned_ry,planned_rz")
+
+
+@dataclasses.dataclass(frozen=True)
+class Suggestion:
+    """A suggested experiment: the rows, what they are for and the separation they should give."""
+
+    purpose: str
+    hypotheses: list[str]
+    cycle: np.ndarray              # (n,) cycle ids (after the log's)
+    rest_lengths_m: np.ndarray     # (n, 6)
+    loads: list[Load | None]       # per row (None: no load)
+    intended_tau_A_Nm: np.ndarray  # (n, 3) at the planned pose
+    planned_R: np.ndarray          # (n, 3, 3) nominal pose
+    separation_sd: dict            # "a vs b" -> expected separation (noise sd)
+    separation_before_sd: dict     # the same on the log's own rows (what the log could tell)
+    equivalent: list = dataclasses.field(default_factory=list)   # pairs no feasible rows separate by 1 sd
+
+    def as_json(self) -> dict:
+        """JSON-able summary.
+
+        Returns
+        -------
+        dict
+        """
+        return {"purpose": self.purpose, "hypotheses": self.hypotheses, "rows": int(len(self.cycle)),
+                "cycles": int(len(np.unique(self.cycle))),
+                "expected_separation_sd": self.separation_sd,
+                "separation_on_log_sd": self.separation_before_sd,
+                "equivalent": self.equivalent,
+                "smallest_expected_separation_sd": min((v for k, v in self.separation_sd.items()
+                                                        if k not in self.equivalent), default=None)}
+
+
+def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
+    """``(purpose, [(name, score), ...])``: why an experiment is needed and which models to separate.
+
+    The leading hypotheses are the plausible singles and fitted pairs whose log evidence
+    (:mod:`.evidence`) is within ``LEAD_NATS`` of the best, the selected model always, and the
+    null model when the named effect is near the floor (at most ``MAX_HYPOTHESES``, best first).
+
+    Parameters
+    ----------
+    d : Diagnosis
+
+    Returns
+    -------
+    tuple
+        ``purpose`` is ``""`` when the verdict needs no further experiment.
+    """
+    pool: dict[str, tuple[float, CandidateScore]] = {}
+    for n, sc in d.candidates.items():
+        t = d.tests.get(n, {})
+        if t.get("plausible", False) and np.isfinite(t.get("log_evidence", np.nan)):
+            pool[n] = (t["log_evidence"], sc)
+    for p in d.pairs:
+        k = tuple(p["effects"])
+        if p.get("fitted") and p.get("plausible") and k in d.pair_scores:
+            pool["+".join(k)] = (p["log_evidence"], d.pair_scores[k])
+    sel, sec = d.selected, d.secondary.get("effect", "none")
+    floor = d.noise_floor_rad
+    reasons = []
+    out: dict[str, CandidateScore] = {}
+    if sel not in ("none", "unexplained"):
+        out[f"{sel}+{sec}" if sec != "none" else sel] = d.selected_score
+    best = max((v[0] for v in pool.values()), default=-np.inf)
+    ranked = sorted(pool, key=lambda n: -pool[n][0])
+    lead = [n for n in ranked if pool[n][0] >= best - LEAD_NATS]
+    if sel == "unexplained":
+        reasons.append("the verdict is unexplained")
+        lead = ranked[:3] if len(lead) < 2 else lead
+    elif sel == "none":
+        near = [n for n in d.candidates if d.tests[n].get("improvement_rad", 0) > 0.5 * floor]
+        if near:
+            reasons.append("no effect was named, but " + ", ".join(near) + " improve on the nominal model by "
+                           "more than half a noise floor")
+            out["none"] = d.baseline
+            lead = sorted(near, key=lambda n: d.candidates[n].heldout_mse)[:2]
+        else:
+            lead = []
+    else:
+        others = [n for n in lead if n not in out and n != f"{sec}+{sel}"]
+        if others:
+            reasons.append(f"the log cannot tell {next(iter(out))} decisively from {', '.join(others)}")
+        if sec != "none" and not d.secondary.get("separable", True):
+            reasons.append(f"{sel} and {sec} are not separable on this log")
+            out.setdefault(sel, d.candidates[sel])
+            out.setdefault(sec, d.candidates[sec])
+        improvement = d.tests.get(sel, {}).get("improvement_rad", np.inf)
+        if improvement < NEAR_FLOOR * floor:
+            reasons.append(f"{sel} improves on the nominal model by only {improvement / floor:.1f} noise floors")
+    for n in lead:
+        if n not in out:
+            out[n] = pool[n][1] if n in pool else d.candidates[n]
+    items = list(out.items())[:MAX_HYPOTHESES - (1 if any("noise floors" in r for r in reasons) else 0)]
+    if any("noise floors" in r for r in reasons):       # the null model last: the effect may be noise
+        items.append(("none", d.baseline))
+    if not reasons or len(items) < 2:
+        return "", []
+    return "; ".join(reasons) + ": the rows separate these models", items
+
+
+def candidate_cycles(rig: Rig, loads: Sequence[Load], rng: np.random.Generator, n: int = N_CANDIDATES,
+                     max_tries: int | None = None) -> list[dict]:
+    """Feasible candidate cycles (nominal model): rest lengths, loads per row, planned poses.
+
+    Parameters
+    ----------
+    rig : Rig
+    loads : sequence of Load
+    rng : numpy.random.Generator
+    n : int, optional
+        Number of cycles wanted.
+    max_tries : int, optional
+        Draws before giving up (default ``20 n``).
+
+    Returns
+    -------
+    list of dict
+        Each with ``rest_lengths_m`` (6,), ``loads`` (list), ``R`` (m, 3, 3), ``tau`` (m, 3).
+
+    Raises
+    ------
+    InvalidInput
+        No load of the set can be held at any pose tried (the load set does not fit the rig).
+    """
+    model = Model(rig)
+    g = np.asarray(rig.gravity_B_m_per_s2, float)
+    points = sorted({ld.point_A_m for ld in loads})
+    by_point = {p: sorted([ld for ld in loads if ld.point_A_m == p], key=lambda ld: ld.mass_kg) for p in points}
+    out: list[dict] = []
+    held_any = False
+    tries = max_tries or 20 * n
+    for _ in range(tries):
+        if len(out) >= n:
+            break
+        tilt, az = rng.uniform(0.0, MAX_TILT_RAD), rng.uniform(0, 2 * np.pi)
+        R_ref = so3.exp(tilt * np.array([np.cos(az), np.sin(az), 0.0])) @ so3.exp(
+            [0, 0, rng.uniform(-MAX_TWIST_RAD, MAX_TWIST_RAD)])
+        share = rng.uniform(*PRETENSION_SHARE)
+        t_ref = np.full(6, rig.t_min_N + share * (rig.t_max_N - rig.t_min_N))
+        seq = by_point[points[rng.integers(len(points))]]
+        try:
+            plan = plan_tensions(rig, R_ref, np.zeros(3), t_ref_N=t_ref, model=model)
+            l = rest_lengths_for(rig, R_ref, plan.tensions_N, model=model)
+            eq0 = solve_equilibrium(rig, l, R_init=R_ref, model=model)
+        except CsjmError:
+            continue
+        if not _within(rig, eq0.tensions_N):
+            continue
+        kept: list[tuple[Load, np.ndarray]] = []
+        R = eq0.R
+        for ld in seq:
+            try:
+                eq = solve_equilibrium(rig, l, point_forces=[(ld.mass_kg * g, np.asarray(ld.point_A_m))],
+                                       R_init=R, model=model)
+            except CsjmError:
+                break
+            if not _within(rig, eq.tensions_N):
+                break
+            kept.append((ld, eq.R))
+            R = eq.R
+        if not kept:
+            continue
+        held_any = True
+        order = kept + kept[-2::-1]
+        rows_R = [eq0.R] + [r for _, r in order] + [eq0.R]
+        rows_load: list[Load | None] = [None] + [ld for ld, _ in order] + [None]
+        tau = np.array([np.zeros(3) if ld is None else ld.moment_A_Nm(r, g) for ld, r in zip(rows_load, rows_R)])
+        out.append({"rest_lengths_m": l, "loads": rows_load, "R": np.array(rows_R), "tau": tau})
+    if not held_any:
+        raise InvalidInput(f"the rig cannot hold any load of the load set ({', '.join(ld.name for ld in loads)}) "
+                           f"with tensions in [{rig.t_min_N:g}, {rig.t_max_N:g}] N at any of {tries} poses tried",
+                           "loads")
+    return out
+
+
+def _within(rig: Rig, T: np.ndarray) -> bool:
+    return bool(np.all(T >= rig.t_min_N - 1e-9) and np.all(T <= rig.t_max_N + 1e-9))
+
+
+def _predict(sc: CandidateScore, d: Diagnosis, cands: list[dict], rig: Rig) -> tuple[np.ndarray, Rows]:
+    """Poses (n, 3, 3) hypothesis ``sc`` predicts for every candidate row (path state from the log's end),
+    and the candidate rows."""
+    model, theta = sc.fit.model, sc.fit.theta
+    train = d.train
+    full = with_entry(model, train.rows, train.R_meas, theta)
+    last_state = last_len = None
+    if model.path_dependent:
+        _, ev = model.evaluate(train.R_meas, full, theta)
+        if ev.state_out is not None and ev.lengths_m is not None:
+            last_state, last_len = ev.state_out[-1], ev.lengths_m[-1]
+    l = np.concatenate([np.repeat(c["rest_lengths_m"][None], len(c["loads"]), 0) for c in cands])
+    tau = np.concatenate([c["tau"] for c in cands])
+    R0 = np.concatenate([c["R"] for c in cands])
+    cyc = np.concatenate([np.full(len(c["loads"]), i) for i, c in enumerate(cands)])
+    n = len(cyc)
+    lengths, _ = kin.cable_terms(R0, np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m))
+    rest = np.zeros((n, 6))
+    first = np.r_[True, cyc[1:] != cyc[:-1]]
+    rest[first] = l[first] - train.rows.rest_lengths_m[-1]
+    entry_s = np.full((n, 6), np.nan)
+    entry_l = np.full((n, 6), np.nan)
+    if last_state is not None:
+        entry_s[first], entry_l[first] = last_state, last_len
+
+    rows = Rows(l, tau, cyc, cable_steps(cyc, lengths), log_steps_m=log_steps(lengths), rest_steps_m=rest,
+                entry_state=entry_s, entry_lengths_m=entry_l)
+    return model.predict_poses(rows, theta, R0).R, rows
+
+
+def _information(sc: CandidateScore, noise_scale: float) -> np.ndarray:
+    """What the log and the prior already say about ``sc``'s scaled parameters (precision matrix)."""
+    fit = sc.fit
+    m, sd = prior_of(fit)
+    J = fit.jac_x[:fit.n_obs] if fit.jac_x is not None else np.zeros((1, len(m)))
+    return J.T @ J / noise_scale ** 2 + np.diag((fit.model.scales / sd) ** 2)
+
+
+def _row_jacobian(sc: CandidateScore, rows: Rows, R: np.ndarray, sigma: float) -> np.ndarray:
+    """(n, 3, p) sensitivity of ``sc``'s predicted poses on ``rows`` to its scaled parameters, over ``sigma``."""
+    table = SimpleNamespace(rows=rows, R_meas=R, whiten=np.broadcast_to(np.eye(3) / sigma, (len(rows), 3, 3)))
+    J = data_jacobian(sc.fit.model, table, sc.fit.theta)       # type: ignore[arg-type]
+    return J.reshape(len(rows), 3, -1)
+
+def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[Load] | None = None,
+                       seed: int = 0, progress: Callable | None = None) -> Suggestion | None:
+    """Up to ``max_rows`` rows that best separate the diagnosis's leading hypotheses (module doc).
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig of the diagnosis.
+    d : Diagnosis
+    max_rows : int
+        Largest number of rows.
+    loads : sequence of Load, optional
+        The lab's load set (default :func:`~csjm_opt.diagnose.loads.default_load_set`).
+    seed : int, optional
+        Seed of the candidate draw.
+    progress : callable, optional
+        ``tqdm``-like factory.
+
+    Returns
+    -------
+    Suggestion or None
+        ``None`` when the verdict needs no further experiment.
+
+    Raises
+    ------
+    InvalidInput
+        ``max_rows`` below 3, or a load set the rig cannot hold.
+    """
+    if int(max_rows) < 3:
+        raise InvalidInput(f"--suggest needs at least 3 rows (one load cycle), got {max_rows}", "suggest")
+    purpose, hyps = hypotheses(d)
+    loads = list(loads) if loads is not None else default_load_set(rig)
+    rng = np.random.default_rng(seed)
+    bar = progress(total=2 + len(hyps), desc="suggest: designing rows") if progress else None
+    cands = [c for c in candidate_cycles(rig, loads, rng) if len(c["loads"]) <= max_rows]
+    if bar:
+        bar.update(1)
+    if not hyps:
+        if bar:
+            bar.close()
+        return None
+    sigma = d.noise_floor_rad / np.sqrt(3.0)          # per pose component
+    scale = float(d.noise_estimates.get("noise_scale", 1.0))
+    preds, jacs, info = [], [], []
+    for _, sc in hyps:
+        R, rows = _predict(sc, d, cands, rig)
+        preds.append(R)
+        jacs.append(_row_jacobian(sc, rows, R, sigma))
+        info.append(_information(sc, scale))
+        if bar:
+            bar.update(1)
+    sizes = [len(c["loads"]) for c in cands]
+    bounds = np.cumsum([0] + sizes)
+    names = [n for n, _ in hyps]
+    pairs = list(itertools.combinations(range(len(hyps)), 2))
+    # per candidate cycle and direction (truth b, refit a): J^T J, J^T delta, delta^T delta (whitened)
+    terms = {}
+    for a, b in pairs:
+        dz = so3.log(np.swapaxes(preds[a], 1, 2) @ preds[b]) / sigma
+        for t, f in ((b, a), (a, b)):          # truth t, refitted hypothesis f
+            delta = dz if f == a else -dz
+            J = jacs[f]
+            A = np.stack([np.einsum("nij,nik->jk", J[lo:hi], J[lo:hi]) for lo, hi in zip(bounds[:-1], bounds[1:])])
+            bvec = np.stack([np.einsum("nij,ni->j", J[lo:hi], delta[lo:hi]) for lo, hi in zip(bounds[:-1], bounds[1:])])
+            e = np.add.reduceat(np.sum(delta ** 2, axis=1), bounds[:-1])
+            terms[(t, f)] = (A, bvec, e)
+
+    def separation(sel: list[int]) -> np.ndarray:
+        """Per pair: the smaller, over which is true, of what the other's refit cannot absorb (squared sd)."""
+        out = np.empty(len(pairs))
+        for k, (a, b) in enumerate(pairs):
+            vals = []
+            for t, f in ((b, a), (a, b)):
+                A, bvec, e = terms[(t, f)]
+                N = info[f] + A[sel].sum(axis=0)
+                r = bvec[sel].sum(axis=0)
+                vals.append(float(e[sel].sum() - r @ np.linalg.lstsq(N, r, rcond=None)[0]))
+            out[k] = max(min(vals), 0.0)
+        return out
+
+    # hypotheses no feasible experiment of this size can tell apart are equivalent here: not a target
+    reach = separation(list(np.argsort(-np.sum([terms[(b, a)][2] for a, b in pairs], axis=0))
+                            [:max(1, max_rows // max(min(sizes), 1))]))
+    target = np.sqrt(reach) >= EQUIVALENT_SD
+    if not target.any():
+        target[:] = True
+    chosen: list[int] = []
+    total = np.zeros(len(pairs))
+    used = 0
+    while True:
+        options = [i for i in range(len(cands)) if i not in chosen and used + sizes[i] <= max_rows]
+        if not options:
+            break
+        scores = {i: separation(chosen + [i]) for i in options}
+        best = max(options, key=lambda i: (np.min(scores[i][target]), -sizes[i]))
+        chosen.append(best)
+        total = scores[best]
+        used += sizes[best]
+    if bar:
+        bar.update(1)
+        bar.close()
+    before = _separation_on_log(d, hyps, sigma ** 2)
+    first_cycle = int(np.max(d.train.cycle)) + 1
+    sel = [cands[i] for i in chosen]
+    cyc = np.concatenate([np.full(len(c["loads"]), first_cycle + j) for j, c in enumerate(sel)])
+    return Suggestion(purpose, names, cyc,
+                      np.concatenate([np.repeat(c["rest_lengths_m"][None], len(c["loads"]), 0) for c in sel]),
+                      [ld for c in sel for ld in c["loads"]], np.concatenate([c["tau"] for c in sel]),
+                      np.concatenate([c["R"] for c in sel]),
+                      {f"{names[a]} vs {names[b]}": float(np.sqrt(total[k])) for k, (a, b) in enumerate(pairs)},
+                      before, [f"{names[a]} vs {names[b]}" for k, (a, b) in enumerate(pairs) if not target[k]])
+
+
+def _separation_on_log(d: Diagnosis, hyps, var: float) -> dict:
+    """How far apart the hypotheses' fits are on the log's own rows (noise sd), for comparison."""
+    out = {}
+    for (na, a), (nb, b) in itertools.combinations(hyps, 2):
+        dz = a.train_zeta_rad - b.train_zeta_rad
+        out[f"{na} vs {nb}"] = float(np.sqrt(np.sum(dz ** 2) / var))
+    return out
+
+
+def protocol_text(s: Suggestion) -> str:
+    """The protocol as CSV: log columns (measured ones empty) and the intended loads.
+
+    Parameters
+    ----------
+    s : Suggestion
+
+    Returns
+    -------
+    str
+    """
+    lines = [PROTOCOL_COLUMNS]
+    rv = so3.log(s.planned_R)
+    for i in range(len(s.cycle)):
+        ld = s.loads[i]
+        load = ["0", "0", "0", "0"] if ld is None else [f"{ld.mass_kg:.6g}"] + [f"{v:.6g}" for v in ld.point_A_m]
+        lines.append(",".join([str(i), str(int(s.cycle[i]))] + [f"{v:.9f}" for v in s.rest_lengths_m[i]]
+                              + ["", "", "", "", "", ""] + load + [f"{v:.6g}" for v in s.intended_tau_A_Nm[i]]
+                              + [f"{v:.6g}" for v in rv[i]]))
+    return "\n".join(lines) + "\n"
+
+
+def suggestion_markdown(s: Suggestion, protocol: str | None = None) -> str:
+    """A short Markdown account of a suggested experiment: what the rows are for, and what they should show.
+
+    Parameters
+    ----------
+    s : Suggestion
+    protocol : str, optional
+        Path of the protocol file, to name it.
+
+    Returns
+    -------
+    str
+    """
+    sj = s.as_json()
+    lines = ["# Suggested experiment", "", f"**Why:** {s.purpose}.", "",
+             f"**Rows:** {sj['rows']} in {sj['cycles']} load cycles"
+             + (f" (protocol: `{protocol}`)" if protocol else "") + "; run them after the log, fill the measured "
+             "columns, then `csjm diagnose LOG --extra MEASURED.csv`.", "",
+             "| hypotheses | expected separation (noise sd) | on this log |", "|---|---|---|"]
+    for k, v in sj["expected_separation_sd"].items():
+        note = " (equivalent: no feasible rows tell them apart)" if k in s.equivalent else ""
+        lines.append(f"| {k}{note} | {v:.1f} | {sj['separation_on_log_sd'].get(k, float('nan')):.1f} |")
+    lines += ["", "The separation is what the other hypothesis, refitted to the log and the new rows, cannot "
+              "absorb (linearised); above about 3 sd the new rows should tell the two apart."]
+    return "\n".join(lines) + "\n"

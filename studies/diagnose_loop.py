@@ -1,0 +1,274 @@
+"""The sim-to-real loop (issue 20): ambiguous log -> ``--suggest`` -> simulated rows -> diagnose again.
+
+For each case a log is simulated on a random rig (the testbed's plant, cycles starting where
+the previous one settled), diagnosed as a new user would, and, when the diagnosis asks for one,
+the suggested experiment (at most ``--rows`` rows, default load set) is run on the *same* plant
+with the same hidden truth, continuing its history (friction state included), with fresh
+instrument noise; ``diagnose(log, extra=rows)`` then gives the new verdict. Cases:
+
+* ``lookalike``: stiffness_scale, link_compliance at 3x; cable_hardening + link_compliance,
+  hole_offsets + mass_com, tracker_registration + mass_com, tracker_registration + sensor_bias,
+  stiffness_scale + mass_com at 3x each (22-cycle... ``--cycles`` logs);
+* ``short``: every single effect at 3x on a 4-cycle log;
+* ``weak``: every single effect at 1.5x.
+
+A suggested load is applied as the moment it would exert at the planned pose (the testbed's
+plant takes moments in {A}); the F/T reading carries the plant's bias and noise as in a log.
+
+Usage::
+
+    python studies/diagnose_loop.py [--rigs 10] [--rows 60] [--workers 2] [--out studies/diagnose_loop]
+        [--plants quasistatic mujoco] [--summarise]
+
+One JSON line per case in ``OUT.jsonl`` (resumable), tables in ``OUT.md``, figure ``OUT.png``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+LOOKALIKE = [["stiffness_scale"], ["link_compliance"], ["cable_hardening", "link_compliance"],
+             ["hole_offsets", "mass_com"], ["tracker_registration", "mass_com"],
+             ["tracker_registration", "sensor_bias"], ["stiffness_scale", "mass_com"]]
+
+
+def jobs(n_rigs: int, cycles: int, plants: list[str]) -> list[dict]:
+    """The study's cases."""
+    from csjm_opt.testbed import EFFECT_NAMES, VARIANT_NAMES
+
+    out = []
+    singles = list(EFFECT_NAMES) + list(VARIANT_NAMES)
+    for plant in plants:
+        for rig in range(n_rigs):
+            def add(group, effects, mult, cyc, rig=rig, plant=plant):
+                out.append({"id": f"loop:{plant}:{group}:{'+'.join(effects)}:{mult:g}:{cyc}:{rig}", "group": group,
+                            "kind": "pair" if len(effects) > 1 else "single", "effects": effects,
+                            "multiple": mult, "rig": rig, "rep": 0, "cycles": cyc, "plant": plant})
+            for eff in LOOKALIKE:
+                add("lookalike", eff, 3.0, cycles)
+            for e in singles:
+                add("short", [e], 3.0, 4)
+            for e in singles:
+                add("weak", [e], 1.5, cycles)
+    return out
+
+
+def _simulate_with_inputs(rig, plant, cycles: int, seed: list[int], noise):
+    """Log of ``cycles`` designed cycles and the inputs behind it (true moments, rest lengths)."""
+    from csjm_opt.errors import NoEquilibrium
+    from csjm_opt.testbed.cycles import design_cycles
+
+    for attempt in range(4):
+        rng = np.random.default_rng(seed + [attempt])
+        cs = design_cycles(rig, cycles, rng)
+        cyc = np.concatenate([np.full(len(c.alphas), i) for i, c in enumerate(cs)])
+        l = np.concatenate([np.repeat(c.rest_lengths_m[None], len(c.alphas), 0) for c in cs])
+        tau = np.concatenate([c.tau_ext_A_Nm for c in cs])
+        R0 = np.concatenate([np.repeat(c.R_ref[None], len(c.alphas), 0) for c in cs])
+        try:
+            plant.respond(l, tau, cyc, R0)
+            return {"cycle": cyc, "l": l, "tau": tau, "R0": R0}
+        except NoEquilibrium:
+            continue
+    raise NoEquilibrium("no design of this experiment has an equilibrium on the plant", "diverged", float("nan"))
+
+
+def _measure(plant, inputs: dict, noise, rng, start: int = 0):
+    """Noisy log of the rows ``start:`` of the whole history ``inputs`` (the plant steps all of it)."""
+    from csjm_opt import so3
+    from csjm_opt.measurement.logfile import MeasurementLog
+
+    R_true = plant.respond(inputs["l"], inputs["tau"], inputs["cycle"], inputs["R0"])
+    tau_meas = plant.measured_moment(inputs["tau"])[start:]
+    n = len(tau_meas)
+    tau_meas = tau_meas + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)
+    R_meas = plant.measured_pose(R_true[start:]) @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
+    return MeasurementLog.from_arrays(inputs["cycle"][start:], inputs["l"][start:], tau_meas, R_meas)
+
+
+def _names(j: dict) -> set[str]:
+    return {j["selected"], j["secondary"]["effect"]} - {"none"} if j["selected"] not in ("none", "unexplained") \
+        else {j["selected"]}
+
+
+def run_one(job: dict) -> dict:
+    from csjm_opt.errors import CsjmError
+
+    try:
+        return _run_one(job)
+    except CsjmError as exc:
+        return {**job, "error": f"{type(exc).__name__}: {exc}"}
+
+
+def _run_one(job: dict) -> dict:
+    from diagnose_confusion import build_plant, job_seed, truth
+
+    from csjm_opt.diagnose import diagnose
+    from csjm_opt.diagnose.suggest import suggest_experiment
+
+    t0 = time.perf_counter()
+    rig, noise, plant, severities, factor = build_plant(job)
+    seed = job_seed(job)
+    inputs = _simulate_with_inputs(rig, plant, job["cycles"], seed + [7], noise)
+    log = _measure(plant, inputs, noise, np.random.default_rng(seed + [8]))
+    d = diagnose(rig, log)
+    j = d.as_json()
+    want = truth(job)
+    rec = {**job, "truth": sorted(want), "severities": severities, "noise_factor": factor, "rows": len(log),
+           "before": sorted(_names(j)), "right_before": _names(j) == want, "warnings_before": j["verdict"]["warnings"]}
+    t1 = time.perf_counter()
+    s = suggest_experiment(rig, d, job.get("max_rows", 60), seed=int(sum(seed)) % 2 ** 31)
+    rec["seconds_suggest"] = time.perf_counter() - t1
+    rec["ambiguous"] = s is not None
+    if s is None:
+        return {**rec, "seconds": time.perf_counter() - t0}
+    sj = s.as_json()
+    rec.update({"purpose": s.purpose, "hypotheses": s.hypotheses, "extra_rows": sj["rows"],
+                "expected_separation_sd": sj["smallest_expected_separation_sd"],
+                "truth_in_hypotheses": any(set(h.split("+")) == want for h in s.hypotheses)})
+    whole = {"cycle": np.r_[inputs["cycle"], s.cycle], "l": np.r_[inputs["l"], s.rest_lengths_m],
+             "tau": np.r_[inputs["tau"], s.intended_tau_A_Nm], "R0": np.concatenate([inputs["R0"], s.planned_R])}
+    extra = _measure(plant, whole, noise, np.random.default_rng(seed + [9]), start=len(log))
+    d2 = diagnose(rig, log, extra=extra)
+    j2 = d2.as_json()
+    rec.update({"after": sorted(_names(j2)), "right_after": _names(j2) == want,
+                "warnings_after": j2["verdict"]["warnings"], "seconds": time.perf_counter() - t0})
+    return rec
+
+
+def summarise(records: list[dict]) -> str:
+    def rate(rs, ok):
+        return f"{sum(map(ok, rs))}/{len(rs)} ({sum(map(ok, rs)) / len(rs):.0%})" if rs else "-"
+
+    lines = []
+    for plant in sorted({r["plant"] for r in records}):
+        rp = [r for r in records if r["plant"] == plant]
+        amb = [r for r in rp if r["ambiguous"]]
+        lines += [f"## Plant: {plant}", "", f"Cases: {len(rp)}; the diagnosis asked for an experiment on {len(amb)}.",
+                  "", "| group | cases | right before | ambiguous | ambiguous: right before | ambiguous: right after "
+                  "one suggested experiment (target >= 80 %) | median rows | median expected separation (sd) |",
+                  "|---|---|---|---|---|---|---|---|"]
+        for g in ["lookalike", "short", "weak", "all"]:
+            rs = rp if g == "all" else [r for r in rp if r["group"] == g]
+            a = [r for r in rs if r["ambiguous"]]
+            rows = np.median([r["extra_rows"] for r in a]) if a else float("nan")
+            sep = np.median([r["expected_separation_sd"] or 0 for r in a]) if a else float("nan")
+            lines.append(f"| {g} | {len(rs)} | {rate(rs, lambda r: r['right_before'])} | {len(a)} | "
+                         f"{rate(a, lambda r: r['right_before'])} | {rate(a, lambda r: r['right_after'])} | "
+                         f"{rows:.0f} | {sep:.1f} |")
+        lines += ["", f"Clear verdicts (no experiment asked) that were right: "
+                      f"{rate([r for r in rp if not r['ambiguous']], lambda r: r['right_before'])}.",
+                  f"Ambiguous logs whose truth was among the hypotheses separated: "
+                  f"{rate(amb, lambda r: r.get('truth_in_hypotheses', False))}.",
+                  f"Median time of --suggest: {np.median([r['seconds_suggest'] for r in rp]):.1f} s.", "",
+                  "| case | truth | before | hypotheses | rows | expected sep. (sd) | after |",
+                  "|---|---|---|---|---|---|---|"]
+        for r in sorted(amb, key=lambda r: r["id"]):
+            lines.append(f"| {r['group']} rig {r['rig']} | {'+'.join(r['truth'])} | {'+'.join(r['before'])} | "
+                         f"{', '.join(r['hypotheses'])} | {r['extra_rows']} | {r['expected_separation_sd'] or 0:.1f} | "
+                         f"{'+'.join(r['after'])} |")
+        lines.append("")
+    return "\n".join(lines) + "\n"
+
+
+def figure(records: list[dict], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    ax = axes[0]
+    groups = ["lookalike", "short", "weak"]
+    plants = sorted({r["plant"] for r in records})
+    width = 0.8 / (2 * len(plants))
+    for k, plant in enumerate(plants):
+        for m, (key, label) in enumerate((("right_before", "before"), ("right_after", "after"))):
+            ys = []
+            for g in groups:
+                a = [r for r in records if r["plant"] == plant and r["group"] == g and r["ambiguous"]]
+                ys.append(np.mean([r[key] for r in a]) if a else 0.0)
+            ax.bar(np.arange(len(groups)) + (2 * k + m - len(plants) + 0.5) * width, ys, width,
+                   label=f"{plant}: {label}")
+    ax.axhline(0.8, color="k", ls=":", lw=1)
+    ax.set_xticks(range(len(groups)), groups)
+    ax.set_ylabel("ambiguous logs named right")
+    ax.set_title("one suggested experiment (<= 60 rows)")
+    ax.legend(fontsize=7)
+    ax = axes[1]
+    a = [r for r in records if r["ambiguous"]]
+    for ok, mk in ((True, "o"), (False, "x")):
+        rs = [r for r in a if r["right_after"] == ok]
+        ax.scatter([max(r["expected_separation_sd"] or 0.01, 0.01) for r in rs], [r["extra_rows"] for r in rs],
+                   marker=mk, label="right after" if ok else "wrong after")
+    ax.set_xscale("log")
+    ax.set_xlabel("expected smallest separation of the hypotheses (noise sd)")
+    ax.set_ylabel("suggested rows")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    from tqdm import tqdm
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rigs", type=int, default=10)
+    ap.add_argument("--cycles", type=int, default=12)
+    ap.add_argument("--rows", type=int, default=60, help="largest suggested experiment")
+    ap.add_argument("--plants", nargs="+", default=["quasistatic"], choices=["quasistatic", "mujoco"])
+    ap.add_argument("--groups", nargs="+", default=["lookalike", "short", "weak"])
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--limit", type=int, default=None)
+    ap.add_argument("--out", default="studies/diagnose_loop")
+    ap.add_argument("--summarise", action="store_true")
+    ap.add_argument("--no-progress", action="store_true")
+    args = ap.parse_args(argv)
+    out = Path(args.out)
+    path = out.with_suffix(".jsonl")
+    done: dict[str, dict] = {}
+    if path.exists():
+        for line in path.read_text().splitlines():
+            if line.strip():
+                rec = json.loads(line)
+                done[rec["id"]] = rec
+    if not args.summarise:
+        todo = [{**j, "max_rows": args.rows} for j in jobs(args.rigs, args.cycles, args.plants)
+                if j["id"] not in done and j["group"] in args.groups]
+        # interleave groups so a partial run answers every question
+        todo.sort(key=lambda j: (j["rig"], j["group"] != "lookalike"))
+        todo = todo[:args.limit] if args.limit else todo
+        bar = tqdm(total=len(todo), file=sys.stderr, desc="loop study", disable=args.no_progress or None)
+        with path.open("a") as fh, concurrent.futures.ProcessPoolExecutor(args.workers) as pool:
+            for f in concurrent.futures.as_completed([pool.submit(run_one, j) for j in todo]):
+                rec = f.result()
+                fh.write(json.dumps(rec) + "\n")
+                fh.flush()
+                done[rec["id"]] = rec
+                bar.update(1)
+        bar.close()
+    failed = [r for r in done.values() if "error" in r]
+    records = [r for r in done.values() if "error" not in r]
+    if failed:
+        print(f"{len(failed)} cases failed: " + "; ".join(r["error"] for r in failed[:3]), file=sys.stderr)
+    if not records:
+        return 0
+    text = summarise(records)
+    out.with_suffix(".md").write_text(text)
+    figure(records, out.with_suffix(".png"))
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
