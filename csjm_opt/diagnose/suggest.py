@@ -29,8 +29,9 @@ rows within the rig's limits:
   between the fitted predictions would be optimistic: 36 hole offsets refitted
   to the new rows mimic much of what they did not predict.
 
-The protocol (:func:`protocol_text`) is the log format (docs/conventions.md) with
-the planned rest lengths and empty measured columns, plus the intended loads.
+The candidate cycles are in :mod:`.candidates`; the protocol (:mod:`.protocol`) is the log
+format (docs/conventions.md) with the planned rest lengths and empty measured columns, plus
+the intended loads.
 """
 
 from __future__ import annotations
@@ -43,33 +44,24 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .. import so3
-from ..errors import CsjmError, InvalidInput
+from ..errors import InvalidInput
 from ..model import kinematics as kin
-from ..model.numeric import Model
 from ..model.rig import Rig
-from ..model.statics import rest_lengths_for, solve_equilibrium
-from ..planning.planner import plan_tensions
 from ._decision import LEAD_NATS
 from .augmented import Rows, cable_steps, log_steps, with_entry
+from .candidates import N_CANDIDATES, candidate_cycles
 from .evidence import prior_of
 from .fit import data_jacobian
 from .loads import Load, default_load_set
+from .protocol import PROTOCOL_COLUMNS, protocol_text, suggestion_markdown
 from .result import Diagnosis
 from .scoring import CandidateScore
 
-MAX_TILT_RAD = 0.5
-MAX_TWIST_RAD = 0.3
-#: Reference tensions of a candidate cycle: this share range of [t_min, t_max].
-PRETENSION_SHARE = (0.25, 0.75)
-N_CANDIDATES = 40
 MAX_HYPOTHESES = 6
 #: Two hypotheses no candidate row can separate by this many noise sd are reported as equivalent.
 EQUIVALENT_SD = 1.0
 #: An effect is "near the floor" when the systematic gap it explains is below this many floors.
 NEAR_FLOOR = 3.0
-
-PROTOCOL_COLUMNS = ("sample,cycle,l1,l2,l3,l4,l5,l6,tau_x,tau_y,tau_z,rx,ry,rz,load_kg,load_x_A_m,load_y_A_m,"
-                    "load_z_A_m,intended_tau_x,intended_tau_y,intended_tau_z,planned_rx,planned_ry,planned_rz")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -169,85 +161,6 @@ def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
     if not reasons or len(items) < 2:
         return "", []
     return "; ".join(reasons) + ": the rows separate these models", items
-
-
-def candidate_cycles(rig: Rig, loads: Sequence[Load], rng: np.random.Generator, n: int = N_CANDIDATES,
-                     max_tries: int | None = None) -> list[dict]:
-    """Feasible candidate cycles (nominal model): rest lengths, loads per row, planned poses.
-
-    Parameters
-    ----------
-    rig : Rig
-    loads : sequence of Load
-    rng : numpy.random.Generator
-    n : int, optional
-        Number of cycles wanted.
-    max_tries : int, optional
-        Draws before giving up (default ``20 n``).
-
-    Returns
-    -------
-    list of dict
-        Each with ``rest_lengths_m`` (6,), ``loads`` (list), ``R`` (m, 3, 3), ``tau`` (m, 3).
-
-    Raises
-    ------
-    InvalidInput
-        No load of the set can be held at any pose tried (the load set does not fit the rig).
-    """
-    model = Model(rig)
-    g = np.asarray(rig.gravity_B_m_per_s2, float)
-    points = sorted({ld.point_A_m for ld in loads})
-    by_point = {p: sorted([ld for ld in loads if ld.point_A_m == p], key=lambda ld: ld.mass_kg) for p in points}
-    out: list[dict] = []
-    held_any = False
-    tries = max_tries or 20 * n
-    for _ in range(tries):
-        if len(out) >= n:
-            break
-        tilt, az = rng.uniform(0.0, MAX_TILT_RAD), rng.uniform(0, 2 * np.pi)
-        R_ref = so3.exp(tilt * np.array([np.cos(az), np.sin(az), 0.0])) @ so3.exp(
-            [0, 0, rng.uniform(-MAX_TWIST_RAD, MAX_TWIST_RAD)])
-        share = rng.uniform(*PRETENSION_SHARE)
-        t_ref = np.full(6, rig.t_min_N + share * (rig.t_max_N - rig.t_min_N))
-        seq = by_point[points[rng.integers(len(points))]]
-        try:
-            plan = plan_tensions(rig, R_ref, np.zeros(3), t_ref_N=t_ref, model=model)
-            l = rest_lengths_for(rig, R_ref, plan.tensions_N, model=model)
-            eq0 = solve_equilibrium(rig, l, R_init=R_ref, model=model)
-        except CsjmError:
-            continue
-        if not _within(rig, eq0.tensions_N):
-            continue
-        kept: list[tuple[Load, np.ndarray]] = []
-        R = eq0.R
-        for ld in seq:
-            try:
-                eq = solve_equilibrium(rig, l, point_forces=[(ld.mass_kg * g, np.asarray(ld.point_A_m))],
-                                       R_init=R, model=model)
-            except CsjmError:
-                break
-            if not _within(rig, eq.tensions_N):
-                break
-            kept.append((ld, eq.R))
-            R = eq.R
-        if not kept:
-            continue
-        held_any = True
-        order = kept + kept[-2::-1]
-        rows_R = [eq0.R] + [r for _, r in order] + [eq0.R]
-        rows_load: list[Load | None] = [None] + [ld for ld, _ in order] + [None]
-        tau = np.array([np.zeros(3) if ld is None else ld.moment_A_Nm(r, g) for ld, r in zip(rows_load, rows_R)])
-        out.append({"rest_lengths_m": l, "loads": rows_load, "R": np.array(rows_R), "tau": tau})
-    if not held_any:
-        raise InvalidInput(f"the rig cannot hold any load of the load set ({', '.join(ld.name for ld in loads)}) "
-                           f"with tensions in [{rig.t_min_N:g}, {rig.t_max_N:g}] N at any of {tries} poses tried",
-                           "loads")
-    return out
-
-
-def _within(rig: Rig, T: np.ndarray) -> bool:
-    return bool(np.all(T >= rig.t_min_N - 1e-9) and np.all(T <= rig.t_max_N + 1e-9))
 
 
 def _predict(sc: CandidateScore, d: Diagnosis, cands: list[dict], rig: Rig) -> tuple[np.ndarray, Rows]:
@@ -416,50 +329,5 @@ def _separation_on_log(d: Diagnosis, hyps, var: float) -> dict:
     return out
 
 
-def protocol_text(s: Suggestion) -> str:
-    """The protocol as CSV: log columns (measured ones empty) and the intended loads.
-
-    Parameters
-    ----------
-    s : Suggestion
-
-    Returns
-    -------
-    str
-    """
-    lines = [PROTOCOL_COLUMNS]
-    rv = so3.log(s.planned_R)
-    for i in range(len(s.cycle)):
-        ld = s.loads[i]
-        load = ["0", "0", "0", "0"] if ld is None else [f"{ld.mass_kg:.6g}"] + [f"{v:.6g}" for v in ld.point_A_m]
-        lines.append(",".join([str(i), str(int(s.cycle[i]))] + [f"{v:.9f}" for v in s.rest_lengths_m[i]]
-                              + ["", "", "", "", "", ""] + load + [f"{v:.6g}" for v in s.intended_tau_A_Nm[i]]
-                              + [f"{v:.6g}" for v in rv[i]]))
-    return "\n".join(lines) + "\n"
-
-
-def suggestion_markdown(s: Suggestion, protocol: str | None = None) -> str:
-    """A short Markdown account of a suggested experiment: what the rows are for, and what they should show.
-
-    Parameters
-    ----------
-    s : Suggestion
-    protocol : str, optional
-        Path of the protocol file, to name it.
-
-    Returns
-    -------
-    str
-    """
-    sj = s.as_json()
-    lines = ["# Suggested experiment", "", f"**Why:** {s.purpose}.", "",
-             f"**Rows:** {sj['rows']} in {sj['cycles']} load cycles"
-             + (f" (protocol: `{protocol}`)" if protocol else "") + "; run them after the log, fill the measured "
-             "columns, then `csjm diagnose LOG --extra MEASURED.csv`.", "",
-             "| hypotheses | expected separation (noise sd) | on this log |", "|---|---|---|"]
-    for k, v in sj["expected_separation_sd"].items():
-        note = " (equivalent: no feasible rows tell them apart)" if k in s.equivalent else ""
-        lines.append(f"| {k}{note} | {v:.1f} | {sj['separation_on_log_sd'].get(k, float('nan')):.1f} |")
-    lines += ["", "The separation is what the other hypothesis, refitted to the log and the new rows, cannot "
-              "absorb (linearised); above about 3 sd the new rows should tell the two apart."]
-    return "\n".join(lines) + "\n"
+__all__ = ["N_CANDIDATES", "PROTOCOL_COLUMNS", "Suggestion", "candidate_cycles", "hypotheses", "protocol_text",
+           "suggest_experiment", "suggestion_markdown"]
