@@ -245,7 +245,8 @@ def with_entry(model: "AugmentedModel", rows: Rows, R_meas: np.ndarray, theta: n
 
     The model is evaluated at the measured poses over the whole log (in log order); a cycle's
     first row gets the state and cable lengths of the log's previous row. Predicting a cycle
-    then uses the measured past, never the cycle's own measurements."""
+    then uses the measured past, never the cycle's own measurements.
+    """
     if not model.path_dependent or any(getattr(e, "memory", "carried") != "carried" for e in model.effects):
         return rows
     _, ev = model.evaluate(R_meas, rows, theta)

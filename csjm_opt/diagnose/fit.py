@@ -49,7 +49,8 @@ class FitResult:
         """Parameters fitted to rows ``keep`` only: one Gauss-Newton step from this fit.
 
         Exact for a linear problem, and the problem is linearised already (a whole refit
-        moves the parameters by the same step to first order); used for the held-out folds."""
+        moves the parameters by the same step to first order); used for the held-out folds.
+        """
         if self.jac_x is None or self.res_x is None or self.free is None:
             raise SolverError("this fit carries no Jacobian for a fold refit", "diagnose")
         idx = self._problem_rows(keep)
@@ -65,7 +66,8 @@ class FitResult:
         with parameters fitted to rows ``keep`` (``None``: all rows): ``J_h (J_k^T J_k)^+ J_h^T``.
 
         ``J_held`` has the columns of :attr:`jac_x` (scaled parameters); parameters at a bound are
-        held fixed. A held-out residual of a correctly specified model is noise plus this."""
+        held fixed. A held-out residual of a correctly specified model is noise plus this.
+        """
         if self.jac_x is None or self.free is None:
             raise SolverError("this fit carries no Jacobian for a prediction covariance", "diagnose")
         J = self.jac_x[:, self.free] if keep is None else self.jac_x[self._problem_rows(keep)][:, self.free]
@@ -177,7 +179,8 @@ def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray
     """Gauss-Newton Jacobian ``W G^-1 dg/dx`` (3 n, p) in units of the parameters' scales.
 
     (The ``dG/dx G^-1 g`` term vanishes at a perfect fit.) Its Gram matrix is the
-    Fisher information of the scaled parameters under whitened noise."""
+    Fisher information of the scaled parameters under whitened noise.
+    """
     scales = model.scales
     rows, R_meas = table.rows, table.R_meas
     theta = np.asarray(theta, float)
@@ -200,7 +203,8 @@ def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray
 def linearised_zeta(model: AugmentedModel, table: ResidualTable, theta: np.ndarray) -> np.ndarray:
     """``G^-1 g`` (n, 3): the pose residual ``log(R_pred^T R_meas)`` to first order (rad).
 
-    (``g(R_meas exp(d)) ~ g + G d = 0`` gives ``R_pred = R_meas exp(-G^-1 g)``.)"""
+    (``g(R_meas exp(d)) ~ g + G d = 0`` gives ``R_pred = R_meas exp(-G^-1 g)``.)
+    """
     def g(R: np.ndarray) -> np.ndarray:
         return model.balance(R, table.rows, theta)
 

@@ -92,7 +92,8 @@ def cycle_features(table: ResidualTable) -> list[tuple[np.ndarray, np.ndarray]]:
     ``a`` rises linearly from 0 (first row) to 1 (the cycle's peak) and falls back to 0 at its
     last row. No measured quantity enters (the measured moment carries the same noise as the
     residual, and regressing on it would find that noise), so under noise alone the residual is
-    independent of the regressors."""
+    independent of the regressors.
+    """
     out = []
     for c in np.unique(table.cycle):
         idx = np.flatnonzero(table.cycle == c)

@@ -132,7 +132,8 @@ def compute_residuals(rig: Rig, log: MeasurementLog, noise: InstrumentNoise | No
 
 def pose_noise_cov(G: np.ndarray, noise: InstrumentNoise) -> np.ndarray:
     """Covariance (n, 3, 3) of a predicted-minus-measured pose under instrument noise, for tangent ``G``:
-    moment noise through ``G^-1`` plus tracker noise."""
+    moment noise through ``G^-1`` plus tracker noise.
+    """
     Ginv = np.linalg.inv(G)
     cov = (Ginv * np.asarray(noise.tau_sigma_Nm) ** 2) @ np.swapaxes(Ginv, 1, 2)
     return cov + (noise.angle_sigma_rad ** 2 + 1e-12) * np.eye(3)

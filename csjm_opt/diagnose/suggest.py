@@ -165,7 +165,8 @@ def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
 
 def _predict(sc: CandidateScore, d: Diagnosis, cands: list[dict], rig: Rig) -> tuple[np.ndarray, Rows]:
     """Poses (n, 3, 3) hypothesis ``sc`` predicts for every candidate row (path state from the log's end),
-    and the candidate rows."""
+    and the candidate rows.
+    """
     model, theta = sc.fit.model, sc.fit.theta
     train = d.train
     full = with_entry(model, train.rows, train.R_meas, theta)
