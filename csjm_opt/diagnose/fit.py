@@ -62,8 +62,10 @@ class FitResult:
         return x * scales
 
     def prediction_cov(self, keep: np.ndarray | None, J_held: np.ndarray) -> np.ndarray:
-        """Covariance (per unit noise variance) of the whitened linearised predictions ``J_held`` makes
-        with parameters fitted to rows ``keep`` (``None``: all rows): ``J_h (J_k^T J_k)^+ J_h^T``.
+        """Covariance of whitened linearised predictions from a fit to rows ``keep``.
+
+        Per unit noise variance, the predictions ``J_held`` makes with parameters fitted to rows
+        ``keep`` (``None``: all rows): ``J_h (J_k^T J_k)^+ J_h^T``.
 
         ``J_held`` has the columns of :attr:`jac_x` (scaled parameters); parameters at a bound are
         held fixed. A held-out residual of a correctly specified model is noise plus this.
@@ -86,6 +88,13 @@ class FitResult:
 
     @property
     def sigma2(self) -> float:
+        """Residual variance per whitened observation, ``RSS / (N - p_eff)``.
+
+        Returns
+        -------
+        float
+            The noise-scale estimate squared (dimensionless, whitened units).
+        """
         return self.rss / max(self.n_obs - self.p_eff, 1.0)
 
     @property
@@ -96,18 +105,56 @@ class FitResult:
 
     @property
     def stderr(self) -> np.ndarray:
+        """Standard errors of the parameters, from the diagonal of ``cov``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape (p,), in the units of each parameter (negative variances clipped to 0).
+        """
         return np.sqrt(np.maximum(np.diag(self.cov), 0.0))
 
     @property
     def identifiable(self) -> bool:
+        """Whether the data determine every parameter.
+
+        Returns
+        -------
+        bool
+            True if the Jacobian has full rank and its condition number is below ``CONDITION_LIMIT``.
+        """
         return bool(self.rank == self.model.n_params and self.condition < CONDITION_LIMIT)
 
     def params(self, effect_only: bool = True) -> dict[str, float]:
+        """Fitted parameter values by name.
+
+        Parameters
+        ----------
+        effect_only : bool, optional
+            Leave out the nuisance parameters (``dl_common_m``); default True.
+
+        Returns
+        -------
+        dict of str to float
+            Parameter name (with units) -> fitted value (SI).
+        """
         names = self.model.param_names
         start = N_NUISANCE if effect_only else 0
         return {n: float(v) for n, v in zip(names[start:], self.theta[start:])}
 
     def param_sd(self, effect_only: bool = True) -> dict[str, float]:
+        """Standard errors of the fitted parameters by name.
+
+        Parameters
+        ----------
+        effect_only : bool, optional
+            Leave out the nuisance parameters (``dl_common_m``); default True.
+
+        Returns
+        -------
+        dict of str to float
+            Parameter name (with units) -> standard error (same units).
+        """
         names = self.model.param_names
         start = N_NUISANCE if effect_only else 0
         return {n: float(v) for n, v in zip(names[start:], self.stderr[start:])}

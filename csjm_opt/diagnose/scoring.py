@@ -43,14 +43,35 @@ class CandidateScore:
 
     @property
     def heldout_rms_rad(self) -> float:
+        """RMS held-out pose residual.
+
+        Returns
+        -------
+        float
+            ``sqrt(mean ||zeta_i||^2)`` (rad).
+        """
         return rms(self.heldout_zeta_rad)
 
     @property
     def heldout_mse(self) -> float:
+        """Mean squared held-out pose residual.
+
+        Returns
+        -------
+        float
+            ``mean ||zeta_i||^2`` (rad^2).
+        """
         return float(np.mean(np.sum(self.heldout_zeta_rad ** 2, axis=1)))
 
     @property
     def train_rms_rad(self) -> float:
+        """RMS forward-statics pose residual on the training rows (full fit).
+
+        Returns
+        -------
+        float
+            ``sqrt(mean ||zeta_i||^2)`` (rad).
+        """
         return rms(self.train_zeta_rad)
 
     def cycle_mse(self) -> dict[int, float]:
@@ -125,8 +146,9 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
 
 
 def heldout_floor(held: ResidualTable, instrument_floor_rad: float, blocks) -> float:
-    """``sqrt(floor^2 + mean prediction variance)`` (rad, per unit noise scale): the held-out RMS a
-    correctly specified model still shows (a many-parameter model pays for its estimation error).
+    """Held-out RMS a correctly specified model still shows: ``sqrt(floor^2 + mean prediction variance)``.
+
+    In rad, per unit noise scale: a many-parameter model pays for its estimation error.
     """
     Linv = np.linalg.inv(held.whiten)           # whitened -> rad
     extra, n = 0.0, 0
