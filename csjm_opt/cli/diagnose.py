@@ -1,4 +1,6 @@
-"""``csjm diagnose DATA.csv --rig RIG [--test TEST.csv] [--extra MORE.csv] --json OUT [--report DIR]
+"""The ``csjm diagnose`` command: which unmodelled effect explains the model-rig gap.
+
+Usage: ``csjm diagnose DATA.csv --rig RIG [--test TEST.csv] [--extra MORE.csv] --json OUT [--report DIR]
 [--suggest N --protocol OUT.csv [--loads LOADS.toml]]``.
 
 Where the nominal model and the rig disagree, which unmodelled effect explains
@@ -21,6 +23,13 @@ from ._options import check_outputs
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``diagnose`` subcommand and its options.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subparsers of the ``csjm`` parser.
+    """
     p = sub.add_parser("diagnose", help="which unmodelled effect explains the model-rig gap",
                        description="Compare a measurement log (CSV, docs/conventions.md) with the nominal model of the "
                        "rig: residuals and where they lie, every candidate effect (" + ", ".join(EFFECTS)
@@ -55,6 +64,32 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Diagnose a measurement log against its rig and write the requested outputs.
+
+    Checks the inputs and outputs (no output may overwrite an input), runs
+    :func:`csjm_opt.diagnose.diagnose`, optionally designs a separating experiment
+    (``--suggest``), writes the JSON, report and protocol atomically, and prints a summary
+    (unless the JSON goes to stdout).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        Exit status 0.
+
+    Raises
+    ------
+    UsageError
+        ``--suggest`` below 3 rows, or a ``--prior`` that is not ``NAME=LO:HI`` with ``LO < HI``.
+    InvalidInput
+        A ``--report`` folder that would overwrite an input or is not a folder.
+    CsjmError
+        Unreadable or invalid input files (rig, logs, load set), raised by their loaders.
+    """
     from ..diagnose import diagnose
     from ..report.diagnosis import write_report
 

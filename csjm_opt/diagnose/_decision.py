@@ -41,8 +41,11 @@ SHORT_LOG_SHARE = 0.5
 
 
 def combine_scales(s1: float, dof1: float, s2: float, dof2: float) -> float:
-    """Noise level from two estimates (relative sd ``sqrt(2/dof)`` each in variance): pooled when they
-    agree within 2.5 sd, else the smaller one (a misfit only inflates an estimate)."""
+    """Noise level from two estimates: pooled when they agree, else the smaller one.
+
+    Each estimate has relative sd ``sqrt(2/dof)`` in variance; they are pooled when they
+    agree within 2.5 sd, else the smaller is kept (a misfit only inflates an estimate).
+    """
     if not np.isfinite(s1) or dof1 <= 0:
         return s2
     v1, v2 = s1 ** 2, s2 ** 2

@@ -124,26 +124,68 @@ class AugmentedModel:
 
     @property
     def name(self) -> str:
+        """Model name: the effect names joined by ``+``.
+
+        Returns
+        -------
+        str
+            ``"none"`` for the nominal model alone.
+        """
         return "+".join(e.name for e in self.effects) or "none"
 
     @property
     def param_names(self) -> tuple[str, ...]:
+        """Parameter names: the nuisance parameter ``dl_common_m`` (m), then each effect's.
+
+        Returns
+        -------
+        tuple of str
+            One name per parameter, in the order of ``theta``.
+        """
         return NUISANCE_NAMES + tuple(n for e in self.effects for n in e.param_names)
 
     @property
     def n_params(self) -> int:
+        """Number of parameters (nuisance plus every effect's).
+
+        Returns
+        -------
+        int
+            Length of ``theta``.
+        """
         return int(self._offsets[-1])
 
     @property
     def scales(self) -> np.ndarray:
+        """Typical magnitude of each parameter, for the optimiser's scaling.
+
+        Returns
+        -------
+        numpy.ndarray
+            Nuisance scale (2e-4 m) then each effect's scales, same units as the parameters.
+        """
         return np.concatenate([NUISANCE_SCALES] + [e.scales for e in self.effects])
 
     @property
     def lower_bounds(self) -> np.ndarray:
+        """Lower bounds of the parameters.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``-inf`` for the nuisance parameter, then each effect's lower bounds.
+        """
         return np.concatenate([np.full(N_NUISANCE, -np.inf)] + [e.lower_bounds for e in self.effects])
 
     @property
     def upper_bounds(self) -> np.ndarray:
+        """Upper bounds of the parameters.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``+inf`` for the nuisance parameter, then each effect's upper bounds.
+        """
         return np.concatenate([np.full(N_NUISANCE, np.inf)] + [e.upper_bounds for e in self.effects])
 
     @property
@@ -155,6 +197,13 @@ class AugmentedModel:
         return np.concatenate(parts)
 
     def x0(self) -> np.ndarray:
+        """Starting parameter vector: the nuisance parameter at zero and each effect's ``x0``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape (n_params,).
+        """
         return np.concatenate([np.zeros(N_NUISANCE)] + [e.x0() for e in self.effects])
 
     def starts(self) -> list[np.ndarray]:
@@ -168,10 +217,29 @@ class AugmentedModel:
         return out
 
     def effect_params(self, theta: np.ndarray) -> list[np.ndarray]:
+        """Split a full parameter vector into the effects' slices.
+
+        Parameters
+        ----------
+        theta : numpy.ndarray
+            Full parameter vector: the nuisance parameters, then each effect's slice.
+
+        Returns
+        -------
+        list of numpy.ndarray
+            One slice (a view of ``theta``) per effect, in order.
+        """
         return [theta[self._offsets[i + 1]:self._offsets[i + 2]] for i in range(len(self.effects))]
 
     @property
     def path_dependent(self) -> bool:
+        """Whether any effect depends on the loading path (e.g. friction with memory).
+
+        Returns
+        -------
+        bool
+            True if some effect has ``path_dependent`` set.
+        """
         return any(getattr(e, "path_dependent", False) for e in self.effects)
 
     def balance(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray) -> np.ndarray:
@@ -245,7 +313,8 @@ def with_entry(model: "AugmentedModel", rows: Rows, R_meas: np.ndarray, theta: n
 
     The model is evaluated at the measured poses over the whole log (in log order); a cycle's
     first row gets the state and cable lengths of the log's previous row. Predicting a cycle
-    then uses the measured past, never the cycle's own measurements."""
+    then uses the measured past, never the cycle's own measurements.
+    """
     if not model.path_dependent or any(getattr(e, "memory", "carried") != "carried" for e in model.effects):
         return rows
     _, ev = model.evaluate(R_meas, rows, theta)

@@ -67,7 +67,6 @@ def check_same_rig(rig: Rig, log: MeasurementLog, extra: MeasurementLog, what: s
         The extra rows' nominal pose residual RMS exceeds ``RESIDUAL_FACTOR`` x max(the log's, 10 mrad):
         the same unmodelled effects cannot make that difference, another rig can.
     """
-
     own = compute_residuals(rig, log).rms_rad
     theirs = compute_residuals(rig, extra).rms_rad
     if not theirs <= RESIDUAL_FACTOR * max(own, 0.01):

@@ -49,7 +49,8 @@ class FitResult:
         """Parameters fitted to rows ``keep`` only: one Gauss-Newton step from this fit.
 
         Exact for a linear problem, and the problem is linearised already (a whole refit
-        moves the parameters by the same step to first order); used for the held-out folds."""
+        moves the parameters by the same step to first order); used for the held-out folds.
+        """
         if self.jac_x is None or self.res_x is None or self.free is None:
             raise SolverError("this fit carries no Jacobian for a fold refit", "diagnose")
         idx = self._problem_rows(keep)
@@ -61,11 +62,14 @@ class FitResult:
         return x * scales
 
     def prediction_cov(self, keep: np.ndarray | None, J_held: np.ndarray) -> np.ndarray:
-        """Covariance (per unit noise variance) of the whitened linearised predictions ``J_held`` makes
-        with parameters fitted to rows ``keep`` (``None``: all rows): ``J_h (J_k^T J_k)^+ J_h^T``.
+        """Covariance of whitened linearised predictions from a fit to rows ``keep``.
+
+        Per unit noise variance, the predictions ``J_held`` makes with parameters fitted to rows
+        ``keep`` (``None``: all rows): ``J_h (J_k^T J_k)^+ J_h^T``.
 
         ``J_held`` has the columns of :attr:`jac_x` (scaled parameters); parameters at a bound are
-        held fixed. A held-out residual of a correctly specified model is noise plus this."""
+        held fixed. A held-out residual of a correctly specified model is noise plus this.
+        """
         if self.jac_x is None or self.free is None:
             raise SolverError("this fit carries no Jacobian for a prediction covariance", "diagnose")
         J = self.jac_x[:, self.free] if keep is None else self.jac_x[self._problem_rows(keep)][:, self.free]
@@ -84,6 +88,13 @@ class FitResult:
 
     @property
     def sigma2(self) -> float:
+        """Residual variance per whitened observation, ``RSS / (N - p_eff)``.
+
+        Returns
+        -------
+        float
+            The noise-scale estimate squared (dimensionless, whitened units).
+        """
         return self.rss / max(self.n_obs - self.p_eff, 1.0)
 
     @property
@@ -94,18 +105,56 @@ class FitResult:
 
     @property
     def stderr(self) -> np.ndarray:
+        """Standard errors of the parameters, from the diagonal of ``cov``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape (p,), in the units of each parameter (negative variances clipped to 0).
+        """
         return np.sqrt(np.maximum(np.diag(self.cov), 0.0))
 
     @property
     def identifiable(self) -> bool:
+        """Whether the data determine every parameter.
+
+        Returns
+        -------
+        bool
+            True if the Jacobian has full rank and its condition number is below ``CONDITION_LIMIT``.
+        """
         return bool(self.rank == self.model.n_params and self.condition < CONDITION_LIMIT)
 
     def params(self, effect_only: bool = True) -> dict[str, float]:
+        """Fitted parameter values by name.
+
+        Parameters
+        ----------
+        effect_only : bool, optional
+            Leave out the nuisance parameters (``dl_common_m``); default True.
+
+        Returns
+        -------
+        dict of str to float
+            Parameter name (with units) -> fitted value (SI).
+        """
         names = self.model.param_names
         start = N_NUISANCE if effect_only else 0
         return {n: float(v) for n, v in zip(names[start:], self.theta[start:])}
 
     def param_sd(self, effect_only: bool = True) -> dict[str, float]:
+        """Standard errors of the fitted parameters by name.
+
+        Parameters
+        ----------
+        effect_only : bool, optional
+            Leave out the nuisance parameters (``dl_common_m``); default True.
+
+        Returns
+        -------
+        dict of str to float
+            Parameter name (with units) -> standard error (same units).
+        """
         names = self.model.param_names
         start = N_NUISANCE if effect_only else 0
         return {n: float(v) for n, v in zip(names[start:], self.stderr[start:])}
@@ -177,7 +226,8 @@ def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray
     """Gauss-Newton Jacobian ``W G^-1 dg/dx`` (3 n, p) in units of the parameters' scales.
 
     (The ``dG/dx G^-1 g`` term vanishes at a perfect fit.) Its Gram matrix is the
-    Fisher information of the scaled parameters under whitened noise."""
+    Fisher information of the scaled parameters under whitened noise.
+    """
     scales = model.scales
     rows, R_meas = table.rows, table.R_meas
     theta = np.asarray(theta, float)
@@ -200,7 +250,8 @@ def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray
 def linearised_zeta(model: AugmentedModel, table: ResidualTable, theta: np.ndarray) -> np.ndarray:
     """``G^-1 g`` (n, 3): the pose residual ``log(R_pred^T R_meas)`` to first order (rad).
 
-    (``g(R_meas exp(d)) ~ g + G d = 0`` gives ``R_pred = R_meas exp(-G^-1 g)``.)"""
+    (``g(R_meas exp(d)) ~ g + G d = 0`` gives ``R_pred = R_meas exp(-G^-1 g)``.)
+    """
     def g(R: np.ndarray) -> np.ndarray:
         return model.balance(R, table.rows, theta)
 

@@ -92,7 +92,8 @@ def cycle_features(table: ResidualTable) -> list[tuple[np.ndarray, np.ndarray]]:
     ``a`` rises linearly from 0 (first row) to 1 (the cycle's peak) and falls back to 0 at its
     last row. No measured quantity enters (the measured moment carries the same noise as the
     residual, and regressing on it would find that noise), so under noise alone the residual is
-    independent of the regressors."""
+    independent of the regressors.
+    """
     out = []
     for c in np.unique(table.cycle):
         idx = np.flatnonzero(table.cycle == c)
@@ -107,7 +108,7 @@ def cycle_features(table: ResidualTable) -> list[tuple[np.ndarray, np.ndarray]]:
 
 def remaining_signature(table: ResidualTable, zeta: np.ndarray, floor: float, alpha: float = 0.01,
                         blocks=()) -> dict:
-    """Does a residual still hold structure within cycles (a level, a trend with the load, a branch step)?
+    """Test whether a residual still holds structure within cycles (a level, a load trend, a branch step).
 
     The residuals are whitened with the instrument model (``table.whiten``); in each cycle they are
     regressed on :func:`cycle_features`; the F-test compares what the regressions explain with what

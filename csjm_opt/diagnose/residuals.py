@@ -51,6 +51,13 @@ class ResidualTable:
 
     @property
     def rms_rad(self) -> float:
+        """RMS pose residual of the table.
+
+        Returns
+        -------
+        float
+            ``sqrt(mean ||zeta_i||^2)`` (rad).
+        """
         return rms(self.zeta_rad)
 
     @property
@@ -71,6 +78,13 @@ class ResidualTable:
 
     @property
     def tau_load_A_Nm(self) -> np.ndarray:
+        """Moment the cables must carry: measured external moment plus the nominal weight moment.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape (n, 3) (N m, in {A}).
+        """
         return self.rows.tau_meas_A_Nm + self.tau_weight_A_Nm
 
     def linearised_zeta(self, g: np.ndarray) -> np.ndarray:
@@ -78,6 +92,18 @@ class ResidualTable:
         return np.linalg.solve(self.G, g[..., None])[..., 0]
 
     def take(self, idx: np.ndarray) -> "ResidualTable":
+        """The rows ``idx`` of this table (the instrument model is shared).
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            Row indices or a boolean mask.
+
+        Returns
+        -------
+        ResidualTable
+            A new table with those rows.
+        """
         idx = np.asarray(idx)
         fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         out: dict[str, Any] = {
@@ -131,8 +157,10 @@ def compute_residuals(rig: Rig, log: MeasurementLog, noise: InstrumentNoise | No
 
 
 def pose_noise_cov(G: np.ndarray, noise: InstrumentNoise) -> np.ndarray:
-    """Covariance (n, 3, 3) of a predicted-minus-measured pose under instrument noise, for tangent ``G``:
-    moment noise through ``G^-1`` plus tracker noise."""
+    """Covariance (n, 3, 3) of a predicted-minus-measured pose under instrument noise.
+
+    For tangent ``G``: moment noise through ``G^-1`` plus tracker noise (rad^2).
+    """
     Ginv = np.linalg.inv(G)
     cov = (Ginv * np.asarray(noise.tau_sigma_Nm) ** 2) @ np.swapaxes(Ginv, 1, 2)
     return cov + (noise.angle_sigma_rad ** 2 + 1e-12) * np.eye(3)

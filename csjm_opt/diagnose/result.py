@@ -76,12 +76,27 @@ class Diagnosis:
 
     @property
     def selected_score(self) -> CandidateScore:
+        """Score of the model behind the reported gap.
+
+        Returns
+        -------
+        CandidateScore
+            The final model (selected, or selected + secondary) if set, else the selected candidate,
+            else the nominal refit.
+        """
         if self.final is not None:
             return self.final
         return self.candidates[self.selected] if self.selected in self.candidates else self.baseline
 
     @property
     def heldout_table(self) -> ResidualTable:
+        """Residual table of the held-out rows.
+
+        Returns
+        -------
+        ResidualTable
+            The test log's table if one was given, else the training table (cross-validation).
+        """
         return self.test if self.test is not None else self.train
 
     @property
@@ -103,6 +118,14 @@ class Diagnosis:
 
     @property
     def gap(self) -> dict:
+        """The model-rig gap before and after the selected model, on held-out rows.
+
+        Returns
+        -------
+        dict
+            ``before_rad`` and ``after_rad`` (RMS, rad), ``fraction_explained``, the systematic parts
+            (rad) and noise floor after, the fraction the nominal refit alone explains, and ``model``.
+        """
         sel = self.selected_score
         before, after = self.nominal_heldout_rms_rad, sel.heldout_rms_rad
         return {"before_rad": before, "after_rad": after, "fraction_explained": self.fraction(sel),

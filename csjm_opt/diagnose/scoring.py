@@ -43,14 +43,35 @@ class CandidateScore:
 
     @property
     def heldout_rms_rad(self) -> float:
+        """RMS held-out pose residual.
+
+        Returns
+        -------
+        float
+            ``sqrt(mean ||zeta_i||^2)`` (rad).
+        """
         return rms(self.heldout_zeta_rad)
 
     @property
     def heldout_mse(self) -> float:
+        """Mean squared held-out pose residual.
+
+        Returns
+        -------
+        float
+            ``mean ||zeta_i||^2`` (rad^2).
+        """
         return float(np.mean(np.sum(self.heldout_zeta_rad ** 2, axis=1)))
 
     @property
     def train_rms_rad(self) -> float:
+        """RMS forward-statics pose residual on the training rows (full fit).
+
+        Returns
+        -------
+        float
+            ``sqrt(mean ||zeta_i||^2)`` (rad).
+        """
         return rms(self.train_zeta_rad)
 
     def cycle_mse(self) -> dict[int, float]:
@@ -62,7 +83,8 @@ class CandidateScore:
         """Names of fitted effect parameters outside their prior ranges by more than their uncertainty.
 
         A free parameter the data do not determine at all (no information: zero variance from the
-        pseudo-inverse) is not evidence against the effect wherever it drifts."""
+        pseudo-inverse) is not evidence against the effect wherever it drifts.
+        """
         m = self.fit.model
         sd_all = self.fit.stderr.copy()
         if self.fit.free is not None:
@@ -124,8 +146,10 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
 
 
 def heldout_floor(held: ResidualTable, instrument_floor_rad: float, blocks) -> float:
-    """``sqrt(floor^2 + mean prediction variance)`` (rad, per unit noise scale): the held-out RMS a
-    correctly specified model still shows (a many-parameter model pays for its estimation error)."""
+    """Held-out RMS a correctly specified model still shows: ``sqrt(floor^2 + mean prediction variance)``.
+
+    In rad, per unit noise scale: a many-parameter model pays for its estimation error.
+    """
     Linv = np.linalg.inv(held.whiten)           # whitened -> rad
     extra, n = 0.0, 0
     for idx, P in blocks:
@@ -148,7 +172,8 @@ def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
     """One-sided p-value that ``b``'s per-cycle held-out MSE is lower than ``a``'s.
 
     Paired t-test over cycles of ``log(MSE_a / MSE_b)``: cycles with large loads have large
-    errors under both models, and the log ratio keeps them from drowning the rest."""
+    errors under both models, and the log ratio keeps them from drowning the rest.
+    """
     ma, mb = a.cycle_mse(), b.cycle_mse()
     tiny = 1e-30
     d = np.array([np.log((ma[c] + tiny) / (mb[c] + tiny)) for c in ma])

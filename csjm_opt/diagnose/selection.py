@@ -265,7 +265,8 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
     A pair is tested against the best of its two singles and the first effect (``masked_base``,
     the null model, when no single was detected), at ``ALPHA`` over the number of pairs fitted
     (Bonferroni): two wrong effects that together mimic the right one do not beat it. The progress
-    bar advances by ``planned`` in all (fits that are not needed count as done)."""
+    bar advances by ``planned`` in all (fits that are not needed count as done).
+    """
     pairs: list[dict] = []
     scores: dict[tuple[str, str], CandidateScore] = {}
     if not secondary:

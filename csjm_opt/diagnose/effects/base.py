@@ -46,7 +46,19 @@ class Effect(abc.ABC):
     range_overrides: Mapping[str, tuple[float, float]] = {}
 
     def with_ranges(self, overrides: Mapping[str, tuple[float, float]] | None) -> "Effect":
-        """This effect with prior ranges overridden (patterns matching none of its names are ignored)."""
+        """Override the prior ranges of this effect in place.
+
+        Parameters
+        ----------
+        overrides : Mapping[str, tuple[float, float]] or None
+            Parameter name or ``fnmatch`` pattern -> ``(lo, hi)``; patterns matching none of the
+            names are ignored. None or empty leaves the ranges unchanged.
+
+        Returns
+        -------
+        Effect
+            The same effect (``self``), for chaining.
+        """
         if overrides:
             self.range_overrides = {**self.range_overrides, **{k: (float(lo), float(hi))
                                                              for k, (lo, hi) in overrides.items()}}
@@ -70,7 +82,8 @@ class Effect(abc.ABC):
 
         With standard errors ``sd`` only those the data put outside: beyond a bound by more
         than ``z`` standard errors (a weakly determined parameter that wanders past a bound
-        within its uncertainty is not evidence against the effect)."""
+        within its uncertainty is not evidence against the effect).
+        """
         p = np.asarray(p, float)
         slack = np.zeros_like(p) if sd is None else z * np.nan_to_num(np.asarray(sd, float), nan=0.0)
         return [n for (n, (lo, hi)), v, e in zip(self.ranges().items(), p, slack)
@@ -88,10 +101,24 @@ class Effect(abc.ABC):
 
     @property
     def lower_bounds(self) -> np.ndarray:
+        """Lower bounds of the parameters for the optimiser.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``-inf`` for every parameter unless overridden.
+        """
         return np.full(len(self.param_names), -np.inf)
 
     @property
     def upper_bounds(self) -> np.ndarray:
+        """Upper bounds of the parameters for the optimiser.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``+inf`` for every parameter unless overridden.
+        """
         return np.full(len(self.param_names), np.inf)
 
     @property
@@ -109,6 +136,13 @@ class Effect(abc.ABC):
 
     @property
     def n_params(self) -> int:
+        """Number of parameters.
+
+        Returns
+        -------
+        int
+            ``len(param_names)``.
+        """
         return len(self.param_names)
 
     # hooks (``ev`` is an :class:`~csjm_opt.diagnose.augmented.Evaluation`)

@@ -20,10 +20,24 @@ class CableHardening(Effect):
 
     @property
     def param_names(self):
+        """Parameter names of this effect.
+
+        Returns
+        -------
+        tuple of str
+            ``("hardening_per_m",)``: the hardening coefficient ``h`` (1/m).
+        """
         return ("hardening_per_m",)
 
     @property
     def scales(self):
+        """Typical parameter magnitudes (optimiser scaling and ridge prior).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``[10.0]`` (1/m).
+        """
         return np.array([10.0])
 
     def default_ranges(self):
@@ -31,7 +45,37 @@ class CableHardening(Effect):
         return {"hardening_per_m": (-20.0, 300.0)}
 
     def adjust_tension(self, ev, stretch_m, T_N, p):
+        """Hardened tensions ``T (1 + h max(e, 0))``, i.e. ``k e (1 + h e)`` for taut cables.
+
+        Parameters
+        ----------
+        ev : Evaluation
+            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`).
+        stretch_m : numpy.ndarray
+            Cable stretch ``e = c - l`` (m), shape (n, 6).
+        T_N : numpy.ndarray
+            Tensions from the tension law so far (N), shape (n, 6).
+        p : numpy.ndarray
+            ``[h]``, the hardening coefficient (1/m).
+
+        Returns
+        -------
+        numpy.ndarray
+            The changed tensions (N), shape (n, 6).
+        """
         return T_N * (1.0 + p[0] * np.maximum(stretch_m, 0.0))
 
     def describe(self, p):
+        """Physically readable quantities derived from the fitted parameters.
+
+        Parameters
+        ----------
+        p : numpy.ndarray
+            This effect's parameter slice.
+
+        Returns
+        -------
+        dict
+            ``stiffness_gain_at_20mm_stretch``: the tangent-stiffness factor ``1 + 2 h e`` at ``e = 20 mm``.
+        """
         return {"stiffness_gain_at_20mm_stretch": float(1 + 2 * p[0] * 0.02)}

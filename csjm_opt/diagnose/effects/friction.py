@@ -125,34 +125,99 @@ class Friction(Effect):
 
     @property
     def param_names(self):
+        """Parameter names of this effect.
+
+        Returns
+        -------
+        tuple of str
+            Six band sizes (``mu_beta_i`` for the capstan law, ``F_i_N`` in N for Coulomb),
+            then ``stick_travel_factor``, ``rest_step_weight`` and ``first_row_state``.
+        """
         unit = "" if self.law == "capstan" else "_N"
         return (tuple(f"{self._band}_{i + 1}{unit}" for i in range(6))
                 + ("stick_travel_factor", "rest_step_weight", "first_row_state"))
 
     @property
     def scales(self):
+        """Typical parameter magnitudes (optimiser scaling and ridge prior).
+
+        Returns
+        -------
+        numpy.ndarray
+            Band scale (0.03, or 2 % of ``t_max_N`` in N) for the six bands, 0.5 for the other three.
+        """
         band = 0.03 if self.law == "capstan" else 0.02 * self.t_max_N
         return np.r_[np.full(6, band), 0.5, 0.5, 0.5]
 
     @property
     def lower_bounds(self):
+        """Lower bounds for the optimiser.
+
+        Returns
+        -------
+        numpy.ndarray
+            Zero for the bands, stick factor and weight; -1 for the first state.
+        """
         return np.r_[np.zeros(8), -1.0]
 
     @property
     def upper_bounds(self):
+        """Upper bounds for the optimiser.
+
+        Returns
+        -------
+        numpy.ndarray
+            Unbounded for the bands, stick factor and weight; 1 for the first state.
+        """
         return np.r_[np.full(8, np.inf), 1.0]
 
     def default_ranges(self):
-        """Capstan factors up to 0.3 (35 % tension band: a badly worn guide), or Coulomb forces up to 10 % of
-        the rig's largest tension; stick factor and drive-side weight up to 2."""
+        """Plausible ranges of the friction parameters.
+
+        Capstan factors up to 0.3 (35 % tension band: a badly worn guide), or Coulomb forces up to 10 % of
+        the rig's largest tension; stick factor and drive-side weight up to 2; first state in [-1, 1].
+
+        Returns
+        -------
+        dict
+            Parameter name -> ``(lo, hi)``.
+        """
         top = 0.3 if self.law == "capstan" else 0.1 * self.t_max_N
         return {**{n: (0.0, top) for n in self.param_names[:6]},
                 "stick_travel_factor": (0.0, 2.0), "rest_step_weight": (0.0, 2.0), "first_row_state": (-1.0, 1.0)}
 
     def x0(self) -> np.ndarray:
+        """Starting values: no friction, stick factor 0.5, drive-side weight 0.1, first state 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            The nine starting values.
+        """
         return np.r_[np.zeros(6), 0.5, 0.1, 0.0]
 
     def adjust_tension(self, ev, stretch_m, T_N, p):
+        """Platform-side tensions with dry friction, ``T exp(mu_beta_i s_i)`` or ``max(T + F_i s_i, 0)``.
+
+        Capstan or Coulomb law. The band position ``s_i`` in [-1, 1] is a play operator of each
+        cable's motion (carried over the log, or one row per cycle); it is stored in ``ev.state_out``.
+
+        Parameters
+        ----------
+        ev : Evaluation
+            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`).
+        stretch_m : numpy.ndarray
+            Cable stretch ``e = c - l`` (m), shape (n, 6).
+        T_N : numpy.ndarray
+            Tensions from the tension law so far (N), shape (n, 6).
+        p : numpy.ndarray
+            Six band sizes, the stick travel factor, the drive-side weight, the first state.
+
+        Returns
+        -------
+        numpy.ndarray
+            The changed tensions (N), shape (n, 6).
+        """
         band, factor, w, s0 = p[:6], p[6], p[7], p[8]
         k = ev.cable_stiffness_N_per_m
         size = band * np.maximum(T_N, 1e-3) if self.law == "capstan" else band * np.ones_like(T_N)
@@ -171,6 +236,18 @@ class Friction(Effect):
         return np.maximum(T_N + s * band, 0.0)
 
     def describe(self, p):
+        """Physically readable quantities derived from the fitted parameters.
+
+        Parameters
+        ----------
+        p : numpy.ndarray
+            This effect's parameter slice.
+
+        Returns
+        -------
+        dict
+            The law and memory, and the tension band per cable (percent, capstan) or the band forces (N, Coulomb).
+        """
         p = np.asarray(p, float)
         if self.law == "capstan":
             return {"law": self.law, "memory": self.memory,

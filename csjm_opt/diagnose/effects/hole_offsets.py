@@ -28,14 +28,35 @@ class HoleOffsets(Effect):
 
     @property
     def param_names(self):
+        """Parameter names of this effect.
+
+        Returns
+        -------
+        tuple of str
+            ``dA{i}_{x,y,z}_m`` (platform holes, in {A}) then ``dB{i}_{x,y,z}_m`` (base holes, in {B}), 36 names (m).
+        """
         return tuple(f"d{s}{i + 1}_{a}_m" for s in "AB" for i in range(6) for a in "xyz")
 
     @property
     def scales(self):
+        """Typical parameter magnitudes (optimiser scaling and ridge prior).
+
+        Returns
+        -------
+        numpy.ndarray
+            1e-3 m for each of the 36 coordinates.
+        """
         return np.full(36, 1e-3)
 
     @property
     def prior_sd(self):
+        """Standard deviation of the zero-mean Gaussian prior on every offset.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``prior_sd_m`` (m) for each of the 36 coordinates.
+        """
         return np.full(36, self.prior_sd_m)
 
     def default_ranges(self):
@@ -43,9 +64,30 @@ class HoleOffsets(Effect):
         return {n: (-RANGE_M, RANGE_M) for n in self.param_names}
 
     def adjust_geometry(self, ev, p):
+        """Shift the platform holes ``ev.A_m`` (in {A}) and base holes ``ev.B_m`` (in {B}) by the offsets.
+
+        Parameters
+        ----------
+        ev : Evaluation
+            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`), changed in place.
+        p : numpy.ndarray
+            Offsets (m): the first 18 the platform holes, the last 18 the base holes, row-major (6, 3).
+        """
         ev.A_m = ev.A_m + p[:18].reshape(6, 3)
         ev.B_m = ev.B_m + p[18:].reshape(6, 3)
 
     def describe(self, p):
+        """Physically readable quantities derived from the fitted parameters.
+
+        Parameters
+        ----------
+        p : numpy.ndarray
+            This effect's parameter slice.
+
+        Returns
+        -------
+        dict
+            ``platform_hole_offset_mm`` and ``base_hole_offset_mm``: the offset length of each hole (mm).
+        """
         d = np.linalg.norm(np.asarray(p).reshape(12, 3), axis=1)
         return {"platform_hole_offset_mm": (1e3 * d[:6]).tolist(), "base_hole_offset_mm": (1e3 * d[6:]).tolist()}

@@ -20,6 +20,18 @@ _IU = np.triu_indices(3)
 
 
 def compliance_matrix(p: np.ndarray) -> np.ndarray:
+    """Symmetric compliance matrix from its upper triangle.
+
+    Parameters
+    ----------
+    p : numpy.ndarray
+        The six upper-triangle entries ``C_11, C_12, C_13, C_22, C_23, C_33`` (rad/(N m)).
+
+    Returns
+    -------
+    numpy.ndarray
+        The symmetric matrix ``C`` (rad/(N m), in {A}), shape (3, 3).
+    """
     C = np.zeros((3, 3))
     C[_IU] = p
     return C + np.triu(C, 1).T
@@ -33,10 +45,24 @@ class LinkCompliance(Effect):
 
     @property
     def param_names(self):
+        """Parameter names of this effect.
+
+        Returns
+        -------
+        tuple of str
+            ``C_{ij}_rad_per_Nm`` for the upper triangle ``i <= j``, six names (rad/(N m)).
+        """
         return tuple(f"C_{i + 1}{j + 1}_rad_per_Nm" for i, j in zip(*_IU))
 
     @property
     def scales(self):
+        """Typical parameter magnitudes (optimiser scaling and ridge prior).
+
+        Returns
+        -------
+        numpy.ndarray
+            2e-3 rad/(N m) for each entry.
+        """
         return np.full(6, 2e-3)
 
     @property
@@ -49,15 +75,45 @@ class LinkCompliance(Effect):
         return {n: ((0.0 if i == j else -0.05), 0.05) for n, i, j in zip(self.param_names, *_IU)}
 
     def extra_starts(self):
+        """A further start from a soft link (diagonal 5e-3 rad/(N m)).
+
+        The stiffness scale and ``C`` trade off, both softening the joint.
+
+        Returns
+        -------
+        list of numpy.ndarray
+            One starting parameter vector.
+        """
         # the stiffness scale and C trade off (both soften the joint): also start from a soft link
         return [np.where(_IU[0] == _IU[1], 5e-3, 0.0)]
 
     def adjust_pose(self, ev, p):
+        """Twist the cable platform back by ``phi = C (tau_ext + tau_weight)`` and record the link rotation.
+
+        Parameters
+        ----------
+        ev : Evaluation
+            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`), changed in place.
+        p : numpy.ndarray
+            The upper triangle of ``C`` (rad/(N m)), shape (6,).
+        """
         phi = (ev.tau_ext_A_Nm + ev.tau_weight_A_Nm) @ compliance_matrix(p)  # C symmetric
         E = so3.exp(phi)
         ev.R_cable = ev.R_cable @ np.swapaxes(E, 1, 2)
         ev.link_rotation = E @ ev.link_rotation
 
     def describe(self, p):
+        """Physically readable quantities derived from the fitted parameters.
+
+        Parameters
+        ----------
+        p : numpy.ndarray
+            This effect's parameter slice.
+
+        Returns
+        -------
+        dict
+            ``compliance_eigenvalues_rad_per_Nm``: the eigenvalues of ``C`` (rad/(N m)).
+        """
         w = np.linalg.eigvalsh(compliance_matrix(p))
         return {"compliance_eigenvalues_rad_per_Nm": w.tolist()}

@@ -25,10 +25,24 @@ class MassCom(Effect):
 
     @property
     def param_names(self):
+        """Parameter names of this effect.
+
+        Returns
+        -------
+        tuple of str
+            The first-moment error components ``dmr_{x,y,z}_kgm`` (kg m, in {A}).
+        """
         return ("dmr_x_kgm", "dmr_y_kgm", "dmr_z_kgm")
 
     @property
     def scales(self):
+        """Typical parameter magnitudes (optimiser scaling and ridge prior).
+
+        Returns
+        -------
+        numpy.ndarray
+            2e-3 kg m for each component.
+        """
         return np.full(3, 2e-3)
 
     def default_ranges(self):
@@ -37,9 +51,31 @@ class MassCom(Effect):
         return {n: (-lim, lim) for n in self.param_names}
 
     def adjust_load(self, ev, p):
+        """Add the first-moment error ``d(m r)`` to ``ev.first_moment_A_kgm`` (kg m, in {A}).
+
+        Parameters
+        ----------
+        ev : Evaluation
+            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`), changed in place.
+        p : numpy.ndarray
+            The first-moment error ``d(m r)`` (kg m, in {A}), shape (3,).
+        """
         ev.first_moment_A_kgm = ev.first_moment_A_kgm + p
 
     def describe(self, p):
+        """Physically readable quantities derived from the fitted parameters.
+
+        Parameters
+        ----------
+        p : numpy.ndarray
+            This effect's parameter slice.
+
+        Returns
+        -------
+        dict
+            ``com_shift_at_nominal_mass_m``: ``d(m r) / m`` (m, in {A}) at the rig file's mass, with a
+            note that mass and centre of mass are confounded; empty if the mass is not positive.
+        """
         if self.mass_kg <= 0:
             return {}
         return {"com_shift_at_nominal_mass_m": (np.asarray(p) / self.mass_kg).tolist(),

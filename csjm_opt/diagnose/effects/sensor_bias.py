@@ -15,10 +15,24 @@ class SensorBias(Effect):
 
     @property
     def param_names(self):
+        """Parameter names of this effect.
+
+        Returns
+        -------
+        tuple of str
+            The three bias components ``bias_{x,y,z}_Nm`` (N m, in {A}).
+        """
         return ("bias_x_Nm", "bias_y_Nm", "bias_z_Nm")
 
     @property
     def scales(self):
+        """Typical parameter magnitudes (optimiser scaling and ridge prior).
+
+        Returns
+        -------
+        numpy.ndarray
+            0.05 N m for each component.
+        """
         return np.full(3, 0.05)
 
     def default_ranges(self):
@@ -26,7 +40,28 @@ class SensorBias(Effect):
         return {n: (-0.5, 0.5) for n in self.param_names}
 
     def adjust_load(self, ev, p):
+        """Subtract the bias ``b`` from the measured external moment ``ev.tau_ext_A_Nm`` (N m, in {A}).
+
+        Parameters
+        ----------
+        ev : Evaluation
+            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`), changed in place.
+        p : numpy.ndarray
+            The bias ``b`` (N m, in {A}), shape (3,).
+        """
         ev.tau_ext_A_Nm = ev.tau_ext_A_Nm - p
 
     def describe(self, p):
+        """Physically readable quantities derived from the fitted parameters.
+
+        Parameters
+        ----------
+        p : numpy.ndarray
+            This effect's parameter slice.
+
+        Returns
+        -------
+        dict
+            ``bias_norm_Nm``: the bias magnitude ``|b|`` (N m).
+        """
         return {"bias_norm_Nm": float(np.linalg.norm(p))}

@@ -21,18 +21,46 @@ class StiffnessScale(Effect):
 
     @property
     def param_names(self):
+        """Parameter names of this effect.
+
+        Returns
+        -------
+        tuple of str
+            ``("log_k_scale",)``: the log of the common stiffness factor.
+        """
         return ("log_k_scale",)
 
     @property
     def scales(self):
+        """Typical parameter magnitudes (optimiser scaling and ridge prior).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``[0.05]`` (log factor, dimensionless).
+        """
         return np.array([0.05])
 
     @property
     def lower_bounds(self):
+        """Lower bound of ``log_k_scale`` for the optimiser.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``[-2.0]`` (factor ``exp(-2)``).
+        """
         return np.array([-2.0])
 
     @property
     def upper_bounds(self):
+        """Upper bound of ``log_k_scale`` for the optimiser.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``[2.0]`` (factor ``exp(2)``).
+        """
         return np.array([2.0])
 
     def default_ranges(self):
@@ -40,7 +68,37 @@ class StiffnessScale(Effect):
         return {"log_k_scale": (float(np.log(0.5)), float(np.log(2.0)))}
 
     def adjust_tension(self, ev, stretch_m, T_N, p):
+        """Tensions scaled by the common stiffness factor ``s = exp(log_k_scale)``.
+
+        Parameters
+        ----------
+        ev : Evaluation
+            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`).
+        stretch_m : numpy.ndarray
+            Cable stretch ``e = c - l`` (m), shape (n, 6).
+        T_N : numpy.ndarray
+            Tensions from the tension law so far (N), shape (n, 6).
+        p : numpy.ndarray
+            ``[log_k_scale]`` (dimensionless).
+
+        Returns
+        -------
+        numpy.ndarray
+            The changed tensions (N), shape (n, 6).
+        """
         return T_N * np.exp(p[0])
 
     def describe(self, p):
+        """Physically readable quantities derived from the fitted parameters.
+
+        Parameters
+        ----------
+        p : numpy.ndarray
+            This effect's parameter slice.
+
+        Returns
+        -------
+        dict
+            ``stiffness_factor``: ``s = exp(log_k_scale)``.
+        """
         return {"stiffness_factor": float(np.exp(p[0]))}

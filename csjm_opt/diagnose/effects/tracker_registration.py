@@ -34,23 +34,66 @@ class TrackerRegistration(Effect):
 
     @property
     def param_names(self):
+        """Parameter names of this effect.
+
+        Returns
+        -------
+        tuple of str
+            ``tracker_rot_{x,y,z}_rad`` (in {B}), followed by ``marker_rot_{x,y,z}_rad``
+            (in {A}) when ``marker`` is set.
+        """
         names = tuple(f"tracker_rot_{a}_rad" for a in "xyz")
         return names + (tuple(f"marker_rot_{a}_rad" for a in "xyz") if self.marker else ())
 
     @property
     def scales(self):
+        """Typical parameter magnitudes (optimiser scaling and ridge prior).
+
+        Returns
+        -------
+        numpy.ndarray
+            5e-3 rad for each rotation-vector component.
+        """
         return np.full(self.n_params, 5e-3)
 
     def default_ranges(self):
+        """Plausible ranges: within 0.05 rad (about 3 degrees) per component.
+
+        Returns
+        -------
+        dict
+            Parameter name -> ``(lo, hi)`` (rad).
+        """
         return {n: (-RANGE_RAD, RANGE_RAD) for n in self.param_names}
 
     def adjust_frame(self, ev, p):
+        """True body pose ``Q_B^T R_meas`` (``... Q_A^T`` with markers) written to ``ev.R_body``.
+
+        Parameters
+        ----------
+        ev : Evaluation
+            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`), changed in place.
+        p : numpy.ndarray
+            ``b`` (rad, in {B}) and, with ``marker``, ``a`` (rad, in {A}).
+        """
         R = so3.exp(-np.asarray(p[:3])) @ ev.R_body              # Q_B^T R_meas
         if self.marker:
             R = R @ so3.exp(-np.asarray(p[3:6]))                  # ... Q_A^T
         ev.R_body = R
 
     def describe(self, p):
+        """Physically readable quantities derived from the fitted parameters.
+
+        Parameters
+        ----------
+        p : numpy.ndarray
+            This effect's parameter slice.
+
+        Returns
+        -------
+        dict
+            ``tracker_rotation_deg`` (and ``marker_rotation_deg``): the rotation angles (degrees).
+        """
         out = {"tracker_rotation_deg": float(np.degrees(np.linalg.norm(p[:3])))}
         if self.marker:
             out["marker_rotation_deg"] = float(np.degrees(np.linalg.norm(p[3:6])))
