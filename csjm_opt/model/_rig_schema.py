@@ -8,6 +8,7 @@ import numpy as np
 
 from .._limits import LIMITS, MIN_HOLE_RADIUS_M, MIN_HOLE_SPACING_M
 from ..errors import RigFileError
+from .cable_terms import cable_lengths
 
 #: Bound (csjm_opt._limits.LIMITS key) of each rig entry.
 _QUANTITY = {"platform_holes": "position_m", "base_holes": "position_m", "stiffness": "cable_stiffness_N_per_m",
@@ -73,7 +74,7 @@ def _check(data: Any, path: str | None) -> None:
                 raise RigFileError(f"{bad:.6g} outside {lim.describe()} ({lim.why.split(';')[0]})",
                                    path, f"{section}.{key}")
     A, B = np.asarray(g["platform_holes"], float), np.asarray(g["base_holes"], float)
-    gaps = np.linalg.norm(B - A, axis=1)  # cable length at R = I
+    gaps = cable_lengths(np.eye(3), A, B)  # cable lengths at R = I
     if np.any(gaps < 1e-6):
         i = int(np.argmin(gaps))
         raise RigFileError(f"platform hole {i + 1} coincides with base hole {i + 1} at R = I",
