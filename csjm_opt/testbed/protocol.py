@@ -112,8 +112,17 @@ def read_protocol(path_or_text: str | Path, source: str | None = None) -> Protoc
     DataFileError
         A malformed protocol (file, line and column named).
     """
-    load = _load_protocol(path_or_text)
-    return load if load is not None else read_log_protocol(path_or_text, source)
+    if isinstance(path_or_text, Path) or "\n" not in str(path_or_text):   # a file: read it once
+        source = str(path_or_text)
+        text = read_text(path_or_text, lambda msg: DataFileError(msg, source), "protocol file",
+                         encoding="utf-8-sig")
+    else:
+        text = str(path_or_text)
+    text = text.lstrip("\ufeff")
+    header = [h.strip() for h in text.split("\n", 1)[0].split(",")]
+    if "load_N" in header:   # csjm plan-experiment: forces fixed in {B} (csjm_opt.measurement.protocol)
+        return LoadProtocol.from_text(text, source)
+    return read_log_protocol(text if "\n" in text else text + "\n", source)
 
 
 def read_log_protocol(path_or_text: str | Path, source: str | None = None) -> Protocol:
@@ -309,11 +318,9 @@ def simulate_protocol(rig: Rig, protocol: str | Path | Protocol | LoadProtocol, 
     from .simulate import with_persistence
 
     rng = np.random.default_rng(0) if rng is None else rng
-    load_protocol = _load_protocol(protocol)
-    proto = None
-    if load_protocol is None:
-        assert not isinstance(protocol, LoadProtocol)
-        proto = protocol if isinstance(protocol, Protocol) else read_log_protocol(protocol)
+    read = protocol if isinstance(protocol, (Protocol, LoadProtocol)) else read_protocol(protocol)
+    load_protocol, proto = (read, None) if isinstance(read, LoadProtocol) else (None, read)
+    if proto is not None:
         check_protocol(rig, proto)
     if hasattr(effects, "respond"):
         truth = with_persistence(effects, persistent)
@@ -346,26 +353,3 @@ def simulate_protocol(rig: Rig, protocol: str | Path | Protocol | LoadProtocol, 
     R_meas = truth.measured_pose(R_true) @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
     return MeasurementLog.from_arrays(proto.cycle, proto.rest_lengths_m, tau_meas, R_meas, sample=proto.sample,
                                       extra=dict(proto.extra))
-
-
-def _load_protocol(protocol: Any) -> LoadProtocol | None:
-    """The identification protocol (pulley forces fixed in {B}) that ``protocol`` is, or ``None``.
-
-    ``csjm plan-experiment`` writes protocols whose loads are forces fixed in {B} at points of the
-    platform (:mod:`csjm_opt.measurement.protocol`, columns ``load_N, dir_*, point_*``); they run
-    through :func:`csjm_opt.testbed.protocol_run.run_protocol`, the same plants underneath.
-    """
-    if isinstance(protocol, LoadProtocol):
-        return protocol
-    if isinstance(protocol, Protocol):
-        return None
-    text = str(protocol)
-    if isinstance(protocol, Path) or "\n" not in text:
-        header = read_text(protocol, lambda msg: DataFileError(msg, text), "protocol file",
-                           encoding="utf-8-sig").lstrip("\ufeff").split("\n", 1)[0]
-        is_load = "load_N" in [h.strip() for h in header.split(",")]
-        return LoadProtocol.from_csv(protocol) if is_load else None
-    header = text.lstrip("\ufeff").split("\n", 1)[0]
-    if "load_N" in [h.strip() for h in header.split(",")]:
-        return LoadProtocol.from_text(text)
-    return None
