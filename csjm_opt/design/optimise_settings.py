@@ -32,18 +32,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .._fileio import read_text
 from ..errors import DesignError
 from ..model.link import DEFAULT_LINK, Link
 from ..model.rig import STANDARD_GRAVITY_B
 from .geometry import SCALAR_PARAMETERS
-from .sweep_file import SweepSpec
+from .sweep_file import SweepSpec, read_sweep_toml
 
 #: Objectives (each maximised, except "size", minimised).
 OBJECTIVES = ("stiffness", "tension_margin", "range", "size")
@@ -143,12 +141,7 @@ def read_optimise_file(path: str | Path) -> tuple[SweepSpec, OptimiseSettings]:
     DesignError
         If the file cannot be read or a key is unknown or invalid (naming the dotted key and the file).
     """
-    path = Path(path)
-    text = read_text(path, lambda msg: DesignError(msg, path=str(path)), "sweep file")
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise DesignError(f"not valid TOML: {exc}", path=str(path)) from exc
+    data = read_sweep_toml(path)
     section = data.pop("optimise", {})
     spec = SweepSpec.from_dict(data, str(path))
     return spec, settings_from(spec, section, str(path))

@@ -141,13 +141,7 @@ class SweepSpec:
             If the file cannot be read, is not TOML, or a section or key is unknown or invalid (naming
             the key and file).
         """
-        path = Path(path)
-        text = read_text(path, lambda msg: DesignError(msg, path=str(path)), "sweep file")
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise DesignError(f"not valid TOML: {exc}", path=str(path)) from exc
-        return cls.from_dict(data, str(path))
+        return cls.from_dict(read_sweep_toml(path), str(path))
 
     @classmethod
     def from_dict(cls, data: dict[str, Any], path: str | None = None) -> "SweepSpec":
@@ -236,3 +230,29 @@ def _check_typical_design(spec: "SweepSpec", fail: Any) -> None:
         else:
             return  # a property of this one design (e.g. holes too close), not of the file
         raise fail(str(exc).split("] ", 1)[-1], f"{section}.{exc.key}") from exc
+
+
+def read_sweep_toml(path: str | Path) -> dict[str, Any]:
+    """The tables of a sweep file, as TOML reads them (nothing checked yet).
+
+    Parameters
+    ----------
+    path : str or Path
+        The sweep file.
+
+    Returns
+    -------
+    dict
+        Its tables and keys.
+
+    Raises
+    ------
+    DesignError
+        If the file cannot be read or is not TOML (naming the file).
+    """
+    path = Path(path)
+    text = read_text(path, lambda msg: DesignError(msg, path=str(path)), "sweep file")
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise DesignError(f"not valid TOML: {exc}", path=str(path)) from exc
