@@ -13,6 +13,25 @@ from .crlb import SYM_NAMES, sym_to_full
 from .excitation import MAX_CONDITION, MAX_RELATIVE_HALF_WIDTH
 
 
+def relative_half_width(half: np.ndarray, K: np.ndarray) -> float:
+    """Largest interval half-width of an entry of ``K`` over ``||K||_2`` (inf when undetermined).
+
+    Parameters
+    ----------
+    half : array
+        Half-widths of K's entries (N m/rad).
+    K : (3, 3) array
+        The estimate (N m/rad).
+
+    Returns
+    -------
+    float
+        The ratio; ``inf`` when ``K`` is zero or a half-width is not finite.
+    """
+    scale = float(np.linalg.norm(K, 2))
+    return float(np.max(half) / scale) if scale > 0 and np.all(np.isfinite(half)) else float("inf")
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class StiffnessEstimate:
     """Stiffness identified at one reference pose; matrices in N m/rad, {A}."""
@@ -73,11 +92,8 @@ class StiffnessEstimate:
         The precision rule's measure (:data:`MAX_RELATIVE_HALF_WIDTH`): K is determined when either
         estimate determines it.
         """
-        rel = []
-        for K, half in ((self.K, self.ci_quantile * self.K_std), (self.K_ml, self.ml_quantile * self.K_ml_std)):
-            scale = float(np.linalg.norm(K, 2))
-            rel.append(float(np.max(half) / scale) if scale > 0 and np.all(np.isfinite(half)) else float("inf"))
-        return min(rel)
+        return min(relative_half_width(self.ci_quantile * self.K_std, self.K),
+                   relative_half_width(self.ml_quantile * self.K_ml_std, self.K_ml))
 
     # ----------------------------------------------------------- self-checks
     @property

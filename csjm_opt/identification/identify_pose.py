@@ -18,7 +18,7 @@ from ..measurement.instruments import InstrumentNoise
 from ..model.numeric import Model
 from .crlb import sym_to_full
 from .curvature import model_curvature, weight_slopes
-from .estimate import StiffnessEstimate
+from .estimate import StiffnessEstimate, relative_half_width
 from .excitation import (
     MAX_CONDITION,
     MAX_RELATIVE_HALF_WIDTH,
@@ -146,7 +146,7 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
     # grows with unmodelled curvature) or K_ml (its bound, curvature subtracted, noise as stated)
     half_lin = q * np.sqrt(np.maximum(np.diag(fit["cov_K"]), 0.0))
     half_ml = ml_quantile * np.sqrt(np.maximum(np.diag(sym_to_full(ml.crlb6)), 0.0))
-    rel_lin, rel_ml = _relative(half_lin, fit["K"]), _relative(half_ml, ml.K)
+    rel_lin, rel_ml = relative_half_width(half_lin, fit["K"]), relative_half_width(half_ml, ml.K)
     half, scale, rel = ((half_lin, float(np.linalg.norm(fit["K"], 2)), rel_lin) if rel_lin <= rel_ml
                         else (half_ml, float(np.linalg.norm(ml.K, 2)), rel_ml))
     if not rel <= MAX_RELATIVE_HALF_WIDTH:
@@ -172,12 +172,6 @@ def identify_stiffness(R: np.ndarray, tau_ext_A_Nm: np.ndarray, model: Model | N
         K_ml=ml.K, crlb6=ml.crlb6, cov6_ml=ml.cov6,
         ml_quantile=ml_quantile,
         curvature=curv_used, noise_estimated=ml.noise_estimated)
-
-
-def _relative(half: np.ndarray, K: np.ndarray) -> float:
-    """Largest interval half-width over ``||K||_2`` (inf when undetermined)."""
-    scale = float(np.linalg.norm(K, 2))
-    return float(half.max() / scale) if scale > 0 and np.all(np.isfinite(half)) else float("inf")
 
 
 def _fit_ml(dzeta, tau_load, R, model, rest_lengths_m, noise, curvature, tracker_sigma_rad):
