@@ -97,6 +97,7 @@ def write_report(d: Diagnosis, out_dir: str | Path, data_name: str = "log") -> P
     plots.save(hysteresis_loops(d), out_dir / "hysteresis.png")
     plots.save(candidate_errors(d).figure, out_dir / "candidates.png")
     plots.save(before_after(d), out_dir / "before_after.png")
-    atomic_write_json(out_dir / "diagnosis.json", d.as_json())
-    write_document(document(d.as_json(), data_name, alpha=ALPHA), out_dir)
+    j = d.as_json()
+    atomic_write_json(out_dir / "diagnosis.json", j)
+    write_document(document(j, data_name, alpha=ALPHA), out_dir)
     return out_dir / "index.md"
