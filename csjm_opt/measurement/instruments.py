@@ -75,3 +75,31 @@ class InstrumentNoise:
             Standard deviation (m).
         """
         return (TRACKER_U0_M + TRACKER_U_PER_M * distance_m) / 2
+
+    def sample(self, tau_A_Nm: np.ndarray, R: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        """Noisy readings of true moments and orientations: Gaussian per moment axis, isotropic body-frame angle.
+
+        The moment noise is drawn first, then the angle noise (one ``(n, 3)`` draw each), so a
+        seeded generator gives the same readings wherever this is called.
+
+        Parameters
+        ----------
+        tau_A_Nm : (n, 3) array
+            Moments the F/T sensor would read without noise (N m, in {A}).
+        R : (n, 3, 3) array
+            Orientations the tracker would report without noise.
+        rng : numpy.random.Generator
+            Source of the noise.
+
+        Returns
+        -------
+        tau_meas_A_Nm : (n, 3) array
+            ``tau + e``, ``e ~ N(0, diag(tau_sigma_Nm^2))``.
+        R_meas : (n, 3, 3) array
+            ``R exp(hat(w))``, ``w ~ N(0, angle_sigma_rad^2 I)``.
+        """
+        from .. import so3
+
+        tau_meas = tau_A_Nm + rng.normal(size=np.shape(tau_A_Nm)) * np.asarray(self.tau_sigma_Nm)
+        R_meas = R @ so3.exp(rng.normal(size=(len(R), 3)) * self.angle_sigma_rad)
+        return tau_meas, R_meas

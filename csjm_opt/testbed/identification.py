@@ -67,9 +67,7 @@ def simulate_identification_experiment(
         rows_R.append(np.repeat(R_ref[None], len(taus), 0))
     cycle, l, tau, R_init = map(np.concatenate, (rows_cycle, rows_l, rows_tau, rows_R))
     R_true = plant.respond(l, tau, cycle, R_init)
-    n = len(cycle)
-    tau_meas = plant.measured_moment(tau) + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)
-    R_meas = plant.measured_pose(R_true) @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
+    tau_meas, R_meas = noise.sample(plant.measured_moment(tau), plant.measured_pose(R_true), rng)
     return MeasurementLog.from_arrays(cycle, l, tau_meas, R_meas)
 
 

@@ -335,7 +335,6 @@ def simulate_protocol(rig: Rig, protocol: str | Path | Protocol | LoadProtocol, 
                                "after")
         return run_protocol(truth, load_protocol, rng, noise)
     assert proto is not None
-    n = len(proto)
     R_start = proto.planned_R if proto.planned_R is not None else _nominal(rig, proto)[0]
     if after is None:
         R_true = truth.respond(proto.rest_lengths_m, proto.tau_fixed_A_Nm, proto.cycle, R_start,
@@ -349,7 +348,6 @@ def simulate_protocol(rig: Rig, protocol: str | Path | Protocol | LoadProtocol, 
                                np.vstack([np.zeros((m, 3)), proto.load_first_moment_A_kgm]), progress)[m:]
     tau_true = proto.tau_fixed_A_Nm + kin.weight_moment(R_true, proto.load_first_moment_A_kgm,
                                                        np.asarray(truth.rig.gravity_B_m_per_s2))
-    tau_meas = truth.measured_moment(tau_true) + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)
-    R_meas = truth.measured_pose(R_true) @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
+    tau_meas, R_meas = noise.sample(truth.measured_moment(tau_true), truth.measured_pose(R_true), rng)
     return MeasurementLog.from_arrays(proto.cycle, proto.rest_lengths_m, tau_meas, R_meas, sample=proto.sample,
                                       extra=dict(proto.extra))

@@ -110,8 +110,6 @@ def run_protocol(plant: Plant | MujocoPlant | Rig, protocol: Protocol, rng: np.r
     plant = plant if isinstance(plant, (Plant, MujocoPlant)) else Plant(plant)
     noise = InstrumentNoise.paper() if noise is None else noise
     R_true, tau = settle_protocol(plant, protocol)
-    n = len(protocol)
-    tau_meas = plant.measured_moment(tau) + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)
-    R_meas = plant.measured_pose(R_true) @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
+    tau_meas, R_meas = noise.sample(plant.measured_moment(tau), plant.measured_pose(R_true), rng)
     return MeasurementLog.from_arrays(protocol.cycle, protocol.rest_lengths_m, tau_meas, R_meas,
                                       extra=protocol.extra_columns())

@@ -135,6 +135,5 @@ def add_noise(log: MeasurementLog, noise: InstrumentNoise, rng: np.random.Genera
     MeasurementLog
         A new log with the same samples, cycles and rest lengths.
     """
-    tau = log.tau_ext_A_Nm + rng.normal(size=log.tau_ext_A_Nm.shape) * np.asarray(noise.tau_sigma_Nm)
-    R = log.R @ so3.exp(rng.normal(size=(len(log), 3)) * noise.angle_sigma_rad)
+    tau, R = noise.sample(log.tau_ext_A_Nm, log.R, rng)
     return MeasurementLog.from_arrays(log.cycle, log.rest_lengths_m, tau, R, sample=log.sample)

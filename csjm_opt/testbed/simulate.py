@@ -7,7 +7,6 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from .. import so3
 from ..errors import InvalidInput
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
@@ -46,9 +45,7 @@ def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
     tau = np.concatenate([c.tau_ext_A_Nm for c in cycles])
     R_init = np.concatenate([np.repeat(c.R_ref[None], len(c.alphas), 0) for c in cycles])
     R_true = plant.respond(l, tau, cycle, R_init)
-    n = len(cycle)
-    tau_meas = plant.measured_moment(tau) + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)
-    R_meas = plant.measured_pose(R_true) @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
+    tau_meas, R_meas = noise.sample(plant.measured_moment(tau), plant.measured_pose(R_true), rng)
     return MeasurementLog.from_arrays(cycle, l, tau_meas, R_meas)
 
 
