@@ -54,6 +54,7 @@ def main() -> None:
           f"max residual {batch.equilibrium_residual_Nm.max():.1e} N m;  "
           f"max |dT| vs SLSQP {np.abs(batch.tensions_N[sample] - ref).max():.1e} N")
     shared_qp_comparison(rig)
+    infeasible_distance(rig, R)
 
 
 def shared_qp_comparison(rig) -> None:
@@ -80,6 +81,32 @@ def shared_qp_comparison(rig) -> None:
     t_s, t_g = median_time(special, 2000, 50), median_time(general, 2000, 50)
     print(f"\none tension QP, cold start: specialised solve_one {t_s * 1e6:.2f} us, general pdas "
           f"{t_g * 1e6:.2f} us ({t_g / t_s:.1f}x): the planner keeps the specialised solver")
+
+
+
+def infeasible_distance(rig, R) -> None:
+    """An infeasible load: the exact distance (facets + faces) vs scipy's bounded least squares."""
+    from scipy.optimize import lsq_linear
+
+    model = co.Model(rig)
+    tau = np.array([30.0, 0.0, 0.0])
+    J, tau_load = model.jacobian(R), tau + model.weight_moment(R)
+
+    def planner():
+        try:
+            co.plan_tensions(rig, R, tau)
+        except co.InfeasibleLoad as exc:
+            return exc.distance_Nm
+        raise AssertionError("the load was expected to be infeasible")
+
+    def bvls():
+        res = lsq_linear(J.T, -tau_load, bounds=(rig.t_min_N, rig.t_max_N), method="bvls", tol=1e-14)
+        return np.linalg.norm(J.T @ res.x + tau_load)
+
+    t_p, t_b = median_time(planner, 200, 5), median_time(bvls, 200, 5)
+    print(f"\nan infeasible load (plan_tensions raises InfeasibleLoad with its distance), median of 200: "
+          f"{t_p * 1e6:.1f} us; scipy lsq_linear(bvls) for the distance alone {t_b * 1e6:.1f} us "
+          f"({t_b / t_p:.1f}x); distances {planner():.6g} / {bvls():.6g} N m")
 
 
 if __name__ == "__main__":

@@ -256,3 +256,101 @@ def pdas(P, q, A, b, lo, hi, lower, upper, max_iter, tol):
                     z[i] = 0.0
             return x, nu, z, lower, upper, it, 0
     return x, nu, z, lower, upper, max_iter, 2
+
+
+@njit(cache=True)
+def outside_margin(J, b, lo, hi):
+    """Largest signed distance (N m) of ``b`` past a facet plane of the zonotope ``{J^T t}``.
+
+    The zonotope of the box ``lo <= t <= hi`` under ``J^T`` (``J`` is 6 x 3) has its
+    facet normals among the 15 cross products of pairs of rows of ``J``; ``b``
+    can be held iff the margin is ``<= 0`` (up to round-off). Degenerate pairs
+    (parallel rows) are skipped.
+    """
+    worst = -np.inf
+    for i in range(6):
+        for j in range(i + 1, 6):
+            gi, gj = J[i], J[j]
+            n0 = gi[1] * gj[2] - gi[2] * gj[1]
+            n1 = gi[2] * gj[0] - gi[0] * gj[2]
+            n2 = gi[0] * gj[1] - gi[1] * gj[0]
+            nn = np.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+            if not nn > 1e-12 * np.sqrt((gi @ gi) * (gj @ gj)):
+                continue
+            for s in (-1.0, 1.0):
+                h = 0.0
+                for k in range(6):     # support function h(u) = sum_k max(lo u.g_k, hi u.g_k)
+                    d = s * (n0 * J[k, 0] + n1 * J[k, 1] + n2 * J[k, 2])
+                    h += hi * d if d > 0.0 else lo * d
+                m = (s * (n0 * b[0] + n1 * b[1] + n2 * b[2]) - h) / nn
+                if m > worst:
+                    worst = m
+    return worst
+
+
+@njit(cache=True)
+def _clamp(x, lo, hi):
+    return lo if x < lo else (hi if x > hi else x)
+
+
+@njit(cache=True)
+def boundary_distance(J, b, lo, hi, t):
+    """``min |J^T t - b|`` over the faces of dimension <= 2 of the box (N m); ``t`` gets the minimiser.
+
+    For a load outside the zonotope ``{J^T t : lo <= t <= hi}`` the nearest
+    point lies on its boundary, which is made of such faces: 15 pairs of free
+    cables x 16 assignments of the other four to their bounds, each a
+    two-variable box least squares solved in closed form (interior stationary
+    point if inside the square, else the four edges' clamped minimisers). For a
+    load inside, this is the distance to the boundary, not zero: test with
+    :func:`outside_margin` first. The generated C planner does the same.
+    """
+    best = np.inf
+    r0 = np.empty(3)
+    xs = np.empty(4)
+    ys = np.empty(4)
+    for i in range(6):
+        for j in range(i + 1, 6):
+            gi, gj = J[i], J[j]
+            a, c, bb = gi @ gi, gj @ gj, gi @ gj
+            det = a * c - bb * bb
+            inv_a = 1.0 / a if a > 0.0 else 0.0
+            inv_c = 1.0 / c if c > 0.0 else 0.0
+            inv_det = 1.0 / det if det > 1e-12 * a * c else 0.0
+            for mask in range(16):     # the four other cables at lo (bit 0) or hi (bit 1)
+                r0[:] = -b
+                bit = 0
+                for k in range(6):
+                    if k == i or k == j:
+                        continue
+                    tk = hi if (mask >> bit) & 1 else lo
+                    bit += 1
+                    r0 += tk * J[k]
+                p, q = gi @ r0, gj @ r0
+                n_cand = 4
+                xs[0], ys[0] = lo, _clamp(-(q + bb * lo) * inv_c, lo, hi)
+                xs[1], ys[1] = hi, _clamp(-(q + bb * hi) * inv_c, lo, hi)
+                ys[2], xs[2] = lo, _clamp(-(p + bb * lo) * inv_a, lo, hi)
+                ys[3], xs[3] = hi, _clamp(-(p + bb * hi) * inv_a, lo, hi)
+                if inv_det > 0.0:
+                    x = (-p * c + q * bb) * inv_det
+                    y = (-q * a + p * bb) * inv_det
+                    if lo <= x <= hi and lo <= y <= hi:
+                        xs[0], ys[0], n_cand = x, y, 1
+                for e in range(n_cand):
+                    d = 0.0
+                    for m in range(3):
+                        v = r0[m] + xs[e] * gi[m] + ys[e] * gj[m]
+                        d += v * v
+                    if d < best:
+                        best = d
+                        bit = 0
+                        for k in range(6):
+                            if k == i:
+                                t[k] = xs[e]
+                            elif k == j:
+                                t[k] = ys[e]
+                            else:
+                                t[k] = hi if (mask >> bit) & 1 else lo
+                                bit += 1
+    return np.sqrt(best)

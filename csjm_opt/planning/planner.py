@@ -24,7 +24,7 @@ tension box; a load within that tolerance always gets a plan.
 from __future__ import annotations
 
 import warnings
-from typing import Any
+from typing import Any, NoReturn
 
 import numba
 import numpy as np
@@ -193,6 +193,9 @@ def _solve_hard(J: np.ndarray, b: np.ndarray, t_ref: np.ndarray, rig: Rig, R: np
     of the feasible set. Raises :class:`InfeasibleLoad` only when it is not.
     """
     lo, hi = rig.t_min_N, rig.t_max_N
+    if kernels.outside_margin(np.ascontiguousarray(J, dtype=float), b, float(lo), float(hi)) > FEASIBILITY_TOL_NM:
+        # past a facet plane: no solver can hold it
+        _raise_infeasible(J, b, lo, hi, R, tau_ext)
     if backend is not None:
         x = _solve_qp(build_tension_qp(J, -b, lo, hi, t_ref), backend)
         if x is not None:
@@ -209,6 +212,12 @@ def _solve_hard(J: np.ndarray, b: np.ndarray, t_ref: np.ndarray, rig: Rig, R: np
     T, dist = _nearest_feasible(J, -b, lo, hi)
     if dist <= FEASIBILITY_TOL_NM:
         return T, "bvls"
+    _raise_infeasible(J, b, lo, hi, R, tau_ext)
+
+
+def _raise_infeasible(J: np.ndarray, b: np.ndarray, lo: float, hi: float, R: np.ndarray,
+                      tau_ext: np.ndarray) -> NoReturn:
+    dist = _nearest_feasible(J, -b, lo, hi)[1]
     raise InfeasibleLoad(
         f"load tau_ext={np.round(tau_ext, 4).tolist()} N m cannot be held at this pose "
         f"with {lo:g} N <= t <= {hi:g} N: it lies {dist:.3g} N m outside the "
@@ -220,6 +229,11 @@ def _holds(J: np.ndarray, b: np.ndarray, T: np.ndarray, lo: float, hi: float) ->
 
 
 def _nearest_feasible(J: np.ndarray, tau_load: np.ndarray, lo: float, hi: float) -> tuple[np.ndarray, float]:
+    J = np.ascontiguousarray(J, dtype=float)
+    b = -np.asarray(tau_load, float)
+    if kernels.outside_margin(J, b, float(lo), float(hi)) > 0.0:   # outside: nearest point on a face, exact
+        T = np.empty(6)
+        return T, float(kernels.boundary_distance(J, b, float(lo), float(hi), T))
     res = lsq_linear(J.T, -np.asarray(tau_load, float), bounds=(lo, hi), method="bvls", tol=1e-14)
     T = np.clip(res.x, lo, hi)
     return T, float(np.linalg.norm(J.T @ T + tau_load))
