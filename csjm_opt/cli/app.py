@@ -14,10 +14,10 @@ import sys
 from typing import NoReturn
 
 from ..errors import CsjmError, UsageError
+from .commands import COMMANDS
 
 #: Modules that register subcommands, in help order.
-COMMAND_MODULES = ("core", "demo", "shape", "identify", "plan_experiment", "diagnose", "simulate", "sweep",
-                   "optimise", "report", "export_mjcf", "codegen")
+COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
 
 
 class _Parser(argparse.ArgumentParser):
@@ -25,8 +25,18 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(f"{self.prog}: {message}")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``csjm`` argument parser, every command of ``COMMAND_MODULES`` registered.
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The ``csjm`` argument parser.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments it will parse. When they name a command, only the
+        module of that command is imported and registered in full; every
+        other command gets a light entry (name and one-line help, from
+        :data:`csjm_opt.cli.commands.COMMANDS`), so ``csjm --help`` and any one
+        command do not pay for the imports of the others. Without ``argv``
+        every command is registered in full.
 
     Returns
     -------
@@ -39,8 +49,18 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=_version())
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    for name in COMMAND_MODULES:
-        importlib.import_module(f"csjm_opt.cli.{name}").register(sub)
+    if argv is None:
+        full = set(COMMAND_MODULES)
+    else:
+        named = next((a for a in argv if not a.startswith("-")), None)
+        full = {COMMANDS[named][0]} if named in COMMANDS else set()
+    registered: set[str] = set()
+    for name, (module, help_text) in COMMANDS.items():
+        if module in full and module not in registered:
+            importlib.import_module(f"csjm_opt.cli.{module}").register(sub)
+            registered.add(module)
+        elif module not in full:
+            sub.add_parser(name, help=help_text)
     return parser
 
 
@@ -51,11 +71,12 @@ def main(argv: list[str] | None = None) -> int:
     non-interactive Agg backend here, before any command runs (library code
     never chooses a backend).
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
     try:
-        args = build_parser().parse_args(argv)
+        argv = sys.argv[1:] if argv is None else argv
+        args = build_parser(argv).parse_args(argv)
+        import matplotlib   # after parsing: ``--help`` and usage errors need no plotting library
+
+        matplotlib.use("Agg")
         return int(args.func(args) or 0)
     except CsjmError as exc:
         print(f"csjm: error: {exc}".replace("\n", " "), file=sys.stderr)

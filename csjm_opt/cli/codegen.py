@@ -7,6 +7,7 @@ import argparse
 from .._fileio import atomic_write_json
 from ..model.rig import load_rig
 from ._options import check_outputs
+from .commands import command_help
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -17,7 +18,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     sub : argparse._SubParsersAction
         The ``csjm`` subparsers the command is added to.
     """
-    p = sub.add_parser("codegen", help="C99 tension planner and K of a rig (no malloc, libm only)",
+    p = sub.add_parser(
+        "codegen", help=command_help("codegen"),
                        description="Write a C99 library for a 1 kHz controller: cable lengths, J and the "
                        "weight moment at a pose, the bounded tension QP of `csjm plan` (warm start, fixed "
                        "iteration bound, status codes), rest lengths, K; the rig's constants baked in. "

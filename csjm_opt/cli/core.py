@@ -15,6 +15,7 @@ from ..model.rig import load_rig
 from ..model.stiffness import stiffness
 from ..planning.planner import TensionPlan, plan_tensions
 from ._options import check_outputs, check_rotvec, quantity, rotvec_component
+from .commands import command_help
 
 
 def add_rig_pose_load(p: argparse.ArgumentParser) -> None:
@@ -45,12 +46,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     sub : argparse._SubParsersAction
         The ``csjm`` subparsers the command is added to.
     """
-    p = sub.add_parser("plan", help="cable tensions that hold a pose under a load",
+    p = sub.add_parser(
+        "plan", help=command_help("plan"),
                        description="Plan the six cable tensions (QP, t_min <= t <= t_max) that hold "
                        "the platform at a pose under an external moment plus its own weight.")
     add_pose_arguments(p)
     p.set_defaults(func=run_plan)
-    p = sub.add_parser("stiffness", help="stiffness K at a pose (tensions as planned)",
+    p = sub.add_parser(
+        "stiffness", help=command_help("stiffness"),
                        description="Plan tensions for the pose and load, then the stiffness K "
                        "(N m/rad; Levi-Civita Hessian of the cable energy, convention of docs/conventions.md).")
     add_pose_arguments(p)

@@ -9,6 +9,7 @@ from pathlib import Path
 from .._fileio import atomic_write_json
 from ..errors import InvalidInput
 from ._options import check_outputs, int_in
+from .commands import command_help
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -19,7 +20,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     sub : argparse._SubParsersAction
         The ``csjm`` subparsers the command is added to.
     """
-    p = sub.add_parser("demo", help="run the main job on the paper rig and write a report folder",
+    p = sub.add_parser(
+        "demo", help=command_help("demo"),
                        description="Plan tensions, compute and shape stiffness, simulate an "
                        "experiment, identify K, verify, diagnose; writes a report folder: index.html (open it "
                        "in a browser), README.md (the same in Markdown), figures, summary.json, and the "

@@ -20,6 +20,7 @@ from ..errors import InvalidInput, UsageError
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import load_rig
 from ._options import check_outputs
+from .commands import command_help
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -30,7 +31,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     sub : argparse._SubParsersAction
         The subparsers of the ``csjm`` parser.
     """
-    p = sub.add_parser("diagnose", help="which unmodelled effect explains the model-rig gap",
+    p = sub.add_parser(
+        "diagnose", help=command_help("diagnose"),
                        description="Compare a measurement log (CSV, docs/conventions.md) with the nominal model of the "
                        "rig: residuals and where they lie, every candidate effect (" + ", ".join(EFFECTS)
                        + ") fitted jointly with the nominal stiffness scale and pretension and scored on "

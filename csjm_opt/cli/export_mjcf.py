@@ -13,6 +13,7 @@ from ..model.mjcf import ACTUATIONS
 from ..model.rig import load_rig
 from ..planning.mjcf_export import export_mjcf
 from ._options import check_outputs, check_rotvec, float_in, quantity, rotvec_component
+from .commands import command_help
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -23,7 +24,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     sub : argparse._SubParsersAction
         The ``csjm`` subparsers the command is added to.
     """
-    p = sub.add_parser("export-mjcf", help="MuJoCo model (MJCF) of a rig",
+    p = sub.add_parser(
+        "export-mjcf", help=command_help("export-mjcf"),
                        description="Write a MuJoCo model of the rig: ball joint at O, six pull-only tendon "
                        "springs with rest lengths planned for the pose and load, the platform's mass and "
                        "inertia, base sites fixed, load motors in {A}. Frames: world = {B}, body "

@@ -11,6 +11,7 @@ from .._fileio import atomic_write_json
 from .._limits import MAX_BOOTSTRAP, MAX_EXACT_INT
 from ..model.rig import load_rig
 from ._options import check_outputs, float_in, int_in
+from .commands import command_help
 
 #: Above this many cycles, one line per cycle is printed and the JSON is compact.
 LONG_LOG_CYCLES = 50
@@ -24,7 +25,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     sub : argparse._SubParsersAction
         The ``csjm`` subparsers the commands are added to.
     """
-    p = sub.add_parser("preprocess", help="raw tracker/F/T CSV -> measurement log",
+    p = sub.add_parser(
+        "preprocess", help=command_help("preprocess"),
                        description="Turn a raw instrument CSV (tracker base points, platform poses "
                        "in the tracker frame, F/T readings in the sensor frame; format in "
                        "docs/guide/input-files.md) into the measurement log of docs/conventions.md: "
@@ -41,7 +43,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", metavar="PATH", help="write a summary ('-' = stdout)")
     p.set_defaults(func=run_preprocess)
 
-    p = sub.add_parser("identify", help="identify K per load cycle of a measurement log",
+    p = sub.add_parser(
+        "identify", help=command_help("identify"),
                        description="Per cycle (first row = reference): the default estimate K_ml "
                        "(maximum likelihood with tracker and F/T noise, curvature of the moment-rotation "
                        "relation from the rig model) with its interval, the Cramér-Rao bound of K's six "
@@ -84,7 +87,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--figures", metavar="DIR", help="write the Figure 5 convergence curve per cycle")
     p.set_defaults(func=run_identify)
 
-    p = sub.add_parser("paper", help="reproduce the paper's Tables 3 and 4 and check them",
+    p = sub.add_parser(
+        "paper", help=command_help("paper"),
                        description="Recompute Table 3 (K_D, K_L, K) and Table 4 (estimated poses, E_theta) "
                        "from the paper's printed numbers; report where the printed numbers disagree "
                        "with the equations (errata 1-5).")

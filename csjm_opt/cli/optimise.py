@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from ._options import check_outputs, int_in
+from .commands import command_help
 
 #: Most design evaluations a run may be given.
 MAX_EVALUATIONS = 10_000_000
@@ -21,7 +22,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         The subparsers of the ``csjm`` parser.
     """
     p = sub.add_parser(
-        "optimise", help="hole-geometry optimisation (guaranteed workspace, stiffness, no collisions)",
+        "optimise", help=command_help("optimise"),
         description="Optimise the swept parameters of a sweep file (same names and bounds) with IPOPT "
         "and exact derivatives: every orientation of the required set holds every load with tensions in "
         "range and a stiffness of at least the stated value, no cable touches another or the link. "

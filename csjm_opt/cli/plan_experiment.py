@@ -7,6 +7,7 @@ import sys
 
 from .._fileio import atomic_write_json
 from ._options import check_outputs, int_in, rotvec_component
+from .commands import command_help
 
 #: Largest budget accepted (loads).
 MAX_BUDGET = 2000
@@ -20,7 +21,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     sub : argparse._SubParsersAction
         The ``csjm`` subparsers the command is added to.
     """
-    p = sub.add_parser("plan-experiment", help="plan an identification experiment (loads, pretension)",
+    p = sub.add_parser(
+        "plan-experiment", help=command_help("plan-experiment"),
                        description="Choose the pretension (rest lengths), dead weights, attachment points and "
                        "directions of an identification experiment with BUDGET loads, within the rig's limits "
                        "(tensions in bounds, stable, within the tracker's range), to minimise the A- or "

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from .._fileio import refuse_input_overwrite
 from ._options import check_outputs, int_in
+from .commands import command_help
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -17,7 +18,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     sub : argparse._SubParsersAction
         The ``csjm`` subparsers the command is added to.
     """
-    p = sub.add_parser("report", help="design-study report (HTML + Markdown) of csjm sweep results",
+    p = sub.add_parser(
+        "report", help=command_help("report"),
                        description="Pareto front of workspace against minimum stiffness, the best designs in a "
                        "table and their hole geometry drawn, from a csjm sweep result file; writes index.html "
                        "(open it in a browser), index.md, figures and design_report.json into a folder.")

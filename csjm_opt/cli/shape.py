@@ -15,6 +15,7 @@ from ..model.numeric import Model
 from ..model.rig import load_rig
 from ..shaping.shaper import OBJECTIVES, shape_stiffness
 from ._options import check_outputs, check_rotvec, finite_float, quantity
+from .commands import command_help
 from .core import add_rig_pose_load
 
 
@@ -26,7 +27,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     sub : argparse._SubParsersAction
         The ``csjm`` subparsers the command is added to.
     """
-    p = sub.add_parser("shape", help="shape the stiffness K toward a target at a pose",
+    p = sub.add_parser(
+        "shape", help=command_help("shape"),
                        description="Choose the six cable tensions (t_min <= t <= t_max) that hold the pose "
                        "under the load and bring the stiffness K (N m/rad, docs/conventions.md) closest to "
                        "a target: weighted Frobenius (default), principal ('eigen') or directional objective. "

@@ -18,6 +18,7 @@ from ..testbed.mujoco_plant import PLANTS
 from ..testbed.plant import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, Plant
 from ..testbed.protocol import read_protocol, simulate_protocol
 from ._options import check_outputs, int_in
+from .commands import command_help
 
 KNOWN = EFFECT_NAMES + tuple(VARIANT_NAMES) + OUTSIDE_NAMES
 
@@ -30,7 +31,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     sub : argparse._SubParsersAction
         The subparsers of the ``csjm`` parser.
     """
-    p = sub.add_parser("simulate", help="run a protocol on a simulated rig (testbed plant with effects)",
+    p = sub.add_parser(
+        "simulate", help=command_help("simulate"),
                        description="Run a protocol (the log format with planned rest lengths, intended loads "
                        "and empty measured columns) on a testbed plant with injected effects, and write the "
                        "measured log (instrument noise added). Each cycle starts where the previous one "

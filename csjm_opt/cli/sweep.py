@@ -10,6 +10,7 @@ from ..design.sweep import run_sweep
 from ..design.sweep_file import MAX_DESIGNS, SweepSpec
 from ..errors import DesignError
 from ._options import check_outputs, int_in
+from .commands import command_help
 
 #: Most local worker processes (more than any workstation has cores).
 MAX_WORKERS = 256
@@ -24,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         The ``csjm`` subparsers the command is added to.
     """
     p = sub.add_parser(
-        "sweep", help="hole-geometry design sweep (workspace, stiffness, margins)",
+        "sweep", help=command_help("sweep"),
         description="Evaluate every design of a sweep description (TOML; see studies/paper_sweep.toml "
         "and docs/guide/design.md): wrench-feasible workspace, stiffness, tension and wrench margins, "
         "shaping range. Results are appended to RESULTS (JSON Lines) as designs finish; "

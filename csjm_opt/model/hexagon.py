@@ -12,7 +12,6 @@ each, exactly as the paper labels them.
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..errors import InvalidInput
 
@@ -34,6 +33,8 @@ def circle_from_chords(d12_m: float, d23_m: float) -> tuple[float, float]:
 
     def ratio_gap(gamma: float) -> float:
         return d12_m * np.sin(np.pi / 3 - gamma / 2) - d23_m * np.sin(gamma / 2)
+
+    from scipy.optimize import brentq  # here, not at import: scipy.optimize costs ~0.4 s
 
     gamma = brentq(ratio_gap, 0.0, 2 * np.pi / 3, xtol=1e-15)
     radius = d12_m / (2 * np.sin(gamma / 2))
