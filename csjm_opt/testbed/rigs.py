@@ -20,6 +20,11 @@ mass, centre of mass     [0.25, 1.0] kg; com z in [30, 120] mm, x, y in
                          [-10, 10] mm
 instrument noise         the paper's F/T and tracker sigmas, each times
                          a factor in [0.6, 1.6] (drawn independently)
+scattered holes          optional (``hole_scatter_m > 0``): every hole
+                         moved off its hexagon by a vector drawn
+                         uniformly in a ball of that radius (in the
+                         hole circle's plane for x, y and along z), so
+                         the rig has no symmetry left
 =======================  ==================================================
 """
 
@@ -57,6 +62,7 @@ class RigRanges:
     com_z_m: Range = (0.030, 0.120)
     com_xy_m: float = 0.010
     noise_factor: Range = (0.6, 1.6)
+    hole_scatter_m: float = 0.0
 
 
 def _u(rng: np.random.Generator, r: Range) -> float:
@@ -69,11 +75,21 @@ def draw_rig(rng: np.random.Generator, ranges: RigRanges = RigRanges()) -> Rig:
                              _u(rng, ranges.platform_height_m))
     base = hexagon_holes(_u(rng, ranges.base_d12_m), _u(rng, ranges.base_d23_m), -_u(rng, ranges.base_depth_m),
                          theta0_deg=_u(rng, ranges.base_turn_deg))
+    if ranges.hole_scatter_m > 0.0:   # drawn only then: the unscattered rigs keep their random stream
+        platform = platform + _in_ball(rng, 6, ranges.hole_scatter_m)
+        base = base + _in_ball(rng, 6, ranges.hole_scatter_m)
     k = _u(rng, ranges.stiffness_N_per_m) * rng.uniform(1 - ranges.stiffness_spread, 1 + ranges.stiffness_spread, 6)
     com = np.r_[rng.uniform(-ranges.com_xy_m, ranges.com_xy_m, 2), _u(rng, ranges.com_z_m)]
     return Rig(platform_holes_A_m=platform, base_holes_B_m=base, cable_stiffness_N_per_m=k,
                t_min_N=_u(rng, ranges.t_min_N), t_max_N=_u(rng, ranges.t_max_N),
                platform_mass_kg=_u(rng, ranges.mass_kg), com_A_m=com)
+
+
+def _in_ball(rng: np.random.Generator, n: int, radius_m: float) -> np.ndarray:
+    """``n`` vectors uniform in the ball of ``radius_m``."""
+    v = rng.normal(size=(n, 3))
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    return v * radius_m * rng.uniform(size=(n, 1)) ** (1.0 / 3.0)
 
 
 def draw_noise(rng: np.random.Generator, ranges: RigRanges = RigRanges()) -> InstrumentNoise:
