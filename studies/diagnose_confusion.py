@@ -117,8 +117,10 @@ def build_plant(job: dict):
     from csjm_opt.measurement.instruments import InstrumentNoise
     from csjm_opt.testbed import inject, make_plant, random_rig
     from csjm_opt.testbed.injection import PLAUSIBLE_SEVERITY
+    from csjm_opt.testbed.rigs import RigRanges
 
-    rig, noise = random_rig(np.random.default_rng([1234, job["rig"]]))
+    ranges = RigRanges(hole_scatter_m=job.get("scatter_mm", 0.0) / 1000.0)
+    rig, noise = random_rig(np.random.default_rng([1234, job["rig"]]), ranges)
     seed = job_seed(job)
     severities = []
     for k, e in enumerate(job["effects"]):       # calibrate each effect to its multiple of the floor
@@ -366,6 +368,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", nargs="+", default=None, help="only logs injecting these effects")
     ap.add_argument("--kinds", nargs="+", default=["none", "single", "pair", "outside"],
                     help="kinds of log to run (several runs may append to the same OUT.jsonl)")
+    ap.add_argument("--scatter-mm", type=float, default=0.0,
+                    help="random rigs with every hole moved off its hexagon by up to this much (no symmetry)")
     ap.add_argument("--out", default="studies/diagnose_confusion")
     ap.add_argument("--summarise", action="store_true", help="only summarise OUT.jsonl")
     ap.add_argument("--no-progress", action="store_true")
@@ -384,6 +388,9 @@ def main(argv: list[str] | None = None) -> int:
                 if j["id"] not in done and j["kind"] in args.kinds
                 and (args.multiples is None or j["multiple"] in args.multiples)
                 and (args.only is None or set(j["effects"]) <= set(args.only))]
+        if args.scatter_mm > 0.0:
+            todo = [{**j, "scatter_mm": args.scatter_mm, "id": f"{j['id']}-scatter{args.scatter_mm:g}mm"} for j in todo]
+            todo = [j for j in todo if j["id"] not in done]
         todo = todo[:args.limit] if args.limit else todo
         bar = tqdm(total=len(todo), file=sys.stderr, desc="confusion study", disable=args.no_progress or None)
         with path.open("a") as fh:
