@@ -80,7 +80,7 @@ from .augmented import AugmentedModel
 from .effects import EFFECTS, make_effect
 from .evidence import log_evidence
 from .extra import append_log
-from .fit import fit_model
+from .fit import FitResult, fit_model
 from .localisation import localise
 from .noise import systematic
 from .pairs import all_separabilities
@@ -324,7 +324,7 @@ def _variant(ctx: _Context, rig: Rig, name: str, ranges) -> dict:
     options = VARIANTS.get(name, [])
     if len(options) < 2:
         return options[0] if options else {}
-    fits = []
+    fits: list[FitResult | None] = []
     for opt in options:
         try:
             fits.append(fit_model(AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), ctx.train))
