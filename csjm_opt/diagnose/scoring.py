@@ -22,6 +22,7 @@ from ..errors import InvalidInput
 from ..model import kinematics as kin
 from .augmented import AugmentedModel, with_entry
 from .fit import FitResult, data_jacobian, fit_model
+from .friction_path import on_predicted_path
 from .residuals import ResidualTable, pose_noise_cov, pose_residuals, rms
 
 
@@ -112,6 +113,12 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
           folds: list[np.ndarray] | None) -> CandidateScore:
     """Fit on all training rows; held-out residuals from ``test`` or the folds."""
     full = fit_model(model, train)
+    if model.path_dependent:          # friction state along the model's own path, if it fits better
+        path = on_predicted_path(model, train, full.theta)
+        on_path = fit_model(model, path, full.theta)
+        if on_path.rss < full.rss:
+            train, full = path, on_path
+            test = None if test is None else on_predicted_path(model, test, full.theta)
     sol = model.predict_poses(with_entry(model, train.rows, train.R_meas, full.theta), full.theta, train.R_meas)
     train_zeta = pose_residuals(sol.R, train.R_meas)
     failed = int(np.sum(~sol.converged(1e-6)))

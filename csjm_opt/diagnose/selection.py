@@ -78,8 +78,9 @@ from ._decision import (  # noqa: F401 (ALPHA and the thresholds are re-exported
 )
 from .augmented import AugmentedModel
 from .effects import EFFECTS, make_effect
+from .evidence import log_evidence
 from .extra import append_log
-from .fit import fit_model
+from .fit import FitResult, fit_model
 from .localisation import localise
 from .noise import systematic
 from .pairs import all_separabilities
@@ -308,23 +309,33 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
     return pairs, scores
 
 
-#: Variants of an effect the data choose between (same number of parameters: the best training fit wins).
+#: Variants of an effect the data choose between (same number of parameters: the highest Laplace evidence
+#: of the training fit wins, at one noise scale for all: the best fit, unless it needs implausible parameters).
 VARIANTS: dict[str, list[dict]] = {"friction": [{"law": law, "memory": mem} for law in ("capstan", "coulomb")
                                                 for mem in ("carried", "reset")]}
 
 
 def _variant(ctx: _Context, rig: Rig, name: str, ranges) -> dict:
-    """The variant of ``name`` (e.g. friction's law and memory) whose training fit is best."""
+    """The variant of ``name`` (e.g. friction's law and memory) with the highest evidence on the training rows.
+
+    The noise scale is the best variant's (whitened RMS): the variants then differ by their fit and by what
+    their priors say of the fitted parameters (a fit that needs a parameter far outside its range pays).
+    """
     options = VARIANTS.get(name, [])
     if len(options) < 2:
         return options[0] if options else {}
-    cost = []
+    fits: list[FitResult | None] = []
     for opt in options:
         try:
-            cost.append(fit_model(AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), ctx.train).rss)
+            fits.append(fit_model(AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), ctx.train))
         except (np.linalg.LinAlgError, CsjmError, FloatingPointError):
-            cost.append(np.inf)
-    return options[int(np.argmin(cost))]
+            fits.append(None)
+    ok = [f for f in fits if f is not None]
+    if not ok:
+        return options[0]
+    scale = float(np.sqrt(max(min(f.rss for f in ok) / max(ok[0].n_obs, 1), 1e-12)))
+    ev = [-np.inf if f is None else log_evidence(f, scale) for f in fits]
+    return options[int(np.nanargmax(np.where(np.isfinite(ev), ev, -np.inf)))]
 
 
 def _n_pair_fits(n_seeds: int, n: int) -> int:

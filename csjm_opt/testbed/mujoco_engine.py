@@ -223,11 +223,17 @@ class Engine:
         return float(np.abs(r).max())
 
     def settle(self, row: int) -> MujocoRow:
-        """Run until at rest; polish (no friction) or certify (friction); the row's record."""
+        """Run until at rest; polish (no friction) or certify (friction); the row's record.
+
+        With friction the certificate includes the joints' damping force at the speed left when
+        the wait ends: a row on the verge of slipping may still creep (about 1e-5 rad/s), held by
+        friction at its bounds plus that damping force. The speed is recorded.
+        """
         from .mujoco_plant import MujocoRow
 
         t0 = self.t
         self._wait()
+        speed = float(np.linalg.norm(self.d.qvel))
         cert = None
         if not self.frictional:
             left = self.polish(np.arange(self.nv))
@@ -235,10 +241,14 @@ class Engine:
                 raise NoEquilibrium(f"MuJoCo plant: row {row} did not settle (net force {left:.2e} N m left)",
                                     "diverged", left)
         else:
+            # a row may still slide slowly when the wait ends (a cable on the verge of slipping creeps
+            # under the joint's damping); the damping force at that speed is a real force of the plant
+            v = np.array(self.d.qvel, float)
             if self.link:
                 self.polish(np.arange(3, 6))
+                v[3:6] = 0.0                      # the link's dofs are polished to rest
             q = self.d.qpos.copy()
-            net = self.net(q)
+            net = self.net(q) - np.asarray(self.m.dof_damping, float) * v
             _, T = self.applied()
             F = self.F0 + self.mu * T if self.capstan else self.F0
             A = np.column_stack([np.asarray(self.d.ten_J).reshape(6, self.nv).T, np.eye(self.nv)[:, :3]])
@@ -251,4 +261,4 @@ class Engine:
         _, T = self.applied()
         R_p = _rotation(self.d.qpos[:4])
         R_tool = R_p @ _rotation(self.d.qpos[4:8]) if self.link else R_p
-        return MujocoRow(R_tool, R_p, T, cert, self.t - t0)
+        return MujocoRow(R_tool, R_p, T, cert, self.t - t0, speed)

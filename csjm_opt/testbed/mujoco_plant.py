@@ -66,6 +66,9 @@ class MujocoRow:
     certificate : FrictionCertificate or None
         The friction LP (``None`` without friction: polished to round-off).
     seconds_simulated : float
+    speed_rad_per_s : float
+        Joint speed left when the row was recorded (0 for a polished frictionless row; a slow
+        creep of a row on the verge of slipping otherwise, its damping force in the certificate).
     """
 
     R_tool: np.ndarray
@@ -73,6 +76,7 @@ class MujocoRow:
     tensions_N: np.ndarray
     certificate: FrictionCertificate | None
     seconds_simulated: float
+    speed_rad_per_s: float = 0.0
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -101,7 +105,7 @@ class MujocoPlant:
     max_settle_s: float = 6.0
     speed_tol_rad_per_s: float = 1e-6
     cycle_ramp_s: float = 2.0
-    noslip_iterations: int = 100
+    noslip_iterations: int = 1000
     noslip_tolerance: float = 1e-12
 
     def __post_init__(self) -> None:

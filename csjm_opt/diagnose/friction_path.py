@@ -1,0 +1,57 @@
+"""The friction state along the model's own path: cable motion from predicted poses, not measured ones.
+
+A dry-friction state (the play operator of :mod:`csjm_opt.diagnose.effects.friction`) is driven by the
+motion of each cable. Where a cable sticks it hardly moves: with MuJoCo's rigid stick not at all, on a
+real rig by the elastic travel of the band, tens of micrometres. The measured poses move it by their
+noise (tens of micrometres of cable length), and a play operator driven by measured motion flips the
+state of stuck cables at random, so the fit compensates with a longer stick travel and an unphysical
+drive-side weight, and leaves a structured residual that the held-out cycles, predicted along the
+model's own (noise-free) path, do not share.
+
+:func:`on_predicted_path` therefore replaces a table's cable steps by those of the poses the model
+predicts for every row (each cycle from the state the measured history leaves, as a held-out cycle is
+predicted): the training fit and the held-out prediction then see the same friction physics.
+:func:`csjm_opt.diagnose.scoring.score` refits a path-dependent model once on that path.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..model import kinematics as kin
+from .augmented import AugmentedModel, cable_steps, log_steps, with_entry
+from .residuals import ResidualTable
+
+
+def on_predicted_path(model: AugmentedModel, table: ResidualTable, theta: np.ndarray) -> ResidualTable:
+    """``table`` with the cable steps of the poses ``model`` predicts at ``theta`` (path-dependent models only).
+
+    Parameters
+    ----------
+    model : AugmentedModel
+        A fitted model; returned unchanged unless it is path dependent.
+    table : ResidualTable
+        The log's rows (measured poses, time order).
+    theta : numpy.ndarray
+        The model's parameters.
+
+    Returns
+    -------
+    ResidualTable
+        The same table whose ``rows`` carry the cable length changes (since the previous row of the
+        log and of the cycle) along the predicted poses; rows whose prediction did not converge keep
+        their measured steps.
+    """
+    if not model.path_dependent:
+        return table
+    sol = model.predict_poses(with_entry(model, table.rows, table.R_meas, theta), theta, table.R_meas)
+    ok = np.all(np.isfinite(sol.R.reshape(len(table), -1)), axis=1) & sol.converged(1e-6)
+    R = np.where(ok[:, None, None], sol.R, table.R_meas)
+    A = np.asarray(model.rig.platform_holes_A_m, float)
+    B = np.asarray(model.rig.base_holes_B_m, float)
+    lengths, _ = kin.cable_terms(R, A, B)
+    rows = dataclasses.replace(table.rows, log_steps_m=log_steps(lengths),
+                               cable_steps_m=cable_steps(table.cycle, lengths))
+    return dataclasses.replace(table, rows=rows)
