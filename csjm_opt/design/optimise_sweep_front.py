@@ -42,11 +42,11 @@ from .optimise_settings import OptimiseSettings
 from .optimise_sweep_surrogate import sweep_surrogate
 
 #: Relative step of the workspace-fraction constraint between front points.
-STEP = 0.02
+STEP = 0.03
 #: Iterations of one front point's solve (warm-started, so a few Newton steps).
-POINT_MAX_ITER = 4
+POINT_MAX_ITER = 8
 #: Iterations of the largest-workspace solve.
-ANCHOR_MAX_ITER = 10
+ANCHOR_MAX_ITER = 6
 #: The constraint counts as inactive (the front has reached its stiffest design) above this slack.
 INACTIVE_SLACK = 1e-3
 
@@ -117,18 +117,19 @@ class _Solvers:
         self.f = sweep_surrogate(settings, evaluation)
         u, eps = ca.MX.sym("u", len(settings.names)), ca.MX.sym("eps")
         F, S, _, _ = self.f(u)
-        self.nlps = {"anchor": {"x": u, "f": -F}, "point": {"x": u, "p": eps, "f": -S / 10.0, "g": F - eps}}
+        self.nlps: dict[str, Any] = {"anchor": {"x": u, "f": -F},
+                                     "point": {"x": u, "p": eps, "f": -S / 10.0, "g": F - eps}}
         self.cache: dict[tuple[str, int], Any] = {}
 
     def get(self, kind: str, max_iter: int) -> Any:
         if (kind, max_iter) not in self.cache:
-            opts = {"print_level": 0, "sb": "yes", "tol": 1e-6, "acceptable_tol": 1e-4, "max_soc": 0,
+            opts: dict[str, Any] = {"print_level": 0, "sb": "yes", "tol": 1e-6, "acceptable_tol": 1e-4, "max_soc": 0,
                     "accept_after_max_steps": 1, "hessian_approximation": "exact", "max_iter": max_iter}
             if kind == "point":
                 opts.update({"warm_start_init_point": "yes", "mu_init": 1e-4, "warm_start_bound_push": 1e-6,
                              "warm_start_mult_bound_push": 1e-6})
-            self.cache[kind, max_iter] = ca.nlpsol(f"sweep_front_{kind}", "ipopt", self.nlps[kind],
-                                                   {"ipopt": opts, "print_time": False})
+            nlp_opts: dict[str, Any] = {"ipopt": opts, "print_time": False}
+            self.cache[kind, max_iter] = ca.nlpsol(f"sweep_front_{kind}", "ipopt", self.nlps[kind], nlp_opts)
         return self.cache[kind, max_iter]
 
 
@@ -194,6 +195,7 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
         counter.sweep += 1
         rec = evaluate_design(params, evaluation)
         rec["epsilon"], rec["surrogate"] = eps, {"F": surrogate[0], "S": surrogate[1]}
+        rec["evaluations_used"] = counter.used      # work done when this design was scored
         records.append(rec)
 
     order = np.argsort(scores)[::-1][:max(branches, 1)]
@@ -220,7 +222,7 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
             F_j, S_j = float(sol["g"]) + eps, -10.0 * float(sol["f"])
             u, lam_g = x, sol["lam_g"]
             score(u, eps, (F_j, S_j))
-            if F_j - eps > INACTIVE_SLACK and converged:   # the stiffest design of this branch: the front ends
+            if converged and F_j - eps > INACTIVE_SLACK:    # constraint inactive: this branch's stiffest design
                 break
     return SweepFrontResult(records=records, evaluations=counter.used, ipopt_evaluations=counter.ipopt,
                             sweep_evaluations=counter.sweep)
