@@ -234,7 +234,8 @@ def main(argv: list[str] | None = None) -> int:
                                       for r in bf["records"]]))
     sweep_front_pts = [tuple(p) for p in sw_pts if not np.any((sw_pts[:, 0] >= p[0]) & (sw_pts[:, 1] >= p[1])
                                                               & ((sw_pts[:, 0] > p[0]) | (sw_pts[:, 1] > p[1])))]
-    undominated = [p for p in sweep_front_pts if not any(a >= p[0] and b >= p[1] for a, b in sf_pts)]
+    undominated = [(float(p[0]), float(p[1])) for p in sweep_front_pts
+                   if not any(a >= p[0] and b >= p[1] for a, b in sf_pts)]
     # the stiffest design at the paper's guaranteed range
     at_paper = optimise(settings.replace(objective="stiffness", pareto_with="", requirements=dataclasses.replace(
         settings.requirements, range_scale=max(paper_s, 1e-3))), workers=args.workers, progress=True)
@@ -317,7 +318,8 @@ def main(argv: list[str] | None = None) -> int:
              f"{sf['seconds']:.1f} s; the sweep used {len(sweep.records)}",
              f"  hypervolume first >= the sweep's at {first_dominating} evaluations; by evaluations: "
              + ", ".join(f"{n}: {hv:.4g}" for n, hv in curve),
-             f"  sweep front points no optimised design dominates: {undominated}",
+             "  sweep front points no optimised design dominates: "
+             + ", ".join(f"({a:.3f}, {b:.4f})" for a, b in undominated),
              f"  with --max-evaluations {BUDGET}: {bf['evaluations']} evaluations, hypervolume {hv_budget:.5g}", ""]
     for r in sf["records"]:
         lines.append(f"  - {r['params']}: workspace fraction {r['workspace_fraction']}, min stiffness "

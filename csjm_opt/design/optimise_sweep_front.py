@@ -20,9 +20,10 @@ exact first and second derivatives:
 Evaluations are counted honestly: every point at which IPOPT evaluates the NLP
 (the surrogate over all the sweep's sample orientations), line-search trials
 included, and every call of the sweep's evaluator. ``max_evaluations`` is a
-hard bound: each solve's iteration cap is set from what is left, with at most
-two trial points per iteration (IPOPT's ``accept_after_max_steps = 1``, no
-second-order corrections), and no solve or scoring starts past it.
+hard bound: IPOPT takes every trial step (``accept_every_trial_step``: no
+backtracking, so one new point per iteration, exact Hessian and bounds keep the
+steps sensible), each solve's iteration cap is what is left, and no solve or
+scoring starts past it.
 """
 
 from __future__ import annotations
@@ -124,7 +125,7 @@ class _Solvers:
     def get(self, kind: str, max_iter: int) -> Any:
         if (kind, max_iter) not in self.cache:
             opts: dict[str, Any] = {"print_level": 0, "sb": "yes", "tol": 1e-6, "acceptable_tol": 1e-4, "max_soc": 0,
-                    "accept_after_max_steps": 1, "hessian_approximation": "exact", "max_iter": max_iter}
+                    "accept_every_trial_step": "yes", "hessian_approximation": "exact", "max_iter": max_iter}
             if kind == "point":
                 opts.update({"warm_start_init_point": "yes", "mu_init": 1e-4, "warm_start_bound_push": 1e-6,
                              "warm_start_mult_bound_push": 1e-6})
@@ -181,8 +182,9 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
         raise DesignError("no start holds any of the sweep's sample poses", "starts")
 
     def solve(kind: str, wanted: int, reserve: int, **args: Any) -> tuple[np.ndarray, Any, bool]:
-        # each iteration evaluates at most two trial points, the start one more; keep `reserve` for after
-        solver = solvers.get(kind, int(min(wanted, (counter.left() - 1 - reserve) // 2)))
+        # each iteration evaluates one trial point (every trial step is taken), the start one more;
+        # keep `reserve` for after
+        solver = solvers.get(kind, int(min(wanted, counter.left() - 1 - reserve)))
         sol = solver(**args)
         st = solver.stats()
         counter.ipopt += int(max(st["n_call_nlp_f"], st.get("n_call_nlp_g", 0)))
