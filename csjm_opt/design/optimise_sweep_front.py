@@ -45,9 +45,9 @@ from .optimise_sweep_surrogate import sweep_surrogate
 #: Relative step of the workspace-fraction constraint between front points.
 STEP = 0.03
 #: Iterations of one front point's solve (warm-started, so a few Newton steps).
-POINT_MAX_ITER = 8
+POINT_MAX_ITER = 4
 #: Iterations of the largest-workspace solve.
-ANCHOR_MAX_ITER = 6
+ANCHOR_MAX_ITER = 4
 #: The constraint counts as inactive (the front has reached its stiffest design) above this slack.
 INACTIVE_SLACK = 1e-3
 
