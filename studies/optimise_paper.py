@@ -18,9 +18,13 @@ angles, 15 x 15 grid) this
    front and the sweep's front in those objectives, and in the sweep's own metrics
    (workspace fraction, minimum stiffness over the feasible poses);
 4. solves for the stiffest design that guarantees the paper design's range, and
-   states what it gains and what it costs.
+   states what it gains and what it costs;
+5. traces the front in the sweep's own metrics (``sweep_front``: workspace
+   fraction x minimum stiffness, every design scored by the sweep's evaluator),
+   unbounded and with ``--max-evaluations 22`` (a tenth of the sweep), and
+   compares its hypervolume with the sweep front's, by evaluations spent.
 
-Writes ``summary.json``, ``summary.md``, ``front.png`` and ``geometry.png``.
+Writes ``summary.json``, ``summary.md``, ``front.png``, ``front_sweep_metrics.png`` and ``geometry.png``.
 """
 
 from __future__ import annotations
@@ -42,6 +46,7 @@ from csjm_opt.design.geometry import GeometryLimits, design_rig
 from csjm_opt.design.interference import interference
 from csjm_opt.design.optimisation import design_rig_of, optimise
 from csjm_opt.design.optimise_settings import read_optimise_file
+from csjm_opt.design.optimise_sweep_front import sweep_front
 from csjm_opt.design.sampling import OrientationSampling, tilt_torsion_rotations
 from csjm_opt.design.sweep import run_sweep
 from csjm_opt.errors import CsjmError
@@ -50,6 +55,8 @@ from csjm_opt.report.optimisation_page import front_figure, geometry_3d_figure
 HERE = Path(__file__).resolve().parent
 BISECTIONS = 10
 MAP_ORIENTATIONS = 1000
+#: A tenth of the sweep's 225 designs.
+BUDGET = 22
 
 
 def hypervolume(points: np.ndarray) -> float:
@@ -210,6 +217,29 @@ def main(argv: list[str] | None = None) -> int:
     sw_pts = np.array([[r["workspace_fraction"], r["min_stiffness_Nm_per_rad"] or 0.0] for r in ok])
     op_pts = np.array([[r["workspace_fraction"] or 0.0, r["min_stiffness_Nm_per_rad"] or 0.0] for r in opt_sweep])
     hv_opt_sw, hv_sweep_sw = hypervolume(op_pts), hypervolume(sw_pts)
+    # the front traced in the sweep's own metrics, every design scored by the sweep's evaluator
+    fronts = {}
+    for label, limit in (("unbounded", None), ("budget", BUDGET)):
+        cache = args.outdir / f"sweep_front_{label}.json"
+        if not cache.is_file():
+            t0 = time.perf_counter()
+            res = sweep_front(settings, spec.settings, points=settings.pareto_points, max_evaluations=limit)
+            atomic_write_json(cache, {**res.as_json(), "seconds": time.perf_counter() - t0, "limit": limit})
+        fronts[label] = json.loads(cache.read_text())
+    sf = fronts["unbounded"]
+    sf_pts = [(r["workspace_fraction"] or 0.0, r["min_stiffness_Nm_per_rad"] or 0.0) for r in sf["records"]]
+    hv_sf = hypervolume(np.array(sf_pts))
+    curve = [(r["evaluations_used"], hypervolume(np.array([p for p, q in zip(sf_pts, sf["records"])
+                                                          if q["evaluations_used"] <= r["evaluations_used"]])))
+             for r in sf["records"]]
+    first_dominating = next((n for n, hv in curve if hv >= hv_sweep_sw), None)
+    bf = fronts["budget"]
+    hv_budget = hypervolume(np.array([(r["workspace_fraction"] or 0.0, r["min_stiffness_Nm_per_rad"] or 0.0)
+                                      for r in bf["records"]]))
+    sweep_front_pts = [tuple(p) for p in sw_pts if not np.any((sw_pts[:, 0] >= p[0]) & (sw_pts[:, 1] >= p[1])
+                                                              & ((sw_pts[:, 0] > p[0]) | (sw_pts[:, 1] > p[1])))]
+    undominated = [(float(p[0]), float(p[1])) for p in sweep_front_pts
+                   if not any(a >= p[0] and b >= p[1] for a, b in sf_pts)]
     # the stiffest design at the paper's guaranteed range
     at_paper = optimise(settings.replace(objective="stiffness", pareto_with="", requirements=dataclasses.replace(
         settings.requirements, range_scale=max(paper_s, 1e-3))), workers=args.workers, progress=True)
@@ -233,6 +263,17 @@ def main(argv: list[str] | None = None) -> int:
                       "sweep_metrics": [{"workspace_fraction": r["workspace_fraction"],
                                          "min_stiffness_Nm_per_rad": r["min_stiffness_Nm_per_rad"]}
                                         for r in opt_sweep]},
+        "sweep_metric_front": {
+            "hypervolume": hv_sf, "sweep_hypervolume": hv_sweep_sw, "evaluations": sf["evaluations"],
+            "ipopt_evaluations": sf["ipopt_evaluations"], "sweep_evaluations": sf["sweep_evaluations"],
+            "seconds": sf["seconds"], "hypervolume_by_evaluations": curve,
+            "first_dominating_at_evaluations": first_dominating,
+            "sweep_front_points_not_dominated": undominated,
+            "designs": [{"params": r["params"], "workspace_fraction": r["workspace_fraction"],
+                         "min_stiffness_Nm_per_rad": r["min_stiffness_Nm_per_rad"], "epsilon": r["epsilon"],
+                         "evaluations_used": r["evaluations_used"]} for r in sf["records"]],
+            "budget": {"limit": BUDGET, "evaluations": bf["evaluations"], "hypervolume": hv_budget,
+                       "seconds": bf["seconds"]}},
         "paper_design": {"range": paper_s, "stiffness": paper_lam,
                          "workspace_fraction": paper_sweep_rec["workspace_fraction"],
                          "min_stiffness_Nm_per_rad": paper_sweep_rec["min_stiffness_Nm_per_rad"],
@@ -244,6 +285,20 @@ def main(argv: list[str] | None = None) -> int:
     ax = front_figure(doc, certified_arr, (paper_s, paper_lam))
     ax.figure.savefig(args.outdir / "front.png", dpi=120, bbox_inches="tight")
     plt.close(ax.figure)
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.scatter(sw_pts[:, 0], sw_pts[:, 1], s=8, c="0.7", label=f"sweep, {len(sweep.records)} designs")
+    fp = np.array(sorted(sweep_front_pts))
+    ax.plot(fp[:, 0], fp[:, 1], "o-", c="tab:red", ms=4, label=f"sweep front (hypervolume {hv_sweep_sw:.4g})")
+    op = np.array(sf_pts)
+    ax.scatter(op[:, 0], op[:, 1], marker="x", c="tab:blue", zorder=3,
+               label=f"optimised, {sf['evaluations']} evaluations (hypervolume {hv_sf:.4g})")
+    ax.set_xlim(0.78, 0.88)
+    ax.set_ylim(12.5, 15.0)
+    ax.set_xlabel("workspace fraction (sweep's samples)")
+    ax.set_ylabel("min stiffness over feasible poses (N m/rad)")
+    ax.legend(fontsize=7)
+    fig.savefig(args.outdir / "front_sweep_metrics.png", dpi=120, bbox_inches="tight")
+    plt.close(fig)
     d0 = designs[0]
     at = d0["certified"]["tension"]
     R = tilt_torsion_rotations(*(np.radians([at[k]]) for k in ("tilt_deg", "azimuth_deg", "torsion_deg")))[0]
@@ -257,8 +312,23 @@ def main(argv: list[str] | None = None) -> int:
              f"iterations, {doc['certified_orientations']} orientations in certification)", "",
              f"hypervolume (range scale x stiffness): optimised {hv_opt:.4g}, sweep {hv_sweep:.4g} (front designs "
              f"re-checked densely: {cert['designs_checked']}; {hv_sweep_1000:.4g} with 1,000 orientations unchecked)",
-             f"hypervolume (workspace fraction x min stiffness, the sweep's metrics): optimised {hv_opt_sw:.4g}, "
-             f"sweep {hv_sweep_sw:.4g}", "",
+             f"hypervolume (workspace fraction x min stiffness, the sweep's metrics): range/stiffness designs "
+             f"{hv_opt_sw:.4g}, sweep {hv_sweep_sw:.4g}", "",
+             "front in the sweep's own metrics (csjm optimise --sweep-front; every design scored by the sweep's "
+             "evaluator):",
+             f"  hypervolume {hv_sf:.5g} against the sweep's {hv_sweep_sw:.5g} "
+             f"({'dominates' if hv_sf >= hv_sweep_sw else 'does NOT dominate'}) with {sf['evaluations']} "
+             f"evaluations ({sf['ipopt_evaluations']} by IPOPT, {sf['sweep_evaluations']} by the sweep's evaluator), "
+             f"{sf['seconds']:.1f} s; the sweep used {len(sweep.records)}",
+             f"  hypervolume first >= the sweep's at {first_dominating} evaluations; by evaluations: "
+             + ", ".join(f"{n}: {hv:.4g}" for n, hv in curve),
+             "  sweep front points no optimised design dominates: "
+             + ", ".join(f"({a:.3f}, {b:.4f})" for a, b in undominated),
+             f"  with --max-evaluations {BUDGET}: {bf['evaluations']} evaluations, hypervolume {hv_budget:.5g}", ""]
+    for r in sf["records"]:
+        lines.append(f"  - {r['params']}: workspace fraction {r['workspace_fraction']}, min stiffness "
+                     f"{r['min_stiffness_Nm_per_rad'] or 0.0:.4f} N m/rad, after {r['evaluations_used']} evaluations")
+    lines += ["",
              f"paper's design: range {paper_s:.3f}, stiffness {paper_lam:.3f} N m/rad",
              f"stiffest design at that range: {best.params}, stiffness {best.objectives['stiffness']:.3f} N m/rad, "
              f"tension margin {best.objectives['tension_margin']:.3f} N, certified {best.ok}",

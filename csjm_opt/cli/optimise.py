@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from ._options import check_outputs, int_in
 from .commands import command_help
@@ -32,8 +33,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("sweep", metavar="DESIGN.toml", help="sweep file (with an optional [optimise] section)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.add_argument("--max-evaluations", type=int_in(1, MAX_EVALUATIONS), default=None, metavar="N",
-                   help="bound on design evaluations (IPOPT's constraint evaluations plus certifications), checked "
-                   "between solves")
+                   help="bound on design evaluations (every point IPOPT evaluates, plus certifications); "
+                   "checked between solves, a hard bound with --sweep-front")
     p.add_argument("--workers", type=int_in(1, 256), default=1,
                    help="processes for the multi-start (default 1)")
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,
@@ -42,6 +43,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--starts-from", metavar="RESULTS", default=None,
                    help="start from the best designs (largest workspace) of a csjm sweep result file "
                    "instead of space-filling designs")
+    p.add_argument("--sweep-front", action="store_true",
+                   help="trace the front in the sweep's own metrics (workspace fraction, minimum stiffness) "
+                   "instead: smooth twins of both on the sweep's samples, every design scored by the sweep's "
+                   "evaluator; --max-evaluations is then a hard bound")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.add_argument("--json", metavar="PATH", help="also write result.json here ('-' = stdout)")
     p.set_defaults(func=run)
@@ -72,7 +77,9 @@ def run(args: argparse.Namespace) -> int:
 
     out = Path(args.out)
     check_outputs([args.sweep, args.starts_from], {"--json": args.json}, dirs={"--out": out})
-    _, settings = read_optimise_file(args.sweep)
+    spec, settings = read_optimise_file(args.sweep)
+    if args.sweep_front:
+        return _sweep_front(args, spec, settings, out)
     starts = None
     if args.starts_from:
         from ..design.optimisation import sweep_starts
@@ -97,4 +104,29 @@ def run(args: argparse.Namespace) -> int:
         print(f"design_{k:03d}: {obj}; {'certified' if d.ok else 'NOT certified'} on "
               f"{settings.certify_orientations} + local-search orientations", file=stream)
     print(f"{len(result.designs)} designs, {result.evaluations} evaluations, written to {out}", file=stream)
+    return 0
+
+
+def _sweep_front(args: argparse.Namespace, spec: Any, settings: Any, out: Path) -> int:
+    """``--sweep-front``: the front in the sweep's metrics, its designs as rig files."""
+    from .._fileio import atomic_write_json
+    from ..design.optimisation import design_rig_of
+    from ..design.optimise_sweep_front import sweep_front
+
+    result = sweep_front(settings, spec.settings, points=settings.pareto_points,
+                         max_evaluations=args.max_evaluations)
+    out.mkdir(parents=True, exist_ok=True)
+    doc = result.as_json()
+    for k, rec in enumerate(doc["front"]):
+        rec["rig_file"] = name = f"design_{k:03d}.toml"
+        design_rig_of(settings, rec["params"]).to_toml(out / name, overwrite=True)
+    atomic_write_json(out / "result.json", doc)
+    if args.json:
+        atomic_write_json(args.json, doc)
+    stream = sys.stderr if args.json == "-" else sys.stdout
+    for rec in doc["front"]:
+        print(f"{rec['rig_file']}: workspace fraction {rec['workspace_fraction']:.4g}, minimum stiffness "
+              f"{rec['min_stiffness_Nm_per_rad']:.4g} N m/rad (the sweep's evaluator)", file=stream)
+    print(f"{len(doc['front'])} front designs, {result.evaluations} evaluations ({result.ipopt_evaluations} by "
+          f"IPOPT, {result.sweep_evaluations} by the sweep's evaluator), written to {out}", file=stream)
     return 0

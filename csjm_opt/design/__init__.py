@@ -9,7 +9,9 @@ settings in :mod:`.evaluation_settings`), :mod:`.store` (crash-safe JSON Lines r
 :mod:`.design_evaluation` (one design's record), :mod:`.sweep` (parallel, resumable runner;
 processes or Dask, result in :mod:`.sweep_result`), :mod:`.interference` (cable-cable and
 cable-link distances, exit angles), :mod:`.optimisation` (IPOPT on the sweep's vocabulary, problem in
-:mod:`.optimise_problem`, settings in :mod:`.optimise_settings`, dense check in :mod:`.certify`).
+:mod:`.optimise_problem`, settings in :mod:`.optimise_settings`, results in :mod:`.optimise_result`, starts
+in :mod:`.optimise_starts`, dense check in :mod:`.certify`), :mod:`.optimise_sweep_front` (the front in
+the sweep's own metrics, on the smooth twins of :mod:`.optimise_sweep_surrogate`).
 """
 
 from .certify import Check, certify
@@ -25,6 +27,7 @@ from .interference import Interference, interference, pose_interference, segment
 from .metrics import DesignMetrics, LoadSet, MetricOptions, PoseMetrics, evaluate, evaluate_poses
 from .optimisation import OptimisationResult, OptimisedDesign, design_rig_of, optimise
 from .optimise_settings import OptimiseSettings, Requirements, read_optimise_file
+from .optimise_sweep_front import SweepFrontResult, sweep_front
 from .sampling import OrientationSampling, tilt_torsion_angles, tilt_torsion_rotations
 from .sweep import SweepResult, evaluate_design, run_sweep
 from .sweep_file import EvaluationSettings, SweepSpec
@@ -32,8 +35,8 @@ from .sweep_file import EvaluationSettings, SweepSpec
 __all__ = [
     "Check", "DesignMetrics", "EvaluationSettings", "GeometryLimits", "Interference", "LoadSet", "MetricOptions",
     "OptimisationResult", "OptimiseSettings", "OptimisedDesign", "OrientationSampling", "PAPER_DESIGN",
-    "PARAMETERS", "PoseMetrics", "Requirements", "SweepResult", "SweepSpec", "certify", "check_holes",
-    "design_holes", "design_rig", "design_rig_of", "evaluate", "evaluate_design", "evaluate_poses",
+    "PARAMETERS", "PoseMetrics", "Requirements", "SweepFrontResult", "SweepResult", "SweepSpec", "certify",
+    "check_holes", "design_holes", "design_rig", "design_rig_of", "evaluate", "evaluate_design", "evaluate_poses",
     "interference", "optimise", "pose_interference", "read_optimise_file", "run_sweep", "segment_distance",
-    "tilt_torsion_angles", "tilt_torsion_rotations",
+    "sweep_front", "tilt_torsion_angles", "tilt_torsion_rotations",
 ]

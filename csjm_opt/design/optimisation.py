@@ -13,71 +13,22 @@ warm-started from the previous design.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import sys
 from typing import Any
 
 import numpy as np
-from scipy.stats import qmc
 
-from ..errors import DesignError
 from .certify import certify
-from .geometry import GeometryLimits, design_rig
 from .optimise_contacts import contacts_near
 from .optimise_diagnosis import infeasible, violation
 from .optimise_problem import Contact, build_problem
+from .optimise_result import OptimisationResult, OptimisedDesign, design_rig_of, objectives_of
 from .optimise_settings import OptimiseSettings
+from .optimise_starts import space_filling_starts, sweep_starts
 from .sampling import OrientationSampling
 
 _INFEASIBLE = ("Infeasible_Problem_Detected", "Restoration_Failed", "Error_In_Step_Computation")
-
-
-@dataclasses.dataclass
-class OptimisedDesign:
-    """One certified design of an optimisation."""
-
-    params: dict[str, float]
-    objectives: dict[str, float]
-    certified: dict[str, Any]
-    epsilon: dict[str, float]
-    rounds: int
-    ok: bool
-
-    def as_dict(self) -> dict[str, Any]:
-        """JSON-able record.
-
-        Returns
-        -------
-        dict
-        """
-        return dataclasses.asdict(self)
-
-
-@dataclasses.dataclass
-class OptimisationResult:
-    """The designs of an optimisation, what they were certified against, and the work it took."""
-
-    designs: list[OptimisedDesign]
-    settings: OptimiseSettings
-    evaluations: int
-    ipopt_iterations: int
-    certified_orientations: int
-
-    def as_json(self) -> dict[str, Any]:
-        """The ``result.json`` document.
-
-        Returns
-        -------
-        dict
-        """
-        s = self.settings
-        return {"objective": s.objective, "pareto_with": s.pareto_with or None, "variables": list(s.names),
-                "bounds": {n: [lo, hi] for n, lo, hi in zip(s.names, s.lower, s.upper)}, "base": s.base,
-                "requirements": s.requirements.as_dict(), "link": dataclasses.asdict(s.link),
-                "certify_orientations": s.certify_orientations, "evaluations": self.evaluations,
-                "ipopt_iterations": self.ipopt_iterations, "certified_orientations": self.certified_orientations,
-                "designs": [d.as_dict() for d in self.designs]}
 
 
 class _Budget:
@@ -132,7 +83,7 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
                disable=None if progress is None else not progress)
     try:
         if starts is None:
-            starts = _starts(settings)
+            starts = space_filling_starts(settings)
         else:
             starts = [{n: float(np.clip(p[n], lo, hi)) for n, lo, hi in zip(settings.names, settings.lower,
                                                                            settings.upper)} for p in starts]
@@ -171,45 +122,6 @@ def _same(a: OptimisedDesign, b: OptimisedDesign, rtol: float = 1e-6) -> bool:
 
 def _halved(name: str, value: float) -> float:
     return value * 2.0 if name == "size" else value * 0.5
-
-
-def sweep_starts(settings: OptimiseSettings, records: list[dict[str, Any]], count: int | None = None,
-                 key: str = "workspace_fraction") -> list[dict[str, float]]:
-    """The best designs of a sweep as starts: valid records sorted by ``key`` (largest first).
-
-    Parameters
-    ----------
-    settings : OptimiseSettings
-    records : list of dict
-        Sweep records (``SweepResult.records`` or the lines of a result file).
-    count : int, optional
-        How many (default ``settings.starts``).
-    key : str
-        Record key to rank by.
-
-    Returns
-    -------
-    list of dict of str to float
-        The optimised parameters of each start.
-
-    Raises
-    ------
-    DesignError
-        If no valid record has every optimised parameter.
-    """
-    ok = [r for r in records if r.get("status") == "ok" and r.get(key) is not None
-          and all(n in r["params"] for n in settings.names)]
-    if not ok:
-        raise DesignError(f"no valid sweep record with {key} and the parameters {list(settings.names)}", "starts")
-    ok.sort(key=lambda r: -float(r[key]))
-    return [{n: float(r["params"][n]) for n in settings.names} for r in ok[:count or settings.starts]]
-
-
-def _starts(settings: OptimiseSettings) -> list[dict[str, float]]:
-    d = len(settings.names)
-    u = qmc.Halton(d=d, scramble=True, seed=np.random.default_rng(settings.seed)).random(settings.starts)
-    lo, hi = np.array(settings.lower), np.array(settings.upper)
-    return [dict(zip(settings.names, (lo + row * (hi - lo)).tolist())) for row in u]
 
 
 def _best_start(settings: OptimiseSettings, starts: list[dict[str, float]], epsilon: dict[str, float],
@@ -294,7 +206,7 @@ def _certified_solve(settings: OptimiseSettings, start: dict[str, float], epsilo
                            axis=0)
         contacts = contacts_near(settings, rig, angles, values["range"])
     assert check is not None
-    objectives = _objectives(settings, params, check, values)
+    objectives = objectives_of(settings, params, check, values)
     return OptimisedDesign(params=params, objectives=objectives, certified=check.as_dict(), epsilon=dict(epsilon),
                            rounds=rounds, ok=check.ok)
 
@@ -312,33 +224,6 @@ def _values(settings: OptimiseSettings, epsilon: dict[str, float], q_obj: float)
          "range": req.range_scale, "size": math.inf, **epsilon}
     v[settings.objective] = q_obj
     return v
-
-
-def design_rig_of(settings: OptimiseSettings, params: dict[str, float]) -> Any:
-    """The rig of an optimised design: the base parameters, ``params`` and the settings' link.
-
-    Parameters
-    ----------
-    settings : OptimiseSettings
-    params : dict of str to float
-
-    Returns
-    -------
-    Rig
-    """
-    limits = GeometryLimits(settings.requirements.min_hole_spacing_m, 0.0)
-    return design_rig({**settings.base, **params}, limits).replace(link=settings.link)
-
-
-def _objectives(settings: OptimiseSettings, params: dict[str, float], check: Any,
-                values: dict[str, float]) -> dict[str, float]:
-    """Certified objective values: the range scale held, and the worst values over the dense check."""
-    rig = design_rig_of(settings, params)
-    size = float(max(np.hypot(*rig.platform_holes_A_m[:, :2].T).max(), np.hypot(*rig.base_holes_B_m[:, :2].T).max()))
-    return {"range": values["range"],
-            "stiffness": values["stiffness"] + check.worst["stiffness"][0],
-            "tension_margin": values["tension_margin"] + check.worst["tension"][0],
-            "size": size}
 
 
 __all__ = ["OptimisationResult", "OptimisedDesign", "design_rig_of", "optimise", "sweep_starts"]

@@ -1,0 +1,149 @@
+"""The front in the sweep's metrics, the evaluation budget, and the multi-start on processes and Dask."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import csjm_opt.design.optimise_sweep_front as front_mod
+from csjm_opt.design.design_evaluation import evaluate_design
+from csjm_opt.design.feasibility import wrench_margin_Nm
+from csjm_opt.design.optimisation import optimise
+from csjm_opt.design.optimise_result import design_rig_of
+from csjm_opt.design.optimise_settings import read_optimise_file
+from csjm_opt.design.optimise_sweep_surrogate import MARGIN_SOFTMIN_NM, sweep_surrogate
+from csjm_opt.errors import DesignError
+from csjm_opt.model.numeric import Model
+
+TINY = """
+[sweep]
+method = "grid"
+[base]
+platform_gamma_deg = 60.0
+base_radius_m = 0.075
+base_gamma_deg = 20.0
+[parameters.platform_radius_m]
+min = 0.04
+max = 0.06
+num = 3
+[sampling]
+orientations = 60
+max_tilt_deg = 40.0
+max_torsion_deg = 20.0
+[loads]
+tau_ext = [[0.0, 0.0, 0.0], [1.5, 0.0, 0.0]]
+[optimise]
+objective = "stiffness"
+pareto_with = ""
+orientations = 4
+certify_orientations = 200
+starts = 2
+min_cable_distance_m = 0.0
+min_link_clearance_m = 0.0
+max_exit_angle_deg = 90.0
+"""
+
+
+@pytest.fixture
+def tiny(tmp_path):
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY)
+    return read_optimise_file(path)
+
+
+def test_surrogate_margins_match_the_exact_zonotope_test(tiny):
+    # the smooth margin differs from the sweep's exact kernel by the soft minimum's bias only, and its sign
+    # count is the sweep's workspace fraction
+    spec, settings = tiny
+    f = sweep_surrogate(settings, spec.settings)
+    for r in (0.04, 0.05, 0.06):
+        _, _, m, lam = (np.array(v).ravel() for v in f([(r - 0.04) / 0.02]))
+        rig = design_rig_of(settings, {"platform_radius_m": r})
+        model, Rs = Model(rig), spec.settings.sampling.rotations()
+        tau = spec.settings.loads.taus_ext_A_Nm[None] + model.weight_moment(Rs)[:, None]
+        exact = wrench_margin_Nm(model.jacobian(Rs), tau, rig.t_min_N, rig.t_max_N).min(axis=1)
+        assert np.all(m <= exact + 1e-6) and np.all(m >= exact - MARGIN_SOFTMIN_NM * math.log(30) - 1e-6)
+        rec = evaluate_design({"platform_radius_m": r}, spec.settings)
+        held = exact >= 1e-3
+        assert np.mean(m >= 0) == pytest.approx(rec["workspace_fraction"], abs=np.mean(np.abs(exact) < 1e-3) + 1e-12)
+        if np.any(held):   # the eigenvalues are the sweep's where its planner's tensions are the least-squares ones
+            assert np.min(lam[held]) == pytest.approx(rec["min_stiffness_Nm_per_rad"], rel=0.05)
+
+
+def test_surrogate_gradient_matches_finite_differences(tiny):
+    spec, settings = tiny
+    f = sweep_surrogate(settings, spec.settings)
+    import casadi as ca
+
+    u = ca.MX.sym("u")
+    F, S, _, _ = f(u)
+    jac = ca.Function("j", [u], [ca.jacobian(ca.vertcat(F, S), u)])
+    for u0 in (0.3, 0.7):
+        h = 1e-6
+        fd = (np.array(ca.vertcat(*f(u0 + h)[:2])) - np.array(ca.vertcat(*f(u0 - h)[:2]))).ravel() / (2 * h)
+        assert np.allclose(np.array(jac(u0)).ravel(), fd, rtol=1e-4, atol=1e-6)
+
+
+def test_max_evaluations_is_a_hard_bound_and_every_sweep_call_is_counted(tiny, monkeypatch):
+    spec, settings = tiny
+    calls = []
+
+    def counted(params, evaluation):
+        calls.append(params)
+        return evaluate_design(params, evaluation)
+
+    monkeypatch.setattr(front_mod, "evaluate_design", counted)
+    for limit in (9, 14):
+        calls.clear()
+        res = front_mod.sweep_front(settings, spec.settings, points=6, max_evaluations=limit)
+        assert res.evaluations <= limit
+        assert res.sweep_evaluations == len(calls) == len(res.records) >= 1
+        assert res.evaluations == res.ipopt_evaluations + res.sweep_evaluations
+        assert res.ipopt_evaluations >= settings.starts + 1
+        # the reported numbers are the sweep evaluator's own
+        for rec in res.records:
+            again = evaluate_design(rec["params"], spec.settings)
+            assert rec["workspace_fraction"] == again["workspace_fraction"]
+    with pytest.raises(DesignError, match="max_evaluations"):
+        front_mod.sweep_front(settings, spec.settings, max_evaluations=4)
+
+
+def test_cli_max_evaluations_bounds_the_sweep_front(tmp_path):
+    import json
+
+    from csjm_opt.cli.app import main
+
+    path = tmp_path / "t.toml"
+    path.write_text(TINY)
+    out = tmp_path / "out"
+    assert main(["optimise", str(path), "--out", str(out), "--sweep-front", "--max-evaluations", "10",
+                 "--no-progress"]) == 0
+    doc = json.loads((out / "result.json").read_text())
+    assert doc["evaluations"] <= 10 and doc["front"]
+    assert (out / doc["front"][0]["rig_file"]).is_file()
+
+
+def _same_designs(a, b):
+    assert len(a.designs) == len(b.designs)
+    for x, y in zip(a.designs, b.designs):
+        for k in x.params:
+            assert x.params[k] == pytest.approx(y.params[k], rel=1e-9, abs=1e-12)
+
+
+def test_multistart_on_processes_and_dask_gives_the_serial_designs(tmp_path):
+    # the small range of tests/test_optimise.py: its optimum is known (radius on its upper bound)
+    path = tmp_path / "small.toml"
+    path.write_text(TINY.replace("max_tilt_deg = 40.0", "max_tilt_deg = 10.0").replace(
+        "max_torsion_deg = 20.0", "max_torsion_deg = 5.0").replace("[1.5, 0.0, 0.0]", "[0.5, 0.0, 0.0]"))
+    _, settings = read_optimise_file(path)
+    starts = [{"platform_radius_m": 0.041}, {"platform_radius_m": 0.052}]
+    serial = optimise(settings, starts=starts, workers=1, progress=False)
+    pooled = optimise(settings, starts=starts, workers=2, progress=False)
+    _same_designs(serial, pooled)
+    assert serial.designs[0].params["platform_radius_m"] == pytest.approx(0.06, abs=1e-6)
+    assert serial.evaluations == pooled.evaluations
+    pytest.importorskip("distributed")
+    on_dask = optimise(settings, starts=starts, workers=1, dask=True, progress=False)
+    _same_designs(serial, on_dask)
