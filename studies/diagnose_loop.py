@@ -26,8 +26,6 @@ One JSON line per case in ``OUT.jsonl`` (resumable), tables in ``OUT.md``, figur
 from __future__ import annotations
 
 import argparse
-import concurrent.futures
-import json
 import sys
 import time
 from pathlib import Path
@@ -35,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
+from _runner import finished, pool_stream, read_records, run_and_append  # noqa: E402
 
 LOOKALIKE = [["stiffness_scale"], ["link_compliance"], ["cable_hardening", "link_compliance"],
              ["hole_offsets", "mass_com"], ["tracker_registration", "mass_com"],
@@ -141,8 +140,31 @@ def _run_one(job: dict) -> dict:
     d2 = diagnose(rig, log, extra=extra)
     j2 = d2.as_json()
     rec.update({"after": sorted(_names(j2)), "right_after": _names(j2) == want,
-                "warnings_after": j2["verdict"]["warnings"], "seconds": time.perf_counter() - t0})
+                "warnings_after": j2["verdict"]["warnings"], "seconds": time.perf_counter() - t0,
+                "truth_vs_before_sd": _separation(sj["expected_separation_sd"], want, set(rec["before"])),
+                "detected_after": [c["effect"] for c in j2["candidates"] if c.get("significant")],
+                "truth_rank_after": _evidence_rank(j2, want)})
     return rec
+
+
+def _separation(seps: dict, a: set, b: set) -> float | None:
+    """Expected separation (sd) of the hypotheses named ``a`` and ``b`` (sets of effects), if both were targets."""
+    for k, v in seps.items():
+        x, y = (set(h.split("+")) for h in k.split(" vs "))
+        if {frozenset(x), frozenset(y)} == {frozenset(a), frozenset(b)}:
+            return v
+    return None
+
+
+def _evidence_rank(j: dict, want: set) -> int | None:
+    """Rank (0 = best) of the true model's log evidence among the fitted plausible models of diagnosis ``j``."""
+    ev = {frozenset([c["effect"]]): c["log_evidence"] for c in j["candidates"]
+          if c.get("plausible") and c.get("log_evidence") is not None}
+    ev.update({frozenset(p["effects"]): p["log_evidence"] for p in j["pairs"]
+               if p.get("fitted") and p.get("plausible") and p.get("log_evidence") is not None})
+    if frozenset(want) not in ev:
+        return None
+    return sum(v > ev[frozenset(want)] for v in ev.values())
 
 
 def summarise(records: list[dict]) -> str:
@@ -220,14 +242,14 @@ def figure(records: list[dict], path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from tqdm import tqdm
-
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rigs", type=int, default=10)
+    ap.add_argument("--rig-ids", nargs="+", type=int, default=None, help="only these rigs (of range(--rigs))")
     ap.add_argument("--cycles", type=int, default=12)
     ap.add_argument("--rows", type=int, default=60, help="largest suggested experiment")
     ap.add_argument("--plants", nargs="+", default=["quasistatic"], choices=["quasistatic", "mujoco"])
     ap.add_argument("--groups", nargs="+", default=["lookalike", "short", "weak"])
+    ap.add_argument("--only", nargs="+", default=None, help="only cases injecting these effects")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--limit", type=int, default=None)
     ap.add_argument("--out", default="studies/diagnose_loop")
@@ -236,31 +258,18 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     out = Path(args.out)
     path = out.with_suffix(".jsonl")
-    done: dict[str, dict] = {}
-    if path.exists():
-        for line in path.read_text().splitlines():
-            if line.strip():
-                rec = json.loads(line)
-                done[rec["id"]] = rec
+    done = read_records(path)
     if not args.summarise:
         todo = [{**j, "max_rows": args.rows} for j in jobs(args.rigs, args.cycles, args.plants)
-                if j["id"] not in done and j["group"] in args.groups]
+                if j["id"] not in done and j["group"] in args.groups
+                and (args.rig_ids is None or j["rig"] in args.rig_ids)
+                and (args.only is None or set(j["effects"]) <= set(args.only))]
         # interleave groups so a partial run answers every question
         todo.sort(key=lambda j: (j["rig"], j["group"] != "lookalike"))
         todo = todo[:args.limit] if args.limit else todo
-        bar = tqdm(total=len(todo), file=sys.stderr, desc="loop study", disable=args.no_progress or None)
-        with path.open("a") as fh, concurrent.futures.ProcessPoolExecutor(args.workers) as pool:
-            for f in concurrent.futures.as_completed([pool.submit(run_one, j) for j in todo]):
-                rec = f.result()
-                fh.write(json.dumps(rec) + "\n")
-                fh.flush()
-                done[rec["id"]] = rec
-                bar.update(1)
-        bar.close()
-    failed = [r for r in done.values() if "error" in r]
-    records = [r for r in done.values() if "error" not in r]
-    if failed:
-        print(f"{len(failed)} cases failed: " + "; ".join(r["error"] for r in failed[:3]), file=sys.stderr)
+        run_and_append(pool_stream(run_one, todo, args.workers), len(todo), path, done, "loop study",
+                       args.no_progress)
+    records = finished(done, path)
     if not records:
         return 0
     text = summarise(records)
