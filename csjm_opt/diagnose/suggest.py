@@ -301,9 +301,9 @@ def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[Lo
         return out
 
     # hypotheses no feasible experiment of this size can tell apart are equivalent here: not a target
-    reach = separation(list(np.argsort(-np.sum([terms[(b, a)][2] for a, b in pairs], axis=0))
+    reachable = separation(list(np.argsort(-np.sum([terms[(b, a)][2] for a, b in pairs], axis=0))
                             [:max(1, max_rows // max(min(sizes), 1))]))
-    target = np.sqrt(reach) >= EQUIVALENT_SD
+    target = np.sqrt(reachable) >= EQUIVALENT_SD
     if not target.any():
         target[:] = True
 
