@@ -12,8 +12,9 @@ instrument noise; ``diagnose(log, extra=rows)`` then gives the new verdict. Case
 * ``short``: every single effect at 3x on a 4-cycle log;
 * ``weak``: every single effect at 1.5x.
 
-A suggested load is applied as the moment it would exert at the planned pose (the testbed's
-plant takes moments in {A}); the F/T reading carries the plant's bias and noise as in a log.
+A suggested load is a dead weight: the plant takes its first moment (mass x point in {A}),
+so its moment follows the pose the plant settles at, and the F/T reading is that moment
+with the plant's bias and noise, as ``csjm simulate PROTOCOL --after LOG`` does it.
 
 Usage::
 
@@ -85,9 +86,12 @@ def _measure(plant, inputs: dict, noise, rng, start: int = 0):
     """Noisy log of the rows ``start:`` of the whole history ``inputs`` (the plant steps all of it)."""
     from csjm_opt import so3
     from csjm_opt.measurement.logfile import MeasurementLog
+    from csjm_opt.model import kinematics as kin
 
-    R_true = plant.respond(inputs["l"], inputs["tau"], inputs["cycle"], inputs["R0"])
-    tau_meas = plant.measured_moment(inputs["tau"])[start:]
+    mr = inputs.get("mr", np.zeros_like(inputs["tau"]))
+    R_true = plant.respond(inputs["l"], inputs["tau"], inputs["cycle"], inputs["R0"], mr)
+    tau = inputs["tau"] + kin.weight_moment(R_true, mr, np.asarray(plant.rig.gravity_B_m_per_s2))
+    tau_meas = plant.measured_moment(tau)[start:]
     n = len(tau_meas)
     tau_meas = tau_meas + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)
     R_meas = plant.measured_pose(R_true[start:]) @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
@@ -135,7 +139,10 @@ def _run_one(job: dict) -> dict:
                 "expected_separation_sd": sj["smallest_expected_separation_sd"],
                 "truth_in_hypotheses": any(set(h.split("+")) == want for h in s.hypotheses)})
     whole = {"cycle": np.r_[inputs["cycle"], s.cycle], "l": np.r_[inputs["l"], s.rest_lengths_m],
-             "tau": np.r_[inputs["tau"], s.intended_tau_A_Nm], "R0": np.concatenate([inputs["R0"], s.planned_R])}
+             "tau": np.r_[inputs["tau"], np.zeros((len(s.cycle), 3))],
+             "R0": np.concatenate([inputs["R0"], s.planned_R]),
+             "mr": np.r_[np.zeros_like(inputs["tau"]),
+                         [np.zeros(3) if ld is None else ld.mass_kg * np.asarray(ld.point_A_m) for ld in s.loads]]}
     extra = _measure(plant, whole, noise, np.random.default_rng(seed + [9]), start=len(log))
     d2 = diagnose(rig, log, extra=extra)
     j2 = d2.as_json()
