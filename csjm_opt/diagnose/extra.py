@@ -77,7 +77,7 @@ def check_same_rig(rig: Rig, log: MeasurementLog, extra: MeasurementLog, what: s
 
 
 def append_log(rig: Rig, log: MeasurementLog, extra: MeasurementLog, what: str = "extra log") -> MeasurementLog:
-    """``log`` followed by ``extra`` (each run of rows of ``extra`` one cycle, numbered after the log's).
+    """``log`` followed by ``extra`` (its cycles numbered after the log's, in time order).
 
     Parameters
     ----------
@@ -98,7 +98,7 @@ def append_log(rig: Rig, log: MeasurementLog, extra: MeasurementLog, what: str =
     check_rows_belong(rig, extra, what)
     check_same_rig(rig, log, extra, what)
     c = np.asarray(extra.cycle)
-    runs = np.cumsum(np.r_[True, c[1:] != c[:-1]]) - 1       # each run of rows its own cycle, in time order
+    runs = np.cumsum(np.r_[True, c[1:] != c[:-1]]) - 1       # cycles in time order (rows consecutive)
     cyc = np.r_[np.asarray(log.cycle), int(np.max(log.cycle)) + 1 + runs]
     return MeasurementLog.from_arrays(cyc, np.r_[log.rest_lengths_m, extra.rest_lengths_m],
                                       np.r_[log.tau_ext_A_Nm, extra.tau_ext_A_Nm],
