@@ -271,8 +271,8 @@ def main(argv: list[str] | None = None) -> int:
                 if j["id"] not in done and j["group"] in args.groups
                 and (args.rig_ids is None or j["rig"] in args.rig_ids)
                 and (args.only is None or set(j["effects"]) <= set(args.only))]
-        # interleave groups so a partial run answers every question
-        todo.sort(key=lambda j: (j["rig"], j["group"] != "lookalike"))
+        # a fixed random order: a partial run is a random sample of the cases (every rig, group, plant)
+        todo = [todo[i] for i in np.random.default_rng(0).permutation(len(todo))]
         todo = todo[:args.limit] if args.limit else todo
         run_and_append(pool_stream(run_one, todo, args.workers), len(todo), path, done, "loop study",
                        args.no_progress)
