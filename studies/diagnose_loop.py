@@ -174,6 +174,24 @@ def _evidence_rank(j: dict, want: set) -> int | None:
     return sum(v > ev[frozenset(want)] for v in ev.values())
 
 
+FAILURE_CLASSES = ("truth not among the hypotheses the rows were designed for",
+                   "no rows within the limits and budget separate truth and verdict by 2 sd",
+                   "the truth has the best evidence after, the decision rule names another model",
+                   "separation expected, the data do not bear it out (truth not best by evidence)")
+
+
+def failure_class(r: dict) -> str:
+    """Why an ambiguous log is still wrong after the experiment (the record's diagnostics)."""
+    if not r.get("truth_in_hypotheses"):
+        return FAILURE_CLASSES[0]
+    sep = r.get("truth_vs_before_sd")
+    if sep is not None and sep < 2.0:
+        return FAILURE_CLASSES[1]
+    if r.get("truth_rank_after") == 0:
+        return FAILURE_CLASSES[2]
+    return FAILURE_CLASSES[3]
+
+
 def summarise(records: list[dict]) -> str:
     def rate(rs, ok):
         return f"{sum(map(ok, rs))}/{len(rs)} ({sum(map(ok, rs)) / len(rs):.0%})" if rs else "-"
@@ -194,6 +212,11 @@ def summarise(records: list[dict]) -> str:
             lines.append(f"| {g} | {len(rs)} | {rate(rs, lambda r: r['right_before'])} | {len(a)} | "
                          f"{rate(a, lambda r: r['right_before'])} | {rate(a, lambda r: r['right_after'])} | "
                          f"{rows:.0f} | {sep:.1f} |")
+        wrong = [r for r in amb if not r["right_after"]]
+        lines += ["", f"Ambiguous logs wrong after the experiment: {len(wrong)} (right before -> wrong after: "
+                      f"{sum(r['right_before'] for r in wrong)}). Why:", "", "| class | logs |", "|---|---|"]
+        for c in FAILURE_CLASSES:
+            lines.append(f"| {c} | {sum(failure_class(r) == c for r in wrong)} |")
         lines += ["", f"Clear verdicts (no experiment asked) that were right: "
                       f"{rate([r for r in rp if not r['ambiguous']], lambda r: r['right_before'])}.",
                   f"Ambiguous logs whose truth was among the hypotheses separated: "

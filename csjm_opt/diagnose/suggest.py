@@ -13,8 +13,9 @@ rows within the rig's limits:
   only where the nominal rig holds every row with tensions in ``[t_min, t_max]``
   (:func:`csjm_opt.model.statics.solve_equilibrium` with the weights as point
   forces); a load the rig cannot hold at a pose is left out of that cycle;
-* **hypotheses**: the selected model, its non-separable alternatives and the
-  pairs they form, the best singles and pairs when the verdict is ``unexplained``,
+* **hypotheses**: the selected model (a pair: and each of its singles), its
+  non-separable alternatives and the pairs they form, the best singles and pairs
+  when the verdict is ``unexplained``,
   and always the null model (at most ``MAX_HYPOTHESES``), each with its fitted
   parameters. The null keeps the rows showing the gap itself: rows that only tell
   two look-alike explanations apart but show neither would leave the held-out
@@ -108,9 +109,9 @@ class Suggestion:
 def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
     """``(purpose, [(name, score), ...])``: why an experiment is needed and which models to separate.
 
-    The leading hypotheses are the plausible singles and fitted pairs whose log evidence
-    (:mod:`.evidence`) is within ``LEAD_NATS`` of the best, the selected model always, and the
-    null model last, always (at most ``MAX_HYPOTHESES``, best first).
+    The leading hypotheses are the selected model, each single of a selected pair, the plausible
+    singles and fitted pairs whose log evidence (:mod:`.evidence`) is within ``LEAD_NATS`` of the
+    best, and the null model last, always (at most ``MAX_HYPOTHESES``).
 
     Parameters
     ----------
@@ -155,8 +156,9 @@ def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
         others = [n for n in lead if n not in out and n != f"{sec}+{sel}"]
         if others:
             reasons.append(f"the log cannot tell {next(iter(out))} decisively from {', '.join(others)}")
-        if sec != "none" and not d.secondary.get("separable", True):
-            reasons.append(f"{sel} and {sec} are not separable on this log")
+        if sec != "none":                   # a pair against each of its singles: is the second effect real?
+            if not d.secondary.get("separable", True):
+                reasons.append(f"{sel} and {sec} are not separable on this log")
             out.setdefault(sel, d.candidates[sel])
             out.setdefault(sec, d.candidates[sec])
         improvement = d.tests.get(sel, {}).get("improvement_rad", np.inf)
