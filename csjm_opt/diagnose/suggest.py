@@ -42,7 +42,6 @@ the intended loads.
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 from types import SimpleNamespace
 from typing import Callable, Sequence
@@ -61,7 +60,7 @@ from .effects import EFFECTS
 from .evidence import prior_of
 from .fit import data_jacobian
 from .loads import Load, default_load_set
-from .protocol import PROTOCOL_COLUMNS, protocol_text, suggestion_markdown
+from .protocol import PROTOCOL_COLUMNS, Suggestion, protocol_text, suggestion_markdown
 from .result import Diagnosis
 from .scoring import CandidateScore
 
@@ -73,37 +72,6 @@ NEAR_FLOOR = 3.0
 #: A pair of hypotheses is resolved at this separation (noise sd): a one-sided test at ``ALPHA`` over the
 #: vocabulary's candidates detects it with power 0.9. Beyond it, rows go to the pairs not yet resolved.
 RESOLVED_SD = float(stats.norm.isf(ALPHA / len(EFFECTS)) + stats.norm.isf(0.1))
-
-
-@dataclasses.dataclass(frozen=True)
-class Suggestion:
-    """A suggested experiment: the rows, what they are for and the separation they should give."""
-
-    purpose: str
-    hypotheses: list[str]
-    cycle: np.ndarray              # (n,) cycle ids (after the log's)
-    rest_lengths_m: np.ndarray     # (n, 6)
-    loads: list[Load | None]       # per row (None: no load)
-    intended_tau_A_Nm: np.ndarray  # (n, 3) at the planned pose
-    planned_R: np.ndarray          # (n, 3, 3) nominal pose
-    separation_sd: dict            # "a vs b" -> expected separation (noise sd)
-    separation_before_sd: dict     # the same on the log's own rows (what the log could tell)
-    equivalent: list = dataclasses.field(default_factory=list)   # pairs no feasible rows separate by 1 sd
-
-    def as_json(self) -> dict:
-        """JSON-able summary.
-
-        Returns
-        -------
-        dict
-        """
-        return {"purpose": self.purpose, "hypotheses": self.hypotheses, "rows": int(len(self.cycle)),
-                "cycles": int(len(np.unique(self.cycle))),
-                "expected_separation_sd": self.separation_sd,
-                "separation_on_log_sd": self.separation_before_sd,
-                "equivalent": self.equivalent,
-                "smallest_expected_separation_sd": min((v for k, v in self.separation_sd.items()
-                                                        if k not in self.equivalent), default=None)}
 
 
 def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
