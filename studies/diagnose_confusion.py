@@ -34,15 +34,16 @@ resumable); ``OUT.md`` gets the tables and ``OUT.png`` the figure.
 from __future__ import annotations
 
 import argparse
-import concurrent.futures
 import itertools
-import json
 import sys
 import time
 from pathlib import Path
 from typing import Callable, Iterator
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parent))
+from _runner import finished, pool_stream, read_records, run_and_append  # noqa: E402
 
 MULTIPLES = (1.5, 3.0, 6.0, 10.0)
 OUTSIDE_MULTIPLES = (3.0, 6.0)
@@ -211,10 +212,7 @@ def stream(todo: list[dict], workers: int, scheduler: str | None, use_dask: bool
             if cluster is not None:
                 cluster.close()
         return
-    with concurrent.futures.ProcessPoolExecutor(workers) as pool:
-        futures = [pool.submit(run_one, j) for j in todo]
-        for f in concurrent.futures.as_completed(futures):
-            yield f.result()
+    yield from pool_stream(run_one, todo, workers)
 
 
 def _rate(rs: list[dict], ok: Callable[[dict], bool]) -> str:
@@ -351,8 +349,6 @@ def figure(records: list[dict], path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from tqdm import tqdm
-
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rigs", type=int, default=10)
     ap.add_argument("--none-per-rig", type=int, default=10)
@@ -376,12 +372,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     out = Path(args.out)
     path = out.with_suffix(".jsonl")
-    done: dict[str, dict] = {}
-    if path.exists():
-        for line in path.read_text().splitlines():
-            if line.strip():
-                rec = json.loads(line)
-                done[rec["id"]] = rec
+    done = read_records(path)
     if not args.summarise:
         todo = [j for plant in args.plants
                 for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs, plant)
@@ -392,19 +383,9 @@ def main(argv: list[str] | None = None) -> int:
             todo = [{**j, "scatter_mm": args.scatter_mm, "id": f"{j['id']}-scatter{args.scatter_mm:g}mm"} for j in todo]
             todo = [j for j in todo if j["id"] not in done]
         todo = todo[:args.limit] if args.limit else todo
-        bar = tqdm(total=len(todo), file=sys.stderr, desc="confusion study", disable=args.no_progress or None)
-        with path.open("a") as fh:
-            for rec in stream(todo, args.workers, args.scheduler, args.dask):
-                fh.write(json.dumps(rec) + "\n")
-                fh.flush()
-                done[rec["id"]] = rec
-                bar.update(1)
-        bar.close()
-    failed = [r for r in done.values() if "error" in r]
-    records = [r for r in done.values() if "error" not in r and "truth" in r]
-    if failed:
-        print(f"{len(failed)} logs failed (recorded in {path}): " + "; ".join(r["error"] for r in failed[:3]),
-              file=sys.stderr)
+        run_and_append(stream(todo, args.workers, args.scheduler, args.dask), len(todo), path, done,
+                       "confusion study", args.no_progress)
+    records = [r for r in finished(done, path, "logs") if "truth" in r]
     if not records:
         return 0
     plants = sorted({r.get("plant", "quasistatic") for r in records})

@@ -12,8 +12,9 @@ instrument noise; ``diagnose(log, extra=rows)`` then gives the new verdict. Case
 * ``short``: every single effect at 3x on a 4-cycle log;
 * ``weak``: every single effect at 1.5x.
 
-A suggested load is applied as the moment it would exert at the planned pose (the testbed's
-plant takes moments in {A}); the F/T reading carries the plant's bias and noise as in a log.
+A suggested load is a dead weight: the plant takes its first moment (mass x point in {A}),
+so its moment follows the pose the plant settles at, and the F/T reading is that moment
+with the plant's bias and noise, as ``csjm simulate PROTOCOL --after LOG`` does it.
 
 Usage::
 
@@ -26,8 +27,6 @@ One JSON line per case in ``OUT.jsonl`` (resumable), tables in ``OUT.md``, figur
 from __future__ import annotations
 
 import argparse
-import concurrent.futures
-import json
 import sys
 import time
 from pathlib import Path
@@ -35,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
+from _runner import finished, pool_stream, read_records, run_and_append  # noqa: E402
 
 LOOKALIKE = [["stiffness_scale"], ["link_compliance"], ["cable_hardening", "link_compliance"],
              ["hole_offsets", "mass_com"], ["tracker_registration", "mass_com"],
@@ -86,9 +86,12 @@ def _measure(plant, inputs: dict, noise, rng, start: int = 0):
     """Noisy log of the rows ``start:`` of the whole history ``inputs`` (the plant steps all of it)."""
     from csjm_opt import so3
     from csjm_opt.measurement.logfile import MeasurementLog
+    from csjm_opt.model import kinematics as kin
 
-    R_true = plant.respond(inputs["l"], inputs["tau"], inputs["cycle"], inputs["R0"])
-    tau_meas = plant.measured_moment(inputs["tau"])[start:]
+    mr = inputs.get("mr", np.zeros_like(inputs["tau"]))
+    R_true = plant.respond(inputs["l"], inputs["tau"], inputs["cycle"], inputs["R0"], mr)
+    tau = inputs["tau"] + kin.weight_moment(R_true, mr, np.asarray(plant.rig.gravity_B_m_per_s2))
+    tau_meas = plant.measured_moment(tau)[start:]
     n = len(tau_meas)
     tau_meas = tau_meas + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)
     R_meas = plant.measured_pose(R_true[start:]) @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
@@ -136,13 +139,57 @@ def _run_one(job: dict) -> dict:
                 "expected_separation_sd": sj["smallest_expected_separation_sd"],
                 "truth_in_hypotheses": any(set(h.split("+")) == want for h in s.hypotheses)})
     whole = {"cycle": np.r_[inputs["cycle"], s.cycle], "l": np.r_[inputs["l"], s.rest_lengths_m],
-             "tau": np.r_[inputs["tau"], s.intended_tau_A_Nm], "R0": np.concatenate([inputs["R0"], s.planned_R])}
+             "tau": np.r_[inputs["tau"], np.zeros((len(s.cycle), 3))],
+             "R0": np.concatenate([inputs["R0"], s.planned_R]),
+             "mr": np.r_[np.zeros_like(inputs["tau"]),
+                         [np.zeros(3) if ld is None else ld.mass_kg * np.asarray(ld.point_A_m) for ld in s.loads]]}
     extra = _measure(plant, whole, noise, np.random.default_rng(seed + [9]), start=len(log))
     d2 = diagnose(rig, log, extra=extra)
     j2 = d2.as_json()
     rec.update({"after": sorted(_names(j2)), "right_after": _names(j2) == want,
-                "warnings_after": j2["verdict"]["warnings"], "seconds": time.perf_counter() - t0})
+                "warnings_after": j2["verdict"]["warnings"], "seconds": time.perf_counter() - t0,
+                "truth_vs_before_sd": _separation(sj["expected_separation_sd"], want, set(rec["before"])),
+                "detected_after": [c["effect"] for c in j2["candidates"] if c.get("significant")],
+                "truth_rank_after": _evidence_rank(j2, want)})
     return rec
+
+
+def _separation(seps: dict, a: set, b: set) -> float | None:
+    """Expected separation (sd) of the hypotheses named ``a`` and ``b`` (sets of effects), if both were targets."""
+    for k, v in seps.items():
+        x, y = (set(h.split("+")) for h in k.split(" vs "))
+        if {frozenset(x), frozenset(y)} == {frozenset(a), frozenset(b)}:
+            return v
+    return None
+
+
+def _evidence_rank(j: dict, want: set) -> int | None:
+    """Rank (0 = best) of the true model's log evidence among the fitted plausible models of diagnosis ``j``."""
+    ev = {frozenset([c["effect"]]): c["log_evidence"] for c in j["candidates"]
+          if c.get("plausible") and c.get("log_evidence") is not None}
+    ev.update({frozenset(p["effects"]): p["log_evidence"] for p in j["pairs"]
+               if p.get("fitted") and p.get("plausible") and p.get("log_evidence") is not None})
+    if frozenset(want) not in ev:
+        return None
+    return sum(v > ev[frozenset(want)] for v in ev.values())
+
+
+FAILURE_CLASSES = ("truth not among the hypotheses the rows were designed for",
+                   "no rows within the limits and budget separate truth and verdict by 2 sd",
+                   "the truth has the best evidence after, the decision rule names another model",
+                   "separation expected, the data do not bear it out (truth not best by evidence)")
+
+
+def failure_class(r: dict) -> str:
+    """Why an ambiguous log is still wrong after the experiment (the record's diagnostics)."""
+    if not r.get("truth_in_hypotheses"):
+        return FAILURE_CLASSES[0]
+    sep = r.get("truth_vs_before_sd")
+    if sep is not None and sep < 2.0:
+        return FAILURE_CLASSES[1]
+    if r.get("truth_rank_after") == 0:
+        return FAILURE_CLASSES[2]
+    return FAILURE_CLASSES[3]
 
 
 def summarise(records: list[dict]) -> str:
@@ -165,6 +212,11 @@ def summarise(records: list[dict]) -> str:
             lines.append(f"| {g} | {len(rs)} | {rate(rs, lambda r: r['right_before'])} | {len(a)} | "
                          f"{rate(a, lambda r: r['right_before'])} | {rate(a, lambda r: r['right_after'])} | "
                          f"{rows:.0f} | {sep:.1f} |")
+        wrong = [r for r in amb if not r["right_after"]]
+        lines += ["", f"Ambiguous logs wrong after the experiment: {len(wrong)} (right before -> wrong after: "
+                      f"{sum(r['right_before'] for r in wrong)}). Why:", "", "| class | logs |", "|---|---|"]
+        for c in FAILURE_CLASSES:
+            lines.append(f"| {c} | {sum(failure_class(r) == c for r in wrong)} |")
         lines += ["", f"Clear verdicts (no experiment asked) that were right: "
                       f"{rate([r for r in rp if not r['ambiguous']], lambda r: r['right_before'])}.",
                   f"Ambiguous logs whose truth was among the hypotheses separated: "
@@ -220,14 +272,14 @@ def figure(records: list[dict], path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from tqdm import tqdm
-
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rigs", type=int, default=10)
+    ap.add_argument("--rig-ids", nargs="+", type=int, default=None, help="only these rigs (of range(--rigs))")
     ap.add_argument("--cycles", type=int, default=12)
     ap.add_argument("--rows", type=int, default=60, help="largest suggested experiment")
     ap.add_argument("--plants", nargs="+", default=["quasistatic"], choices=["quasistatic", "mujoco"])
     ap.add_argument("--groups", nargs="+", default=["lookalike", "short", "weak"])
+    ap.add_argument("--only", nargs="+", default=None, help="only cases injecting these effects")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--limit", type=int, default=None)
     ap.add_argument("--out", default="studies/diagnose_loop")
@@ -236,31 +288,18 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     out = Path(args.out)
     path = out.with_suffix(".jsonl")
-    done: dict[str, dict] = {}
-    if path.exists():
-        for line in path.read_text().splitlines():
-            if line.strip():
-                rec = json.loads(line)
-                done[rec["id"]] = rec
+    done = read_records(path)
     if not args.summarise:
         todo = [{**j, "max_rows": args.rows} for j in jobs(args.rigs, args.cycles, args.plants)
-                if j["id"] not in done and j["group"] in args.groups]
-        # interleave groups so a partial run answers every question
-        todo.sort(key=lambda j: (j["rig"], j["group"] != "lookalike"))
+                if j["id"] not in done and j["group"] in args.groups
+                and (args.rig_ids is None or j["rig"] in args.rig_ids)
+                and (args.only is None or set(j["effects"]) <= set(args.only))]
+        # a fixed random order: a partial run is a random sample of the cases (every rig, group, plant)
+        todo = [todo[i] for i in np.random.default_rng(0).permutation(len(todo))]
         todo = todo[:args.limit] if args.limit else todo
-        bar = tqdm(total=len(todo), file=sys.stderr, desc="loop study", disable=args.no_progress or None)
-        with path.open("a") as fh, concurrent.futures.ProcessPoolExecutor(args.workers) as pool:
-            for f in concurrent.futures.as_completed([pool.submit(run_one, j) for j in todo]):
-                rec = f.result()
-                fh.write(json.dumps(rec) + "\n")
-                fh.flush()
-                done[rec["id"]] = rec
-                bar.update(1)
-        bar.close()
-    failed = [r for r in done.values() if "error" in r]
-    records = [r for r in done.values() if "error" not in r]
-    if failed:
-        print(f"{len(failed)} cases failed: " + "; ".join(r["error"] for r in failed[:3]), file=sys.stderr)
+        run_and_append(pool_stream(run_one, todo, args.workers), len(todo), path, done, "loop study",
+                       args.no_progress)
+    records = finished(done, path)
     if not records:
         return 0
     text = summarise(records)

@@ -93,3 +93,44 @@ def test_suggestion_separates_lookalikes_within_the_row_budget(rig):
     assert text[0] == PROTOCOL_COLUMNS and len(text) == len(s.cycle) + 1
     cols = text[1].split(",")
     assert cols[8:14] == [""] * 6                                # measured columns left empty
+
+
+def test_default_loads_reach_the_moment_the_log_applied(rig):
+    """The heaviest default load exerts the given moment with its lever horizontal (|p x m g| = reach)."""
+    reach = 2.4
+    loads = default_load_set(rig, reach)
+    g = np.asarray(rig.gravity_B_m_per_s2)
+    top = max(np.linalg.norm(ld.moment_A_Nm(np.eye(3), g)) for ld in loads)
+    assert top == pytest.approx(reach, rel=1e-9)
+    assert {ld.mass_kg for ld in default_load_set(rig)} == {0.1, 0.2, 0.5}      # no moment given: the defaults
+
+
+def test_extra_rows_are_cycles_of_their_own_in_time_order(rig):
+    """The extra log's cycles follow the log's in the order they were run, whatever their ids."""
+    log = simulate_experiment(rig, 2, np.random.default_rng(1), steps=1)
+    more = simulate_experiment(rig, 3, np.random.default_rng(2), steps=1)
+    ids = np.repeat([7, 3, 9], 3)                                 # run in this order
+    more = type(more).from_arrays(ids, more.rest_lengths_m, more.tau_ext_A_Nm, more.R)
+    both = append_log(rig, log, more)
+    assert both.cycle[len(log):].tolist() == [2, 2, 2, 3, 3, 3, 4, 4, 4]
+    np.testing.assert_array_equal(both.rest_lengths_m[len(log):], more.rest_lengths_m)
+
+
+def test_suggested_rows_show_the_effect_not_only_the_lookalike_difference(rig):
+    """On a short link-compliance log the two compliance explanations are near each other; the rows
+    (simulated noise-free on the same plant after the log, dead weights) must still show the effect
+    itself: the nominal model misses them by more than a noise floor (about 2 here, 1.5 on the log's own
+    cycles; rows designed only to tell the two apart, with 0.1-0.5 kg weights, showed 0.3)."""
+    noise = InstrumentNoise.paper()
+    log = simulate_experiment(rig, 3, np.random.default_rng(5), effect="link_compliance", severity=1.0,
+                              noise=noise, steps=2)
+    d = diagnose(rig, log, effects=["link_compliance", "stiffness_scale"])
+    s = suggest_experiment(rig, d, 30, seed=2)
+    assert s is not None and s.hypotheses[-1] == "none" and len(s.cycle) <= 30
+    from csjm_opt.diagnose.residuals import compute_residuals
+    from csjm_opt.testbed import simulate_protocol
+
+    rows = simulate_protocol(rig, protocol_text(s), "link_compliance", 1.0, rng=np.random.default_rng(5),
+                             noise=InstrumentNoise.none(), after=log)
+    floor = compute_residuals(rig, log, noise).instrument_floor_rad
+    assert compute_residuals(rig, rows, noise).rms_rad > floor

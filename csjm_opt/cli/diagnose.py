@@ -58,8 +58,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="where --suggest writes the protocol (log columns, measured ones empty; default "
                         "%(default)s)")
     p.add_argument("--loads", metavar="LOADS.toml", default=None,
-                   help="the lab's load set for --suggest ([[load]] name, mass_kg, point_A_m; default: 0.1, 0.2, "
-                        "0.5 kg at +-x, +-y of the platform)")
+                   help="the lab's load set for --suggest ([[load]] name, mass_kg, point_A_m; default: masses at "
+                        "+-x, +-y of the platform reaching 1/3, 2/3 and all of the log's largest moment)")
     p.add_argument("--seed", type=int, default=0, help="seed of --suggest's candidate draw")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)

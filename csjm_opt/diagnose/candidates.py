@@ -25,7 +25,7 @@ from .loads import Load
 MAX_TILT_RAD = 0.5
 MAX_TWIST_RAD = 0.3
 #: Reference tensions of a candidate cycle: this share range of [t_min, t_max].
-PRETENSION_SHARE = (0.25, 0.75)
+PRETENSION_SHARE = (0.1, 0.9)
 N_CANDIDATES = 40
 
 

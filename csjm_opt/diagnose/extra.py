@@ -4,7 +4,9 @@ The extra rows must come from the same rig: at their measured poses the rig file
 cables must be taut and within reach of the tension range on most rows (a log from
 another rig, with other rest lengths, shows slack or wildly stretched cables). Their
 cycles are renumbered to follow the log's, in the order given (they were run after it:
-a friction state carries on from the log's last row).
+a friction state carries on from the log's last row, and the held-out scoring deals
+them to folds as cycles of their own). A cycle id that comes back after other rows is
+a new cycle (rows of one cycle are consecutive): the cables were moved in between.
 """
 
 from __future__ import annotations
@@ -75,7 +77,7 @@ def check_same_rig(rig: Rig, log: MeasurementLog, extra: MeasurementLog, what: s
 
 
 def append_log(rig: Rig, log: MeasurementLog, extra: MeasurementLog, what: str = "extra log") -> MeasurementLog:
-    """``log`` followed by ``extra`` (cycles renumbered after the log's; samples renumbered).
+    """``log`` followed by ``extra`` (its cycles numbered after the log's, in time order).
 
     Parameters
     ----------
@@ -95,9 +97,9 @@ def append_log(rig: Rig, log: MeasurementLog, extra: MeasurementLog, what: str =
     """
     check_rows_belong(rig, extra, what)
     check_same_rig(rig, log, extra, what)
-    ids = {c: i for i, c in enumerate(dict.fromkeys(int(c) for c in extra.cycle))}
-    start = int(np.max(log.cycle)) + 1
-    cyc = np.r_[np.asarray(log.cycle), [start + ids[int(c)] for c in extra.cycle]]
+    c = np.asarray(extra.cycle)
+    runs = np.cumsum(np.r_[True, c[1:] != c[:-1]]) - 1       # cycles in time order (rows consecutive)
+    cyc = np.r_[np.asarray(log.cycle), int(np.max(log.cycle)) + 1 + runs]
     return MeasurementLog.from_arrays(cyc, np.r_[log.rest_lengths_m, extra.rest_lengths_m],
                                       np.r_[log.tau_ext_A_Nm, extra.tau_ext_A_Nm],
                                       np.concatenate([log.R, extra.R]))

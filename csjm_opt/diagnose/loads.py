@@ -11,7 +11,8 @@ A small TOML file, one table per load::
 The external moment of a load depends on the pose: ``tau_ext = point x (R^T m g_B)`` (in
 {A}, the weight fixed in {B}). Without a file, :func:`default_load_set` gives masses of
 0.1, 0.2 and 0.5 kg at four points (+-x, +-y) in the platform's hole plane, at 0.8 of the
-holes' radius: what any lab with a set of calibration weights has.
+holes' radius: what any lab with a set of calibration weights has; ``--suggest`` asks for
+masses that reach the largest moment the log already applied (the lab has shown it can).
 """
 
 from __future__ import annotations
@@ -28,6 +29,8 @@ from ..model.rig import Rig
 #: Default masses (kg) and the share of the platform-hole radius at which they hang.
 DEFAULT_MASSES_KG = (0.1, 0.2, 0.5)
 DEFAULT_RADIUS_SHARE = 0.8
+#: With a moment to reach: masses at these shares of the one that reaches it.
+REACH_SHARES = (1 / 3, 2 / 3, 1.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -56,12 +59,20 @@ class Load:
         return np.cross(np.asarray(self.point_A_m, float), self.mass_kg * g_A)
 
 
-def default_load_set(rig: Rig) -> list[Load]:
-    """Masses ``DEFAULT_MASSES_KG`` at +-x, +-y, radius ``DEFAULT_RADIUS_SHARE`` x the platform holes'.
+def default_load_set(rig: Rig, reach_Nm: float | None = None) -> list[Load]:
+    """Masses hung at +-x, +-y, radius ``DEFAULT_RADIUS_SHARE`` x the platform holes'.
+
+    Without ``reach_Nm`` the masses are ``DEFAULT_MASSES_KG``. With it (the largest external moment
+    the lab already applied, e.g. in the log being diagnosed) the masses are ``REACH_SHARES`` of the
+    mass that exerts ``reach_Nm`` at that radius with the lever horizontal: a lab that applied a moment
+    can apply it again, and load-dependent effects (compliance, hardening, friction) show in
+    proportion to the load, so rows with a tenth of the log's moments tell them apart poorly.
 
     Parameters
     ----------
     rig : Rig
+    reach_Nm : float, optional
+        Largest external moment to reach (N m).
 
     Returns
     -------
@@ -71,7 +82,11 @@ def default_load_set(rig: Rig) -> list[Load]:
     r = DEFAULT_RADIUS_SHARE * float(np.mean(np.linalg.norm(A[:, :2], axis=1)))
     z = float(A[:, 2].mean())
     points = {"+x": (r, 0.0, z), "-x": (-r, 0.0, z), "+y": (0.0, r, z), "-y": (0.0, -r, z)}
-    return [Load(f"{1e3 * m:.0f} g at {k}", m, p) for m in DEFAULT_MASSES_KG for k, p in points.items()]
+    masses: tuple[float, ...] = DEFAULT_MASSES_KG
+    if reach_Nm is not None and np.isfinite(reach_Nm) and reach_Nm > 0:
+        top = float(reach_Nm) / (r * float(np.linalg.norm(rig.gravity_B_m_per_s2)))
+        masses = tuple(max(top * s, DEFAULT_MASSES_KG[0]) for s in REACH_SHARES)
+    return [Load(f"{1e3 * m:.0f} g at {k}", m, p) for m in masses for k, p in points.items()]
 
 
 def load_load_set(path: str | Path) -> list[Load]:

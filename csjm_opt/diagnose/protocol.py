@@ -1,13 +1,45 @@
-"""The suggested experiment as a protocol file and as a short Markdown account."""
+"""The suggested experiment: its rows, and the protocol file and short Markdown account of them."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+import dataclasses
+
+import numpy as np
 
 from .. import so3
+from .loads import Load
 
-if TYPE_CHECKING:
-    from .suggest import Suggestion
+
+@dataclasses.dataclass(frozen=True)
+class Suggestion:
+    """A suggested experiment: the rows, what they are for and the separation they should give."""
+
+    purpose: str
+    hypotheses: list[str]
+    cycle: np.ndarray              # (n,) cycle ids (after the log's)
+    rest_lengths_m: np.ndarray     # (n, 6)
+    loads: list[Load | None]       # per row (None: no load)
+    intended_tau_A_Nm: np.ndarray  # (n, 3) at the planned pose
+    planned_R: np.ndarray          # (n, 3, 3) nominal pose
+    separation_sd: dict            # "a vs b" -> expected separation (noise sd)
+    separation_before_sd: dict     # the same on the log's own rows (what the log could tell)
+    equivalent: list = dataclasses.field(default_factory=list)   # pairs no feasible rows separate by 1 sd
+
+    def as_json(self) -> dict:
+        """JSON-able summary.
+
+        Returns
+        -------
+        dict
+        """
+        return {"purpose": self.purpose, "hypotheses": self.hypotheses, "rows": int(len(self.cycle)),
+                "cycles": int(len(np.unique(self.cycle))),
+                "expected_separation_sd": self.separation_sd,
+                "separation_on_log_sd": self.separation_before_sd,
+                "equivalent": self.equivalent,
+                "smallest_expected_separation_sd": min((v for k, v in self.separation_sd.items()
+                                                        if k not in self.equivalent), default=None)}
+
 
 PROTOCOL_COLUMNS = ("sample,cycle,l1,l2,l3,l4,l5,l6,tau_x,tau_y,tau_z,rx,ry,rz,load_kg,load_x_A_m,load_y_A_m,"
                     "load_z_A_m,intended_tau_x,intended_tau_y,intended_tau_z,planned_rx,planned_ry,planned_rz")

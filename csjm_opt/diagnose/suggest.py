@@ -13,10 +13,13 @@ rows within the rig's limits:
   only where the nominal rig holds every row with tensions in ``[t_min, t_max]``
   (:func:`csjm_opt.model.statics.solve_equilibrium` with the weights as point
   forces); a load the rig cannot hold at a pose is left out of that cycle;
-* **hypotheses**: the selected model, its non-separable alternatives and the
-  pairs they form, the null model when the effect is near the floor, the best
-  singles and pairs when the verdict is ``unexplained`` (at most ``MAX_HYPOTHESES``),
-  each with its fitted parameters. Each predicts every candidate row (forward
+* **hypotheses**: the selected model (a pair: and each of its singles), its
+  non-separable alternatives and the pairs they form, the best singles and pairs
+  when the verdict is ``unexplained``,
+  and always the null model (at most ``MAX_HYPOTHESES``), each with its fitted
+  parameters. The null keeps the rows showing the gap itself: rows that only tell
+  two look-alike explanations apart but show neither would leave the held-out
+  tests of the re-diagnosis (over cycles) without the effect to see. Each predicts every candidate row (forward
   statics, path state carried on from the end of the log);
 * **design**: if ``b`` is true, the new rows show ``b``'s predictions; ``a`` refitted to
   the log and the new rows absorbs what its parameters can (linearised: its pose
@@ -24,8 +27,11 @@ rows within the rig's limits:
   give it). The separation of ``a`` and ``b`` is what it cannot absorb, in noise
   units (``delta^T delta - r^T N^-1 r``, whitened by the floor per component), the
   smaller of the two directions. Cycles are added greedily, each time the one that
-  most raises the *smallest* separation over all pairs of hypotheses, until ``N``
-  rows are used; ``sqrt`` of it (noise sd) is reported per pair. A plain distance
+  most raises the *smallest* separation over the pairs of hypotheses (then their sum),
+  each counted up to ``RESOLVED_SD`` (a pair that far apart is resolved: further rows go
+  to the others), until ``N`` rows are used; ``sqrt`` of it (noise sd) is reported per
+  pair. Pairs no feasible rows of this size separate by ``EQUIVALENT_SD`` are reported
+  as equivalent and not targeted. A plain distance
   between the fitted predictions would be optimistic: 36 hole offsets refitted
   to the new rows mimic much of what they did not predict.
 
@@ -36,24 +42,25 @@ the intended loads.
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 from types import SimpleNamespace
 from typing import Callable, Sequence
 
 import numpy as np
+from scipy import stats
 
 from .. import so3
 from ..errors import InvalidInput
 from ..model import kinematics as kin
 from ..model.rig import Rig
-from ._decision import LEAD_NATS
+from ._decision import ALPHA, LEAD_NATS
 from .augmented import Rows, cable_steps, log_steps, with_entry
 from .candidates import N_CANDIDATES, candidate_cycles
+from .effects import EFFECTS
 from .evidence import prior_of
 from .fit import data_jacobian
 from .loads import Load, default_load_set
-from .protocol import PROTOCOL_COLUMNS, protocol_text, suggestion_markdown
+from .protocol import PROTOCOL_COLUMNS, Suggestion, protocol_text, suggestion_markdown
 from .result import Diagnosis
 from .scoring import CandidateScore
 
@@ -62,45 +69,17 @@ MAX_HYPOTHESES = 6
 EQUIVALENT_SD = 1.0
 #: An effect is "near the floor" when the systematic gap it explains is below this many floors.
 NEAR_FLOOR = 3.0
-
-
-@dataclasses.dataclass(frozen=True)
-class Suggestion:
-    """A suggested experiment: the rows, what they are for and the separation they should give."""
-
-    purpose: str
-    hypotheses: list[str]
-    cycle: np.ndarray              # (n,) cycle ids (after the log's)
-    rest_lengths_m: np.ndarray     # (n, 6)
-    loads: list[Load | None]       # per row (None: no load)
-    intended_tau_A_Nm: np.ndarray  # (n, 3) at the planned pose
-    planned_R: np.ndarray          # (n, 3, 3) nominal pose
-    separation_sd: dict            # "a vs b" -> expected separation (noise sd)
-    separation_before_sd: dict     # the same on the log's own rows (what the log could tell)
-    equivalent: list = dataclasses.field(default_factory=list)   # pairs no feasible rows separate by 1 sd
-
-    def as_json(self) -> dict:
-        """JSON-able summary.
-
-        Returns
-        -------
-        dict
-        """
-        return {"purpose": self.purpose, "hypotheses": self.hypotheses, "rows": int(len(self.cycle)),
-                "cycles": int(len(np.unique(self.cycle))),
-                "expected_separation_sd": self.separation_sd,
-                "separation_on_log_sd": self.separation_before_sd,
-                "equivalent": self.equivalent,
-                "smallest_expected_separation_sd": min((v for k, v in self.separation_sd.items()
-                                                        if k not in self.equivalent), default=None)}
+#: A pair of hypotheses is resolved at this separation (noise sd): a one-sided test at ``ALPHA`` over the
+#: vocabulary's candidates detects it with power 0.9. Beyond it, rows go to the pairs not yet resolved.
+RESOLVED_SD = float(stats.norm.isf(ALPHA / len(EFFECTS)) + stats.norm.isf(0.1))
 
 
 def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
     """``(purpose, [(name, score), ...])``: why an experiment is needed and which models to separate.
 
-    The leading hypotheses are the plausible singles and fitted pairs whose log evidence
-    (:mod:`.evidence`) is within ``LEAD_NATS`` of the best, the selected model always, and the
-    null model when the named effect is near the floor (at most ``MAX_HYPOTHESES``, best first).
+    The leading hypotheses are the selected model, each single of a selected pair, the plausible
+    singles and fitted pairs whose log evidence (:mod:`.evidence`) is within ``LEAD_NATS`` of the
+    best, and the null model last, always (at most ``MAX_HYPOTHESES``).
 
     Parameters
     ----------
@@ -145,8 +124,9 @@ def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
         others = [n for n in lead if n not in out and n != f"{sec}+{sel}"]
         if others:
             reasons.append(f"the log cannot tell {next(iter(out))} decisively from {', '.join(others)}")
-        if sec != "none" and not d.secondary.get("separable", True):
-            reasons.append(f"{sel} and {sec} are not separable on this log")
+        if sec != "none":                   # a pair against each of its singles: is the second effect real?
+            if not d.secondary.get("separable", True):
+                reasons.append(f"{sel} and {sec} are not separable on this log")
             out.setdefault(sel, d.candidates[sel])
             out.setdefault(sec, d.candidates[sec])
         improvement = d.tests.get(sel, {}).get("improvement_rad", np.inf)
@@ -155,9 +135,9 @@ def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
     for n in lead:
         if n not in out:
             out[n] = pool[n][1] if n in pool else d.candidates[n]
-    items = list(out.items())[:MAX_HYPOTHESES - (1 if any("noise floors" in r for r in reasons) else 0)]
-    if any("noise floors" in r for r in reasons):       # the null model last: the effect may be noise
-        items.append(("none", d.baseline))
+    # the null model last, always: the rows must show the gap itself, not only the differences
+    # between its explanations (held-out tests compare cycles: rows that show nothing dilute them)
+    items = [(n, sc) for n, sc in out.items() if n != "none"][:MAX_HYPOTHESES - 1] + [("none", d.baseline)]
     if not reasons or len(items) < 2:
         return "", []
     return "; ".join(reasons) + ": the rows separate these models", items
@@ -240,7 +220,8 @@ def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[Lo
     if int(max_rows) < 3:
         raise InvalidInput(f"--suggest needs at least 3 rows (one load cycle), got {max_rows}", "suggest")
     purpose, hyps = hypotheses(d)
-    loads = list(loads) if loads is not None else default_load_set(rig)
+    reach = float(np.max(np.linalg.norm(d.train.rows.tau_meas_A_Nm, axis=1), initial=0.0))
+    loads = list(loads) if loads is not None else default_load_set(rig, reach)
     rng = np.random.default_rng(seed)
     bar = progress(total=2 + len(hyps), desc="suggest: designing rows") if progress else None
     cands = [c for c in candidate_cycles(rig, loads, rng) if len(c["loads"]) <= max_rows]
@@ -290,11 +271,16 @@ def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[Lo
         return out
 
     # hypotheses no feasible experiment of this size can tell apart are equivalent here: not a target
-    reach = separation(list(np.argsort(-np.sum([terms[(b, a)][2] for a, b in pairs], axis=0))
+    reachable = separation(list(np.argsort(-np.sum([terms[(b, a)][2] for a, b in pairs], axis=0))
                             [:max(1, max_rows // max(min(sizes), 1))]))
-    target = np.sqrt(reach) >= EQUIVALENT_SD
+    target = np.sqrt(reachable) >= EQUIVALENT_SD
     if not target.any():
         target[:] = True
+
+    def utility(sep2: np.ndarray) -> tuple[float, float]:
+        """Smallest separation over the target pairs, then their sum; each counted up to ``RESOLVED_SD``."""
+        v = np.minimum(np.sqrt(sep2[target]), RESOLVED_SD)
+        return float(v.min()), float(v.sum())
     chosen: list[int] = []
     total = np.zeros(len(pairs))
     used = 0
@@ -303,7 +289,7 @@ def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[Lo
         if not options:
             break
         scores = {i: separation(chosen + [i]) for i in options}
-        best = max(options, key=lambda i: (np.min(scores[i][target]), -sizes[i]))
+        best = max(options, key=lambda i: (*utility(scores[i]), -sizes[i]))
         chosen.append(best)
         total = scores[best]
         used += sizes[best]
