@@ -239,6 +239,13 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     if alternatives:
         verdict["warnings"].append(f"{selected} is not separable on this log from {', '.join(alternatives)} "
                                    "(detected too; Fisher block correlation above the separability limit)")
+    verdict["secondary_alternatives"] = _secondary_alternatives(ctx, pairs, pair_scores, final, selected,
+                                                                second.get("effect", "none"))
+    if verdict["secondary_alternatives"]:
+        verdict["warnings"].append(
+            f"the second effect {second['effect']} is not separable on this log from "
+            f"{', '.join(verdict['secondary_alternatives'])}: {selected} with either closes the gap "
+            f"(evidence within {LEAD_NATS:g} nats, Fisher block correlation above the separability limit)")
     steps = [{"model": "nominal_refit", "heldout_rms_rad": baseline.heldout_rms_rad}]
     lead = selected if selected in singles else first
     if lead is not None:
@@ -380,3 +387,31 @@ def _verdict(ctx: _Context, baseline, singles, tests, first, pairs, pair_scores,
         "selected": "unexplained", "warnings": warnings,
         "reason": "no plausible single effect or pair brings the held-out gap near the noise floor; "
                   "see localisation for where the residual lies"}
+
+
+def _secondary_alternatives(ctx: _Context, pairs: list, pair_scores: dict, final: CandidateScore,
+                            first: str, second: str) -> list[str]:
+    """Effects that could replace ``second`` next to ``first``: the log cannot tell which.
+
+    A pair verdict ``first + second`` is honest only when no other effect ``c`` does the second
+    effect's job as well: ``first + c`` is fitted, detected, plausible and closes the gap, its
+    log evidence is within ``LEAD_NATS`` of the named pair's, and ``c`` and ``second`` are not
+    separable on this log (their parameter blocks' canonical correlation is above the limit).
+    Such a ``c`` is reported, not guessed away (e.g. small hole offsets next to friction act as a
+    constant pose offset, as a sensor bias does).
+    """
+    if second in ("none", "") or first == "unexplained":
+        return []
+    ev = ctx.evidence(final)
+    out = []
+    for p in pairs:
+        a, b = p["effects"]
+        if not p.get("fitted") or first not in (a, b) or second in (a, b):
+            continue
+        c = b if a == first else a
+        sep = next((q for q in pairs if set(q["effects"]) == {c, second}), None)
+        if sep is None or sep["separable"]:
+            continue
+        if p["significant"] and p["plausible"] and p["closes_gap"] and p["log_evidence"] >= ev - LEAD_NATS:
+            out.append(c)
+    return out
