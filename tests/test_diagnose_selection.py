@@ -222,3 +222,26 @@ def test_fold_estimates_agree_with_refits_for_models_that_change_their_own_tange
             sol = model.predict_poses(with_entry(model, t.rows, t.R_meas, theta).take(held), theta, part.R_meas)
             errs.append(rms(pose_residuals(sol.R, part.R_meas)))
         assert errs[0] <= 1.1 * errs[1] + 0.1 * t.instrument_floor_rad
+
+
+def test_secondary_alternatives_are_the_non_separable_stand_ins_of_the_second_effect():
+    """A + B named; A + C lists C only if it closes the gap about as well (evidence within
+    LEAD_NATS) and C cannot be told from B on the log."""
+    from csjm_opt.diagnose.selection import _secondary_alternatives
+
+    class Ctx:
+        def evidence(self, sc):
+            return -100.0
+
+    def fitted(a, b, ev, ok=True):
+        return {"effects": [a, b], "fitted": True, "significant": ok, "plausible": ok, "closes_gap": ok,
+                "log_evidence": ev, "separable": True}
+
+    def sep(a, b, separable):
+        return {"effects": [a, b], "fitted": False, "separable": separable}
+
+    pairs = [fitted("A", "B", -100.0), fitted("A", "C", -100.0 - LEAD_NATS / 2), fitted("A", "D", -101.0),
+             fitted("A", "E", -100.0 - 2 * LEAD_NATS), fitted("A", "F", -99.0, ok=False),
+             sep("B", "C", False), sep("B", "D", True), sep("B", "E", False), sep("B", "F", False)]
+    assert _secondary_alternatives(Ctx(), pairs, {}, object(), "A", "B") == ["C"]
+    assert _secondary_alternatives(Ctx(), pairs, {}, object(), "A", "none") == []
