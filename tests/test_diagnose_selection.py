@@ -227,7 +227,7 @@ def test_fold_estimates_agree_with_refits_for_models_that_change_their_own_tange
 def test_secondary_alternatives_are_the_non_separable_stand_ins_of_the_second_effect():
     """A + B named; A + C lists C only if it closes the gap about as well (evidence within
     LEAD_NATS) and C cannot be told from B on the log."""
-    from csjm_opt.diagnose.selection import _secondary_alternatives
+    from csjm_opt.diagnose.pairs import secondary_alternatives
 
     class Ctx:
         def evidence(self, sc):
@@ -243,5 +243,5 @@ def test_secondary_alternatives_are_the_non_separable_stand_ins_of_the_second_ef
     pairs = [fitted("A", "B", -100.0), fitted("A", "C", -100.0 - LEAD_NATS / 2), fitted("A", "D", -101.0),
              fitted("A", "E", -100.0 - 2 * LEAD_NATS), fitted("A", "F", -99.0, ok=False),
              sep("B", "C", False), sep("B", "D", True), sep("B", "E", False), sep("B", "F", False)]
-    assert _secondary_alternatives(Ctx(), pairs, {}, object(), "A", "B") == ["C"]
-    assert _secondary_alternatives(Ctx(), pairs, {}, object(), "A", "none") == []
+    assert secondary_alternatives(Ctx(), pairs, {}, object(), "A", "B") == ["C"]
+    assert secondary_alternatives(Ctx(), pairs, {}, object(), "A", "none") == []

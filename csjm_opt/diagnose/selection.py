@@ -82,7 +82,7 @@ from .extra import append_log
 from .fit import fit_model
 from .localisation import localise
 from .noise import systematic
-from .pairs import all_separabilities
+from .pairs import all_separabilities, secondary_alternatives
 from .residuals import compute_residuals
 from .result import Diagnosis
 from .scoring import CandidateScore, paired_heldout_test
@@ -199,12 +199,23 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     ev_final = ctx.evidence(final)
     # rivals: other plausible explanations of the gap (a pair that only adds to the named model is none)
     named = set(final.name.split("+"))
-    rivals_ev = [ctx.evidence(sc) for n, sc in singles.items() if sc is not final and tests[n]["plausible"]
-                 and tests[n]["closes_gap"] and n not in named] + \
-                [ctx.evidence(sc) for k, sc in pair_scores.items() if sc is not final and not named <= set(k)
-                 and next((p["plausible"] and p["closes_gap"] for p in pairs if tuple(p["effects"]) == k), False)]
+    rivals = {n: ctx.evidence(sc) for n, sc in singles.items() if sc is not final and tests[n]["plausible"]
+              and tests[n]["closes_gap"] and n not in named}
+    rivals.update({"+".join(k): ctx.evidence(sc) for k, sc in pair_scores.items() if sc is not final
+                   and not named <= set(k)
+                   and next((p["plausible"] and p["closes_gap"] for p in pairs if tuple(p["effects"]) == k), False)})
+    rivals_ev = list(rivals.values())
     decisive = bool(ev_final - max(rivals_ev, default=-np.inf) >= EVIDENCE_MIN)
     verdict["evidence_margin"] = float(ev_final - max(rivals_ev, default=-np.inf))
+    # a plausible model that closes the gap and is more probable under the priors, not confirmed on held-out
+    # cycles: the verdict is the held-out test's pick, not the only reading of the log
+    verdict["more_probable_rivals"] = sorted((n for n, e in rivals.items() if e > ev_final),
+                                             key=lambda n: -rivals[n])
+    if selected not in ("none", "unexplained") and verdict["more_probable_rivals"]:
+        best_rival = verdict["more_probable_rivals"][0]
+        verdict["warnings"].append(
+            f"{best_rival} also closes the gap and has higher evidence ({rivals[best_rival] - ev_final:.1f} nats) "
+            f"than {final.name}, but did not beat it on held-out cycles: the log does not decide between them")
     if selected not in ("none", "unexplained") and final.fit.p_eff > SHORT_LOG_SHARE * 3 * n_cycles \
             and not decisive:
         verdict["warnings"].append(
@@ -239,7 +250,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     if alternatives:
         verdict["warnings"].append(f"{selected} is not separable on this log from {', '.join(alternatives)} "
                                    "(detected too; Fisher block correlation above the separability limit)")
-    verdict["secondary_alternatives"] = _secondary_alternatives(ctx, pairs, pair_scores, final, selected,
+    verdict["secondary_alternatives"] = secondary_alternatives(ctx, pairs, pair_scores, final, selected,
                                                                 second.get("effect", "none"))
     if verdict["secondary_alternatives"]:
         verdict["warnings"].append(
@@ -387,31 +398,3 @@ def _verdict(ctx: _Context, baseline, singles, tests, first, pairs, pair_scores,
         "selected": "unexplained", "warnings": warnings,
         "reason": "no plausible single effect or pair brings the held-out gap near the noise floor; "
                   "see localisation for where the residual lies"}
-
-
-def _secondary_alternatives(ctx: _Context, pairs: list, pair_scores: dict, final: CandidateScore,
-                            first: str, second: str) -> list[str]:
-    """Effects that could replace ``second`` next to ``first``: the log cannot tell which.
-
-    A pair verdict ``first + second`` is honest only when no other effect ``c`` does the second
-    effect's job as well: ``first + c`` is fitted, detected, plausible and closes the gap, its
-    log evidence is within ``LEAD_NATS`` of the named pair's, and ``c`` and ``second`` are not
-    separable on this log (their parameter blocks' canonical correlation is above the limit).
-    Such a ``c`` is reported, not guessed away (e.g. small hole offsets next to friction act as a
-    constant pose offset, as a sensor bias does).
-    """
-    if second in ("none", "") or first == "unexplained":
-        return []
-    ev = ctx.evidence(final)
-    out = []
-    for p in pairs:
-        a, b = p["effects"]
-        if not p.get("fitted") or first not in (a, b) or second in (a, b):
-            continue
-        c = b if a == first else a
-        sep = next((q for q in pairs if set(q["effects"]) == {c, second}), None)
-        if sep is None or sep["separable"]:
-            continue
-        if p["significant"] and p["plausible"] and p["closes_gap"] and p["log_evidence"] >= ev - LEAD_NATS:
-            out.append(c)
-    return out
