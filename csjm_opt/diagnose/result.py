@@ -30,7 +30,9 @@
                         words; alternatives are detected effects not separable from the selected one on
                         this log; secondary_alternatives are effects that, paired with the selected one,
                         close the gap as well (evidence within LEAD_NATS) and are not separable from
-                        the named second effect
+                        the named second effect; more_probable_rivals are plausible models that
+                        close the gap with higher evidence than the named one (not confirmed on
+                        held-out cycles); evidence_margin is the named model's lead in nats
     significance        the decision rule's constants and tests
     gap                 {before_rad, after_rad, fraction_explained, systematic_before_rad,
                          systematic_after_rad, noise_floor_after_rad, fraction_explained_by_nominal_refit,
