@@ -74,7 +74,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         argv = sys.argv[1:] if argv is None else argv
         args = build_parser(argv).parse_args(argv)
-        import matplotlib   # after parsing: ``--help`` and usage errors need no plotting library
+        import matplotlib  # after parsing: ``--help`` and usage errors need no plotting library
 
         matplotlib.use("Agg")
         return int(args.func(args) or 0)

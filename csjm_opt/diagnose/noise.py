@@ -8,10 +8,18 @@ slope, and the first row its own offset: dry friction with memory bends the bran
 shifts the row where the previous cycle's state enters), where ``s`` are the measured
 moment's coordinates along the directions in which the cycle's load really
 varies (principal directions with spread well above the F/T noise: regressing
-on pure-noise directions would absorb the noise the floor is meant to measure), and pooling the residual
-sums of squares over cycles and axes (with their degrees of freedom) gives
-``E||zeta_noise||^2``; its square root is the noise floor (rad): the held-out
-RMS a perfect model would still show.
+on pure-noise directions would absorb the noise the floor is meant to measure).
+
+The regression is weighted by the instrument model's shape (generalised least squares on
+whitened residuals ``W_i zeta_i``, :attr:`ResidualTable.whiten`): the noise is far from
+equal across a cycle (on a soft rig whose pose noise comes from the F/T sensor, a cycle's
+first and last rows, at the lowest load, carry 2-3x the noise of its middle rows), and an
+unweighted fit spends its per-row parameters (the first row's own offset, the branch
+slopes) on exactly those rows and underestimates the floor (by about 1.6x on such a rig,
+which then left a correct model "unexplained"). Pooling the whitened residual sums of squares over
+cycles (with their degrees of freedom) gives the noise scale ``s`` relative to the
+instrument model, and the floor is ``s`` times the instrument model's floor
+(:attr:`ResidualTable.instrument_floor_rad`): the held-out RMS a perfect model would still show.
 """
 
 from __future__ import annotations
@@ -27,6 +35,7 @@ LOAD_SPREAD_NM = 0.2
 def noise_floor(table: ResidualTable, zeta: np.ndarray | None = None) -> tuple[float, int]:
     """``(floor_rad, degrees_of_freedom)``; ``(nan, 0)`` when no cycle has spare rows."""
     zeta = table.zeta_rad if zeta is None else zeta
+    W = table.whiten
     rss, dof = 0.0, 0
     for c in np.unique(table.cycle):
         idx = np.flatnonzero(table.cycle == c)
@@ -52,12 +61,15 @@ def noise_floor(table: ResidualTable, zeta: np.ndarray | None = None) -> tuple[f
         rank = np.linalg.matrix_rank(X)
         if m - rank < 1:
             continue
-        coef, *_ = np.linalg.lstsq(X, zeta[idx], rcond=None)
-        rss += float(np.sum((zeta[idx] - X @ coef) ** 2))
+        # whitened design: row i, axis a of the coefficient block of regressor k -> W_i[:, a] x_k[i]
+        Xw = np.einsum("iab,ik->iakb", W[idx], X).reshape(3 * m, 3 * X.shape[1])
+        yw = np.einsum("iab,ib->ia", W[idx], zeta[idx]).reshape(3 * m)
+        coef, *_ = np.linalg.lstsq(Xw, yw, rcond=None)
+        rss += float(np.sum((yw - Xw @ coef) ** 2))
         dof += m - rank
     if dof == 0:
         return float("nan"), 0
-    return float(np.sqrt(rss / dof)), dof
+    return float(np.sqrt(rss / (3 * dof))) * table.instrument_floor_rad, dof
 
 
 def systematic(rms_rad: float, floor_rad: float) -> float:

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..errors import CsjmError
 from ..model.rig import Rig
+from ._decision import LEAD_NATS
 from .augmented import N_NUISANCE, AugmentedModel
 from .effects import Effect
 from .fit import data_jacobian
@@ -87,4 +88,49 @@ def all_separabilities(rig: Rig, table: ResidualTable, singles: dict[str, Candid
                 out[(a, b)] = separability(rig, table, fa.model.effects[0], fa.theta, fb.model.effects[0], fb.theta)
             except (np.linalg.LinAlgError, CsjmError) as exc:      # reported, never guessed
                 out[(a, b)] = {"max_correlation": float("nan"), "separable": False, "error": str(exc)}
+    return out
+
+
+def secondary_alternatives(ctx, pairs: list, pair_scores: dict, final: CandidateScore,
+                           first: str, second: str) -> list[str]:
+    """Effects that could replace ``second`` next to ``first``: the log cannot tell which.
+
+    A pair verdict ``first + second`` is honest only when no other effect ``c`` does the second
+    effect's job as well: ``first + c`` is fitted, detected, plausible and closes the gap, its
+    log evidence is within ``LEAD_NATS`` of the named pair's, and ``c`` and ``second`` are not
+    separable on this log (their parameter blocks' canonical correlation is above the limit).
+    Such a ``c`` is reported, not guessed away (e.g. small hole offsets next to friction act as a
+    constant pose offset, as a sensor bias does).
+
+    Parameters
+    ----------
+    ctx : object
+        The diagnosis context (its ``evidence(score)`` gives a model's log evidence).
+    pairs : list of dict
+        The pair entries of the diagnosis (separability of every pair; fitted ones scored).
+    pair_scores : dict
+        Scores of the fitted pairs (unused; kept for symmetry with the verdict).
+    final : CandidateScore
+        The named pair's score.
+    first, second : str
+        The named pair.
+
+    Returns
+    -------
+    list of str
+    """
+    if second in ("none", "") or first == "unexplained":
+        return []
+    ev = ctx.evidence(final)
+    out = []
+    for p in pairs:
+        a, b = p["effects"]
+        if not p.get("fitted") or first not in (a, b) or second in (a, b):
+            continue
+        c = b if a == first else a
+        sep = next((q for q in pairs if set(q["effects"]) == {c, second}), None)
+        if sep is None or sep["separable"]:
+            continue
+        if p["significant"] and p["plausible"] and p["closes_gap"] and p["log_evidence"] >= ev - LEAD_NATS:
+            out.append(c)
     return out

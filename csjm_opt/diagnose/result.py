@@ -26,8 +26,13 @@
     steps               the greedy path: [{model, heldout_rms_rad, fraction_explained}]
     confounded_with     effects whose single fits are not separable from the selected one
                         and not significantly worse on held-out cycles
-    verdict             {selected, reason, warnings[], alternatives[]}: why, in words; alternatives are
-                        detected effects not separable from the selected one on this log
+    verdict             {selected, reason, warnings[], alternatives[], secondary_alternatives[]}: why, in
+                        words; alternatives are detected effects not separable from the selected one on
+                        this log; secondary_alternatives are effects that, paired with the selected one,
+                        close the gap as well (evidence within LEAD_NATS) and are not separable from
+                        the named second effect; more_probable_rivals are plausible models that
+                        close the gap with higher evidence than the named one (not confirmed on
+                        held-out cycles); evidence_margin is the named model's lead in nats
     significance        the decision rule's constants and tests
     gap                 {before_rad, after_rad, fraction_explained, systematic_before_rad,
                          systematic_after_rad, noise_floor_after_rad, fraction_explained_by_nominal_refit,

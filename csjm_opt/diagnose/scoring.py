@@ -21,7 +21,7 @@ from scipy import stats
 from ..errors import InvalidInput
 from ..model import kinematics as kin
 from .augmented import AugmentedModel, with_entry
-from .fit import FitResult, data_jacobian, fit_model
+from .fit import FitResult, data_jacobian, fit_model, objective
 from .friction_path import on_predicted_path
 from .residuals import ResidualTable, pose_noise_cov, pose_residuals, rms
 
@@ -132,7 +132,7 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
         zeta, cyc = np.empty((len(train), 3)), train.cycle
         for held in folds or []:
             keep = np.setdiff1d(np.arange(len(train)), held)
-            theta = full.refit_rows(keep)
+            theta = _fold_fit(model, full, train.take(keep), keep)
             part = train.take(held)
             ho = model.predict_poses(with_entry(model, train.rows, train.R_meas, theta).take(held), theta, part.R_meas)
             zeta[held] = pose_residuals(ho.R, part.R_meas)
@@ -150,6 +150,21 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
     held_table = test if test is not None else train
     return CandidateScore(model.name, full, zeta, cyc, train_zeta, failed, instrument, ratio2,
                           heldout_floor(held_table, instrument, blocks), tuple(blocks))
+
+
+def _fold_fit(model: AugmentedModel, full: FitResult, kept: ResidualTable, keep: np.ndarray) -> np.ndarray:
+    """A fold's parameters: one Gauss-Newton step from the full fit, or a refit where the step fails.
+
+    The step (:meth:`FitResult.refit_rows`) is trusted only when it fits the fold's own rows at
+    least as well as the full fit does (a least-squares estimate on rows ``keep`` cannot fit
+    them worse than any other parameter vector, the full fit's included); otherwise the step
+    left the region where the linearisation holds (a weakly determined direction, a bound) and
+    the fold is refitted from the full fit's parameters.
+    """
+    theta = full.refit_rows(keep)
+    if objective(model, kept, theta) <= objective(model, kept, full.theta) * (1 + 1e-9):
+        return theta
+    return fit_model(model, kept, theta0=full.theta).theta
 
 
 def heldout_floor(held: ResidualTable, instrument_floor_rad: float, blocks) -> float:

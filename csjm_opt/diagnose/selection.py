@@ -24,8 +24,8 @@ Rule (constants below; ``m`` candidates tried):
    (the detected one with the lowest held-out error if none is plausible): a
    model that explains the gap beats a simpler one that does not.
    *Pairs*: the seeds are the first effect and the singles with the lowest
-   held-out errors (``PAIR_SEEDS`` in all; one wrong first pick does not hide
-   the right pair); each seed is paired with every other effect, and a pair is
+   held-out errors (``PAIR_SEEDS`` in all, the whole vocabulary: every pair is
+   fitted, so no wrong first pick hides the right pair); each seed is paired with every other effect, and a pair is
    detected by the same test against the best of its two singles and the
    first effect, at ``ALPHA`` over the number of pairs fitted (two wrong
    effects that together mimic the right one do not beat it).
@@ -83,7 +83,7 @@ from .extra import append_log
 from .fit import FitResult, fit_model
 from .localisation import localise
 from .noise import systematic
-from .pairs import all_separabilities
+from .pairs import all_separabilities, secondary_alternatives
 from .residuals import compute_residuals
 from .result import Diagnosis
 from .scoring import CandidateScore, paired_heldout_test
@@ -200,12 +200,23 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     ev_final = ctx.evidence(final)
     # rivals: other plausible explanations of the gap (a pair that only adds to the named model is none)
     named = set(final.name.split("+"))
-    rivals_ev = [ctx.evidence(sc) for n, sc in singles.items() if sc is not final and tests[n]["plausible"]
-                 and tests[n]["closes_gap"] and n not in named] + \
-                [ctx.evidence(sc) for k, sc in pair_scores.items() if sc is not final and not named <= set(k)
-                 and next((p["plausible"] and p["closes_gap"] for p in pairs if tuple(p["effects"]) == k), False)]
+    rivals = {n: ctx.evidence(sc) for n, sc in singles.items() if sc is not final and tests[n]["plausible"]
+              and tests[n]["closes_gap"] and n not in named}
+    rivals.update({"+".join(k): ctx.evidence(sc) for k, sc in pair_scores.items() if sc is not final
+                   and not named <= set(k)
+                   and next((p["plausible"] and p["closes_gap"] for p in pairs if tuple(p["effects"]) == k), False)})
+    rivals_ev = list(rivals.values())
     decisive = bool(ev_final - max(rivals_ev, default=-np.inf) >= EVIDENCE_MIN)
     verdict["evidence_margin"] = float(ev_final - max(rivals_ev, default=-np.inf))
+    # a plausible model that closes the gap and is more probable under the priors, not confirmed on held-out
+    # cycles: the verdict is the held-out test's pick, not the only reading of the log
+    verdict["more_probable_rivals"] = sorted((n for n, e in rivals.items() if e > ev_final),
+                                             key=lambda n: -rivals[n])
+    if selected not in ("none", "unexplained") and verdict["more_probable_rivals"]:
+        best_rival = verdict["more_probable_rivals"][0]
+        verdict["warnings"].append(
+            f"{best_rival} also closes the gap and has higher evidence ({rivals[best_rival] - ev_final:.1f} nats) "
+            f"than {final.name}, but did not beat it on held-out cycles: the log does not decide between them")
     if selected not in ("none", "unexplained") and final.fit.p_eff > SHORT_LOG_SHARE * 3 * n_cycles \
             and not decisive:
         verdict["warnings"].append(
@@ -240,6 +251,13 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     if alternatives:
         verdict["warnings"].append(f"{selected} is not separable on this log from {', '.join(alternatives)} "
                                    "(detected too; Fisher block correlation above the separability limit)")
+    verdict["secondary_alternatives"] = secondary_alternatives(ctx, pairs, pair_scores, final, selected,
+                                                                second.get("effect", "none"))
+    if verdict["secondary_alternatives"]:
+        verdict["warnings"].append(
+            f"the second effect {second['effect']} is not separable on this log from "
+            f"{', '.join(verdict['secondary_alternatives'])}: {selected} with either closes the gap "
+            f"(evidence within {LEAD_NATS:g} nats, Fisher block correlation above the separability limit)")
     steps = [{"model": "nominal_refit", "heldout_rms_rad": baseline.heldout_rms_rad}]
     lead = selected if selected in singles else first
     if lead is not None:
