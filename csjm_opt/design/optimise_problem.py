@@ -41,7 +41,6 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .geometry import PAPER_DESIGN
 from .interference import PAIRS
 from .optimise_settings import OptimiseSettings
 from .optimise_symbols import (
@@ -51,7 +50,7 @@ from .optimise_symbols import (
     MAX_ITER,
     SIZE_SCALE_M,
     STIFFNESS_SCALE_NM_PER_RAD,
-    holes_sym,
+    design_sym,
     pose_bounds,
     pose_constraints,
     rotation_sym,
@@ -212,7 +211,7 @@ def clear_cache() -> None:
 
 def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int) -> _Built:
     """The solver for ``n_slots`` orientations and ``n_contacts`` contacts."""
-    names, lo, hi = settings.names, settings.lower, settings.upper
+    names = settings.names
     n_d = len(names)
     req = settings.requirements
     loads = np.asarray(req.loads, float)
@@ -223,12 +222,7 @@ def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int) -> _Built:
     pq = ca.SX.sym("pq", 4)
     held = {"tension_margin": pq[0], "stiffness": pq[1], "range": pq[2], "size": pq[3]}
     q = {k: (q_var * _SCALE[k] if k == obj else v) for k, v in held.items()}
-    p: dict[str, Any] = {**PAPER_DESIGN, **settings.base}
-    for k, name in enumerate(names):
-        p[name] = lo[k] + u[k] * (hi[k] - lo[k])
-    A, B = holes_sym(p)
-    rig = ca.vertcat(p["cable_stiffness_N_per_m"], p["t_min_N"], p["t_max_N"], p["platform_mass_kg"],
-                     p["com_z_m"], *settings.gravity_B_m_per_s2)
+    p, A, B, rig = design_sym(settings, u)
     qv = ca.vertcat(q["tension_margin"], q["stiffness"], q["range"], math.cos(math.radians(req.max_exit_angle_deg)))
     design = ca.Function("design", [u, q_var, pq], [A, B, rig, qv])
     pc = ca.SX.sym("pc", _CONTACT_WIDTH, n_contacts)

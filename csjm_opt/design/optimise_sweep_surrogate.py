@@ -41,9 +41,8 @@ import numpy as np
 
 from ..model.casadi_model import build_functions
 from .evaluation_settings import EvaluationSettings
-from .geometry import PAPER_DESIGN
 from .optimise_settings import OptimiseSettings
-from .optimise_symbols import holes_sym
+from .optimise_symbols import design_sym
 from .sampling import tilt_torsion_angles
 
 #: Width (N m) of the sigmoid that turns a wrench margin into "held": a margin of 2 widths counts 0.88.
@@ -113,14 +112,9 @@ def sweep_surrogate(settings: OptimiseSettings, evaluation: EvaluationSettings) 
         Input ``u`` (n variables, scaled to their bounds); outputs ``F`` (fraction, 0..1), ``S``
         (N m/rad), the per-pose margins ``m`` (N m) and eigenvalues ``lam`` (N m/rad).
     """
-    names, lo, hi = settings.names, settings.lower, settings.upper
+    names = settings.names
     u = ca.MX.sym("u", len(names))
-    p: dict[str, Any] = {**PAPER_DESIGN, **settings.base}
-    for k, name in enumerate(names):
-        p[name] = lo[k] + u[k] * (hi[k] - lo[k])
-    A, B = holes_sym(p)
-    rig = ca.vertcat(p["cable_stiffness_N_per_m"], p["t_min_N"], p["t_max_N"], p["platform_mass_kg"],
-                     p["com_z_m"], *settings.gravity_B_m_per_s2)
+    p, A, B, rig = design_sym(settings, u)
     Rs = evaluation.sampling.rotations()
     loads = np.asarray(evaluation.loads.taus_ext_A_Nm, float)
     pose = _pose_function(loads.shape[0]).map(Rs.shape[0], "serial")

@@ -95,6 +95,37 @@ def holes_sym(p: dict[str, Any]) -> tuple[Any, Any]:
     return out[0], out[1]
 
 
+def design_sym(settings: Any, u: Any) -> tuple[dict[str, Any], Any, Any, Any]:
+    """A design's parameters, holes and rig vector as functions of the scaled variables ``u``.
+
+    Parameters
+    ----------
+    settings : OptimiseSettings
+        Names and bounds of the optimised parameters, the fixed ones (``base``) and gravity.
+    u : casadi.SX or casadi.MX
+        The optimised parameters scaled to their bounds (0 at the lower, 1 at the upper).
+
+    Returns
+    -------
+    p : dict
+        Every design parameter (paper values filled in), symbolic where optimised.
+    A, B : casadi expression, shape (3, 6)
+        Platform and base holes (:func:`holes_sym`).
+    rig : casadi expression
+        ``(k, t_min, t_max, mass, com_z, g_B)``, the rig inputs of the model functions.
+    """
+    from .geometry import PAPER_DESIGN
+
+    p: dict[str, Any] = {**PAPER_DESIGN, **settings.base}
+    lo, hi = settings.lower, settings.upper
+    for k, name in enumerate(settings.names):
+        p[name] = lo[k] + u[k] * (hi[k] - lo[k])
+    A, B = holes_sym(p)
+    rig = ca.vertcat(p["cable_stiffness_N_per_m"], p["t_min_N"], p["t_max_N"], p["platform_mass_kg"],
+                     p["com_z_m"], *settings.gravity_B_m_per_s2)
+    return p, A, B, rig
+
+
 @functools.lru_cache(maxsize=16)
 def pose_constraints(n_loads: int, exit_limit: bool) -> Any:
     """Constraints at one orientation, as a CasADi function (built once, mapped over orientations).
