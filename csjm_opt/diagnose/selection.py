@@ -205,8 +205,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     rivals.update({"+".join(k): ctx.evidence(sc) for k, sc in pair_scores.items() if sc is not final
                    and not named <= set(k)
                    and next((p["plausible"] and p["closes_gap"] for p in pairs if tuple(p["effects"]) == k), False)})
-    rivals_ev = list(rivals.values())
-    verdict["evidence_margin"] = float(ev_final - max(rivals_ev, default=-np.inf))
+    verdict["evidence_margin"] = float(ev_final - max(rivals.values(), default=-np.inf))
     # a plausible model that closes the gap and is more probable under the priors, not confirmed on held-out
     # cycles: the verdict is the held-out test's pick, not the only reading of the log
     verdict["more_probable_rivals"] = sorted((n for n, e in rivals.items() if e > ev_final),

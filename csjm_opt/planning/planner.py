@@ -234,9 +234,9 @@ def _nearest_feasible(J: np.ndarray, tau_load: np.ndarray, lo: float, hi: float)
     if kernels.outside_margin(J, b, float(lo), float(hi)) > 0.0:   # outside: nearest point on a face, exact
         T = np.empty(6)
         return T, float(kernels.boundary_distance(J, b, float(lo), float(hi), T))
-    res = lsq_linear(J.T, -np.asarray(tau_load, float), bounds=(lo, hi), method="bvls", tol=1e-14)
+    res = lsq_linear(J.T, b, bounds=(lo, hi), method="bvls", tol=1e-14)
     T = np.clip(res.x, lo, hi)
-    return T, float(np.linalg.norm(J.T @ T + tau_load))
+    return T, float(np.linalg.norm(J.T @ T - b))
 
 
 def feasibility_distance_Nm(J: np.ndarray, tau_load_A_Nm: np.ndarray, t_min_N: float,
