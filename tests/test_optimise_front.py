@@ -11,6 +11,7 @@ import csjm_opt.design.optimise_sweep_front as front_mod
 from csjm_opt.design.design_evaluation import evaluate_design
 from csjm_opt.design.feasibility import wrench_margin_Nm
 from csjm_opt.design.optimisation import optimise
+from csjm_opt.design.optimise_front_model import QuadModel, best_step, model_function
 from csjm_opt.design.optimise_result import design_rig_of
 from csjm_opt.design.optimise_settings import read_optimise_file
 from csjm_opt.design.optimise_sweep_surrogate import MARGIN_SOFTMIN_NM, sweep_surrogate
@@ -88,29 +89,77 @@ def test_surrogate_gradient_matches_finite_differences(tiny):
 
 def test_max_evaluations_is_a_hard_bound_and_every_sweep_call_is_counted(tiny, monkeypatch):
     spec, settings = tiny
-    calls = []
+    calls, twins = [], []
 
     def counted(params, evaluation):
         calls.append(params)
         return evaluate_design(params, evaluation)
 
+    real_model_function = front_mod.model_function
+
+    def counted_model_function(*args):
+        evaluate = real_model_function(*args)
+
+        def wrapped(u):
+            twins.append(np.array(u))
+            return evaluate(u)
+        return wrapped
+
     monkeypatch.setattr(front_mod, "evaluate_design", counted)
-    for limit in (9, 14):
+    monkeypatch.setattr(front_mod, "model_function", counted_model_function)
+    for limit in (3, 6, 9, 14):
         calls.clear()
-        res = front_mod.sweep_front(settings, spec.settings, points=6, max_evaluations=limit)
-        assert res.evaluations <= limit
+        twins.clear()
+        res = front_mod.sweep_front(settings, spec.settings, max_evaluations=limit)
+        assert len(calls) + len(twins) <= limit
         assert res.sweep_evaluations == len(calls) == len(res.records) >= 1
-        assert res.evaluations == res.ipopt_evaluations + res.sweep_evaluations
-        assert res.ipopt_evaluations >= settings.starts + 1
+        assert res.twin_evaluations == len(twins) >= settings.starts
+        assert res.evaluations == res.twin_evaluations + res.sweep_evaluations
         # the reported numbers are the sweep evaluator's own
         for rec in res.records:
             again = evaluate_design(rec["params"], spec.settings)
             assert rec["workspace_fraction"] == again["workspace_fraction"]
     with pytest.raises(DesignError, match="max_evaluations"):
-        front_mod.sweep_front(settings, spec.settings, max_evaluations=4)
+        front_mod.sweep_front(settings, spec.settings, max_evaluations=2)
 
 
-def test_cli_max_evaluations_bounds_the_sweep_front(tmp_path):
+def test_model_derivatives_match_finite_differences_of_the_twins(tiny):
+    spec, settings = tiny
+    f = sweep_surrogate(settings, spec.settings)
+    evaluate = model_function(settings, spec.settings)
+    h = 1e-4
+    for u0 in (0.3, 0.7):
+        m = evaluate(np.array([u0]))
+        F = [float(f(u0 + k * h)[0]) for k in (-1, 0, 1)]
+        S = [float(f(u0 + k * h)[1]) for k in (-1, 0, 1)]
+        assert m.F == pytest.approx(F[1], abs=1e-12) and m.S == pytest.approx(S[1], abs=1e-12)
+        assert m.gF[0] == pytest.approx((F[2] - F[0]) / (2 * h), rel=1e-4, abs=1e-6)
+        assert m.HF[0, 0] == pytest.approx((F[2] - 2 * F[1] + F[0]) / h ** 2, rel=1e-3, abs=1e-3)
+        assert m.HS[0, 0] == pytest.approx((S[2] - 2 * S[1] + S[0]) / h ** 2, rel=1e-3, abs=1e-3)
+
+
+def test_model_step_matches_brute_force_on_a_grid():
+    # an indefinite model of S and a concave one of F, in two variables: the best step in the box and trust
+    # region with F held above a floor, against the best of a fine grid of steps
+    rng = np.random.default_rng(3)
+    for _ in range(4):
+        H = rng.normal(size=(2, 2))
+        m = QuadModel(u=rng.uniform(0.2, 0.8, 2), F=0.8, S=10.0, gF=rng.normal(size=2), gS=rng.normal(size=2),
+                      HF=-np.eye(2) * 3.0, HS=H + H.T)
+        radius, floor = 0.15, 0.8 - 0.05
+        d, feasible = best_step(m, "S", radius, floor=("F", floor))
+        lo, hi = np.maximum(-m.u, -radius), np.minimum(1 - m.u, radius)
+        g = np.stack(np.meshgrid(np.linspace(lo[0], hi[0], 401), np.linspace(lo[1], hi[1], 401)), -1).reshape(-1, 2)
+        Fg = m.F + g @ m.gF + 0.5 * np.einsum("ni,ij,nj->n", g, m.HF, g)
+        Sg = m.S + g @ m.gS + 0.5 * np.einsum("ni,ij,nj->n", g, m.HS, g)
+        ok = Fg >= floor
+        assert feasible == bool(ok.any())
+        assert np.all(d >= lo - 1e-12) and np.all(d <= hi + 1e-12)
+        assert m.predict(d)[0] >= floor - 1e-7
+        assert m.predict(d)[1] >= Sg[ok].max() - 1e-6
+
+
+def test_cli_max_evaluations_bounds_the_sweep_front_and_report_renders_it(tmp_path):
     import json
 
     from csjm_opt.cli.app import main
@@ -123,6 +172,15 @@ def test_cli_max_evaluations_bounds_the_sweep_front(tmp_path):
     doc = json.loads((out / "result.json").read_text())
     assert doc["evaluations"] <= 10 and doc["front"]
     assert (out / doc["front"][0]["rig_file"]).is_file()
+    # csjm report renders the folder like a sweep result: its Pareto front is the records' (brute force here)
+    assert main(["report", str(out), "--out", str(tmp_path / "rep")]) == 0
+    rep = json.loads((tmp_path / "rep" / "design_report.json").read_text())
+    pts = [(r["workspace_fraction"], r["min_stiffness_Nm_per_rad"]) for r in doc["records"]
+           if r["status"] == "ok" and r["workspace_fraction"] and r["min_stiffness_Nm_per_rad"] is not None]
+    front = {p for p in pts if not any(q[0] >= p[0] and q[1] >= p[1] and q != p for q in pts)}
+    assert {(r["workspace_fraction"], r["min_stiffness_Nm_per_rad"]) for r in rep["pareto_front"]} == front
+    assert rep["designs"] == len({r["id"] for r in doc["records"]})
+    assert (tmp_path / "rep" / "index.html").is_file() and (tmp_path / "rep" / "pareto.png").is_file()
 
 
 def _same_designs(a, b):

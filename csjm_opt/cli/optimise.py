@@ -108,18 +108,23 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _sweep_front(args: argparse.Namespace, spec: Any, settings: Any, out: Path) -> int:
-    """``--sweep-front``: the front in the sweep's metrics, its designs as rig files."""
-    from .._fileio import atomic_write_json
+    """``--sweep-front``: the front in the sweep's metrics, its designs as rig files, its records as a sweep file."""
+    import json
+
+    from .._fileio import atomic_write_json, atomic_write_text
     from ..design.optimisation import design_rig_of
     from ..design.optimise_sweep_front import sweep_front
 
-    result = sweep_front(settings, spec.settings, points=settings.pareto_points,
-                         max_evaluations=args.max_evaluations)
+    result = sweep_front(settings, spec.settings, max_evaluations=args.max_evaluations)
     out.mkdir(parents=True, exist_ok=True)
     doc = result.as_json()
     for k, rec in enumerate(doc["front"]):
         rec["rig_file"] = name = f"design_{k:03d}.toml"
         design_rig_of(settings, rec["params"]).to_toml(out / name, overwrite=True)
+    # every scored design as a csjm sweep result file: csjm report DIR renders it like a sweep
+    atomic_write_text(out / "records.jsonl", "".join(json.dumps(r, sort_keys=True, allow_nan=False) + "\n"
+                                                     for r in result.records), overwrite=True)
+    doc["records_file"] = "records.jsonl"
     atomic_write_json(out / "result.json", doc)
     if args.json:
         atomic_write_json(args.json, doc)
@@ -127,6 +132,6 @@ def _sweep_front(args: argparse.Namespace, spec: Any, settings: Any, out: Path) 
     for rec in doc["front"]:
         print(f"{rec['rig_file']}: workspace fraction {rec['workspace_fraction']:.4g}, minimum stiffness "
               f"{rec['min_stiffness_Nm_per_rad']:.4g} N m/rad (the sweep's evaluator)", file=stream)
-    print(f"{len(doc['front'])} front designs, {result.evaluations} evaluations ({result.ipopt_evaluations} by "
-          f"IPOPT, {result.sweep_evaluations} by the sweep's evaluator), written to {out}", file=stream)
+    print(f"{len(doc['front'])} front designs, {result.evaluations} evaluations ({result.twin_evaluations} of the "
+          f"smooth twins, {result.sweep_evaluations} by the sweep's evaluator), written to {out}", file=stream)
     return 0

@@ -24,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "table and their hole geometry drawn, from a csjm sweep result file; writes index.html "
                        "(open it in a browser), index.md, figures and design_report.json into a folder.")
     p.add_argument("results", metavar="RESULTS", help="csjm sweep result file (JSON Lines), or a csjm optimise "
-                   "output folder (with result.json)")
+                   "output folder (with result.json; a --sweep-front folder renders like a sweep result)")
     p.add_argument("--sweep", metavar="SWEEP.toml", default=None,
                    help="the sweep file of the results: draws the geometry with its [base] parameters and "
                    "evaluates the paper's design with the same settings to mark it")
@@ -57,19 +57,23 @@ def run(args: argparse.Namespace) -> int:
     from ..report.design import write_design_report
 
     results = Path(args.results)
-    if results.is_dir() and (results / "result.json").is_file():  # a csjm optimise folder
+    if results.is_dir() and (results / "records.jsonl").is_file():  # csjm optimise --sweep-front: sweep records
+        results = results / "records.jsonl"
+        out = Path(args.out) if args.out else results.parent.with_name(results.parent.name + "_report")
+    elif results.is_dir() and (results / "result.json").is_file():  # a csjm optimise folder
         from ..report.optimisation_page import write_optimisation_report
 
         out = Path(args.out) if args.out else results.with_name(results.name + "_report")
         check_outputs([results / "result.json"], dirs={"--out": out})
         print(f"report written to {write_optimisation_report(results, out)}")
         return 0
-    if not results.is_file():
-        raise InvalidInput(f"no result file {results}", "RESULTS")
-    out = Path(args.out) if args.out else results.with_name(results.stem + "_report")
-    check_outputs([args.results, args.sweep], dirs={"--out": out})
+    else:
+        if not results.is_file():
+            raise InvalidInput(f"no result file {results}", "RESULTS")
+        out = Path(args.out) if args.out else results.with_name(results.stem + "_report")
+    check_outputs([str(results), args.sweep], dirs={"--out": out})
     for name in ("index.html", "index.md", "design_report.json", "pareto.png", "geometry.png"):
-        refuse_input_overwrite(out / name, args.results, args.sweep)
+        refuse_input_overwrite(out / name, str(results), args.sweep)
     page = write_design_report(results, out, args.sweep, args.top)
     print(f"report written to {page}")
     return 0

@@ -19,7 +19,9 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import DesignError
 from .certify import certify
+from .optimise_budget import STOPPED, evaluations_of
 from .optimise_contacts import contacts_near
 from .optimise_diagnosis import infeasible, violation
 from .optimise_problem import Contact, build_problem
@@ -38,6 +40,19 @@ class _Budget:
     def left(self) -> int:
         return 10 ** 9 if self.limit is None else max(self.limit - self.used, 0)
 
+    def for_solve(self) -> int | None:
+        """Evaluations the next solve may make (one is kept for its certification); None without a bound."""
+        return None if self.limit is None else self.left() - 1
+
+
+def _run(pb: Any, evaluations: int | None) -> tuple[Any, dict[str, Any], int]:
+    """One IPOPT solve of ``pb``, stopped by its iteration callback within ``evaluations`` (a hard bound)."""
+    if pb.stop is not None:
+        pb.stop.arm(evaluations)
+    sol = pb.solver(x0=pb.x0, p=pb.p, lbx=pb.lbx, ubx=pb.ubx, lbg=pb.lbg, ubg=pb.ubg)
+    stats = pb.solver.stats()
+    return sol, stats, evaluations_of(stats)
+
 
 def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, workers: int = 1,
              progress: bool | None = None, starts: list[dict[str, float]] | None = None,
@@ -49,9 +64,10 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
     settings : OptimiseSettings
         From :func:`csjm_opt.design.optimise_settings.read_optimise_file` or built directly.
     max_evaluations : int, optional
-        Bound on design evaluations (IPOPT's constraint evaluations plus one per certification),
-        checked between solves: no new solve starts once it is reached (a design not yet certified
-        is then returned with ``ok = False``).
+        Hard bound on design evaluations (every NLP evaluation by IPOPT, line-search trials included,
+        plus one per certification): each solve is stopped within its share by IPOPT's iteration
+        callback (:mod:`csjm_opt.design.optimise_budget`); a design not yet certified when it runs out
+        is returned with ``ok = False``.
     workers : int
         Processes for the multi-start (the sweep's worker pool when > 1).
     progress : bool, optional
@@ -73,11 +89,14 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
     InfeasibleRequirement
         If no design meets the requirements (naming the binding constraint and an orientation).
     DesignError
-        If a setting is invalid.
+        If a setting is invalid, or ``max_evaluations`` leaves no room for one solve and its certification.
     """
     from tqdm import tqdm
 
     budget = _Budget(max_evaluations)
+    if max_evaluations is not None and max_evaluations < 4:
+        raise DesignError(f"max_evaluations = {max_evaluations} leaves no room for a start, one solve and its "
+                          "certification (at least 4)", "max_evaluations")
     points = settings.pareto_points if settings.pareto_with else 1
     bar = tqdm(total=points + 1 if points > 1 else 1, desc="designs", unit="design", file=sys.stderr,
                disable=None if progress is None else not progress)
@@ -91,7 +110,7 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
         first = _best_start(settings, starts, {}, budget, workers, backend)
         designs = [first]
         bar.update(1)
-        if points > 1 and budget.left() > 0:
+        if points > 1 and budget.left() >= 2:
             other = settings.pareto_with
             half = {settings.objective: _halved(settings.objective, first.objectives[settings.objective])}
             flipped = settings.replace(objective=other, pareto_with=settings.objective)
@@ -100,7 +119,7 @@ def optimise(settings: OptimiseSettings, max_evaluations: int | None = None, wor
             lo_v, hi_v = first.objectives[other], anchor.objectives[other] if anchor.ok else first.objectives[other]
             prev = first
             for eps in np.linspace(lo_v, hi_v, points)[1:]:
-                if budget.left() <= 0:
+                if budget.left() < 2:       # a solve needs one evaluation and its certification one
                     break
                 d = _certified_solve(settings, prev.params, {other: float(eps)}, budget)
                 bar.update(1)
@@ -129,20 +148,25 @@ def _best_start(settings: OptimiseSettings, starts: list[dict[str, float]], epsi
                 backend: tuple[str, str | None] = ("processes", None)) -> OptimisedDesign:
     """Solve from every start (on the sweep's worker processes or Dask); certify the best."""
     results: list[tuple[dict[str, float] | None, float, int, str, Any]] = []
+    share = None
+    if budget.limit is not None:       # the starts share what is left but two (the best one's solve and check)
+        starts = starts[:max(min(len(starts), budget.left() - 3), 1)]
+        share = max((budget.left() - 2) // len(starts), 1)
+    payload = (settings, epsilon, share)
     if backend[0] == "dask":
         from ._dask_backend import _run_dask
 
-        got = dict(_run_dask(list(enumerate(starts)), (settings, epsilon), backend[1], max(workers, 1), 10.0,
+        got = dict(_run_dask(list(enumerate(starts)), payload, backend[1], max(workers, 1), 10.0,
                              fn=_solve_start))
         results = [got[i] for i in range(len(starts))]
     elif workers > 1 and len(starts) > 1:
         from ._worker_processes import _run_processes
 
         todo = list(enumerate(starts))
-        got = dict(_run_processes(todo, (settings, epsilon), workers, fn=_solve_start))
+        got = dict(_run_processes(todo, payload, workers, fn=_solve_start))
         results = [got[i] for i in range(len(starts))]
     else:
-        results = [_solve_start(p, (settings, epsilon)) for p in starts]
+        results = [_solve_start(p, payload) for p in starts]
     for _, _, calls, _, _ in results:
         budget.used += calls
     good = [r for r in results if r[0] is not None]
@@ -153,16 +177,14 @@ def _best_start(settings: OptimiseSettings, starts: list[dict[str, float]], epsi
     return _certified_solve(settings, best[0], epsilon, budget)  # type: ignore[arg-type]
 
 
-def _solve_start(start: dict[str, float], payload: tuple[OptimiseSettings, dict[str, float]]) -> tuple:
-    """One IPOPT solve on the starting orientation set (a worker-process task)."""
-    settings, epsilon = payload
+def _solve_start(start: dict[str, float], payload: tuple[OptimiseSettings, dict[str, float], int | None]) -> tuple:
+    """One IPOPT solve on the starting orientation set within ``payload[2]`` evaluations (a worker-process task)."""
+    settings, epsilon, evaluations = payload
     angles = _initial_angles(settings)
-    pb = build_problem(settings, angles, start, [], epsilon)
-    sol = pb.solver(x0=pb.x0, p=pb.p, lbx=pb.lbx, ubx=pb.ubx, lbg=pb.lbg, ubg=pb.ubg)
-    stats = pb.solver.stats()
+    pb = build_problem(settings, angles, start, [], epsilon, bounded=evaluations is not None)
+    sol, stats, calls = _run(pb, evaluations)
     x = np.array(sol["x"]).ravel()
-    calls = int(stats.get("n_call_nlp_g", stats["iter_count"]))
-    if not stats["success"] and stats["return_status"] != "Maximum_Iterations_Exceeded":
+    if not stats["success"] and stats["return_status"] not in ("Maximum_Iterations_Exceeded", STOPPED):
         return None, math.nan, calls, stats["return_status"], violation(settings, angles, pb, x, sol)
     params = dict(zip(settings.names, np.array(pb.design_of(x[:pb.n_design])).ravel().tolist()))
     return params, float(x[pb.objective_index]), calls, stats["return_status"], None
@@ -182,12 +204,12 @@ def _certified_solve(settings: OptimiseSettings, start: dict[str, float], epsilo
     params, q_obj = dict(start), None
     check = None
     rounds = 0
-    while rounds < settings.max_rounds:
+    while rounds < settings.max_rounds and budget.left() >= 2:
         rounds += 1
-        pb = build_problem(settings, angles, params, contacts, epsilon, objective_start=q_obj)
-        sol = pb.solver(x0=pb.x0, p=pb.p, lbx=pb.lbx, ubx=pb.ubx, lbg=pb.lbg, ubg=pb.ubg)
-        stats = pb.solver.stats()
-        budget.used += int(stats.get("n_call_nlp_g", stats["iter_count"]))
+        pb = build_problem(settings, angles, params, contacts, epsilon, objective_start=q_obj,
+                           bounded=budget.limit is not None)
+        sol, stats, calls = _run(pb, budget.for_solve())
+        budget.used += calls
         budget.iterations += int(stats["iter_count"])
         x = np.array(sol["x"]).ravel()
         if stats["return_status"] in _INFEASIBLE:

@@ -42,6 +42,7 @@ import casadi as ca
 import numpy as np
 
 from .interference import PAIRS
+from .optimise_budget import BOUNDED_OPTIONS, IterationStop
 from .optimise_settings import OptimiseSettings
 from .optimise_symbols import (
     HESSIAN,
@@ -85,6 +86,7 @@ class Problem:
     design_of: Any        # casadi Function: u -> design vector (natural units)
     constraints_of: Any   # casadi Function: x, p -> g
     n_slots: int = 0      # orientation slots (the pose constraints come first, slot by slot)
+    stop: Any = None      # IterationStop of a bounded solver (optimise_budget), else None
 
 
 @dataclasses.dataclass
@@ -97,6 +99,7 @@ class _Built:
     ubg: np.ndarray
     n_slots: int
     n_contacts: int
+    stop: Any = None
 
 
 def _quantity_values(settings: OptimiseSettings, epsilon: dict[str, float]) -> dict[str, float]:
@@ -109,7 +112,7 @@ def _quantity_values(settings: OptimiseSettings, epsilon: dict[str, float]) -> d
 
 def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[str, float],
                   contacts: list[Contact], epsilon: dict[str, float],
-                  objective_start: float | None = None) -> Problem:
+                  objective_start: float | None = None, bounded: bool = False) -> Problem:
     """The NLP on the orientation set ``angles`` from ``start`` (see the module docstring).
 
     The solver is built once per process for a number of orientation and contact slots
@@ -130,6 +133,8 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
         Quantities held at a value instead of their requirement (Pareto front).
     objective_start : float, optional
         Initial value of the objective's variable (natural units).
+    bounded : bool
+        A solver whose evaluations can be bounded (:mod:`csjm_opt.design.optimise_budget`; ``Problem.stop``).
 
     Returns
     -------
@@ -137,7 +142,7 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
     """
     n_slots = -(-angles.shape[0] // SLOT_STEP) * SLOT_STEP
     n_contacts = max(-(-len(contacts) // SLOT_STEP) * SLOT_STEP, MIN_CONTACT_SLOTS)
-    built = _built_for(settings, n_slots, n_contacts)
+    built = _built_for(settings, n_slots, n_contacts, bounded)
     padded = np.vstack([angles, np.zeros((n_slots - angles.shape[0], 3))])
     values = _quantity_values(settings, epsilon)
     p_q = [values["tension_margin"], values["stiffness"], values["range"], values["size"]]
@@ -170,7 +175,7 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
     ubx = np.concatenate([np.ones(len(names)), [q_hi], np.full(n_t, np.inf)])
     return Problem(solver=built.solver, x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=built.lbg, ubg=built.ubg,
                    n_design=len(names), objective_index=len(names), design_of=built.design_of,
-                   constraints_of=built.constraints_of, n_slots=n_slots)
+                   constraints_of=built.constraints_of, n_slots=n_slots, stop=built.stop)
 
 
 _SCALE = {"stiffness": STIFFNESS_SCALE_NM_PER_RAD, "tension_margin": MARGIN_SCALE_N, "range": 1.0,
@@ -183,19 +188,19 @@ _CONTACT_WIDTH = 19    # angles (3), one-hot cable i (6), one-hot cable j (6), s
 _NO_SIZE_LIMIT_M = 1e3
 
 
-_CACHE: dict[tuple[str, int, int], _Built] = {}
+_CACHE: dict[tuple[str, int, int, bool], _Built] = {}
 _CACHE_SIZE = 8
 
 
-def _built_for(settings: OptimiseSettings, n_slots: int, n_contacts: int) -> _Built:
+def _built_for(settings: OptimiseSettings, n_slots: int, n_contacts: int, bounded: bool = False) -> _Built:
     """The cached solver of settings with this content (a worker process reuses it across tasks)."""
     key = (json.dumps([settings.names, settings.lower, settings.upper, settings.base, settings.requirements.as_dict(),
                        settings.objective, settings.pareto_with, dataclasses.asdict(settings.link),
-                       settings.gravity_B_m_per_s2], sort_keys=True, default=str), n_slots, n_contacts)
+                       settings.gravity_B_m_per_s2], sort_keys=True, default=str), n_slots, n_contacts, bounded)
     if key not in _CACHE:
         if len(_CACHE) >= _CACHE_SIZE:
             _CACHE.pop(next(iter(_CACHE)))
-        _CACHE[key] = _built(settings, n_slots, n_contacts)
+        _CACHE[key] = _built(settings, n_slots, n_contacts, bounded)
     return _CACHE[key]
 
 
@@ -209,7 +214,7 @@ def clear_cache() -> None:
     _CACHE.clear()
 
 
-def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int) -> _Built:
+def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int, bounded: bool) -> _Built:
     """The solver for ``n_slots`` orientations and ``n_contacts`` contacts."""
     names = settings.names
     n_d = len(names)
@@ -263,11 +268,15 @@ def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int) -> _Built:
                                       "constr_viol_tol": 1e-9, "mu_strategy": "adaptive", "sb": "yes",
                                       "hessian_approximation": HESSIAN}, "print_time": False, "expand": True}
     nlp: dict[str, Any] = {"x": x, "p": par, "f": sign * qx, "g": g}
+    stop = IterationStop(x.numel(), g.numel(), par.numel()) if bounded else None
+    if bounded:
+        opts["ipopt"].update(BOUNDED_OPTIONS)
+        opts["iteration_callback"] = stop
     solver = ca.nlpsol("csjm_optimise", "ipopt", nlp, opts)
     design_of = ca.Function("design_of", [u], [ca.vertcat(*[p[n] for n in names])])
     return _Built(solver=solver, design=design, design_of=design_of,
                   constraints_of=ca.Function("constraints_of", [x, par], [g]), lbg=lbg, ubg=ubg,
-                  n_slots=n_slots, n_contacts=n_contacts)
+                  n_slots=n_slots, n_contacts=n_contacts, stop=stop)
 
 
 def _objective_bounds(settings: OptimiseSettings, scale: float) -> tuple[float, float]:

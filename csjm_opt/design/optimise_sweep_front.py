@@ -3,62 +3,71 @@
 ``csjm sweep`` draws its Pareto front in (``workspace_fraction``,
 ``min_stiffness_Nm_per_rad``) on its own sample orientations. :func:`sweep_front`
 traces the same front by optimisation, on the smooth twins ``F`` and ``S`` of
-those metrics (:mod:`csjm_opt.design.optimise_sweep_surrogate`), with IPOPT and
-exact first and second derivatives:
+those metrics (:mod:`csjm_opt.design.optimise_sweep_surrogate`), with exact
+first and second derivatives, by a trust-region method on their quadratic
+models (:mod:`csjm_opt.design.optimise_front_model`):
 
-1. the space-filling starts are scored by ``F`` (one evaluation each); from the
-   best, ``max F`` gives the largest workspace ``F*``;
-2. continuation down the front: ``max S subject to F >= eps_j``,
-   ``eps_j = F* (1 - j STEP)``, each point warm-started from the previous
-   solution (primal and dual), until the constraint is no longer active (the
-   stiffest design has been reached) or the points run out;
-3. every design is scored by the sweep's evaluator
+1. the space-filling starts are evaluated (one evaluation each); from the one
+   of largest ``F``, trust-region Newton steps on ``F`` reach the largest
+   workspace ``F*`` (until the model promises less than :data:`F_TOL`);
+2. predictor-corrector continuation down the front, one evaluation per point:
+   from the models at the last front point, the next point is the model's
+   solution of ``max S subject to F >= eps`` in the trust region, ``eps``
+   chosen so that the point moves :data:`FRONT_STEP` along the front (in
+   fractions of ``F*`` and ``S``); a point the twins do not confirm (``F``
+   more than :data:`F_SLACK` short of ``eps``, or ``S`` not gained) shrinks
+   the trust region and is not scored; the branch ends where the constraint
+   is inactive inside the trust region (its stiffest design);
+3. every confirmed point is scored by the sweep's evaluator
    (:func:`~csjm_opt.design.design_evaluation.evaluate_design`, one evaluation
    each): those are the reported numbers, and the front is the Pareto front of
    the scored designs.
 
-Evaluations are counted honestly: every point at which IPOPT evaluates the NLP
-(the surrogate over all the sweep's sample orientations), line-search trials
-included, and every call of the sweep's evaluator. ``max_evaluations`` is a
-hard bound: IPOPT takes every trial step (``accept_every_trial_step``: no
-backtracking, so one new point per iteration, exact Hessian and bounds keep the
-steps sensible), each solve's iteration cap is what is left, and no solve or
-scoring starts past it.
+Evaluations are counted honestly: every evaluation of the twins (over all the
+sweep's sample orientations, with gradients and Hessians) counts one, and so
+does every call of the sweep's evaluator. ``max_evaluations`` is a hard bound:
+no evaluation starts past it.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
-from typing import Any
+from typing import Any, Callable
 
-import casadi as ca
 import numpy as np
 from scipy.stats import qmc
 
 from ..errors import DesignError
-from .design_evaluation import evaluate_design
+from .design_evaluation import design_id, evaluate_design
 from .evaluation_settings import EvaluationSettings
+from .optimise_front_model import QuadModel, best_step, model_function
 from .optimise_settings import OptimiseSettings
-from .optimise_sweep_surrogate import sweep_surrogate
 
-#: Relative step of the workspace-fraction constraint between front points.
-STEP = 0.03
-#: Iterations of one front point's solve (warm-started, so a few Newton steps).
-POINT_MAX_ITER = 4
-#: Iterations of the largest-workspace solve.
-ANCHOR_MAX_ITER = 4
-#: The constraint counts as inactive (the front has reached its stiffest design) above this slack.
-INACTIVE_SLACK = 1e-3
+#: Length of a front step, in fractions of the largest workspace F* and of S there (Euclidean); longer (up to
+#: MAX_FRONT_STEP) when the evaluations left would not reach the end of the front (:func:`_step_length`).
+FRONT_STEP, MAX_FRONT_STEP = 0.015, 0.06
+#: Radius (scaled variables) within which the model's stiffest design estimates the end of the front.
+END_RADIUS = 0.25
+#: The largest-workspace search stops when the model promises less than this gain in F.
+F_TOL = 5e-4
+#: A front point counts as on the front when its F is at most this far below its epsilon.
+F_SLACK = 2e-3
+#: Initial trust-region radius (scaled variables, infinity norm) and its bounds.
+RADIUS, MIN_RADIUS, MAX_RADIUS = 0.05, 1e-3, 0.25
+#: A further branch starts only with this many evaluations left (an ascent step, its scoring, a corrector
+#: and two front points, at the least).
+MIN_BRANCH_EVALUATIONS = 6
+#: Most trust-region steps of the largest-workspace search.
+ANCHOR_STEPS = 8
 
 
 @dataclasses.dataclass
 class SweepFrontResult:
     """Designs of the front, each scored by the sweep's evaluator, and the work it took."""
 
-    records: list[dict[str, Any]]        # evaluate_design records (+ "epsilon", "surrogate")
+    records: list[dict[str, Any]]        # evaluate_design records (+ "epsilon", "surrogate", "evaluations_used")
     evaluations: int
-    ipopt_evaluations: int
+    twin_evaluations: int
     sweep_evaluations: int
 
     def front(self) -> list[dict[str, Any]]:
@@ -80,7 +89,7 @@ class SweepFrontResult:
         -------
         dict
         """
-        return {"evaluations": self.evaluations, "ipopt_evaluations": self.ipopt_evaluations,
+        return {"evaluations": self.evaluations, "twin_evaluations": self.twin_evaluations,
                 "sweep_evaluations": self.sweep_evaluations, "records": self.records,
                 "front": self.front()}
 
@@ -99,42 +108,151 @@ def r_ok(record: dict[str, Any]) -> bool:
     return record.get("status") == "ok" and bool(record.get("workspace_fraction"))
 
 
-class _Counter:
-    def __init__(self, limit: int | None):
-        self.limit, self.ipopt, self.sweep = limit, 0, 0
+class _Work:
+    """The evaluation counter and the two evaluators it counts."""
 
-    @property
-    def used(self) -> int:
-        return self.ipopt + self.sweep
+    def __init__(self, limit: int | None, twins: Callable[[np.ndarray], QuadModel],
+                 settings: OptimiseSettings, evaluation: EvaluationSettings):
+        self.limit, self.twins_n, self.sweep_n = limit, 0, 0
+        self._twins, self.settings, self.evaluation = twins, settings, evaluation
+        self.records: list[dict[str, Any]] = []
 
     def left(self) -> int:
-        return 10 ** 9 if self.limit is None else max(self.limit - self.used, 0)
+        return 10 ** 9 if self.limit is None else self.limit - self.twins_n - self.sweep_n
+
+    def twins(self, u: np.ndarray) -> QuadModel:
+        assert self.left() >= 1
+        self.twins_n += 1
+        return self._twins(u)
+
+    def score(self, u: np.ndarray, eps: float | None, model: tuple[float, float]) -> dict[str, Any]:
+        assert self.left() >= 1
+        lo, hi = np.array(self.settings.lower), np.array(self.settings.upper)
+        self.sweep_n += 1
+        params = dict(zip(self.settings.names, (lo + u * (hi - lo)).tolist()))
+        rec = evaluate_design(params, self.evaluation)
+        digest = self.evaluation.digest()      # the sweep's record keys: a csjm sweep result file line
+        rec.update(id=design_id(digest, params), index=len(self.records), settings=digest)
+        rec["epsilon"], rec["surrogate"] = eps, {"F": float(model[0]), "S": float(model[1])}
+        rec["evaluations_used"] = self.twins_n + self.sweep_n      # work done when this design was scored
+        self.records.append(rec)
+        return rec
 
 
-class _Solvers:
-    """The surrogate and the two IPOPT solvers, built per iteration cap (options are fixed at build)."""
-
-    def __init__(self, settings: OptimiseSettings, evaluation: EvaluationSettings):
-        self.f = sweep_surrogate(settings, evaluation)
-        u, eps = ca.MX.sym("u", len(settings.names)), ca.MX.sym("eps")
-        F, S, _, _ = self.f(u)
-        self.nlps: dict[str, Any] = {"anchor": {"x": u, "f": -F},
-                                     "point": {"x": u, "p": eps, "f": -S / 10.0, "g": F - eps}}
-        self.cache: dict[tuple[str, int], Any] = {}
-
-    def get(self, kind: str, max_iter: int) -> Any:
-        if (kind, max_iter) not in self.cache:
-            opts: dict[str, Any] = {"print_level": 0, "sb": "yes", "tol": 1e-6, "acceptable_tol": 1e-4, "max_soc": 0,
-                    "accept_every_trial_step": "yes", "hessian_approximation": "exact", "max_iter": max_iter}
-            if kind == "point":
-                opts.update({"warm_start_init_point": "yes", "mu_init": 1e-4, "warm_start_bound_push": 1e-6,
-                             "warm_start_mult_bound_push": 1e-6})
-            nlp_opts: dict[str, Any] = {"ipopt": opts, "print_time": False}
-            self.cache[kind, max_iter] = ca.nlpsol(f"sweep_front_{kind}", "ipopt", self.nlps[kind], nlp_opts)
-        return self.cache[kind, max_iter]
+def _on_box(u: np.ndarray) -> np.ndarray:
+    """Clip to the box, snapping round-off at the bounds onto them."""
+    u = np.clip(u, 0.0, 1.0)
+    return np.where(u < 1e-9, 0.0, np.where(u > 1.0 - 1e-9, 1.0, u))
 
 
-def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, points: int = 8,
+def _ratio(actual: float, predicted: float) -> float:
+    return actual / predicted if abs(predicted) > 1e-12 else (1.0 if abs(actual) < 1e-9 else 0.0)
+
+
+def _radius(radius: float, rho: float, d: np.ndarray) -> float:
+    """Next trust radius: halved about a rejected step, doubled past a good step on its boundary.
+
+    After an accepted step inside it, twice that step: the model's reach is known only that far.
+    """
+    size = float(np.max(np.abs(d)))
+    if rho < 0.25:
+        return max(0.5 * min(radius, size), MIN_RADIUS)
+    if size > 0.9 * radius:
+        return min(2.0 * radius, MAX_RADIUS) if rho > 0.75 else radius
+    return float(np.clip(2.0 * size, MIN_RADIUS, radius))
+
+
+def _largest_workspace(work: _Work, m: QuadModel) -> QuadModel:
+    """Trust-region Newton ascent of F from ``m`` (keeps one evaluation for the scoring)."""
+    radius = MAX_RADIUS
+    for _ in range(ANCHOR_STEPS):
+        if work.left() < 3:
+            break
+        d, _ = best_step(m, "F", radius)
+        gain = m.predict(d)[0] - m.F
+        if gain < F_TOL:
+            break
+        trial = work.twins(_on_box(m.u + d))
+        rho = _ratio(trial.F - m.F, gain)
+        radius = _radius(radius, rho, d)
+        if rho > 0.1:
+            m = trial
+    return m
+
+
+def _next_point(m: QuadModel, radius: float, F0: float, S0: float, scale: tuple[float, float],
+                step: float) -> tuple[float, np.ndarray, bool]:
+    """The model's front point ``step`` beyond (F0, S0): its epsilon, its step from ``m.u``, whether F binds."""
+    def solve(delta: float) -> tuple[np.ndarray, float, bool]:
+        d, _ = best_step(m, "S", radius, floor=("F", F0 - delta))
+        F_d, S_d = m.predict(d)
+        return d, float(np.hypot((F0 - F_d) / scale[0], (S_d - S0) / scale[1])), F_d < F0 - delta + 1e-6
+    lo, hi = 0.0, step * scale[0]
+    d, length, binds = solve(hi)
+    while binds and length < step and hi < 0.5 * scale[0]:     # the model's front is steep: go further
+        lo, hi = hi, 2.0 * hi
+        d, length, binds = solve(hi)
+    if length <= step:                              # F is free: the stiffest design within the region is near
+        return F0 - hi, d, binds
+    for _ in range(12):                             # bisection on the step length
+        mid = 0.5 * (lo + hi)
+        d_mid, length_mid, binds_mid = solve(mid)
+        if length_mid > step:
+            hi, d, binds = mid, d_mid, binds_mid
+        else:
+            lo = mid
+    return F0 - hi, d, binds
+
+
+def _step_length(m: QuadModel, left: int, scale: tuple[float, float]) -> float:
+    """FRONT_STEP, or longer when the evaluations left do not reach the model's stiffest design at that spacing.
+
+    The remaining front is estimated by the model's stiffest design in the box around ``m.u`` (radius
+    END_RADIUS, F free); the points left are 2/3 of the evaluations (two predicted points per corrector).
+    """
+    d, _ = best_step(m, "S", END_RADIUS)
+    F_end, S_end = m.predict(d)
+    remaining = float(np.hypot((m.F - F_end) / scale[0], max(S_end - m.S, 0.0) / scale[1]))
+    return float(np.clip(remaining / max(2 * left // 3, 1), FRONT_STEP, MAX_FRONT_STEP))
+
+
+def _branch(work: _Work, m: QuadModel, points: int | None) -> QuadModel:
+    """Largest workspace from ``m``, then continuation down the front to the branch's stiffest design.
+
+    Predictor: from the models at ``m`` the points of the model's front, each FRONT_STEP beyond the last,
+    are scored while they lie in the trust region. Corrector: the twins are evaluated at the last of them,
+    which becomes the next centre; the model's error there sets the next trust region.
+    """
+    m = _largest_workspace(work, m)
+    work.score(m.u, None, (m.F, m.S))
+    scale = (max(m.F, 1e-3), max(abs(m.S), 1e-3))
+    radius, done, finished = RADIUS, 0, False
+    while work.left() >= 1 and not finished and radius >= MIN_RADIUS:
+        F0, S0, chain = m.F, m.S, 0
+        d = np.zeros_like(m.u)
+        step = _step_length(m, work.left(), scale)
+        while work.left() >= 1 and (points is None or done < points):
+            eps, d_next, binds = _next_point(m, radius, F0, S0, scale, step)
+            F0, S0 = m.predict(d_next)
+            if np.max(np.abs(d_next - d)) < 1e-6:   # no further model front within the region
+                break
+            d = d_next
+            work.score(_on_box(m.u + d), eps, (F0, S0))
+            chain, done = chain + 1, done + 1
+            if not binds:
+                finished = np.max(np.abs(d)) < 0.9 * radius     # F free inside the region: stiffest design
+                break
+        if chain == 0 or work.left() < 2 or finished or (points is not None and done >= points):
+            break
+        trial = work.twins(_on_box(m.u + d))        # corrector: the new centre, and the model's error
+        rho = _ratio(trial.S - m.S, S0 - m.S)
+        good = abs(trial.F - F0) <= F_SLACK and rho > 0.25
+        radius = _radius(radius, rho if good else 0.0, d)
+        m = trial
+    return m
+
+
+def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, points: int | None = None,
                 max_evaluations: int | None = None, starts: list[dict[str, float]] | None = None,
                 branches: int = 2) -> SweepFrontResult:
     """Trace the front in the sweep's metrics (see the module docstring).
@@ -145,15 +263,17 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
         Variables, bounds, base design, ``starts`` and ``seed`` of the space-filling starts.
     evaluation : EvaluationSettings
         The sweep's evaluator settings (``SweepSpec.settings``): its samples define both metrics.
-    points : int
-        Most front points after the largest-workspace design.
+    points : int, optional
+        Most front points per branch after its largest-workspace design (default: until the branch's
+        stiffest design or the budget).
     max_evaluations : int, optional
-        Hard bound on evaluations (IPOPT's NLP evaluations plus the sweep evaluator's calls).
+        Hard bound on evaluations (the twins' evaluations plus the sweep evaluator's calls).
     starts : list of dict, optional
         Starting designs (default: ``settings.starts`` Halton designs in the variable box).
     branches : int
-        Fronts traced, from the starts of largest ``F`` that lead to different largest-workspace
-        designs (mirror-image geometries are separate local optima).
+        Most fronts traced, from the starts of largest ``F`` that lead to different largest-workspace
+        designs (mirror-image geometries are separate local optima); a further branch only uses what
+        the previous ones left of the budget.
 
     Returns
     -------
@@ -162,70 +282,28 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
     Raises
     ------
     DesignError
-        If the budget does not allow one solve and its scoring, or no start holds any pose.
+        If the budget does not allow the starts and one scored design, or no start holds any pose.
     """
-    counter = _Counter(max_evaluations)
     names, lo, hi = settings.names, np.array(settings.lower), np.array(settings.upper)
     if starts is None:
         u_starts = qmc.Halton(d=len(names), scramble=True, seed=np.random.default_rng(settings.seed)).random(
             settings.starts)
     else:
         u_starts = np.clip([(np.array([s[n] for n in names]) - lo) / (hi - lo) for s in starts], 0.0, 1.0)
-    if counter.left() < len(u_starts) + 5:
-        raise DesignError(f"max_evaluations = {max_evaluations} leaves no room for {len(u_starts)} starts, one "
-                          "solve and its scoring", "max_evaluations")
-    solvers = _Solvers(settings, evaluation)
-    f = solvers.f
-    scores = [float(f(u)[0]) for u in u_starts]
-    counter.ipopt += len(u_starts)
-    if max(scores) <= 0.0:
+    if max_evaluations is not None and max_evaluations < len(u_starts) + 1:
+        raise DesignError(f"max_evaluations = {max_evaluations} leaves no room for {len(u_starts)} starts and "
+                          "one scored design", "max_evaluations")
+    work = _Work(max_evaluations, model_function(settings, evaluation), settings, evaluation)
+    models = [work.twins(u) for u in u_starts]
+    if max(m.F for m in models) <= 0.0:
         raise DesignError("no start holds any of the sweep's sample poses", "starts")
-
-    def solve(kind: str, wanted: int, reserve: int, **args: Any) -> tuple[np.ndarray, Any, bool]:
-        # each iteration evaluates one trial point (every trial step is taken), the start one more;
-        # keep `reserve` for after
-        solver = solvers.get(kind, int(min(wanted, counter.left() - 1 - reserve)))
-        sol = solver(**args)
-        st = solver.stats()
-        counter.ipopt += int(max(st["n_call_nlp_f"], st.get("n_call_nlp_g", 0)))
-        return np.array(sol["x"]).ravel(), sol, bool(st["success"])
-
-    records: list[dict[str, Any]] = []
-
-    def score(u: np.ndarray, eps: float | None, surrogate: tuple[float, float]) -> None:
-        params = dict(zip(names, (lo + u * (hi - lo)).tolist()))
-        counter.sweep += 1
-        rec = evaluate_design(params, evaluation)
-        rec["epsilon"], rec["surrogate"] = eps, {"F": surrogate[0], "S": surrogate[1]}
-        rec["evaluations_used"] = counter.used      # work done when this design was scored
-        records.append(rec)
-
-    order = np.argsort(scores)[::-1][:max(branches, 1)]
-    anchors: list[np.ndarray] = []
-    for k in order:
-        if scores[k] <= 0.0 or counter.left() < 5:
+    ends: list[np.ndarray] = []
+    for k in np.argsort([-m.F for m in models])[:max(branches, 1)]:
+        if models[k].F <= 0.0 or work.left() < (1 if not ends else MIN_BRANCH_EVALUATIONS):
             break
-        u, _, _ = solve("anchor", ANCHOR_MAX_ITER, 2, x0=u_starts[k], lbx=0.0, ubx=1.0)
-        if any(np.max(np.abs(u - a)) < 1e-3 for a in anchors):     # the same branch again
-            continue
-        anchors.append(u)
-        F_star, S_star = (float(v) for v in f(u)[:2])
-        counter.ipopt += 1
-        score(u, None, (F_star, S_star))
-        lam_g: Any = 0.0
-        for j in range(1, points + 1):
-            if counter.left() < 4:
-                break
-            eps = F_star * (1.0 - j * STEP)
-            x, sol, converged = solve("point", POINT_MAX_ITER, 1, x0=u, p=eps, lbx=0.0, ubx=1.0, lbg=0.0, ubg=math.inf,
-                           lam_g0=lam_g, lam_x0=0.0)
-            if not np.all(np.isfinite(x)):
-                break
-            F_j, S_j = float(sol["g"]) + eps, -10.0 * float(sol["f"])
-            u, lam_g = x, sol["lam_g"]
-            score(u, eps, (F_j, S_j))
-            if converged and F_j - eps > INACTIVE_SLACK:    # constraint inactive: this branch's stiffest design
-                break
-    return SweepFrontResult(records=records, evaluations=counter.used, ipopt_evaluations=counter.ipopt,
-                            sweep_evaluations=counter.sweep)
-
+        if ends and min(np.max(np.abs(models[k].u - e)) for e in ends) < 0.1:
+            continue                                # starts near a traced branch lead to it again
+        m = _branch(work, models[k], points)
+        ends.append(m.u)
+    return SweepFrontResult(records=work.records, evaluations=work.twins_n + work.sweep_n,
+                            twin_evaluations=work.twins_n, sweep_evaluations=work.sweep_n)

@@ -1,0 +1,149 @@
+"""Quadratic models of the sweep-metric twins (F, S) and the trust-region steps taken on them.
+
+One evaluation of the twins at a design ``u`` (scaled to its bounds, in
+``[0, 1]^n``) gives their values, gradients and exact Hessians
+(:func:`model_function`); :class:`QuadModel` is the second-order Taylor model
+around ``u``. :func:`best_step` maximises one model over the box
+``0 <= u + d <= 1`` intersected with a trust region ``|d|_inf <= radius``,
+optionally with the other model held at least at a value: the step of a
+trust-region Newton method (ascent) or of a sequential quadratically
+constrained programme (the epsilon-constraint front). Solving a model costs
+no evaluation of the twins: it is a small dense problem in ``n`` variables,
+solved by SLSQP from several starting steps (the model need not be concave).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from scipy.optimize import minimize
+
+from .evaluation_settings import EvaluationSettings
+from .optimise_settings import OptimiseSettings
+from .optimise_sweep_surrogate import sweep_surrogate
+
+
+@dataclasses.dataclass(frozen=True)
+class QuadModel:
+    """Second-order Taylor models of F (fraction) and S (stiffness, N m/rad) around ``u``."""
+
+    u: np.ndarray
+    F: float
+    S: float
+    gF: np.ndarray
+    gS: np.ndarray
+    HF: np.ndarray
+    HS: np.ndarray
+
+    def predict(self, d: np.ndarray) -> tuple[float, float]:
+        """Model values of (F, S) at ``u + d``.
+
+        Parameters
+        ----------
+        d : ndarray
+            Step in scaled variables.
+
+        Returns
+        -------
+        (float, float)
+        """
+        return (self.F + self.gF @ d + 0.5 * d @ self.HF @ d, self.S + self.gS @ d + 0.5 * d @ self.HS @ d)
+
+    def part(self, name: str) -> tuple[float, np.ndarray, np.ndarray]:
+        """Value, gradient and Hessian of ``"F"`` or ``"S"``.
+
+        Parameters
+        ----------
+        name : str
+
+        Returns
+        -------
+        (float, ndarray, ndarray)
+        """
+        return (self.F, self.gF, self.HF) if name == "F" else (self.S, self.gS, self.HS)
+
+
+def model_function(settings: OptimiseSettings, evaluation: EvaluationSettings) -> Any:
+    """``u -> QuadModel``: the twins of the sweep's metrics with exact gradients and Hessians.
+
+    Parameters
+    ----------
+    settings : OptimiseSettings
+        Optimised variables and bounds.
+    evaluation : EvaluationSettings
+        The sweep's evaluator settings (samples and loads of both metrics).
+
+    Returns
+    -------
+    callable
+        ``evaluate(u) -> QuadModel``; one call is one evaluation of the twins over every sample.
+    """
+    f = sweep_surrogate(settings, evaluation)
+    u = ca.MX.sym("u", len(settings.names))
+    F, S, _, _ = f(u)
+    HF, gF = ca.hessian(F, u)
+    HS, gS = ca.hessian(S, u)
+    fun = ca.Function("sweep_twins_2nd_order", [u], [F, S, gF, gS, HF, HS])
+
+    def evaluate(x: np.ndarray) -> QuadModel:
+        out = [np.array(v, float) for v in fun(np.asarray(x, float))]
+        return QuadModel(np.array(x, float), out[0].item(), out[1].item(), out[2].ravel(), out[3].ravel(),
+                         0.5 * (out[4] + out[4].T), 0.5 * (out[5] + out[5].T))
+
+    return evaluate
+
+
+def best_step(model: QuadModel, objective: str, radius: float, floor: tuple[str, float] | None = None,
+              seed: int = 0) -> tuple[np.ndarray, bool]:
+    """Maximise one model over the box and the trust region, optionally keeping the other above a floor.
+
+    Parameters
+    ----------
+    model : QuadModel
+    objective : str
+        ``"F"`` or ``"S"``, the model maximised.
+    radius : float
+        Trust-region radius (infinity norm, scaled variables).
+    floor : (str, float), optional
+        ``(name, value)``: the model of ``name`` at least ``value`` at the step.
+    seed : int
+        Seed of the random starting steps.
+
+    Returns
+    -------
+    d : ndarray
+        The step (the one with the smallest floor violation when no step meets the floor).
+    feasible : bool
+        Whether the floor holds at ``d`` (always True without a floor).
+    """
+    n = len(model.u)
+    lo, hi = np.maximum(-model.u, -radius), np.minimum(1.0 - model.u, radius)
+    v0, g, H = model.part(objective)
+
+    def neg(d: np.ndarray) -> tuple[float, np.ndarray]:
+        return -(g @ d + 0.5 * d @ H @ d), -(g + H @ d)
+
+    cons: list[dict[str, Any]] = []
+    if floor is not None:
+        c0, cg, cH = model.part(floor[0])
+        cons = [{"type": "ineq", "fun": lambda d: c0 + cg @ d + 0.5 * d @ cH @ d - floor[1],
+                 "jac": lambda d: cg + cH @ d}]
+    rng = np.random.default_rng(seed)
+    inits = [np.zeros(n), np.clip(g * radius / (np.max(np.abs(g)) + 1e-300), lo, hi),
+             *(lo + (hi - lo) * rng.random(n) for _ in range(4 * n))]
+    if floor is not None:
+        inits.append(np.clip(cg * radius / (np.max(np.abs(cg)) + 1e-300), lo, hi))
+    best: tuple[float, float, np.ndarray] | None = None
+    for d0 in inits:
+        r = minimize(neg, d0, jac=True, method="SLSQP", bounds=list(zip(lo, hi)), constraints=cons,
+                     options={"maxiter": 200, "ftol": 1e-12})
+        d = np.clip(r.x, lo, hi)
+        gap = 0.0 if floor is None else max(floor[1] - model.predict(d)[0 if floor[0] == "F" else 1], 0.0)
+        key = (round(gap, 9), float(neg(d)[0]))
+        if best is None or key < best[:2]:
+            best = (key[0], key[1], d)
+    assert best is not None
+    return best[2], best[0] <= 1e-9
