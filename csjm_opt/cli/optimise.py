@@ -33,8 +33,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("sweep", metavar="DESIGN.toml", help="sweep file (with an optional [optimise] section)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.add_argument("--max-evaluations", type=int_in(1, MAX_EVALUATIONS), default=None, metavar="N",
-                   help="bound on design evaluations (every point IPOPT evaluates, plus certifications); "
-                   "checked between solves, a hard bound with --sweep-front")
+                   help="hard bound on design evaluations (every point IPOPT evaluates, line-search trials "
+                   "included, plus certifications; with --sweep-front every evaluation of the smooth twins and "
+                   "every scoring by the sweep's evaluator)")
     p.add_argument("--workers", type=int_in(1, 256), default=1,
                    help="processes for the multi-start (default 1)")
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,
@@ -46,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sweep-front", action="store_true",
                    help="trace the front in the sweep's own metrics (workspace fraction, minimum stiffness) "
                    "instead: smooth twins of both on the sweep's samples, every design scored by the sweep's "
-                   "evaluator; --max-evaluations is then a hard bound")
+                   "evaluator; DIR also gets records.jsonl, a sweep result file (csjm report DIR renders it)")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.add_argument("--json", metavar="PATH", help="also write result.json here ('-' = stdout)")
     p.set_defaults(func=run)

@@ -10,8 +10,9 @@ settings in :mod:`.evaluation_settings`), :mod:`.store` (crash-safe JSON Lines r
 processes or Dask, result in :mod:`.sweep_result`), :mod:`.interference` (cable-cable and
 cable-link distances, exit angles), :mod:`.optimisation` (IPOPT on the sweep's vocabulary, problem in
 :mod:`.optimise_problem`, settings in :mod:`.optimise_settings`, results in :mod:`.optimise_result`, starts
-in :mod:`.optimise_starts`, dense check in :mod:`.certify`), :mod:`.optimise_sweep_front` (the front in
-the sweep's own metrics, on the smooth twins of :mod:`.optimise_sweep_surrogate`).
+in :mod:`.optimise_starts`, dense check in :mod:`.certify`, evaluation bound in :mod:`.optimise_budget`),
+:mod:`.optimise_sweep_front` (the front in the sweep's own metrics, on the smooth twins of
+:mod:`.optimise_sweep_surrogate` and their quadratic models in :mod:`.optimise_front_model`).
 """
 
 from .certify import Check, certify

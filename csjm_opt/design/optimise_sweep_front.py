@@ -9,7 +9,11 @@ models (:mod:`csjm_opt.design.optimise_front_model`):
 
 1. the space-filling starts are evaluated (one evaluation each); from the one
    of largest ``F``, trust-region Newton steps on ``F`` reach the largest
-   workspace ``F*`` (until the model promises less than :data:`F_TOL`);
+   workspace ``F*`` (until the model promises less than :data:`F_TOL`); then
+   the front's other end, the stiffest design, by the same steps on ``S`` from
+   the start of largest ``S`` (with at most a third of the evaluations left):
+   on a design space with mirror-image geometries it may lie on another
+   branch, and it sets the spacing of the front's points;
 2. predictor-corrector continuation down the front, one evaluation per point:
    from the models at the last front point, the next point is the model's
    solution of ``max S subject to F >= eps`` in the trust region, ``eps``
@@ -32,6 +36,7 @@ no evaluation starts past it.
 from __future__ import annotations
 
 import dataclasses
+import time
 from typing import Any, Callable
 
 import numpy as np
@@ -65,7 +70,7 @@ ANCHOR_STEPS = 8
 class SweepFrontResult:
     """Designs of the front, each scored by the sweep's evaluator, and the work it took."""
 
-    records: list[dict[str, Any]]        # evaluate_design records (+ "epsilon", "surrogate", "evaluations_used")
+    records: list[dict[str, Any]]        # sweep records (+ "epsilon", "surrogate", "evaluations_used", "elapsed_s")
     evaluations: int
     twin_evaluations: int
     sweep_evaluations: int
@@ -114,6 +119,7 @@ class _Work:
     def __init__(self, limit: int | None, twins: Callable[[np.ndarray], QuadModel],
                  settings: OptimiseSettings, evaluation: EvaluationSettings):
         self.limit, self.twins_n, self.sweep_n = limit, 0, 0
+        self.t0 = time.perf_counter()
         self._twins, self.settings, self.evaluation = twins, settings, evaluation
         self.records: list[dict[str, Any]] = []
 
@@ -135,6 +141,7 @@ class _Work:
         rec.update(id=design_id(digest, params), index=len(self.records), settings=digest)
         rec["epsilon"], rec["surrogate"] = eps, {"F": float(model[0]), "S": float(model[1])}
         rec["evaluations_used"] = self.twins_n + self.sweep_n      # work done when this design was scored
+        rec["elapsed_s"] = time.perf_counter() - self.t0
         self.records.append(rec)
         return rec
 
@@ -162,18 +169,19 @@ def _radius(radius: float, rho: float, d: np.ndarray) -> float:
     return float(np.clip(2.0 * size, MIN_RADIUS, radius))
 
 
-def _largest_workspace(work: _Work, m: QuadModel) -> QuadModel:
-    """Trust-region Newton ascent of F from ``m`` (keeps one evaluation for the scoring)."""
-    radius = MAX_RADIUS
-    for _ in range(ANCHOR_STEPS):
-        if work.left() < 3:
+def _ascent(work: _Work, m: QuadModel, part: str, steps: int, keep: int) -> QuadModel:
+    """Trust-region Newton ascent of ``part`` ("F" or "S") from ``m``, keeping ``keep`` evaluations."""
+    radius, tol = MAX_RADIUS, F_TOL * (1.0 if part == "F" else max(abs(m.S), 1.0))
+    for _ in range(steps):
+        if work.left() <= keep:
             break
-        d, _ = best_step(m, "F", radius)
-        gain = m.predict(d)[0] - m.F
-        if gain < F_TOL:
+        d, _ = best_step(m, part, radius)
+        value = m.part(part)[0]
+        gain = m.predict(d)[0 if part == "F" else 1] - value
+        if gain < tol:
             break
         trial = work.twins(_on_box(m.u + d))
-        rho = _ratio(trial.F - m.F, gain)
+        rho = _ratio(trial.part(part)[0] - value, gain)
         radius = _radius(radius, rho, d)
         if rho > 0.1:
             m = trial
@@ -204,33 +212,28 @@ def _next_point(m: QuadModel, radius: float, F0: float, S0: float, scale: tuple[
     return F0 - hi, d, binds
 
 
-def _step_length(m: QuadModel, left: int, scale: tuple[float, float]) -> float:
-    """FRONT_STEP, or longer when the evaluations left do not reach the model's stiffest design at that spacing.
+def _step_length(F0: float, S0: float, end: tuple[float, float], left: int, scale: tuple[float, float]) -> float:
+    """FRONT_STEP, or longer when the evaluations left do not reach the stiffest design ``end`` at that spacing.
 
-    The remaining front is estimated by the model's stiffest design in the box around ``m.u`` (radius
-    END_RADIUS, F free); the points left are 2/3 of the evaluations (two predicted points per corrector).
+    The points left are 2/3 of the evaluations left (two predicted points per corrector).
     """
-    d, _ = best_step(m, "S", END_RADIUS)
-    F_end, S_end = m.predict(d)
-    remaining = float(np.hypot((m.F - F_end) / scale[0], max(S_end - m.S, 0.0) / scale[1]))
+    remaining = float(np.hypot((F0 - end[0]) / scale[0], max(end[1] - S0, 0.0) / scale[1]))
     return float(np.clip(remaining / max(2 * left // 3, 1), FRONT_STEP, MAX_FRONT_STEP))
 
 
-def _branch(work: _Work, m: QuadModel, points: int | None) -> QuadModel:
-    """Largest workspace from ``m``, then continuation down the front to the branch's stiffest design.
+def _branch(work: _Work, m: QuadModel, points: int | None, end: tuple[float, float]) -> QuadModel:
+    """Continuation down the front from the largest-workspace design ``m`` to the branch's stiffest design.
 
     Predictor: from the models at ``m`` the points of the model's front, each FRONT_STEP beyond the last,
     are scored while they lie in the trust region. Corrector: the twins are evaluated at the last of them,
     which becomes the next centre; the model's error there sets the next trust region.
     """
-    m = _largest_workspace(work, m)
-    work.score(m.u, None, (m.F, m.S))
     scale = (max(m.F, 1e-3), max(abs(m.S), 1e-3))
     radius, done, finished = RADIUS, 0, False
     while work.left() >= 1 and not finished and radius >= MIN_RADIUS:
         F0, S0, chain = m.F, m.S, 0
         d = np.zeros_like(m.u)
-        step = _step_length(m, work.left(), scale)
+        step = _step_length(m.F, m.S, end, work.left(), scale)
         while work.left() >= 1 and (points is None or done < points):
             eps, d_next, binds = _next_point(m, radius, F0, S0, scale, step)
             F0, S0 = m.predict(d_next)
@@ -299,11 +302,18 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
         raise DesignError("no start holds any of the sweep's sample poses", "starts")
     ends: list[np.ndarray] = []
     for k in np.argsort([-m.F for m in models])[:max(branches, 1)]:
-        if models[k].F <= 0.0 or work.left() < (1 if not ends else MIN_BRANCH_EVALUATIONS):
+        if models[k].F <= 0.0 or work.left() < (2 if not ends else MIN_BRANCH_EVALUATIONS):
             break
         if ends and min(np.max(np.abs(models[k].u - e)) for e in ends) < 0.1:
             continue                                # starts near a traced branch lead to it again
-        m = _branch(work, models[k], points)
-        ends.append(m.u)
+        m = _ascent(work, models[k], "F", ANCHOR_STEPS, keep=2)      # the largest workspace
+        work.score(m.u, None, (m.F, m.S))
+        if not ends:            # the front's other end first: the stiffest design, from the stiffest start
+            held = [j for j in range(len(models)) if models[j].F > 0.0]
+            stiff = _ascent(work, models[max(held, key=lambda j: models[j].S)], "S", ANCHOR_STEPS,
+                            keep=max(work.left() * 2 // 3, 2))
+            work.score(stiff.u, None, (stiff.F, stiff.S))
+            end = (stiff.F, stiff.S)
+        ends.append(_branch(work, m, points, end).u)
     return SweepFrontResult(records=work.records, evaluations=work.twins_n + work.sweep_n,
                             twin_evaluations=work.twins_n, sweep_evaluations=work.sweep_n)
