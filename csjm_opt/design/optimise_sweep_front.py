@@ -302,7 +302,7 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
         raise DesignError("no start holds any of the sweep's sample poses", "starts")
     ends: list[np.ndarray] = []
     for k in np.argsort([-m.F for m in models])[:max(branches, 1)]:
-        if models[k].F <= 0.0 or work.left() < (2 if not ends else MIN_BRANCH_EVALUATIONS):
+        if models[k].F <= 0.0 or work.left() < (1 if not ends else MIN_BRANCH_EVALUATIONS):
             break
         if ends and min(np.max(np.abs(models[k].u - e)) for e in ends) < 0.1:
             continue                                # starts near a traced branch lead to it again
@@ -312,7 +312,8 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
             held = [j for j in range(len(models)) if models[j].F > 0.0]
             stiff = _ascent(work, models[max(held, key=lambda j: models[j].S)], "S", ANCHOR_STEPS,
                             keep=max(work.left() * 2 // 3, 2))
-            work.score(stiff.u, None, (stiff.F, stiff.S))
+            if work.left() >= 1 and np.max(np.abs(stiff.u - m.u)) > 1e-9:
+                work.score(stiff.u, None, (stiff.F, stiff.S))
             end = (stiff.F, stiff.S)
         ends.append(_branch(work, m, points, end).u)
     return SweepFrontResult(records=work.records, evaluations=work.twins_n + work.sweep_n,
