@@ -22,7 +22,9 @@ angles, 15 x 15 grid) this
 5. traces the front in the sweep's own metrics (``sweep_front``: workspace
    fraction x minimum stiffness, every design scored by the sweep's evaluator),
    unbounded and with ``--max-evaluations 22`` (a tenth of the sweep), and
-   compares its hypervolume with the sweep front's, by evaluations spent.
+   compares its hypervolume with the sweep front's, by evaluations spent; then
+   again with 22 evaluations from the other start sets of ``--seeds`` (the
+   Halton seed of the space-filling starts), how often it dominates.
 
 Writes ``summary.json``, ``summary.md``, ``front.png``, ``front_sweep_metrics.png`` and ``geometry.png``.
 """

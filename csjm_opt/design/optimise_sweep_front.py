@@ -131,11 +131,14 @@ class _Work:
         self.twins_n += 1
         return self._twins(u)
 
-    def score(self, u: np.ndarray, eps: float | None, model: tuple[float, float]) -> dict[str, Any]:
-        assert self.left() >= 1
+    def score(self, u: np.ndarray, eps: float | None, model: tuple[float, float]) -> dict[str, Any] | None:
+        """Score a design by the sweep's evaluator (None, and no evaluation, for a design already scored)."""
         lo, hi = np.array(self.settings.lower), np.array(self.settings.upper)
-        self.sweep_n += 1
         params = dict(zip(self.settings.names, (lo + u * (hi - lo)).tolist()))
+        if any(r["params"] == params for r in self.records):
+            return None
+        assert self.left() >= 1
+        self.sweep_n += 1
         rec = evaluate_design(params, self.evaluation)
         digest = self.evaluation.digest()      # the sweep's record keys: a csjm sweep result file line
         rec.update(id=design_id(digest, params), index=len(self.records), settings=digest)
