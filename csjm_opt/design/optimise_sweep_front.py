@@ -76,7 +76,7 @@ class SweepFrontResult:
     sweep_evaluations: int
 
     def front(self) -> list[dict[str, Any]]:
-        """The Pareto-optimal records (workspace fraction and minimum stiffness, both maximised).
+        """The Pareto-optimal records (workspace fraction and minimum stiffness, both maximised), widest first.
 
         Returns
         -------
@@ -85,7 +85,7 @@ class SweepFrontResult:
         pts = [(r["workspace_fraction"] or 0.0, r["min_stiffness_Nm_per_rad"] or 0.0) for r in self.records]
         keep = [i for i, (x, y) in enumerate(pts) if r_ok(self.records[i]) and not any(
             (a >= x and b >= y and (a > x or b > y)) for a, b in pts)]
-        return [self.records[i] for i in keep]
+        return [self.records[i] for i in sorted(keep, key=lambda i: -pts[i][0])]   # largest workspace first
 
     def as_json(self) -> dict[str, Any]:
         """JSON-able summary.
