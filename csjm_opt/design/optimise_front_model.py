@@ -10,6 +10,9 @@ trust-region Newton method (ascent) or of a sequential quadratically
 constrained programme (the epsilon-constraint front). Solving a model costs
 no evaluation of the twins: it is a small dense problem in ``n`` variables,
 solved by SLSQP from several starting steps (the model need not be concave).
+:func:`next_point` finds the model's front point a given length beyond the
+last one; :func:`trust_radius` updates the trust region from the ratio of
+actual to predicted change (:func:`ratio`).
 """
 
 from __future__ import annotations
@@ -24,6 +27,9 @@ from scipy.optimize import minimize
 from .evaluation_settings import EvaluationSettings
 from .optimise_settings import OptimiseSettings
 from .optimise_sweep_surrogate import sweep_surrogate
+
+#: Smallest and largest trust-region radius (scaled variables, infinity norm).
+MIN_RADIUS, MAX_RADIUS = 1e-3, 0.25
 
 
 @dataclasses.dataclass(frozen=True)
@@ -147,3 +153,51 @@ def best_step(model: QuadModel, objective: str, radius: float, floor: tuple[str,
             best = (key[0], key[1], d)
     assert best is not None
     return best[2], best[0] <= 1e-9
+
+
+def on_box(u: np.ndarray) -> np.ndarray:
+    """Clip to the box, snapping round-off at the bounds onto them."""
+    u = np.clip(u, 0.0, 1.0)
+    return np.where(u < 1e-9, 0.0, np.where(u > 1.0 - 1e-9, 1.0, u))
+
+
+def ratio(actual: float, predicted: float) -> float:
+    """Actual over predicted change (1 when both vanish)."""
+    return actual / predicted if abs(predicted) > 1e-12 else (1.0 if abs(actual) < 1e-9 else 0.0)
+
+
+def trust_radius(radius: float, rho: float, d: np.ndarray) -> float:
+    """Next trust radius: halved about a rejected step, doubled past a good step on its boundary.
+
+    After an accepted step inside it, twice that step: the model's reach is known only that far.
+    """
+    size = float(np.max(np.abs(d)))
+    if rho < 0.25:
+        return max(0.5 * min(radius, size), MIN_RADIUS)
+    if size > 0.9 * radius:
+        return min(2.0 * radius, MAX_RADIUS) if rho > 0.75 else radius
+    return float(np.clip(2.0 * size, MIN_RADIUS, radius))
+
+
+def next_point(m: QuadModel, radius: float, F0: float, S0: float, scale: tuple[float, float],
+                step: float) -> tuple[float, np.ndarray, bool]:
+    """The model's front point ``step`` beyond (F0, S0): its epsilon, its step from ``m.u``, whether F binds."""
+    def solve(delta: float) -> tuple[np.ndarray, float, bool]:
+        d, _ = best_step(m, "S", radius, floor=("F", F0 - delta))
+        F_d, S_d = m.predict(d)
+        return d, float(np.hypot((F0 - F_d) / scale[0], (S_d - S0) / scale[1])), F_d < F0 - delta + 1e-6
+    lo, hi = 0.0, step * scale[0]
+    d, length, binds = solve(hi)
+    while binds and length < step and hi < 0.5 * scale[0]:     # the model's front is steep: go further
+        lo, hi = hi, 2.0 * hi
+        d, length, binds = solve(hi)
+    if length <= step:                              # F is free: the stiffest design within the region is near
+        return F0 - hi, d, binds
+    for _ in range(12):                             # bisection on the step length
+        mid = 0.5 * (lo + hi)
+        d_mid, length_mid, binds_mid = solve(mid)
+        if length_mid > step:
+            hi, d, binds = mid, d_mid, binds_mid
+        else:
+            lo = mid
+    return F0 - hi, d, binds

@@ -269,9 +269,8 @@ def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int, bounded: b
                                       "hessian_approximation": HESSIAN}, "print_time": False, "expand": True}
     nlp: dict[str, Any] = {"x": x, "p": par, "f": sign * qx, "g": g}
     stop = IterationStop(x.numel(), g.numel(), par.numel()) if bounded else None
-    if bounded:
-        opts["ipopt"].update(BOUNDED_OPTIONS)
-        opts["iteration_callback"] = stop
+    if stop is not None:                                # evaluations bounded (optimise_budget)
+        opts.update(iteration_callback=stop, ipopt={**opts["ipopt"], **BOUNDED_OPTIONS})
     solver = ca.nlpsol("csjm_optimise", "ipopt", nlp, opts)
     design_of = ca.Function("design_of", [u], [ca.vertcat(*[p[n] for n in names])])
     return _Built(solver=solver, design=design, design_of=design_of,

@@ -45,7 +45,17 @@ from scipy.stats import qmc
 from ..errors import DesignError
 from .design_evaluation import design_id, evaluate_design
 from .evaluation_settings import EvaluationSettings
-from .optimise_front_model import QuadModel, best_step, model_function
+from .optimise_front_model import (
+    MAX_RADIUS,
+    MIN_RADIUS,
+    QuadModel,
+    best_step,
+    model_function,
+    next_point,
+    on_box,
+    ratio,
+    trust_radius,
+)
 from .optimise_settings import OptimiseSettings
 
 #: Length of a front step, in fractions of the largest workspace F* and of S there (Euclidean); longer (up to
@@ -57,8 +67,9 @@ END_RADIUS = 0.25
 F_TOL = 5e-4
 #: A front point counts as on the front when its F is at most this far below its epsilon.
 F_SLACK = 2e-3
-#: Initial trust-region radius (scaled variables, infinity norm) and its bounds.
-RADIUS, MIN_RADIUS, MAX_RADIUS = 0.05, 1e-3, 0.25
+#: Initial trust-region radius of the front (scaled variables, infinity norm; its bounds are in
+#: :mod:`csjm_opt.design.optimise_front_model`).
+RADIUS = 0.05
 #: A further branch starts only with this many evaluations left (an ascent step, its scoring, a corrector
 #: and two front points, at the least).
 MIN_BRANCH_EVALUATIONS = 6
@@ -149,29 +160,6 @@ class _Work:
         return rec
 
 
-def _on_box(u: np.ndarray) -> np.ndarray:
-    """Clip to the box, snapping round-off at the bounds onto them."""
-    u = np.clip(u, 0.0, 1.0)
-    return np.where(u < 1e-9, 0.0, np.where(u > 1.0 - 1e-9, 1.0, u))
-
-
-def _ratio(actual: float, predicted: float) -> float:
-    return actual / predicted if abs(predicted) > 1e-12 else (1.0 if abs(actual) < 1e-9 else 0.0)
-
-
-def _radius(radius: float, rho: float, d: np.ndarray) -> float:
-    """Next trust radius: halved about a rejected step, doubled past a good step on its boundary.
-
-    After an accepted step inside it, twice that step: the model's reach is known only that far.
-    """
-    size = float(np.max(np.abs(d)))
-    if rho < 0.25:
-        return max(0.5 * min(radius, size), MIN_RADIUS)
-    if size > 0.9 * radius:
-        return min(2.0 * radius, MAX_RADIUS) if rho > 0.75 else radius
-    return float(np.clip(2.0 * size, MIN_RADIUS, radius))
-
-
 def _ascent(work: _Work, m: QuadModel, part: str, steps: int, keep: int) -> QuadModel:
     """Trust-region Newton ascent of ``part`` ("F" or "S") from ``m``, keeping ``keep`` evaluations."""
     radius, tol = MAX_RADIUS, F_TOL * (1.0 if part == "F" else max(abs(m.S), 1.0))
@@ -183,36 +171,12 @@ def _ascent(work: _Work, m: QuadModel, part: str, steps: int, keep: int) -> Quad
         gain = m.predict(d)[0 if part == "F" else 1] - value
         if gain < tol:
             break
-        trial = work.twins(_on_box(m.u + d))
-        rho = _ratio(trial.part(part)[0] - value, gain)
-        radius = _radius(radius, rho, d)
+        trial = work.twins(on_box(m.u + d))
+        rho = ratio(trial.part(part)[0] - value, gain)
+        radius = trust_radius(radius, rho, d)
         if rho > 0.1:
             m = trial
     return m
-
-
-def _next_point(m: QuadModel, radius: float, F0: float, S0: float, scale: tuple[float, float],
-                step: float) -> tuple[float, np.ndarray, bool]:
-    """The model's front point ``step`` beyond (F0, S0): its epsilon, its step from ``m.u``, whether F binds."""
-    def solve(delta: float) -> tuple[np.ndarray, float, bool]:
-        d, _ = best_step(m, "S", radius, floor=("F", F0 - delta))
-        F_d, S_d = m.predict(d)
-        return d, float(np.hypot((F0 - F_d) / scale[0], (S_d - S0) / scale[1])), F_d < F0 - delta + 1e-6
-    lo, hi = 0.0, step * scale[0]
-    d, length, binds = solve(hi)
-    while binds and length < step and hi < 0.5 * scale[0]:     # the model's front is steep: go further
-        lo, hi = hi, 2.0 * hi
-        d, length, binds = solve(hi)
-    if length <= step:                              # F is free: the stiffest design within the region is near
-        return F0 - hi, d, binds
-    for _ in range(12):                             # bisection on the step length
-        mid = 0.5 * (lo + hi)
-        d_mid, length_mid, binds_mid = solve(mid)
-        if length_mid > step:
-            hi, d, binds = mid, d_mid, binds_mid
-        else:
-            lo = mid
-    return F0 - hi, d, binds
 
 
 def _step_length(F0: float, S0: float, end: tuple[float, float], left: int, scale: tuple[float, float]) -> float:
@@ -238,22 +202,22 @@ def _branch(work: _Work, m: QuadModel, points: int | None, end: tuple[float, flo
         d = np.zeros_like(m.u)
         step = _step_length(m.F, m.S, end, work.left(), scale)
         while work.left() >= 1 and (points is None or done < points):
-            eps, d_next, binds = _next_point(m, radius, F0, S0, scale, step)
+            eps, d_next, binds = next_point(m, radius, F0, S0, scale, step)
             F0, S0 = m.predict(d_next)
             if np.max(np.abs(d_next - d)) < 1e-6:   # no further model front within the region
                 break
             d = d_next
-            work.score(_on_box(m.u + d), eps, (F0, S0))
+            work.score(on_box(m.u + d), eps, (F0, S0))
             chain, done = chain + 1, done + 1
             if not binds:
                 finished = np.max(np.abs(d)) < 0.9 * radius     # F free inside the region: stiffest design
                 break
         if chain == 0 or work.left() < 2 or finished or (points is not None and done >= points):
             break
-        trial = work.twins(_on_box(m.u + d))        # corrector: the new centre, and the model's error
-        rho = _ratio(trial.S - m.S, S0 - m.S)
+        trial = work.twins(on_box(m.u + d))        # corrector: the new centre, and the model's error
+        rho = ratio(trial.S - m.S, S0 - m.S)
         good = abs(trial.F - F0) <= F_SLACK and rho > 0.25
-        radius = _radius(radius, rho if good else 0.0, d)
+        radius = trust_radius(radius, rho if good else 0.0, d)
         m = trial
     return m
 
