@@ -69,6 +69,52 @@ def test_hole_offsets_hardening_and_link_match_the_quasi_static_plant(rig, cycle
             assert so3.angle_between(row.R_tool, R_q[i]) < 1e-9, effect
 
 
+def test_hardening_with_a_link_matches_the_quasi_static_plant(rig, cycle):
+    """Hardening on a plant with a link (six dofs: the tendons span only the platform's three)."""
+    args = _args(cycle)
+    plant = make_plant(rig, ["cable_hardening", "link_compliance"], 2.0, np.random.default_rng(3))
+    R_q = plant.respond(*args)
+    rows = as_mujoco(plant).respond_rows(*args)
+    for i, row in enumerate(rows):
+        assert row.settled
+        assert so3.angle_between(row.R_tool, R_q[i]) < 1e-9
+
+
+def test_tendon_jacobian_is_the_derivative_of_the_tendon_lengths(rig):
+    """The dense tendon Jacobian (MuJoCo 4 stores it sparse) against central differences of the lengths."""
+    import mujoco
+
+    from csjm_opt.testbed.mujoco_engine import tendon_jacobian
+
+    plant = dataclasses.replace(Plant.nominal(rig), link_compliance_rad_per_Nm=np.diag([0.006, 0.004, 0.008]))
+    engine = Engine(as_mujoco(plant), np.full(6, 0.1))
+    m, d = engine.m, engine.d
+    rng = np.random.default_rng(8)
+    q0 = np.zeros(m.nq)
+    q0[:4], q0[4:8] = _quat(0.2 * rng.normal(size=3)), _quat(0.05 * rng.normal(size=3))
+    d.qpos[:] = q0
+    mujoco.mj_forward(m, d)
+    J = tendon_jacobian(m, d)
+    assert J.shape == (m.ntendon, m.nv)
+    h = 1e-6
+    fd = np.zeros_like(J)
+    for k in range(m.nv):
+        for sgn in (1.0, -1.0):
+            q = q0.copy()
+            mujoco.mj_integratePos(m, q, sgn * h * np.eye(m.nv)[k], 1.0)
+            d.qpos[:] = q
+            mujoco.mj_forward(m, d)
+            fd[:, k] += sgn * np.asarray(d.ten_length) / (2 * h)
+    np.testing.assert_allclose(J, fd, atol=1e-8)
+    assert np.abs(J[:, 3:]).max() == 0.0 and np.abs(J[:, :3]).min() > 0.0    # the link moves no tendon
+
+
+def _quat(v):
+    from csjm_opt.model.mjcf import quat_wxyz
+
+    return quat_wxyz(so3.exp(v))
+
+
 def test_link_turns_the_tool_by_the_compliance_times_the_tool_moment(rig, cycle):
     C = np.diag([0.006, 0.004, 0.008])
     plant = dataclasses.replace(Plant.nominal(rig), link_compliance_rad_per_Nm=C)

@@ -28,6 +28,30 @@ FRICTIONLESS_SPEED_TOL = 1e-4
 BOUND_SLACK = 1e-4
 
 
+def tendon_jacobian(m: mujoco.MjModel, d: mujoco.MjData) -> np.ndarray:
+    """Dense tendon Jacobian ``(ntendon, nv)`` at the data's kinematics.
+
+    MuJoCo 4 stores ``ten_J`` sparse (rows by ``MjModel.ten_J_rownnz/rowadr/colind``); MuJoCo 3 stored it
+    dense for small models. A tendon that does not span every dof (the tool's link) makes the two differ.
+
+    Parameters
+    ----------
+    m : mujoco.MjModel
+    d : mujoco.MjData
+
+    Returns
+    -------
+    (ntendon, nv) array
+    """
+    J = np.asarray(d.ten_J, float).ravel()
+    if J.size == m.ntendon * m.nv and not hasattr(m, "ten_J_rownnz"):
+        return J.reshape(m.ntendon, m.nv).copy()
+    dense = np.zeros((m.ntendon, m.nv))
+    mujoco.mju_sparse2dense(dense, J, np.asarray(m.ten_J_rownnz, np.int32), np.asarray(m.ten_J_rowadr, np.int32),
+                            np.asarray(m.ten_J_colind, np.int32))
+    return dense
+
+
 def _rotation(q: np.ndarray) -> np.ndarray:
     R = np.zeros(9)
     mujoco.mju_quat2Mat(R, np.asarray(q, float))
@@ -106,7 +130,7 @@ class Engine:
         qfrc[self.tool] = tau                # the load on the tool, in its frame
         if self.h:
             extra = self.k * self.h * e * e
-            qfrc -= d.ten_J.reshape(6, self.nv).T @ extra
+            qfrc -= tendon_jacobian(self.m, d).T @ extra
             e_T = self.k * e + extra
         else:
             e_T = self.k * e
@@ -184,18 +208,20 @@ class Engine:
             self.frictional = fr
         mujoco.mj_forward(self.m, self.d)
 
-    def _wait(self) -> None:
+    def _wait(self) -> bool:
+        """Run until the joint speed is below the tolerance, at most ``max_settle_s``; whether it got there."""
         m, d = self.m, self.d
         q_start = d.qpos[:4].copy()
         # without friction Newton's method finishes the settling: the engine only has to reach the basin
         tol = self.mp.speed_tol_rad_per_s if self.frictional else FRICTIONLESS_SPEED_TOL
-        for _ in range(int(self.mp.max_settle_s / (m.opt.timestep * CHECK_STEPS))):
+        for _ in range(max(1, int(round(self.mp.max_settle_s / (m.opt.timestep * CHECK_STEPS))))):
             self.run(CHECK_STEPS)
             if np.linalg.norm(d.qvel) < tol:
-                return
+                return True
             if not np.all(np.isfinite(d.qpos)) or abs(float(np.dot(q_start, d.qpos[:4]))) < np.cos(np.pi / 4):
                 raise NoEquilibrium("the MuJoCo plant fell over (more than 90 deg from the row's start)",
                                     "fell", np.nan)
+        return False
 
     def polish(self, dofs: np.ndarray, max_iter: int = 20, h: float = 1e-7) -> float:
         """Newton's method on :meth:`net` over ``dofs`` (others held); returns the largest net force left."""
@@ -227,12 +253,15 @@ class Engine:
 
         With friction the certificate includes the joints' damping force at the speed left when
         the wait ends: a row on the verge of slipping may still creep (about 1e-5 rad/s), held by
-        friction at its bounds plus that damping force. The speed is recorded.
+        friction at its bounds plus that damping force. The speed is recorded, and a row whose wait
+        reached ``max_settle_s`` before the speed fell below ``speed_tol_rad_per_s`` is flagged
+        (``settled=False``; still certified, or refused). A frictionless row is polished to an
+        exact equilibrium by Newton's method (``settled=True``) or refused.
         """
         from .mujoco_plant import MujocoRow
 
         t0 = self.t
-        self._wait()
+        at_rest = self._wait()
         speed = float(np.linalg.norm(self.d.qvel))
         cert = None
         if not self.frictional:
@@ -251,7 +280,7 @@ class Engine:
             net = self.net(q) - np.asarray(self.m.dof_damping, float) * v
             _, T = self.applied()
             F = self.F0 + self.mu * T if self.capstan else self.F0
-            A = np.column_stack([np.asarray(self.d.ten_J).reshape(6, self.nv).T, np.eye(self.nv)[:, :3]])
+            A = np.column_stack([tendon_jacobian(self.m, self.d).T, np.eye(self.nv)[:, :3]])
             cert = certify_static(net, A, np.r_[F, self.M0[:3]] * (1.0 + BOUND_SLACK))
             self.d.qpos[:] = q
             if not cert.certified:
@@ -261,4 +290,4 @@ class Engine:
         _, T = self.applied()
         R_p = _rotation(self.d.qpos[:4])
         R_tool = R_p @ _rotation(self.d.qpos[4:8]) if self.link else R_p
-        return MujocoRow(R_tool, R_p, T, cert, self.t - t0, speed)
+        return MujocoRow(R_tool, R_p, T, cert, self.t - t0, speed, at_rest or not self.frictional)

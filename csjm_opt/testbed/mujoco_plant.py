@@ -69,6 +69,11 @@ class MujocoRow:
     speed_rad_per_s : float
         Joint speed left when the row was recorded (0 for a polished frictionless row; a slow
         creep of a row on the verge of slipping otherwise, its damping force in the certificate).
+    settled : bool
+        Whether the row came to rest (speed below ``speed_tol_rad_per_s``) within ``max_settle_s``
+        of simulated time; a row that did not is still certified (held by friction within its
+        bounds plus the damping force at the speed left) but flagged here. Frictionless rows are
+        polished to an exact equilibrium (always ``True``).
     """
 
     R_tool: np.ndarray
@@ -77,6 +82,7 @@ class MujocoRow:
     certificate: FrictionCertificate | None
     seconds_simulated: float
     speed_rad_per_s: float = 0.0
+    settled: bool = True
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
