@@ -75,27 +75,38 @@ def _simulate_with_inputs(rig, plant, cycles: int, seed: list[int], noise):
         tau = np.concatenate([c.tau_ext_A_Nm for c in cs])
         R0 = np.concatenate([np.repeat(c.R_ref[None], len(c.alphas), 0) for c in cs])
         try:
-            plant.respond(l, tau, cyc, R0)
-            return {"cycle": cyc, "l": l, "tau": tau, "R0": R0}
+            settled = _respond(plant, {"l": l, "tau": tau, "cycle": cyc, "R0": R0, "mr": np.zeros_like(tau)})
+            return {"cycle": cyc, "l": l, "tau": tau, "R0": R0, "settled": settled}
         except NoEquilibrium:
             continue
     raise NoEquilibrium("no design of this experiment has an equilibrium on the plant", "diverged", float("nan"))
 
 
-def _measure(plant, inputs: dict, noise, rng, start: int = 0):
-    """Noisy log of the rows ``start:`` of the whole history ``inputs`` (the plant steps all of it)."""
+def _respond(plant, inputs: dict) -> tuple[np.ndarray, int]:
+    """True poses of the whole history ``inputs`` and the number of rows that did not come to rest
+    within the plant's bound (MuJoCo plant: flagged rows, see ``MujocoRow.settled``; else 0)."""
+    args = (inputs["l"], inputs["tau"], inputs["cycle"], inputs["R0"], inputs["mr"])
+    if hasattr(plant, "respond_rows"):
+        rows = plant.respond_rows(*args)
+        return np.stack([r.R_tool for r in rows]), int(sum(not r.settled for r in rows))
+    return plant.respond(*args), 0
+
+
+def _measure(plant, inputs: dict, noise, rng, start: int = 0, settled=None):
+    """Noisy log of the rows ``start:`` of the whole history ``inputs`` (the plant steps all of it,
+    unless ``settled``, its result from :func:`_respond`, is given) and the history's unsettled rows."""
     from csjm_opt import so3
     from csjm_opt.measurement.logfile import MeasurementLog
     from csjm_opt.model import kinematics as kin
 
-    mr = inputs.get("mr", np.zeros_like(inputs["tau"]))
-    R_true = plant.respond(inputs["l"], inputs["tau"], inputs["cycle"], inputs["R0"], mr)
+    mr = inputs.setdefault("mr", np.zeros_like(inputs["tau"]))
+    R_true, unsettled = _respond(plant, inputs) if settled is None else settled
     tau = inputs["tau"] + kin.weight_moment(R_true, mr, np.asarray(plant.rig.gravity_B_m_per_s2))
     tau_meas = plant.measured_moment(tau)[start:]
     n = len(tau_meas)
     tau_meas = tau_meas + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)
     R_meas = plant.measured_pose(R_true[start:]) @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
-    return MeasurementLog.from_arrays(inputs["cycle"][start:], inputs["l"][start:], tau_meas, R_meas)
+    return MeasurementLog.from_arrays(inputs["cycle"][start:], inputs["l"][start:], tau_meas, R_meas), unsettled
 
 
 def _names(j: dict) -> set[str]:
@@ -110,6 +121,8 @@ def run_one(job: dict) -> dict:
         return _run_one(job)
     except CsjmError as exc:
         return {**job, "error": f"{type(exc).__name__}: {exc}"}
+    except Exception as exc:     # a defect: recorded (with its kind) so the rest of the study still runs
+        return {**job, "error": f"defect: {type(exc).__name__}: {exc}"}
 
 
 def _run_one(job: dict) -> dict:
@@ -122,12 +135,14 @@ def _run_one(job: dict) -> dict:
     rig, noise, plant, severities, factor = build_plant(job)
     seed = job_seed(job)
     inputs = _simulate_with_inputs(rig, plant, job["cycles"], seed + [7], noise)
-    log = _measure(plant, inputs, noise, np.random.default_rng(seed + [8]))
+    # the plant is deterministic: the history simulated to find a design with an equilibrium is the log's
+    log, unsettled = _measure(plant, inputs, noise, np.random.default_rng(seed + [8]),
+                              settled=inputs.pop("settled"))
     d = diagnose(rig, log)
     j = d.as_json()
     want = truth(job)
     rec = {**job, "truth": sorted(want), "severities": severities, "noise_factor": factor, "rows": len(log),
-           "before": sorted(_names(j)), "right_before": _names(j) == want, "warnings_before": j["verdict"]["warnings"]}
+           "unsettled_rows": unsettled, "before": sorted(_names(j)), "right_before": _names(j) == want, "warnings_before": j["verdict"]["warnings"]}
     t1 = time.perf_counter()
     s = suggest_experiment(rig, d, job.get("max_rows", 60), seed=int(sum(seed)) % 2 ** 31)
     rec["seconds_suggest"] = time.perf_counter() - t1
@@ -143,10 +158,10 @@ def _run_one(job: dict) -> dict:
              "R0": np.concatenate([inputs["R0"], s.planned_R]),
              "mr": np.r_[np.zeros_like(inputs["tau"]),
                          [np.zeros(3) if ld is None else ld.mass_kg * np.asarray(ld.point_A_m) for ld in s.loads]]}
-    extra = _measure(plant, whole, noise, np.random.default_rng(seed + [9]), start=len(log))
+    extra, unsettled2 = _measure(plant, whole, noise, np.random.default_rng(seed + [9]), start=len(log))
     d2 = diagnose(rig, log, extra=extra)
     j2 = d2.as_json()
-    rec.update({"after": sorted(_names(j2)), "right_after": _names(j2) == want,
+    rec.update({"unsettled_rows_after": unsettled2, "after": sorted(_names(j2)), "right_after": _names(j2) == want,
                 "warnings_after": j2["verdict"]["warnings"], "seconds": time.perf_counter() - t0,
                 "truth_vs_before_sd": _separation(sj["expected_separation_sd"], want, set(rec["before"])),
                 "detected_after": [c["effect"] for c in j2["candidates"] if c.get("significant")],
