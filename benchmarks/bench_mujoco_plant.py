@@ -102,6 +102,8 @@ def main(argv: list[str] | None = None) -> int:
             first = res_by_noslip[args.noslip[0]]
             diff = max((float(so3.angle_between(R[r], first[r]).max()) for r in R if r in first), default=np.nan)
             w = np.asarray(walls) * 1e3
+            if not len(w):            # refused at the first row
+                w = np.full(1, np.nan)
             rec = {"median_ms": float(np.median(w)), "p90_ms": float(np.percentile(w, 90)), "max_ms": float(w.max()),
                    "median_sim_s": float(np.median(sims)) if sims else float("nan"), "rows": len(w),
                    "unsettled": unsettled, "refused": refused, "max_pose_diff_rad": diff}

@@ -142,7 +142,8 @@ def _run_one(job: dict) -> dict:
     j = d.as_json()
     want = truth(job)
     rec = {**job, "truth": sorted(want), "severities": severities, "noise_factor": factor, "rows": len(log),
-           "unsettled_rows": unsettled, "before": sorted(_names(j)), "right_before": _names(j) == want, "warnings_before": j["verdict"]["warnings"]}
+           "unsettled_rows": unsettled, "before": sorted(_names(j)), "right_before": _names(j) == want,
+           "warnings_before": j["verdict"]["warnings"]}
     t1 = time.perf_counter()
     s = suggest_experiment(rig, d, job.get("max_rows", 60), seed=int(sum(seed)) % 2 ** 31)
     rec["seconds_suggest"] = time.perf_counter() - t1

@@ -230,3 +230,14 @@ def test_joint_friction_agrees_between_the_plants(rig, cycle):
         size = so3.angle_between(R_n[i], R_q[i])
         assert size > 1e-3
         assert so3.angle_between(R_m[i], R_q[i]) < 0.1 * size
+
+
+def test_former_names_are_the_renamed_classes():
+    """``testbed.MujocoPlant`` and ``testbed.Protocol`` still work (renamed: the control loop's
+    ``MujocoPlant`` and the identification ``measurement.Protocol`` are other things)."""
+    import csjm_opt.testbed as tb
+    from csjm_opt.control.plants import MujocoPlant as ControlPlant
+    from csjm_opt.measurement import Protocol as IdentificationProtocol
+
+    assert tb.MujocoPlant is tb.MujocoTestbedPlant and tb.Protocol is tb.LogProtocol
+    assert tb.MujocoTestbedPlant is not ControlPlant and tb.LogProtocol is not IdentificationProtocol

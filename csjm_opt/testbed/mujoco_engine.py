@@ -1,4 +1,4 @@
-"""One MuJoCo run of a :class:`~csjm_opt.testbed.mujoco_plant.MujocoPlant` (its state carries across rows)."""
+"""One MuJoCo run of a :class:`~csjm_opt.testbed.mujoco_plant.MujocoTestbedPlant` (its state carries across rows)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from .certify import certify_static
 from .mujoco_model import has_link, plant_mjcf
 
 if TYPE_CHECKING:
-    from .mujoco_plant import MujocoPlant, MujocoRow
+    from .mujoco_plant import MujocoRow, MujocoTestbedPlant
 
 #: Inputs are changed in this many chunks over a ramp.
 RAMP_CHUNKS = 30
@@ -61,7 +61,7 @@ def _rotation(q: np.ndarray) -> np.ndarray:
 class Engine:
     """MuJoCo model and data of a plant, with the run-time forces (hardening, link spring, load)."""
 
-    def __init__(self, mp: MujocoPlant, l0: np.ndarray) -> None:
+    def __init__(self, mp: MujocoTestbedPlant, l0: np.ndarray) -> None:
         from .mujoco_plant import critical_damping
 
         self.mp, self.p = mp, mp.plant

@@ -1,6 +1,6 @@
 """MuJoCo as the testbed's plant: the same effects, realised in the engine's model.
 
-:class:`MujocoPlant` wraps a :class:`~csjm_opt.testbed.plant.Plant` (the
+:class:`MujocoTestbedPlant` wraps a :class:`~csjm_opt.testbed.plant.Plant` (the
 effect parameters drawn by :func:`~csjm_opt.testbed.injection.inject`, so both
 plants share effect names, parameters and random draws) and answers the same
 calls (``respond``, ``measured_moment``, ``measured_pose``). The engine model is
@@ -30,7 +30,18 @@ by :func:`~csjm_opt.testbed.certify.certify_static` (friction forces within
 their bounds hold it), and MuJoCo's noslip iterations stop the soft friction
 from creeping. With ``persistent`` (the plant's setting, default) a cycle
 starts where the previous one settled; otherwise each cycle starts from its
-``R_init``, settled without friction first (a relaxed start).
+``R_init``, settled without friction first (a relaxed start). The wait for rest is
+bounded by ``max_settle_s`` of simulated time (at most ``(cycle_ramp_s + max_settle_s) /
+timestep`` engine steps a row); a row that is not at rest by then is certified as it stands
+(held by friction within its bounds and the damping force of its remaining speed) and
+flagged (:attr:`MujocoRow.settled`), or refused (:class:`~csjm_opt.errors.NoEquilibrium`).
+
+Not to be confused with :class:`csjm_opt.control.plants.MujocoPlant`: that one is the
+*closed loop's* plant, the nominal rig stepped in real time under a controller's commands
+(inertia, winch rate limits, no injected effects, no settling). This one *settles* every
+row of a log statically, with effects injected, to make diagnosis logs; both build their
+engine model with :func:`csjm_opt.model.mjcf.rig_to_mjcf`. (``MujocoPlant`` is this class's
+former name, kept as an alias.)
 """
 
 from __future__ import annotations
@@ -86,7 +97,7 @@ class MujocoRow:
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
-class MujocoPlant:
+class MujocoTestbedPlant:
     """A :class:`Plant` realised in MuJoCo (see the module doc).
 
     Attributes
@@ -241,25 +252,30 @@ class MujocoPlant:
         return rows
 
 
-def as_mujoco(plant: Plant, **options) -> MujocoPlant:
+#: The class's former name (kept for existing code). Not :class:`csjm_opt.control.plants.MujocoPlant`,
+#: the closed loop's time-stepped plant (see the module doc).
+MujocoPlant = MujocoTestbedPlant
+
+
+def as_mujoco(plant: Plant, **options) -> MujocoTestbedPlant:
     """The same plant realised in MuJoCo.
 
     Parameters
     ----------
     plant : Plant
     **options
-        :class:`MujocoPlant` settings (``ramp_s``, ``noslip_iterations``, ...).
+        :class:`MujocoTestbedPlant` settings (``ramp_s``, ``noslip_iterations``, ...).
 
     Returns
     -------
-    MujocoPlant
+    MujocoTestbedPlant
 
     Raises
     ------
     InvalidInput
         An effect MuJoCo cannot realise (eyelet radius).
     """
-    return MujocoPlant(plant, **options)
+    return MujocoTestbedPlant(plant, **options)
 
 
 def critical_damping(plant: Plant) -> float:
