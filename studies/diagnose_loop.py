@@ -82,14 +82,22 @@ def _simulate_with_inputs(rig, plant, cycles: int, seed: list[int], noise):
     raise NoEquilibrium("no design of this experiment has an equilibrium on the plant", "diverged", float("nan"))
 
 
+#: Wall seconds spent in the plant by this process (the records take differences of it).
+PLANT_SECONDS = [0.0]
+
+
 def _respond(plant, inputs: dict) -> tuple[np.ndarray, int]:
     """True poses of the whole history ``inputs`` and the number of rows that did not come to rest
     within the plant's bound (MuJoCo plant: flagged rows, see ``MujocoRow.settled``; else 0)."""
     args = (inputs["l"], inputs["tau"], inputs["cycle"], inputs["R0"], inputs["mr"])
-    if hasattr(plant, "respond_rows"):
-        rows = plant.respond_rows(*args)
-        return np.stack([r.R_tool for r in rows]), int(sum(not r.settled for r in rows))
-    return plant.respond(*args), 0
+    t0 = time.perf_counter()
+    try:
+        if hasattr(plant, "respond_rows"):
+            rows = plant.respond_rows(*args)
+            return np.stack([r.R_tool for r in rows]), int(sum(not r.settled for r in rows))
+        return plant.respond(*args), 0
+    finally:
+        PLANT_SECONDS[0] += time.perf_counter() - t0
 
 
 def _measure(plant, inputs: dict, noise, rng, start: int = 0, settled=None):
@@ -131,7 +139,7 @@ def _run_one(job: dict) -> dict:
     from csjm_opt.diagnose import diagnose
     from csjm_opt.diagnose.suggest import suggest_experiment
 
-    t0 = time.perf_counter()
+    t0, plant0 = time.perf_counter(), PLANT_SECONDS[0]
     rig, noise, plant, severities, factor = build_plant(job)
     seed = job_seed(job)
     inputs = _simulate_with_inputs(rig, plant, job["cycles"], seed + [7], noise)
@@ -149,7 +157,7 @@ def _run_one(job: dict) -> dict:
     rec["seconds_suggest"] = time.perf_counter() - t1
     rec["ambiguous"] = s is not None
     if s is None:
-        return {**rec, "seconds": time.perf_counter() - t0}
+        return {**rec, "seconds": time.perf_counter() - t0, "seconds_plant": PLANT_SECONDS[0] - plant0}
     sj = s.as_json()
     rec.update({"purpose": s.purpose, "hypotheses": s.hypotheses, "extra_rows": sj["rows"],
                 "expected_separation_sd": sj["smallest_expected_separation_sd"],
@@ -164,6 +172,7 @@ def _run_one(job: dict) -> dict:
     j2 = d2.as_json()
     rec.update({"unsettled_rows_after": unsettled2, "after": sorted(_names(j2)), "right_after": _names(j2) == want,
                 "warnings_after": j2["verdict"]["warnings"], "seconds": time.perf_counter() - t0,
+                "seconds_plant": PLANT_SECONDS[0] - plant0,
                 "truth_vs_before_sd": _separation(sj["expected_separation_sd"], want, set(rec["before"])),
                 "detected_after": [c["effect"] for c in j2["candidates"] if c.get("significant")],
                 "truth_rank_after": _evidence_rank(j2, want)})
