@@ -175,8 +175,17 @@ def _run_one(job: dict) -> dict:
                 "seconds_plant": PLANT_SECONDS[0] - plant0,
                 "truth_vs_before_sd": _separation(sj["expected_separation_sd"], want, set(rec["before"])),
                 "detected_after": [c["effect"] for c in j2["candidates"] if c.get("significant")],
-                "truth_rank_after": _evidence_rank(j2, want)})
+                "truth_rank_after": _evidence_rank(j2, want), "truth_after": _truth_status(j2, want)})
     return rec
+
+
+def _truth_status(j: dict, want: set) -> dict | None:
+    """The true model's tests in diagnosis ``j`` (significant, plausible, closes the gap, share explained)."""
+    keys = ("significant", "plausible", "closes_gap", "fraction_explained")
+    for c in j["candidates"] if len(want) == 1 else j["pairs"]:
+        if set([c["effect"]] if len(want) == 1 else c.get("effects", [])) == want:
+            return {k: c.get(k) for k in keys}
+    return None
 
 
 def _separation(seps: dict, a: set, b: set) -> float | None:
@@ -202,11 +211,21 @@ def _evidence_rank(j: dict, want: set) -> int | None:
 FAILURE_CLASSES = ("truth not among the hypotheses the rows were designed for",
                    "no rows within the limits and budget separate truth and verdict by 2 sd",
                    "the truth has the best evidence after, the decision rule names another model",
-                   "separation expected, the data do not bear it out (truth not best by evidence)")
+                   "separation expected, the data do not bear it out (truth not best by evidence)",
+                   "the true model, fitted to log and rows, does not close the gap (the plant's effect is not "
+                   "the vocabulary's law)")
 
 
 def failure_class(r: dict) -> str:
-    """Why an ambiguous log is still wrong after the experiment (the record's diagnostics)."""
+    """Why an ambiguous log is still wrong after the experiment (the record's diagnostics).
+
+    A true model that is significant and plausible but leaves part of the gap after the new
+    rows is a mismatch between the plant and the fitted law (no rows can fix that); otherwise
+    the first of: truth not targeted, no separating rows, decision rule, data.
+    """
+    t = r.get("truth_after")
+    if t and t.get("significant") and t.get("plausible") and t.get("closes_gap") is False:
+        return FAILURE_CLASSES[4]
     if not r.get("truth_in_hypotheses"):
         return FAILURE_CLASSES[0]
     sep = r.get("truth_vs_before_sd")
