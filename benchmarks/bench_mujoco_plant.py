@@ -12,8 +12,9 @@ whether the wait for rest reached ``max_settle_s`` (recorded as an unsettled row
 :class:`~csjm_opt.testbed.mujoco_plant.MujocoRow`). Reported per effect set: median and 90th
 percentile of the wall time per row, median simulated seconds per row, rows that reached the
 bound, and rows the plant refused (:class:`~csjm_opt.errors.NoEquilibrium`). ``--noslip``
-runs each case with each number of noslip iterations (the baseline is the first), and the
-largest pose difference (rad) from the first setting is printed.
+and ``--travel-tol`` run each case with each number of noslip iterations and each
+``rest_travel_tol_rad`` (0: off, the wait ends on the speed alone, as before that test
+existed); the largest pose difference (rad) from the first setting is printed.
 
 Timings on a shared machine are noisy: compare medians and ratios measured in the same run.
 """
@@ -53,10 +54,10 @@ def inputs(rig, cycles: int, seed: int) -> dict:
             "cycle": np.r_[cyc, np.full(m, cycles)], "R0": np.r_[R0, np.repeat(c.R_ref[None], m, 0)], "mr": mr}
 
 
-def run_case(rig, effects: list[str], noslip: int, rows: dict, seed: int) -> dict:
+def run_case(rig, effects: list[str], settings: dict, rows: dict, seed: int) -> dict:
     """Time one carried run; per-row wall times from the plant's progress callback."""
     base = make_plant(rig, effects, 3.0, np.random.default_rng(seed))
-    mp = as_mujoco(base, noslip_iterations=noslip)
+    mp = as_mujoco(base, **settings)
     stamps = [time.perf_counter()]
     try:
         out = mp.respond_rows(rows["l"], rows["tau"], rows["cycle"], rows["R0"], rows["mr"],
@@ -76,21 +77,25 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cycles", type=int, default=4)
     ap.add_argument("--effects", nargs="+", default=list(DEFAULT_EFFECTS))
     ap.add_argument("--noslip", nargs="+", type=int, default=[1000])
+    ap.add_argument("--travel-tol", nargs="+", type=float, default=[None],
+                    help="rest_travel_tol_rad settings (0: off; default: the plant's)")
     ap.add_argument("--json", default=None)
     args = ap.parse_args(argv)
     out: dict = {}
     print(f"MuJoCo plant, {args.cycles} cycles + 1 dead-weight cycle per rig, rigs {args.rigs}")
-    print(f"  {'effects':<34s} {'noslip':>6s} {'median ms':>10s} {'p90 ms':>8s} {'max ms':>8s} "
+    print(f"  {'effects':<34s} {'noslip':>6s} {'travel':>7s} {'median ms':>10s} {'p90 ms':>8s} {'max ms':>8s} "
           f"{'sim s':>6s} {'rows':>5s} {'bound':>5s} {'refused':>7s} {'vs first':>9s}")
     for eff in args.effects:
         effects = [] if eff == "none" else eff.split("+")
-        res_by_noslip = {}
-        for ns in args.noslip:
+        res_by_noslip: dict = {}
+        settings = [(ns, tt) for ns in args.noslip for tt in args.travel_tol]
+        for ns, tt in settings:
+            opts = {"noslip_iterations": ns} if tt is None else {"noslip_iterations": ns, "rest_travel_tol_rad": tt}
             walls, sims, unsettled, refused, R = [], [], 0, 0, {}
             for r in args.rigs:
                 rig, _ = random_rig(np.random.default_rng([1234, r]))
                 rows = inputs(rig, args.cycles, 100 + r)
-                res = run_case(rig, effects, ns, rows, 200 + r)
+                res = run_case(rig, effects, opts, rows, 200 + r)
                 walls += res["wall_s"]
                 if "error" in res:
                     refused += 1
@@ -98,8 +103,8 @@ def main(argv: list[str] | None = None) -> int:
                 sims += res["sim_s"]
                 unsettled += res["unsettled"]
                 R[r] = np.asarray(res["R"])
-            res_by_noslip[ns] = R
-            first = res_by_noslip[args.noslip[0]]
+            res_by_noslip[ns, tt] = R
+            first = res_by_noslip[settings[0]]
             diff = max((float(so3.angle_between(R[r], first[r]).max()) for r in R if r in first), default=np.nan)
             w = np.asarray(walls) * 1e3
             if not len(w):            # refused at the first row
@@ -107,8 +112,10 @@ def main(argv: list[str] | None = None) -> int:
             rec = {"median_ms": float(np.median(w)), "p90_ms": float(np.percentile(w, 90)), "max_ms": float(w.max()),
                    "median_sim_s": float(np.median(sims)) if sims else float("nan"), "rows": len(w),
                    "unsettled": unsettled, "refused": refused, "max_pose_diff_rad": diff}
-            out[f"{eff}@{ns}"] = rec
-            print(f"  {eff:<34s} {ns:6d} {rec['median_ms']:10.1f} {rec['p90_ms']:8.1f} {rec['max_ms']:8.1f} "
+            out[f"{eff}@{ns}@{tt}"] = rec
+            label = "plant" if tt is None else f"{tt:.0e}"
+            print(f"  {eff:<34s} {ns:6d} {label:>7s} {rec['median_ms']:10.1f} {rec['p90_ms']:8.1f} "
+                  f"{rec['max_ms']:8.1f} "
                   f"{rec['median_sim_s']:6.2f} {len(w):5d} {unsettled:5d} {refused:7d} {diff:9.1e}", flush=True)
     if args.json:
         Path(args.json).write_text(json.dumps(out, indent=2))

@@ -241,3 +241,22 @@ def test_former_names_are_the_renamed_classes():
 
     assert tb.MujocoPlant is tb.MujocoTestbedPlant and tb.Protocol is tb.LogProtocol
     assert tb.MujocoTestbedPlant is not ControlPlant and tb.LogProtocol is not IdentificationProtocol
+
+
+def test_remaining_travel_is_the_distance_left_to_the_equilibrium(rig, cycle):
+    """Overdamped approach: ``|K^-1 c v|`` is the distance still to go (toolkit statics), up to the inertia term."""
+    import mujoco
+
+    from csjm_opt.model.mjcf import quat_wxyz
+
+    eq = solve_equilibrium(rig, cycle.rest_lengths_m, cycle.tau_ext_A_Nm[2], R_init=cycle.R_ref)
+    engine = Engine(as_mujoco(Plant.nominal(rig)), cycle.rest_lengths_m)
+    engine.set_inputs(cycle.rest_lengths_m, cycle.tau_ext_A_Nm[2], np.zeros(3))
+    engine.d.qpos[:4] = quat_wxyz(eq.R @ so3.exp(np.array([0.02, -0.01, 0.015])))
+    mujoco.mj_forward(engine.m, engine.d)
+    engine.run(100)                                      # past the fast transient
+    for _ in range(4):
+        engine.run(50)
+        left = so3.angle_between(_rot(engine.d.qpos[:4]), eq.R)
+        assert left > 1e-5
+        assert engine.remaining_travel() == pytest.approx(left, rel=0.1)

@@ -26,6 +26,8 @@ CHECK_STEPS = 25
 FRICTIONLESS_SPEED_TOL = 1e-4
 #: Relative excess over a friction bound still counted as within it (a slipping element sits on its bound).
 BOUND_SLACK = 1e-4
+#: Below this joint speed (rad/s) a frictional row's remaining quasi-static travel is checked.
+TRAVEL_CHECK_SPEED = 1e-4
 
 
 def tendon_jacobian(m: mujoco.MjModel, d: mujoco.MjData) -> np.ndarray:
@@ -105,6 +107,7 @@ class Engine:
         self._v3 = np.zeros(3)
         self.tool_body = self.m.nbody - 1          # 'tool' with a link, else 'platform'
         self.t = 0.0
+        self._scratch = mujoco.MjData(self.m)     # finite differences without touching the run's state
 
     # ------------------------------------------------------------ forces
     def set_inputs(self, l: np.ndarray, tau: np.ndarray, mr: np.ndarray) -> None:
@@ -209,38 +212,86 @@ class Engine:
         mujoco.mj_forward(self.m, self.d)
 
     def _wait(self) -> bool:
-        """Run until the joint speed is below the tolerance, at most ``max_settle_s``; whether it got there."""
+        """Run until at rest, at most ``max_settle_s``; whether it got there.
+
+        At rest: the joint speed is below ``speed_tol_rad_per_s`` (frictionless: below
+        ``FRICTIONLESS_SPEED_TOL``, Newton's method finishes), or, with friction, the
+        quasi-static travel left (:meth:`remaining_travel`) is below ``rest_travel_tol_rad``.
+        """
         m, d = self.m, self.d
         q_start = d.qpos[:4].copy()
         # without friction Newton's method finishes the settling: the engine only has to reach the basin
         tol = self.mp.speed_tol_rad_per_s if self.frictional else FRICTIONLESS_SPEED_TOL
+        travel_tol = self.mp.rest_travel_tol_rad if self.frictional else 0.0
         for _ in range(max(1, int(round(self.mp.max_settle_s / (m.opt.timestep * CHECK_STEPS))))):
             self.run(CHECK_STEPS)
-            if np.linalg.norm(d.qvel) < tol:
+            speed = float(np.linalg.norm(d.qvel))
+            if speed < tol or (travel_tol > 0 and speed < TRAVEL_CHECK_SPEED
+                               and self.remaining_travel() < travel_tol):
                 return True
             if not np.all(np.isfinite(d.qpos)) or abs(float(np.dot(q_start, d.qpos[:4]))) < np.cos(np.pi / 4):
                 raise NoEquilibrium("the MuJoCo plant fell over (more than 90 deg from the row's start)",
                                     "fell", np.nan)
         return False
 
+    def _moved(self, q: np.ndarray, dofs: np.ndarray, z_sub: np.ndarray) -> np.ndarray:
+        z = np.zeros(self.nv)
+        z[dofs] = z_sub
+        out = q.copy()
+        mujoco.mj_integratePos(self.m, out, z, 1.0)
+        return out
+
+    def net_jacobian(self, q: np.ndarray, dofs: np.ndarray, h: float = 1e-7) -> np.ndarray:
+        """``d net / d z`` over ``dofs`` at ``qpos = q`` (central differences under ``mj_integratePos``).
+
+        Parameters
+        ----------
+        q : (nq,) array
+        dofs : int array
+        h : float, optional
+            Step (rad).
+
+        Returns
+        -------
+        (len(dofs), len(dofs)) array
+        """
+        E = np.eye(len(dofs))
+        return np.column_stack([(self.net(self._moved(q, dofs, h * e))[dofs]
+                                 - self.net(self._moved(q, dofs, -h * e))[dofs]) / (2 * h) for e in E])
+
+    def remaining_travel(self) -> float:
+        """Quasi-static distance (rad) still to travel: ``|K^-1 (c v)|``.
+
+        ``c v`` is the joints' damping force at the current speed, ``K = -d net / d z`` the
+        frictionless tangent stiffness. Near rest an overdamped motion carries the force imbalance
+        by its damping; it stops after about that force over the stiffness. Stuck friction elements
+        only stiffen the plant, so the frictionless ``K`` bounds the travel from above (``inf``
+        where ``K`` is not positive definite). MuJoCo's soft friction keeps creeping far beyond
+        this (a regularisation, not physics).
+
+        Returns
+        -------
+        float
+        """
+        mujoco.mj_copyData(self._scratch, self.m, self.d)
+        d, self.d = self.d, self._scratch         # the finite differences run on a copy
+        try:
+            K = -self.net_jacobian(d.qpos.copy(), np.arange(self.nv))
+        finally:
+            self.d = d
+        K = 0.5 * (K + K.T)
+        if np.linalg.eigvalsh(K).min() <= 0:
+            return float("inf")
+        return float(np.linalg.norm(np.linalg.solve(K, np.asarray(self.m.dof_damping) * np.asarray(d.qvel))))
+
     def polish(self, dofs: np.ndarray, max_iter: int = 20, h: float = 1e-7) -> float:
         """Newton's method on :meth:`net` over ``dofs`` (others held); returns the largest net force left."""
         q = self.d.qpos.copy()
-
-        def moved(z_sub: np.ndarray) -> np.ndarray:
-            z = np.zeros(self.nv)
-            z[dofs] = z_sub
-            out = q.copy()
-            mujoco.mj_integratePos(self.m, out, z, 1.0)
-            return out
-
         r = self.net(q)[dofs]
         for _ in range(max_iter):
             if np.abs(r).max() < 1e-12:
                 break
-            E = np.eye(len(dofs))
-            D = np.column_stack([(self.net(moved(h * e))[dofs] - self.net(moved(-h * e))[dofs]) / (2 * h) for e in E])
-            q = moved(-np.linalg.solve(D, r))
+            q = self._moved(q, dofs, -np.linalg.solve(self.net_jacobian(q, dofs, h), r))
             r = self.net(q)[dofs]
         self.d.qpos[:] = q
         self.d.qvel[:] = 0.0

@@ -111,6 +111,14 @@ class MujocoTestbedPlant:
         friction (large moves: slow enough to stay quasi-static).
     speed_tol_rad_per_s : float
         Joint speed below which the engine has settled.
+    rest_travel_tol_rad : float
+        With friction, a row is also at rest when the quasi-static travel left (the joints'
+        damping force at the current speed over the tangent stiffness) is below this (default
+        0: off). MuJoCo's soft friction lets a row on the verge of slipping creep on at 1e-6 to
+        1e-4 rad/s for seconds (noslip reduces, does not remove it), far beyond that travel:
+        without this test such a row waits the full ``max_settle_s``. At 1e-5 such rows stop
+        4-6x sooner, but a row stopped so creeps on by a few 1e-6 rad in the next row
+        (``benchmarks/bench_mujoco_plant.py --travel-tol``; docs/guide/diagnosis.md).
     noslip_iterations : int
         MuJoCo's noslip solver iterations (0: soft friction creeps).
     noslip_tolerance : float
@@ -121,6 +129,7 @@ class MujocoTestbedPlant:
     ramp_s: float = 0.3
     max_settle_s: float = 6.0
     speed_tol_rad_per_s: float = 1e-6
+    rest_travel_tol_rad: float = 0.0
     cycle_ramp_s: float = 2.0
     noslip_iterations: int = 1000
     noslip_tolerance: float = 1e-12
