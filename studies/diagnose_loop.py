@@ -236,10 +236,12 @@ def failure_class(r: dict) -> str:
     return FAILURE_CLASSES[3]
 
 
-def summarise(records: list[dict]) -> str:
+def summarise(records: list[dict], failed: list[dict] | None = None) -> str:
+    """The study's tables (per plant); ``failed``: cases that ended in an error (counted, listed)."""
     def rate(rs, ok):
         return f"{sum(map(ok, rs))}/{len(rs)} ({sum(map(ok, rs)) / len(rs):.0%})" if rs else "-"
 
+    failed = failed or []
     lines = []
     for plant in sorted({r["plant"] for r in records}):
         rp = [r for r in records if r["plant"] == plant]
@@ -256,6 +258,18 @@ def summarise(records: list[dict]) -> str:
             lines.append(f"| {g} | {len(rs)} | {rate(rs, lambda r: r['right_before'])} | {len(a)} | "
                          f"{rate(a, lambda r: r['right_before'])} | {rate(a, lambda r: r['right_after'])} | "
                          f"{rows:.0f} | {sep:.1f} |")
+        fp = [r for r in failed if r["plant"] == plant]
+        if fp:
+            lines += ["", f"Cases that ended in an error (not counted above): {len(fp)}: "
+                      + "; ".join(f"{'+'.join(r['effects'])} ({r['group']}, rig {r['rig']}): {r['error']}" for r in fp)]
+        timed = [r for r in rp if "seconds_plant" in r]
+        if timed:
+            wall, plant_s = (np.median([r[k] for r in timed]) for k in ("seconds", "seconds_plant"))
+            lines += ["", f"Wall time per case (median, shared box): {wall:.0f} s, "
+                      f"of which in the plant {plant_s:.0f} s; rows that did not "
+                      f"come to rest within the plant's bound (flagged, certified): "
+                      f"{sum(r.get('unsettled_rows', 0) + r.get('unsettled_rows_after', 0) for r in timed)} "
+                      f"in {len(timed)} cases."]
         wrong = [r for r in amb if not r["right_after"]]
         lines += ["", f"Ambiguous logs wrong after the experiment: {len(wrong)} (right before -> wrong after: "
                       f"{sum(r['right_before'] for r in wrong)}). Why:", "", "| class | logs |", "|---|---|"]
@@ -346,7 +360,7 @@ def main(argv: list[str] | None = None) -> int:
     records = finished(done, path)
     if not records:
         return 0
-    text = summarise(records)
+    text = summarise(records, [r for r in done.values() if "error" in r])
     out.with_suffix(".md").write_text(text)
     figure(records, out.with_suffix(".png"))
     print(text)
