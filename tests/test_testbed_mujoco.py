@@ -260,3 +260,13 @@ def test_remaining_travel_is_the_distance_left_to_the_equilibrium(rig, cycle):
         left = so3.angle_between(_rot(engine.d.qpos[:4]), eq.R)
         assert left > 1e-5
         assert engine.remaining_travel() == pytest.approx(left, rel=0.1)
+
+
+def test_frictionless_rows_settle_when_the_move_outlasts_one_wait(rig, cycle):
+    """A wait far shorter than the move (as a long move on a soft rig): further waits, then Newton's method,
+    reach the toolkit's stable equilibrium."""
+    args = _args(cycle)
+    rows = as_mujoco(Plant.nominal(rig), max_settle_s=0.05, ramp_s=0.01).respond_rows(*args)
+    for i, row in enumerate(rows):
+        eq = solve_equilibrium(rig, cycle.rest_lengths_m, cycle.tau_ext_A_Nm[i], R_init=cycle.R_ref)
+        assert so3.angle_between(row.R_tool, eq.R) < 1e-9

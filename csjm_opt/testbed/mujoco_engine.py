@@ -28,6 +28,12 @@ FRICTIONLESS_SPEED_TOL = 1e-4
 BOUND_SLACK = 1e-4
 #: Below this joint speed (rad/s) a frictional row's remaining quasi-static travel is checked.
 TRAVEL_CHECK_SPEED = 1e-4
+#: A frictionless row hands over to Newton's method once the quasi-static travel left is below this (rad).
+NEWTON_HANDOVER_RAD = 0.02
+#: Below this joint speed (rad/s) a frictionless row's travel left is checked for the hand-over.
+HANDOVER_CHECK_SPEED = 0.1
+#: Waits of ``max_settle_s`` a frictionless row may take before it is refused (it needs no history: only CPU).
+FRICTIONLESS_WAITS = 4
 
 
 def tendon_jacobian(m: mujoco.MjModel, d: mujoco.MjData) -> np.ndarray:
@@ -214,20 +220,23 @@ class Engine:
     def _wait(self) -> bool:
         """Run until at rest, at most ``max_settle_s``; whether it got there.
 
-        At rest: the joint speed is below ``speed_tol_rad_per_s`` (frictionless: below
-        ``FRICTIONLESS_SPEED_TOL``, Newton's method finishes), or, with friction, the
+        At rest: the joint speed is below ``speed_tol_rad_per_s``, or, with friction, the
         quasi-static travel left (:meth:`remaining_travel`) is below ``rest_travel_tol_rad``.
+        Without friction the engine only has to bring the pose into the basin of its
+        equilibrium, Newton's method finishes: the speed below ``FRICTIONLESS_SPEED_TOL`` or the
+        travel left below ``NEWTON_HANDOVER_RAD`` (a soft direction of the rig, heavily
+        overdamped by a damping set for the stiff ones, would otherwise creep for many seconds).
         """
         m, d = self.m, self.d
         q_start = d.qpos[:4].copy()
-        # without friction Newton's method finishes the settling: the engine only has to reach the basin
-        tol = self.mp.speed_tol_rad_per_s if self.frictional else FRICTIONLESS_SPEED_TOL
-        travel_tol = self.mp.rest_travel_tol_rad if self.frictional else 0.0
+        if self.frictional:
+            tol, travel_tol, check_below = self.mp.speed_tol_rad_per_s, self.mp.rest_travel_tol_rad, TRAVEL_CHECK_SPEED
+        else:
+            tol, travel_tol, check_below = FRICTIONLESS_SPEED_TOL, NEWTON_HANDOVER_RAD, HANDOVER_CHECK_SPEED
         for _ in range(max(1, int(round(self.mp.max_settle_s / (m.opt.timestep * CHECK_STEPS))))):
             self.run(CHECK_STEPS)
             speed = float(np.linalg.norm(d.qvel))
-            if speed < tol or (travel_tol > 0 and speed < TRAVEL_CHECK_SPEED
-                               and self.remaining_travel() < travel_tol):
+            if speed < tol or (travel_tol > 0 and speed < check_below and self.remaining_travel() < travel_tol):
                 return True
             if not np.all(np.isfinite(d.qpos)) or abs(float(np.dot(q_start, d.qpos[:4]))) < np.cos(np.pi / 4):
                 raise NoEquilibrium("the MuJoCo plant fell over (more than 90 deg from the row's start)",
@@ -273,16 +282,31 @@ class Engine:
         -------
         float
         """
+        K = self.stiffness()
+        if np.linalg.eigvalsh(K).min() <= 0:
+            return float("inf")
+        return float(np.linalg.norm(np.linalg.solve(K, np.asarray(self.m.dof_damping) * np.asarray(self.d.qvel))))
+
+    def stiffness(self) -> np.ndarray:
+        """Frictionless tangent stiffness ``-d net / d z`` (symmetric part) at the current pose, all dofs.
+
+        Computed on a copy of the engine data (the run's state is not touched).
+
+        Returns
+        -------
+        (nv, nv) array
+        """
         mujoco.mj_copyData(self._scratch, self.m, self.d)
-        d, self.d = self.d, self._scratch         # the finite differences run on a copy
+        d, self.d = self.d, self._scratch
         try:
             K = -self.net_jacobian(d.qpos.copy(), np.arange(self.nv))
         finally:
             self.d = d
-        K = 0.5 * (K + K.T)
-        if np.linalg.eigvalsh(K).min() <= 0:
-            return float("inf")
-        return float(np.linalg.norm(np.linalg.solve(K, np.asarray(self.m.dof_damping) * np.asarray(d.qvel))))
+        return 0.5 * (K + K.T)
+
+    def _stable(self) -> bool:
+        """Whether the frictionless tangent stiffness at the current pose is positive definite."""
+        return bool(np.linalg.eigvalsh(self.stiffness()).min() > 0)
 
     def polish(self, dofs: np.ndarray, max_iter: int = 20, h: float = 1e-7) -> float:
         """Newton's method on :meth:`net` over ``dofs`` (others held); returns the largest net force left."""
@@ -291,8 +315,14 @@ class Engine:
         for _ in range(max_iter):
             if np.abs(r).max() < 1e-12:
                 break
-            q = self._moved(q, dofs, -np.linalg.solve(self.net_jacobian(q, dofs, h), r))
-            r = self.net(q)[dofs]
+            step = -np.linalg.solve(self.net_jacobian(q, dofs, h), r)
+            for _ in range(8):              # backtracking: a step that does not reduce the net force is halved
+                q_new = self._moved(q, dofs, step)
+                r_new = self.net(q_new)[dofs]
+                if np.abs(r_new).max() < np.abs(r).max():
+                    break
+                step = 0.5 * step
+            q, r = q_new, r_new
         self.d.qpos[:] = q
         self.d.qvel[:] = 0.0
         self.d.qfrc_applied[:] = 0.0
@@ -316,10 +346,23 @@ class Engine:
         speed = float(np.linalg.norm(self.d.qvel))
         cert = None
         if not self.frictional:
-            left = self.polish(np.arange(self.nv))
+            for _ in range(FRICTIONLESS_WAITS):
+                q_wait, v_wait = self.d.qpos.copy(), self.d.qvel.copy()
+                left = self.polish(np.arange(self.nv))
+                if left <= 1e-8 and self._stable():
+                    break
+                # not yet in the basin (a long move, e.g. to a new cycle on a soft rig): wait on from there
+                self.d.qpos[:], self.d.qvel[:] = q_wait, v_wait
+                mujoco.mj_forward(self.m, self.d)
+                at_rest = self._wait()
+            else:
+                left = self.polish(np.arange(self.nv))
             if left > 1e-8:
                 raise NoEquilibrium(f"MuJoCo plant: row {row} did not settle (net force {left:.2e} N m left)",
                                     "diverged", left)
+            if not self._stable():
+                raise NoEquilibrium(f"MuJoCo plant: row {row} settled at an unstable equilibrium", "unstable",
+                                    0.0)
         else:
             # a row may still slide slowly when the wait ends (a cable on the verge of slipping creeps
             # under the joint's damping); the damping force at that speed is a real force of the plant
