@@ -84,7 +84,7 @@ def test_tendon_jacobian_is_the_derivative_of_the_tendon_lengths(rig):
     """The dense tendon Jacobian (MuJoCo 4 stores it sparse) against central differences of the lengths."""
     import mujoco
 
-    from csjm_opt.testbed.mujoco_engine import tendon_jacobian
+    from csjm_opt.testbed.mujoco_statics import tendon_jacobian
 
     plant = dataclasses.replace(Plant.nominal(rig), link_compliance_rad_per_Nm=np.diag([0.006, 0.004, 0.008]))
     engine = Engine(as_mujoco(plant), np.full(6, 0.1))
