@@ -212,15 +212,14 @@ FAILURE_CLASSES = ("truth not among the hypotheses the rows were designed for",
                    "no rows within the limits and budget separate truth and verdict by 2 sd",
                    "the truth has the best evidence after, the decision rule names another model",
                    "separation expected, the data do not bear it out (truth not best by evidence)",
-                   "the true model, fitted to log and rows, does not close the gap (the plant's effect is not "
-                   "the vocabulary's law)")
+                   "the true model, fitted to log and rows, is significant but does not close the gap")
 
 
 def failure_class(r: dict) -> str:
     """Why an ambiguous log is still wrong after the experiment (the record's diagnostics).
 
     A true model that is significant and plausible but leaves part of the gap after the new
-    rows is a mismatch between the plant and the fitted law (no rows can fix that); otherwise
+    rows (its fit fails on them, or the plant's effect is not the vocabulary's law); otherwise
     the first of: truth not targeted, no separating rows, decision rule, data.
     """
     t = r.get("truth_after")
