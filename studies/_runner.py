@@ -27,10 +27,21 @@ def read_records(path: Path) -> dict[str, dict]:
 
 
 def pool_stream(run_one: Callable[[dict], dict], todo: list[dict], workers: int) -> Iterator[dict]:
-    """Records of ``todo`` as a process pool of ``workers`` finishes them."""
-    with concurrent.futures.ProcessPoolExecutor(workers) as pool:
+    """Records of ``todo`` as a process pool of ``workers`` finishes them (one worker: in this process).
+
+    An exception in a case ends the stream at once: the cases still queued are cancelled (a pool
+    left to finish them would run for hours with nothing recorded and no progress shown).
+    """
+    if workers <= 1:
+        for j in todo:
+            yield run_one(j)
+        return
+    pool = concurrent.futures.ProcessPoolExecutor(workers)
+    try:
         for f in concurrent.futures.as_completed([pool.submit(run_one, j) for j in todo]):
             yield f.result()
+    finally:
+        pool.shutdown(wait=False, cancel_futures=True)
 
 
 def run_and_append(records: Iterable[dict], total: int, path: Path, done: dict[str, dict], desc: str,

@@ -75,27 +75,46 @@ def _simulate_with_inputs(rig, plant, cycles: int, seed: list[int], noise):
         tau = np.concatenate([c.tau_ext_A_Nm for c in cs])
         R0 = np.concatenate([np.repeat(c.R_ref[None], len(c.alphas), 0) for c in cs])
         try:
-            plant.respond(l, tau, cyc, R0)
-            return {"cycle": cyc, "l": l, "tau": tau, "R0": R0}
+            settled = _respond(plant, {"l": l, "tau": tau, "cycle": cyc, "R0": R0, "mr": np.zeros_like(tau)})
+            return {"cycle": cyc, "l": l, "tau": tau, "R0": R0, "settled": settled}
         except NoEquilibrium:
             continue
     raise NoEquilibrium("no design of this experiment has an equilibrium on the plant", "diverged", float("nan"))
 
 
-def _measure(plant, inputs: dict, noise, rng, start: int = 0):
-    """Noisy log of the rows ``start:`` of the whole history ``inputs`` (the plant steps all of it)."""
+#: Wall seconds spent in the plant by this process (the records take differences of it).
+PLANT_SECONDS = [0.0]
+
+
+def _respond(plant, inputs: dict) -> tuple[np.ndarray, int]:
+    """True poses of the whole history ``inputs`` and the number of rows that did not come to rest
+    within the plant's bound (MuJoCo plant: flagged rows, see ``MujocoRow.settled``; else 0)."""
+    args = (inputs["l"], inputs["tau"], inputs["cycle"], inputs["R0"], inputs["mr"])
+    t0 = time.perf_counter()
+    try:
+        if hasattr(plant, "respond_rows"):
+            rows = plant.respond_rows(*args)
+            return np.stack([r.R_tool for r in rows]), int(sum(not r.settled for r in rows))
+        return plant.respond(*args), 0
+    finally:
+        PLANT_SECONDS[0] += time.perf_counter() - t0
+
+
+def _measure(plant, inputs: dict, noise, rng, start: int = 0, settled=None):
+    """Noisy log of the rows ``start:`` of the whole history ``inputs`` (the plant steps all of it,
+    unless ``settled``, its result from :func:`_respond`, is given) and the history's unsettled rows."""
     from csjm_opt import so3
     from csjm_opt.measurement.logfile import MeasurementLog
     from csjm_opt.model import kinematics as kin
 
-    mr = inputs.get("mr", np.zeros_like(inputs["tau"]))
-    R_true = plant.respond(inputs["l"], inputs["tau"], inputs["cycle"], inputs["R0"], mr)
+    mr = inputs.setdefault("mr", np.zeros_like(inputs["tau"]))
+    R_true, unsettled = _respond(plant, inputs) if settled is None else settled
     tau = inputs["tau"] + kin.weight_moment(R_true, mr, np.asarray(plant.rig.gravity_B_m_per_s2))
     tau_meas = plant.measured_moment(tau)[start:]
     n = len(tau_meas)
     tau_meas = tau_meas + rng.normal(size=(n, 3)) * np.asarray(noise.tau_sigma_Nm)
     R_meas = plant.measured_pose(R_true[start:]) @ so3.exp(rng.normal(size=(n, 3)) * noise.angle_sigma_rad)
-    return MeasurementLog.from_arrays(inputs["cycle"][start:], inputs["l"][start:], tau_meas, R_meas)
+    return MeasurementLog.from_arrays(inputs["cycle"][start:], inputs["l"][start:], tau_meas, R_meas), unsettled
 
 
 def _names(j: dict) -> set[str]:
@@ -110,6 +129,8 @@ def run_one(job: dict) -> dict:
         return _run_one(job)
     except CsjmError as exc:
         return {**job, "error": f"{type(exc).__name__}: {exc}"}
+    except Exception as exc:     # a defect: recorded (with its kind) so the rest of the study still runs
+        return {**job, "error": f"defect: {type(exc).__name__}: {exc}"}
 
 
 def _run_one(job: dict) -> dict:
@@ -118,22 +139,25 @@ def _run_one(job: dict) -> dict:
     from csjm_opt.diagnose import diagnose
     from csjm_opt.diagnose.suggest import suggest_experiment
 
-    t0 = time.perf_counter()
+    t0, plant0 = time.perf_counter(), PLANT_SECONDS[0]
     rig, noise, plant, severities, factor = build_plant(job)
     seed = job_seed(job)
     inputs = _simulate_with_inputs(rig, plant, job["cycles"], seed + [7], noise)
-    log = _measure(plant, inputs, noise, np.random.default_rng(seed + [8]))
+    # the plant is deterministic: the history simulated to find a design with an equilibrium is the log's
+    log, unsettled = _measure(plant, inputs, noise, np.random.default_rng(seed + [8]),
+                              settled=inputs.pop("settled"))
     d = diagnose(rig, log)
     j = d.as_json()
     want = truth(job)
     rec = {**job, "truth": sorted(want), "severities": severities, "noise_factor": factor, "rows": len(log),
-           "before": sorted(_names(j)), "right_before": _names(j) == want, "warnings_before": j["verdict"]["warnings"]}
+           "unsettled_rows": unsettled, "before": sorted(_names(j)), "right_before": _names(j) == want,
+           "warnings_before": j["verdict"]["warnings"]}
     t1 = time.perf_counter()
     s = suggest_experiment(rig, d, job.get("max_rows", 60), seed=int(sum(seed)) % 2 ** 31)
     rec["seconds_suggest"] = time.perf_counter() - t1
     rec["ambiguous"] = s is not None
     if s is None:
-        return {**rec, "seconds": time.perf_counter() - t0}
+        return {**rec, "seconds": time.perf_counter() - t0, "seconds_plant": PLANT_SECONDS[0] - plant0}
     sj = s.as_json()
     rec.update({"purpose": s.purpose, "hypotheses": s.hypotheses, "extra_rows": sj["rows"],
                 "expected_separation_sd": sj["smallest_expected_separation_sd"],
@@ -143,15 +167,25 @@ def _run_one(job: dict) -> dict:
              "R0": np.concatenate([inputs["R0"], s.planned_R]),
              "mr": np.r_[np.zeros_like(inputs["tau"]),
                          [np.zeros(3) if ld is None else ld.mass_kg * np.asarray(ld.point_A_m) for ld in s.loads]]}
-    extra = _measure(plant, whole, noise, np.random.default_rng(seed + [9]), start=len(log))
+    extra, unsettled2 = _measure(plant, whole, noise, np.random.default_rng(seed + [9]), start=len(log))
     d2 = diagnose(rig, log, extra=extra)
     j2 = d2.as_json()
-    rec.update({"after": sorted(_names(j2)), "right_after": _names(j2) == want,
+    rec.update({"unsettled_rows_after": unsettled2, "after": sorted(_names(j2)), "right_after": _names(j2) == want,
                 "warnings_after": j2["verdict"]["warnings"], "seconds": time.perf_counter() - t0,
+                "seconds_plant": PLANT_SECONDS[0] - plant0,
                 "truth_vs_before_sd": _separation(sj["expected_separation_sd"], want, set(rec["before"])),
                 "detected_after": [c["effect"] for c in j2["candidates"] if c.get("significant")],
-                "truth_rank_after": _evidence_rank(j2, want)})
+                "truth_rank_after": _evidence_rank(j2, want), "truth_after": _truth_status(j2, want)})
     return rec
+
+
+def _truth_status(j: dict, want: set) -> dict | None:
+    """The true model's tests in diagnosis ``j`` (significant, plausible, closes the gap, share explained)."""
+    keys = ("significant", "plausible", "closes_gap", "fraction_explained")
+    for c in j["candidates"] if len(want) == 1 else j["pairs"]:
+        if set([c["effect"]] if len(want) == 1 else c.get("effects", [])) == want:
+            return {k: c.get(k) for k in keys}
+    return None
 
 
 def _separation(seps: dict, a: set, b: set) -> float | None:
@@ -177,11 +211,20 @@ def _evidence_rank(j: dict, want: set) -> int | None:
 FAILURE_CLASSES = ("truth not among the hypotheses the rows were designed for",
                    "no rows within the limits and budget separate truth and verdict by 2 sd",
                    "the truth has the best evidence after, the decision rule names another model",
-                   "separation expected, the data do not bear it out (truth not best by evidence)")
+                   "separation expected, the data do not bear it out (truth not best by evidence)",
+                   "the true model, fitted to log and rows, is significant but does not close the gap")
 
 
 def failure_class(r: dict) -> str:
-    """Why an ambiguous log is still wrong after the experiment (the record's diagnostics)."""
+    """Why an ambiguous log is still wrong after the experiment (the record's diagnostics).
+
+    A true model that is significant and plausible but leaves part of the gap after the new
+    rows (its fit fails on them, or the plant's effect is not the vocabulary's law); otherwise
+    the first of: truth not targeted, no separating rows, decision rule, data.
+    """
+    t = r.get("truth_after")
+    if t and t.get("significant") and t.get("plausible") and t.get("closes_gap") is False:
+        return FAILURE_CLASSES[4]
     if not r.get("truth_in_hypotheses"):
         return FAILURE_CLASSES[0]
     sep = r.get("truth_vs_before_sd")
@@ -192,10 +235,12 @@ def failure_class(r: dict) -> str:
     return FAILURE_CLASSES[3]
 
 
-def summarise(records: list[dict]) -> str:
+def summarise(records: list[dict], failed: list[dict] | None = None) -> str:
+    """The study's tables (per plant); ``failed``: cases that ended in an error (counted, listed)."""
     def rate(rs, ok):
         return f"{sum(map(ok, rs))}/{len(rs)} ({sum(map(ok, rs)) / len(rs):.0%})" if rs else "-"
 
+    failed = failed or []
     lines = []
     for plant in sorted({r["plant"] for r in records}):
         rp = [r for r in records if r["plant"] == plant]
@@ -212,6 +257,18 @@ def summarise(records: list[dict]) -> str:
             lines.append(f"| {g} | {len(rs)} | {rate(rs, lambda r: r['right_before'])} | {len(a)} | "
                          f"{rate(a, lambda r: r['right_before'])} | {rate(a, lambda r: r['right_after'])} | "
                          f"{rows:.0f} | {sep:.1f} |")
+        fp = [r for r in failed if r["plant"] == plant]
+        if fp:
+            lines += ["", f"Cases that ended in an error (not counted above): {len(fp)}: "
+                      + "; ".join(f"{'+'.join(r['effects'])} ({r['group']}, rig {r['rig']}): {r['error']}" for r in fp)]
+        timed = [r for r in rp if "seconds_plant" in r]
+        if timed:
+            wall, plant_s = (np.median([r[k] for r in timed]) for k in ("seconds", "seconds_plant"))
+            lines += ["", f"Wall time per case (median, shared box): {wall:.0f} s, "
+                      f"of which in the plant {plant_s:.0f} s; rows that did not "
+                      f"come to rest within the plant's bound (flagged, certified): "
+                      f"{sum(r.get('unsettled_rows', 0) + r.get('unsettled_rows_after', 0) for r in timed)} "
+                      f"in {len(timed)} cases."]
         wrong = [r for r in amb if not r["right_after"]]
         lines += ["", f"Ambiguous logs wrong after the experiment: {len(wrong)} (right before -> wrong after: "
                       f"{sum(r['right_before'] for r in wrong)}). Why:", "", "| class | logs |", "|---|---|"]
@@ -302,7 +359,7 @@ def main(argv: list[str] | None = None) -> int:
     records = finished(done, path)
     if not records:
         return 0
-    text = summarise(records)
+    text = summarise(records, [r for r in done.values() if "error" in r])
     out.with_suffix(".md").write_text(text)
     figure(records, out.with_suffix(".png"))
     print(text)

@@ -69,6 +69,52 @@ def test_hole_offsets_hardening_and_link_match_the_quasi_static_plant(rig, cycle
             assert so3.angle_between(row.R_tool, R_q[i]) < 1e-9, effect
 
 
+def test_hardening_with_a_link_matches_the_quasi_static_plant(rig, cycle):
+    """Hardening on a plant with a link (six dofs: the tendons span only the platform's three)."""
+    args = _args(cycle)
+    plant = make_plant(rig, ["cable_hardening", "link_compliance"], 2.0, np.random.default_rng(3))
+    R_q = plant.respond(*args)
+    rows = as_mujoco(plant).respond_rows(*args)
+    for i, row in enumerate(rows):
+        assert row.settled
+        assert so3.angle_between(row.R_tool, R_q[i]) < 1e-9
+
+
+def test_tendon_jacobian_is_the_derivative_of_the_tendon_lengths(rig):
+    """The dense tendon Jacobian (MuJoCo 4 stores it sparse) against central differences of the lengths."""
+    import mujoco
+
+    from csjm_opt.testbed.mujoco_statics import tendon_jacobian
+
+    plant = dataclasses.replace(Plant.nominal(rig), link_compliance_rad_per_Nm=np.diag([0.006, 0.004, 0.008]))
+    engine = Engine(as_mujoco(plant), np.full(6, 0.1))
+    m, d = engine.m, engine.d
+    rng = np.random.default_rng(8)
+    q0 = np.zeros(m.nq)
+    q0[:4], q0[4:8] = _quat(0.2 * rng.normal(size=3)), _quat(0.05 * rng.normal(size=3))
+    d.qpos[:] = q0
+    mujoco.mj_forward(m, d)
+    J = tendon_jacobian(m, d)
+    assert J.shape == (m.ntendon, m.nv)
+    h = 1e-6
+    fd = np.zeros_like(J)
+    for k in range(m.nv):
+        for sgn in (1.0, -1.0):
+            q = q0.copy()
+            mujoco.mj_integratePos(m, q, sgn * h * np.eye(m.nv)[k], 1.0)
+            d.qpos[:] = q
+            mujoco.mj_forward(m, d)
+            fd[:, k] += sgn * np.asarray(d.ten_length) / (2 * h)
+    np.testing.assert_allclose(J, fd, atol=1e-8)
+    assert np.abs(J[:, 3:]).max() == 0.0 and np.abs(J[:, :3]).min() > 0.0    # the link moves no tendon
+
+
+def _quat(v):
+    from csjm_opt.model.mjcf import quat_wxyz
+
+    return quat_wxyz(so3.exp(v))
+
+
 def test_link_turns_the_tool_by_the_compliance_times_the_tool_moment(rig, cycle):
     C = np.diag([0.006, 0.004, 0.008])
     plant = dataclasses.replace(Plant.nominal(rig), link_compliance_rad_per_Nm=C)
@@ -184,3 +230,43 @@ def test_joint_friction_agrees_between_the_plants(rig, cycle):
         size = so3.angle_between(R_n[i], R_q[i])
         assert size > 1e-3
         assert so3.angle_between(R_m[i], R_q[i]) < 0.1 * size
+
+
+def test_former_names_are_the_renamed_classes():
+    """``testbed.MujocoPlant`` and ``testbed.Protocol`` still work (renamed: the control loop's
+    ``MujocoPlant`` and the identification ``measurement.Protocol`` are other things)."""
+    import csjm_opt.testbed as tb
+    from csjm_opt.control.plants import MujocoPlant as ControlPlant
+    from csjm_opt.measurement import Protocol as IdentificationProtocol
+
+    assert tb.MujocoPlant is tb.MujocoTestbedPlant and tb.Protocol is tb.LogProtocol
+    assert tb.MujocoTestbedPlant is not ControlPlant and tb.LogProtocol is not IdentificationProtocol
+
+
+def test_remaining_travel_is_the_distance_left_to_the_equilibrium(rig, cycle):
+    """Overdamped approach: ``|K^-1 c v|`` is the distance still to go (toolkit statics), up to the inertia term."""
+    import mujoco
+
+    from csjm_opt.model.mjcf import quat_wxyz
+
+    eq = solve_equilibrium(rig, cycle.rest_lengths_m, cycle.tau_ext_A_Nm[2], R_init=cycle.R_ref)
+    engine = Engine(as_mujoco(Plant.nominal(rig)), cycle.rest_lengths_m)
+    engine.set_inputs(cycle.rest_lengths_m, cycle.tau_ext_A_Nm[2], np.zeros(3))
+    engine.d.qpos[:4] = quat_wxyz(eq.R @ so3.exp(np.array([0.02, -0.01, 0.015])))
+    mujoco.mj_forward(engine.m, engine.d)
+    engine.run(100)                                      # past the fast transient
+    for _ in range(4):
+        engine.run(50)
+        left = so3.angle_between(_rot(engine.d.qpos[:4]), eq.R)
+        assert left > 1e-5
+        assert engine.remaining_travel() == pytest.approx(left, rel=0.1)
+
+
+def test_frictionless_rows_settle_when_the_move_outlasts_one_wait(rig, cycle):
+    """A wait far shorter than the move (as a long move on a soft rig): further waits, then Newton's method,
+    reach the toolkit's stable equilibrium."""
+    args = _args(cycle)
+    rows = as_mujoco(Plant.nominal(rig), max_settle_s=0.05, ramp_s=0.01).respond_rows(*args)
+    for i, row in enumerate(rows):
+        eq = solve_equilibrium(rig, cycle.rest_lengths_m, cycle.tau_ext_A_Nm[i], R_init=cycle.R_ref)
+        assert so3.angle_between(row.R_tool, eq.R) < 1e-9

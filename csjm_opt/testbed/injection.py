@@ -76,7 +76,7 @@ def inject(plant, effect: str, severity: float, rng: np.random.Generator):
 
     Parameters
     ----------
-    plant : Plant or MujocoPlant
+    plant : Plant or MujocoTestbedPlant
         A MuJoCo plant gets the effect in its :class:`Plant` description (same draws).
     effect : str
         A name of the module's tables.
@@ -85,7 +85,7 @@ def inject(plant, effect: str, severity: float, rng: np.random.Generator):
 
     Returns
     -------
-    Plant or MujocoPlant
+    Plant or MujocoTestbedPlant
         Of the same kind as ``plant``.
 
     Raises
@@ -93,7 +93,7 @@ def inject(plant, effect: str, severity: float, rng: np.random.Generator):
     InvalidInput
         Unknown effect name (or one the MuJoCo plant cannot realise).
     """
-    if not isinstance(plant, Plant):            # a MujocoPlant: inject into its description
+    if not isinstance(plant, Plant):            # a MujocoTestbedPlant: inject into its description
         return dataclasses.replace(plant, plant=inject(plant.plant, effect, severity, rng))
     s = float(severity)
     rig = plant.rig
@@ -151,13 +151,13 @@ def make_plant(rig: Rig, effects: str | Iterable[str] | None, severity: float,
     rng : numpy.random.Generator
         Draws of the effects (the same for both plants).
     plant : {"quasi-static", "mujoco"}, optional
-        The quasi-static :class:`Plant` or the :class:`~csjm_opt.testbed.mujoco_plant.MujocoPlant`.
+        The quasi-static :class:`Plant` or the :class:`~csjm_opt.testbed.mujoco_plant.MujocoTestbedPlant`.
     persistent : bool, optional
         Cycles start where the previous one settled (default) or relaxed.
 
     Returns
     -------
-    Plant or MujocoPlant
+    Plant or MujocoTestbedPlant
 
     Raises
     ------

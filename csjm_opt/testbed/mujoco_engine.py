@@ -1,4 +1,4 @@
-"""One MuJoCo run of a :class:`~csjm_opt.testbed.mujoco_plant.MujocoPlant` (its state carries across rows)."""
+"""One MuJoCo run of a :class:`~csjm_opt.testbed.mujoco_plant.MujocoTestbedPlant` (its state carries across rows)."""
 
 from __future__ import annotations
 
@@ -12,9 +12,10 @@ from ..model.dynamics import rig_dynamics
 from ..model.mjcf import quat_wxyz
 from .certify import certify_static
 from .mujoco_model import has_link, plant_mjcf
+from .mujoco_statics import NetForceStatics, tendon_jacobian
 
 if TYPE_CHECKING:
-    from .mujoco_plant import MujocoPlant, MujocoRow
+    from .mujoco_plant import MujocoRow, MujocoTestbedPlant
 
 #: Inputs are changed in this many chunks over a ramp.
 RAMP_CHUNKS = 30
@@ -26,6 +27,14 @@ CHECK_STEPS = 25
 FRICTIONLESS_SPEED_TOL = 1e-4
 #: Relative excess over a friction bound still counted as within it (a slipping element sits on its bound).
 BOUND_SLACK = 1e-4
+#: Below this joint speed (rad/s) a frictional row's remaining quasi-static travel is checked.
+TRAVEL_CHECK_SPEED = 1e-4
+#: A frictionless row hands over to Newton's method once the quasi-static travel left is below this (rad).
+NEWTON_HANDOVER_RAD = 0.02
+#: Below this joint speed (rad/s) a frictionless row's travel left is checked for the hand-over.
+HANDOVER_CHECK_SPEED = 0.1
+#: Waits of ``max_settle_s`` a frictionless row may take before it is refused (it needs no history: only CPU).
+FRICTIONLESS_WAITS = 4
 
 
 def _rotation(q: np.ndarray) -> np.ndarray:
@@ -34,10 +43,10 @@ def _rotation(q: np.ndarray) -> np.ndarray:
     return R.reshape(3, 3)
 
 
-class Engine:
+class Engine(NetForceStatics):
     """MuJoCo model and data of a plant, with the run-time forces (hardening, link spring, load)."""
 
-    def __init__(self, mp: MujocoPlant, l0: np.ndarray) -> None:
+    def __init__(self, mp: MujocoTestbedPlant, l0: np.ndarray) -> None:
         from .mujoco_plant import critical_damping
 
         self.mp, self.p = mp, mp.plant
@@ -81,6 +90,7 @@ class Engine:
         self._v3 = np.zeros(3)
         self.tool_body = self.m.nbody - 1          # 'tool' with a link, else 'platform'
         self.t = 0.0
+        self._scratch = mujoco.MjData(self.m)     # finite differences without touching the run's state
 
     # ------------------------------------------------------------ forces
     def set_inputs(self, l: np.ndarray, tau: np.ndarray, mr: np.ndarray) -> None:
@@ -106,7 +116,7 @@ class Engine:
         qfrc[self.tool] = tau                # the load on the tool, in its frame
         if self.h:
             extra = self.k * self.h * e * e
-            qfrc -= d.ten_J.reshape(6, self.nv).T @ extra
+            qfrc -= tendon_jacobian(self.m, d).T @ extra
             e_T = self.k * e + extra
         else:
             e_T = self.k * e
@@ -184,62 +194,66 @@ class Engine:
             self.frictional = fr
         mujoco.mj_forward(self.m, self.d)
 
-    def _wait(self) -> None:
+    def _wait(self) -> bool:
+        """Run until at rest, at most ``max_settle_s``; whether it got there.
+
+        At rest: the joint speed is below ``speed_tol_rad_per_s``, or, with friction, the
+        quasi-static travel left (:meth:`remaining_travel`) is below ``rest_travel_tol_rad``.
+        Without friction the engine only has to bring the pose into the basin of its
+        equilibrium, Newton's method finishes: the speed below ``FRICTIONLESS_SPEED_TOL`` or the
+        travel left below ``NEWTON_HANDOVER_RAD`` (a soft direction of the rig, heavily
+        overdamped by a damping set for the stiff ones, would otherwise creep for many seconds).
+        """
         m, d = self.m, self.d
         q_start = d.qpos[:4].copy()
-        # without friction Newton's method finishes the settling: the engine only has to reach the basin
-        tol = self.mp.speed_tol_rad_per_s if self.frictional else FRICTIONLESS_SPEED_TOL
-        for _ in range(int(self.mp.max_settle_s / (m.opt.timestep * CHECK_STEPS))):
+        if self.frictional:
+            tol, travel_tol, check_below = self.mp.speed_tol_rad_per_s, self.mp.rest_travel_tol_rad, TRAVEL_CHECK_SPEED
+        else:
+            tol, travel_tol, check_below = FRICTIONLESS_SPEED_TOL, NEWTON_HANDOVER_RAD, HANDOVER_CHECK_SPEED
+        for _ in range(max(1, int(round(self.mp.max_settle_s / (m.opt.timestep * CHECK_STEPS))))):
             self.run(CHECK_STEPS)
-            if np.linalg.norm(d.qvel) < tol:
-                return
+            speed = float(np.linalg.norm(d.qvel))
+            if speed < tol or (travel_tol > 0 and speed < check_below and self.remaining_travel() < travel_tol):
+                return True
             if not np.all(np.isfinite(d.qpos)) or abs(float(np.dot(q_start, d.qpos[:4]))) < np.cos(np.pi / 4):
                 raise NoEquilibrium("the MuJoCo plant fell over (more than 90 deg from the row's start)",
                                     "fell", np.nan)
-
-    def polish(self, dofs: np.ndarray, max_iter: int = 20, h: float = 1e-7) -> float:
-        """Newton's method on :meth:`net` over ``dofs`` (others held); returns the largest net force left."""
-        q = self.d.qpos.copy()
-
-        def moved(z_sub: np.ndarray) -> np.ndarray:
-            z = np.zeros(self.nv)
-            z[dofs] = z_sub
-            out = q.copy()
-            mujoco.mj_integratePos(self.m, out, z, 1.0)
-            return out
-
-        r = self.net(q)[dofs]
-        for _ in range(max_iter):
-            if np.abs(r).max() < 1e-12:
-                break
-            E = np.eye(len(dofs))
-            D = np.column_stack([(self.net(moved(h * e))[dofs] - self.net(moved(-h * e))[dofs]) / (2 * h) for e in E])
-            q = moved(-np.linalg.solve(D, r))
-            r = self.net(q)[dofs]
-        self.d.qpos[:] = q
-        self.d.qvel[:] = 0.0
-        self.d.qfrc_applied[:] = 0.0
-        mujoco.mj_forward(self.m, self.d)
-        return float(np.abs(r).max())
+        return False
 
     def settle(self, row: int) -> MujocoRow:
         """Run until at rest; polish (no friction) or certify (friction); the row's record.
 
         With friction the certificate includes the joints' damping force at the speed left when
         the wait ends: a row on the verge of slipping may still creep (about 1e-5 rad/s), held by
-        friction at its bounds plus that damping force. The speed is recorded.
+        friction at its bounds plus that damping force. The speed is recorded, and a row whose wait
+        reached ``max_settle_s`` before the speed fell below ``speed_tol_rad_per_s`` is flagged
+        (``settled=False``; still certified, or refused). A frictionless row is polished to an
+        exact equilibrium by Newton's method (``settled=True``) or refused.
         """
         from .mujoco_plant import MujocoRow
 
         t0 = self.t
-        self._wait()
+        at_rest = self._wait()
         speed = float(np.linalg.norm(self.d.qvel))
         cert = None
         if not self.frictional:
-            left = self.polish(np.arange(self.nv))
+            for _ in range(FRICTIONLESS_WAITS):
+                q_wait, v_wait = self.d.qpos.copy(), self.d.qvel.copy()
+                left = self.polish(np.arange(self.nv))
+                if left <= 1e-8 and self._stable():
+                    break
+                # not yet in the basin (a long move, e.g. to a new cycle on a soft rig): wait on from there
+                self.d.qpos[:], self.d.qvel[:] = q_wait, v_wait
+                mujoco.mj_forward(self.m, self.d)
+                at_rest = self._wait()
+            else:
+                left = self.polish(np.arange(self.nv))
             if left > 1e-8:
                 raise NoEquilibrium(f"MuJoCo plant: row {row} did not settle (net force {left:.2e} N m left)",
                                     "diverged", left)
+            if not self._stable():
+                raise NoEquilibrium(f"MuJoCo plant: row {row} settled at an unstable equilibrium", "unstable",
+                                    0.0)
         else:
             # a row may still slide slowly when the wait ends (a cable on the verge of slipping creeps
             # under the joint's damping); the damping force at that speed is a real force of the plant
@@ -251,7 +265,7 @@ class Engine:
             net = self.net(q) - np.asarray(self.m.dof_damping, float) * v
             _, T = self.applied()
             F = self.F0 + self.mu * T if self.capstan else self.F0
-            A = np.column_stack([np.asarray(self.d.ten_J).reshape(6, self.nv).T, np.eye(self.nv)[:, :3]])
+            A = np.column_stack([tendon_jacobian(self.m, self.d).T, np.eye(self.nv)[:, :3]])
             cert = certify_static(net, A, np.r_[F, self.M0[:3]] * (1.0 + BOUND_SLACK))
             self.d.qpos[:] = q
             if not cert.certified:
@@ -261,4 +275,4 @@ class Engine:
         _, T = self.applied()
         R_p = _rotation(self.d.qpos[:4])
         R_tool = R_p @ _rotation(self.d.qpos[4:8]) if self.link else R_p
-        return MujocoRow(R_tool, R_p, T, cert, self.t - t0, speed)
+        return MujocoRow(R_tool, R_p, T, cert, self.t - t0, speed, at_rest or not self.frictional)

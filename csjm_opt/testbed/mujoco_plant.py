@@ -1,6 +1,6 @@
 """MuJoCo as the testbed's plant: the same effects, realised in the engine's model.
 
-:class:`MujocoPlant` wraps a :class:`~csjm_opt.testbed.plant.Plant` (the
+:class:`MujocoTestbedPlant` wraps a :class:`~csjm_opt.testbed.plant.Plant` (the
 effect parameters drawn by :func:`~csjm_opt.testbed.injection.inject`, so both
 plants share effect names, parameters and random draws) and answers the same
 calls (``respond``, ``measured_moment``, ``measured_pose``). The engine model is
@@ -30,7 +30,18 @@ by :func:`~csjm_opt.testbed.certify.certify_static` (friction forces within
 their bounds hold it), and MuJoCo's noslip iterations stop the soft friction
 from creeping. With ``persistent`` (the plant's setting, default) a cycle
 starts where the previous one settled; otherwise each cycle starts from its
-``R_init``, settled without friction first (a relaxed start).
+``R_init``, settled without friction first (a relaxed start). The wait for rest is
+bounded by ``max_settle_s`` of simulated time (at most ``(cycle_ramp_s + max_settle_s) /
+timestep`` engine steps a row); a row that is not at rest by then is certified as it stands
+(held by friction within its bounds and the damping force of its remaining speed) and
+flagged (:attr:`MujocoRow.settled`), or refused (:class:`~csjm_opt.errors.NoEquilibrium`).
+
+Not to be confused with :class:`csjm_opt.control.plants.MujocoPlant`: that one is the
+*closed loop's* plant, the nominal rig stepped in real time under a controller's commands
+(inertia, winch rate limits, no injected effects, no settling). This one *settles* every
+row of a log statically, with effects injected, to make diagnosis logs; both build their
+engine model with :func:`csjm_opt.model.mjcf.rig_to_mjcf`. (``MujocoPlant`` is this class's
+former name, kept as an alias.)
 """
 
 from __future__ import annotations
@@ -69,6 +80,11 @@ class MujocoRow:
     speed_rad_per_s : float
         Joint speed left when the row was recorded (0 for a polished frictionless row; a slow
         creep of a row on the verge of slipping otherwise, its damping force in the certificate).
+    settled : bool
+        Whether the row came to rest (speed below ``speed_tol_rad_per_s``) within ``max_settle_s``
+        of simulated time; a row that did not is still certified (held by friction within its
+        bounds plus the damping force at the speed left) but flagged here. Frictionless rows are
+        polished to an exact equilibrium (always ``True``).
     """
 
     R_tool: np.ndarray
@@ -77,10 +93,11 @@ class MujocoRow:
     certificate: FrictionCertificate | None
     seconds_simulated: float
     speed_rad_per_s: float = 0.0
+    settled: bool = True
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
-class MujocoPlant:
+class MujocoTestbedPlant:
     """A :class:`Plant` realised in MuJoCo (see the module doc).
 
     Attributes
@@ -94,6 +111,14 @@ class MujocoPlant:
         friction (large moves: slow enough to stay quasi-static).
     speed_tol_rad_per_s : float
         Joint speed below which the engine has settled.
+    rest_travel_tol_rad : float
+        With friction, a row is also at rest when the quasi-static travel left (the joints'
+        damping force at the current speed over the tangent stiffness) is below this (default
+        0: off). MuJoCo's soft friction lets a row on the verge of slipping creep on at 1e-6 to
+        1e-4 rad/s for seconds (noslip reduces, does not remove it), far beyond that travel:
+        without this test such a row waits the full ``max_settle_s``. At 1e-5 such rows stop
+        4-6x sooner, but a row stopped so creeps on by a few 1e-6 rad in the next row
+        (``benchmarks/bench_mujoco_plant.py --travel-tol``; docs/guide/diagnosis.md).
     noslip_iterations : int
         MuJoCo's noslip solver iterations (0: soft friction creeps).
     noslip_tolerance : float
@@ -104,6 +129,7 @@ class MujocoPlant:
     ramp_s: float = 0.3
     max_settle_s: float = 6.0
     speed_tol_rad_per_s: float = 1e-6
+    rest_travel_tol_rad: float = 0.0
     cycle_ramp_s: float = 2.0
     noslip_iterations: int = 1000
     noslip_tolerance: float = 1e-12
@@ -235,25 +261,30 @@ class MujocoPlant:
         return rows
 
 
-def as_mujoco(plant: Plant, **options) -> MujocoPlant:
+#: The class's former name (kept for existing code). Not :class:`csjm_opt.control.plants.MujocoPlant`,
+#: the closed loop's time-stepped plant (see the module doc).
+MujocoPlant = MujocoTestbedPlant
+
+
+def as_mujoco(plant: Plant, **options) -> MujocoTestbedPlant:
     """The same plant realised in MuJoCo.
 
     Parameters
     ----------
     plant : Plant
     **options
-        :class:`MujocoPlant` settings (``ramp_s``, ``noslip_iterations``, ...).
+        :class:`MujocoTestbedPlant` settings (``ramp_s``, ``noslip_iterations``, ...).
 
     Returns
     -------
-    MujocoPlant
+    MujocoTestbedPlant
 
     Raises
     ------
     InvalidInput
         An effect MuJoCo cannot realise (eyelet radius).
     """
-    return MujocoPlant(plant, **options)
+    return MujocoTestbedPlant(plant, **options)
 
 
 def critical_damping(plant: Plant) -> float:

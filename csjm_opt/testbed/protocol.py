@@ -23,6 +23,15 @@ refuses rows the rig cannot hold (a cable slack or above ``t_max`` at the
 nominal equilibrium) and planned poses that are not the rig's equilibrium (a
 protocol written for another rig); :func:`simulate_protocol` runs it on a plant
 and returns the measured log, which keeps the protocol's extra columns.
+
+Two protocol formats exist, and :func:`read_protocol` reads both:
+
+* :class:`LogProtocol` (this module; ``csjm diagnose --suggest`` writes it): dead weights
+  ``load_kg`` at points of the tool, whose moment follows the pose, and the planned pose;
+* :class:`csjm_opt.measurement.protocol.Protocol` (``csjm plan-experiment`` writes it, for
+  identification): a force ``load_N`` of fixed direction ``dir_*`` in {B} at a platform point.
+
+``Protocol`` in this module is :class:`LogProtocol`'s former name, kept as an alias.
 """
 
 from __future__ import annotations
@@ -55,7 +64,7 @@ PLANNED_POSE_TOL_RAD = 0.02
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
-class Protocol:
+class LogProtocol:
     """A planned experiment (rows in time order).
 
     Attributes
@@ -88,12 +97,17 @@ class Protocol:
         return len(self.cycle)
 
 
-def read_protocol(path_or_text: str | Path, source: str | None = None) -> Protocol | LoadProtocol:
-    """Read a protocol: a diagnosis protocol (:class:`Protocol`) or an identification one.
+#: The class's former name (kept for existing code); not :class:`csjm_opt.measurement.protocol.Protocol`
+#: (see the module doc).
+Protocol = LogProtocol
+
+
+def read_protocol(path_or_text: str | Path, source: str | None = None) -> LogProtocol | LoadProtocol:
+    """Read a protocol: a diagnosis protocol (:class:`LogProtocol`) or an identification one.
 
     A file with the columns ``load_N, dir_*, point_*`` (``csjm plan-experiment``: forces fixed in
     {B} at platform points) is read as :class:`csjm_opt.measurement.protocol.Protocol`; any
-    other as :class:`Protocol` (see :func:`read_log_protocol`). Both run in :func:`simulate_protocol`.
+    other as :class:`LogProtocol` (see :func:`read_log_protocol`). Both run in :func:`simulate_protocol`.
 
     Parameters
     ----------
@@ -104,7 +118,7 @@ def read_protocol(path_or_text: str | Path, source: str | None = None) -> Protoc
 
     Returns
     -------
-    Protocol or csjm_opt.measurement.protocol.Protocol
+    LogProtocol or csjm_opt.measurement.protocol.Protocol
         The protocol read.
 
     Raises
@@ -125,7 +139,7 @@ def read_protocol(path_or_text: str | Path, source: str | None = None) -> Protoc
     return read_log_protocol(text if "\n" in text else text + "\n", source)
 
 
-def read_log_protocol(path_or_text: str | Path, source: str | None = None) -> Protocol:
+def read_log_protocol(path_or_text: str | Path, source: str | None = None) -> LogProtocol:
     """Read a protocol (a file path, or CSV text when it contains a newline).
 
     Parameters
@@ -136,7 +150,7 @@ def read_log_protocol(path_or_text: str | Path, source: str | None = None) -> Pr
 
     Returns
     -------
-    Protocol
+    LogProtocol
 
     Raises
     ------
@@ -214,11 +228,11 @@ def read_log_protocol(path_or_text: str | Path, source: str | None = None) -> Pr
         raise DataFileError("sample ids must be unique", source, int(lines[0]))
     known = set(COLUMNS)
     extra = {h: np.array([r[col[h]] for _, r in body], dtype=str) for h in header if h not in known}
-    return Protocol(ids[:, 0].astype(int), cycle, lengths, tau_fixed, mr,
+    return LogProtocol(ids[:, 0].astype(int), cycle, lengths, tau_fixed, mr,
                     None if planned is None else so3.exp(planned), lines, extra, source)
 
 
-def _nominal(rig: Rig, protocol: Protocol) -> tuple[np.ndarray, np.ndarray]:
+def _nominal(rig: Rig, protocol: LogProtocol) -> tuple[np.ndarray, np.ndarray]:
     """Nominal equilibrium poses and tensions of the protocol's rows (each row from its planned pose)."""
     n = len(protocol)
     R0 = protocol.planned_R if protocol.planned_R is not None else np.repeat(np.eye(3)[None], n, 0)
@@ -229,14 +243,14 @@ def _nominal(rig: Rig, protocol: Protocol) -> tuple[np.ndarray, np.ndarray]:
     return R, np.asarray(rig.cable_stiffness_N_per_m) * (c - protocol.rest_lengths_m)
 
 
-def check_protocol(rig: Rig, protocol: Protocol) -> None:
+def check_protocol(rig: Rig, protocol: LogProtocol) -> None:
     """Refuse a protocol the rig cannot run (see the module doc).
 
     Parameters
     ----------
     rig : Rig
         The nominal rig the protocol was written for.
-    protocol : Protocol
+    protocol : LogProtocol
 
     Raises
     ------
@@ -267,7 +281,7 @@ def check_protocol(rig: Rig, protocol: Protocol) -> None:
                                     f"rest lengths and load: written for another rig?", where, line)
 
 
-def simulate_protocol(rig: Rig, protocol: str | Path | Protocol | LoadProtocol, effects: Any = None,
+def simulate_protocol(rig: Rig, protocol: str | Path | LogProtocol | LoadProtocol, effects: Any = None,
                       severity: float = 1.0,
                       plant: str = "quasi-static", rng: np.random.Generator | None = None,
                       noise: InstrumentNoise | None = None, persistent: bool = True,
@@ -279,9 +293,9 @@ def simulate_protocol(rig: Rig, protocol: str | Path | Protocol | LoadProtocol, 
     ----------
     rig : Rig
         The nominal rig (the protocol's).
-    protocol : str, Path or Protocol
+    protocol : str, Path, LogProtocol or csjm_opt.measurement.protocol.Protocol
         A protocol file (or CSV text) or a read one.
-    effects : str, iterable of str, Plant, MujocoPlant or None
+    effects : str, iterable of str, Plant, MujocoTestbedPlant or None
         Effect names (injected at ``severity`` with draws from ``rng``) or a ready plant
         (the hidden truth of a study; its own kind is used, ``plant`` ignored).
     severity : float, optional
@@ -318,7 +332,7 @@ def simulate_protocol(rig: Rig, protocol: str | Path | Protocol | LoadProtocol, 
     from .simulate import with_persistence
 
     rng = np.random.default_rng(0) if rng is None else rng
-    read = protocol if isinstance(protocol, (Protocol, LoadProtocol)) else read_protocol(protocol)
+    read = protocol if isinstance(protocol, (LogProtocol, LoadProtocol)) else read_protocol(protocol)
     load_protocol, proto = (read, None) if isinstance(read, LoadProtocol) else (None, read)
     if proto is not None:
         check_protocol(rig, proto)

@@ -20,7 +20,7 @@ from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..measurement.protocol import Protocol
 from ..model.rig import Rig
-from .mujoco_plant import MujocoPlant
+from .mujoco_plant import MujocoTestbedPlant
 from .plant import Plant
 
 #: Fixed-point iterations on the dead-weight moment before giving up.
@@ -43,7 +43,7 @@ def dead_weight_moments(R: np.ndarray, force_B_N: np.ndarray, point_A_m: np.ndar
     return np.cross(point_A_m, np.einsum("nji,nj->ni", R, force_B_N))
 
 
-def settle_protocol(plant: Plant | MujocoPlant, protocol: Protocol,
+def settle_protocol(plant: Plant | MujocoTestbedPlant, protocol: Protocol,
                     R_start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """True poses (n, 3, 3) and true external moments in {A} (n, 3) of every protocol row.
 
@@ -65,7 +65,7 @@ def settle_protocol(plant: Plant | MujocoPlant, protocol: Protocol,
         The plant cannot hold a row's load, or the load iteration does not settle.
     """
     n = len(protocol)
-    base = plant.plant if isinstance(plant, MujocoPlant) else plant   # a MujocoPlant wraps its Plant
+    base = plant.plant if isinstance(plant, MujocoTestbedPlant) else plant   # it wraps its Plant
     path = base.has_friction or bool(np.isfinite(base.drum_slip_threshold_N))
     cycle = protocol.cycle if path else np.arange(n)
     f, p, l = protocol.force_B_N, protocol.point_A_m, protocol.rest_lengths_m
@@ -83,7 +83,7 @@ def settle_protocol(plant: Plant | MujocoPlant, protocol: Protocol,
                         f"(last change {step:.3g} rad)", "diverged", step)
 
 
-def run_protocol(plant: Plant | MujocoPlant | Rig, protocol: Protocol, rng: np.random.Generator,
+def run_protocol(plant: Plant | MujocoTestbedPlant | Rig, protocol: Protocol, rng: np.random.Generator,
                  noise: InstrumentNoise | None = None) -> MeasurementLog:
     """The measurement log a lab would record running ``protocol`` on ``plant``.
 
@@ -107,7 +107,7 @@ def run_protocol(plant: Plant | MujocoPlant | Rig, protocol: Protocol, rng: np.r
     NoEquilibrium
         As :func:`settle_protocol`.
     """
-    plant = plant if isinstance(plant, (Plant, MujocoPlant)) else Plant(plant)
+    plant = plant if isinstance(plant, (Plant, MujocoTestbedPlant)) else Plant(plant)
     noise = InstrumentNoise.paper() if noise is None else noise
     R_true, tau = settle_protocol(plant, protocol)
     tau_meas, R_meas = noise.sample(plant.measured_moment(tau), plant.measured_pose(R_true), rng)

@@ -13,19 +13,19 @@ from ..measurement.logfile import MeasurementLog
 from ..model.rig import Rig
 from .cycles import design_cycles
 from .injection import make_plant
-from .mujoco_plant import MujocoPlant
+from .mujoco_plant import MujocoTestbedPlant
 from .plant import Plant
 
 
 def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
-                        effect: str | Iterable[str] | Plant | MujocoPlant | None = None, severity: float = 1.0,
+                        effect: str | Iterable[str] | Plant | MujocoTestbedPlant | None = None, severity: float = 1.0,
                         noise: InstrumentNoise | None = None, steps: int = 4,
                         first_cycle: int = 0, persistent: bool | None = None) -> MeasurementLog:
     """A log of ``n_cycles`` load cycles (``2 * steps + 1`` rows each) on ``rig``.
 
     ``effect``: ``None``/``"none"`` (nominal plant), an effect name from the
     documented vocabulary, several names, or a ready :class:`Plant` or
-    :class:`~csjm_opt.testbed.mujoco_plant.MujocoPlant`. Rest lengths are
+    :class:`~csjm_opt.testbed.mujoco_plant.MujocoTestbedPlant`. Rest lengths are
     commanded with the *nominal* rig (as an experimenter would); the plant
     responds; the F/T reading (plus any bias) and the tracked pose get the
     instrument noise (``InstrumentNoise.paper()`` by default). ``persistent``
@@ -36,7 +36,7 @@ def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
     if int(n_cycles) < 1 or int(steps) < 1:
         raise InvalidInput(f"need n_cycles >= 1 and steps >= 1 (got {n_cycles}, {steps})", "n_cycles")
     noise = InstrumentNoise.paper() if noise is None else noise
-    plant = effect if isinstance(effect, (Plant, MujocoPlant)) else make_plant(rig, effect, severity, rng)
+    plant = effect if isinstance(effect, (Plant, MujocoTestbedPlant)) else make_plant(rig, effect, severity, rng)
     if persistent is not None:
         plant = with_persistence(plant, bool(persistent))
     cycles = design_cycles(rig, n_cycles, rng, steps=steps)
@@ -54,12 +54,12 @@ def with_persistence(plant, persistent: bool):
 
     Parameters
     ----------
-    plant : Plant or MujocoPlant
+    plant : Plant or MujocoTestbedPlant
     persistent : bool
 
     Returns
     -------
-    Plant or MujocoPlant
+    Plant or MujocoTestbedPlant
     """
     if isinstance(plant, Plant):
         return dataclasses.replace(plant, persistent=persistent)
