@@ -55,6 +55,9 @@ class Rows:
     # cycle's first row (NaN where there is none): where a predicted cycle starts.
     entry_state: np.ndarray | None = None
     entry_lengths_m: np.ndarray | None = None
+    # Shape (n, S, 6) of each cable's motion along the quasi-static ramp of the inputs into each row,
+    # as a deviation from even steps (:mod:`csjm_opt.diagnose.friction_ramp`); None: one step.
+    ramp_shape_m: np.ndarray | None = None
 
     def __len__(self) -> int:
         return self.rest_lengths_m.shape[0]
@@ -67,7 +70,7 @@ class Rows:
         return Rows(self.rest_lengths_m[idx], self.tau_meas_A_Nm[idx], self.cycle[idx],
                     self.cable_steps_m[idx], sub(self.state_prev), sub(self.lengths_prev_m),
                     sub(self.log_steps_m), sub(self.rest_steps_m), sub(self.entry_state),
-                    sub(self.entry_lengths_m))
+                    sub(self.entry_lengths_m), sub(self.ramp_shape_m))
 
     @property
     def steps_since_previous(self) -> tuple[np.ndarray, np.ndarray]:
