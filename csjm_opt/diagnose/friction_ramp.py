@@ -4,83 +4,132 @@ A rig is moved from one row to the next by ramping its inputs (the load, and bet
 rest lengths) while the platform follows quasi-statically. A dry-friction state is a play
 operator of each cable's motion, and a play operator remembers the *extremes* of its input, not
 only its end points: when a cable's length reverses during the ramp (it draws out, then back in,
-as the platform swings from one reference pose to the next), the state it leaves differs from
-the state one step from the previous row's length to this row's would leave. Between load cycles
-such reversals reach millimetres (tens of stick travels), so a one-step model gets the state at a
-cycle's first row wrong on some cables, and a fit compensates with unphysical parameters.
+as the platform swings from one reference pose to the next, or as its neighbours break loose and
+the platform jumps), the state it leaves differs from the state one step from the previous row's
+length to this row's would leave. Between load cycles such reversals reach millimetres (tens of
+stick travels), so a one-step model gets the state at a cycle's first row wrong on some cables,
+and a fit compensates with unphysical parameters.
 
-:func:`ramp_shape` computes, once per log, the shape of each cable's motion along the ramp from
-the nominal model's equilibria at ``RAMP_SUBSTEPS`` evenly spaced inputs between the two rows
-(linear in the rest lengths and the measured moment, as a lab ramps its drives and loads). The
-friction model then moves each cable along ``dc / S + shape_q`` (:func:`ramp_steps`): the row's
-own length change (measured, or predicted by the fitted model) spread evenly, plus the ramp's
-deviation from a straight line. The row end points are the fitted model's; only the curvature
-between them comes from the nominal model (friction moves the poses by a fraction of a
-milliradian, the reversals come from the geometry of the swing).
+:func:`predict_ramp` predicts the poses of a path-dependent model along the ramp into every row,
+in ``RAMP_SUBSTEPS`` evenly spaced inputs (linear in the rest lengths and the measured moment, as a
+lab ramps its drives and loads), each from the state the previous one left: the friction model's
+own quasi-static response, stick and slip included. It returns the *shape* of each cable's motion
+along each ramp (its steps' deviation from even steps); a fit then moves each cable along
+``dc / S + shape_q`` (:func:`ramp_steps`): the row's own length change (measured, or predicted)
+spread evenly, plus the ramp's shape. The shape is computed at given parameters and held fixed
+while they are refitted (:func:`csjm_opt.diagnose.friction_path.on_predicted_path`).
 """
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from ..model import kinematics as kin
-from ..model.rig import Rig
 
 #: Evenly spaced inputs along each ramp between two rows (resolves one reversal of a cable's motion).
 RAMP_SUBSTEPS = 8
 
 
-def ramp_shape(rig: Rig, rest_prev_m: np.ndarray, tau_prev_A_Nm: np.ndarray, R_prev: np.ndarray,
-               rest_m: np.ndarray, tau_A_Nm: np.ndarray, R: np.ndarray,
-               substeps: int = RAMP_SUBSTEPS) -> np.ndarray:
-    """Deviation (n, S, 6) of each cable's steps along the ramp into each row from even steps (m).
+def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray,
+                 substeps: int = RAMP_SUBSTEPS) -> tuple[kin.PoseSolution, np.ndarray]:
+    """Poses a path-dependent model predicts for every row, stepped along the ramps, and the ramps' shape.
+
+    Rows are stepped in order within their cycle (all cycles at once); a cycle's first row ramps
+    from the log's previous row, from the state the measured history leaves there
+    (``rows.entry_state``, :func:`csjm_opt.diagnose.augmented.with_entry`); a row without
+    history starts at the model's first-row state, without a ramp.
 
     Parameters
     ----------
-    rig : Rig
-        The nominal rig (its frictionless equilibria trace the ramp).
-    rest_prev_m, tau_prev_A_Nm : numpy.ndarray
-        Inputs of the row before each row (n, 6) and (n, 3): where the ramp starts.
-    R_prev : numpy.ndarray
-        Poses (n, 3, 3) at the previous rows (starting guesses of the equilibria).
-    rest_m, tau_A_Nm : numpy.ndarray
-        Inputs of the rows (n, 6) and (n, 3): where the ramp ends.
-    R : numpy.ndarray
-        Poses (n, 3, 3) at the rows (unused but for rows whose ramp does not converge).
+    model : AugmentedModel
+        A path-dependent model.
+    rows : Rows
+        The rows in time order (with their entry states for carried memory).
+    theta : numpy.ndarray
+        The model's parameters.
+    R_init : numpy.ndarray
+        Poses (n, 3, 3) near the rows' equilibria (the measured ones); a cycle's first ramp starts
+        at the pose of the log's previous row.
     substeps : int, optional
         Number of steps ``S`` along each ramp.
 
     Returns
     -------
-    numpy.ndarray
-        ``d_q - mean_q d_q`` (n, S, 6), ``d_q`` the change of each cable's nominal equilibrium
-        length over step ``q``; it sums to zero over the steps. Rows whose ramp has no converged
-        nominal equilibrium get zeros (a straight path, one even step).
+    (PoseSolution, numpy.ndarray)
+        The predicted poses at the rows (residuals of the last step), and the shape (n, S, 6) of
+        each cable's motion along the ramp into each row (:func:`ramp_shape_of`; zero where
+        a step did not converge, and on rows without history).
     """
-    from .augmented import AugmentedModel, Rows       # the nominal balance (same layer)
-
-    model = AugmentedModel(rig)
-    theta = model.x0()
-    A = np.asarray(rig.platform_holes_A_m, float)
-    B = np.asarray(rig.base_holes_B_m, float)
-    n = len(rest_m)
-    cycle = np.arange(n)
-    lengths = np.empty((substeps + 1, n, 6))
+    n = len(rows)
+    R_init = np.asarray(R_init, float)
+    l_all, tau_all = np.asarray(rows.rest_lengths_m, float), np.asarray(rows.tau_meas_A_Nm, float)
+    pos = rows.positions
+    R_out, res = R_init.copy(), np.zeros(n)
+    state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
+    path = np.zeros((n, substeps + 1, 6))
     ok = np.ones(n, bool)
-    R_q = np.array(R_prev, float)
-    for q in range(substeps + 1):
-        f = q / substeps
-        rows = Rows(rest_prev_m + f * (rest_m - rest_prev_m), tau_prev_A_Nm + f * (tau_A_Nm - tau_prev_A_Nm),
-                    cycle, np.zeros((n, 6)))
-        sol = kin.solve_poses(lambda Rx, rows=rows: model.balance(Rx, rows, theta), R_q)  # type: ignore[misc]
-        good = sol.converged(1e-6) & np.all(np.isfinite(sol.R.reshape(n, -1)), axis=1)
-        ok &= good
-        R_q = np.where(good[:, None, None], sol.R, R_q if q else np.asarray(R, float))
-        lengths[q], _ = kin.cable_terms(R_q, A, B)
-    d = np.swapaxes(np.diff(lengths, axis=0), 0, 1)            # (n, S, 6)
-    d = d - d.mean(axis=1, keepdims=True)
-    d[~ok] = 0.0
-    return d
+    it = 0
+    for j in range(int(pos.max(initial=0)) + 1):
+        idx = np.flatnonzero(pos == j)
+        prev = np.maximum(idx - 1, 0)
+        if j == 0:
+            has = rows.entry_state is not None and rows.entry_lengths_m is not None
+            s_q = rows.entry_state[idx] if has else np.full((len(idx), 6), np.nan)          # type: ignore[index]
+            c_q = rows.entry_lengths_m[idx] if has else np.full((len(idx), 6), np.nan)     # type: ignore[index]
+            R_q = R_init[prev]
+        else:
+            s_q, c_q, R_q = state[idx - 1], lengths[idx - 1], R_out[idx - 1]
+        fresh = np.isnan(c_q).any(axis=1)          # no history: the row itself, at the first-row state
+        l0 = np.where(fresh[:, None], l_all[idx], l_all[prev])
+        t0 = np.where(fresh[:, None], tau_all[idx], tau_all[prev])
+        R_q = np.where(fresh[:, None, None], R_init[idx], R_q)
+        dl = (l_all[idx] - l0) / substeps
+        path[idx, 0] = np.nan_to_num(c_q)
+        base = rows.take(idx)
+        for q in range(1, substeps + 1):
+            f = q / substeps
+            sub = dataclasses.replace(base, rest_lengths_m=l0 + f * (l_all[idx] - l0),
+                                      tau_meas_A_Nm=t0 + f * (tau_all[idx] - t0), rest_steps_m=dl,
+                                      log_steps_m=None, state_prev=np.nan_to_num(s_q), lengths_prev_m=c_q,
+                                      ramp_shape_m=None)
+            sol = kin.solve_poses(lambda R, sub=sub: model.balance(R, sub, theta), R_q)  # type: ignore[misc]
+            _, ev = model.evaluate(sol.R, sub, theta)
+            ok[idx] &= sol.converged(1e-6)
+            R_q = sol.R
+            s_q = ev.state_out if ev.state_out is not None else np.zeros((len(idx), 6))
+            c_q = np.where(fresh[:, None], np.nan, ev.lengths_m)
+            path[idx, q] = ev.lengths_m
+            it = max(it, sol.iterations)
+            res[idx] = sol.residual_Nm
+        R_out[idx], state[idx], lengths[idx] = R_q, s_q, path[idx, substeps]
+    shape = ramp_shape_of(path)
+    shape[~ok] = 0.0
+    shape[np.isnan(path[:, 0]).any(axis=1) | ~np.isfinite(shape).all(axis=(1, 2))] = 0.0
+    first_rows = np.flatnonzero(pos == 0)
+    if rows.entry_lengths_m is None:
+        shape[first_rows] = 0.0
+    else:
+        shape[first_rows[np.isnan(rows.entry_lengths_m[first_rows]).any(axis=1)]] = 0.0
+    return kin.PoseSolution(R_out, res, it), shape
+
+
+def ramp_shape_of(path_m: np.ndarray) -> np.ndarray:
+    """Deviation (n, S, 6) of each cable's steps along ramps ``path_m`` (n, S + 1, 6) from even steps (m).
+
+    Parameters
+    ----------
+    path_m : numpy.ndarray
+        Each cable's length at the ``S + 1`` points of each row's ramp (m).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``d_q - mean_q d_q`` (sums to zero over the steps), ``d_q`` the change over step ``q``.
+    """
+    d = np.diff(path_m, axis=1)
+    return d - d.mean(axis=1, keepdims=True)
 
 
 def ramp_steps(dc_m: np.ndarray, shape_m: np.ndarray | None) -> np.ndarray:
@@ -91,7 +140,7 @@ def ramp_steps(dc_m: np.ndarray, shape_m: np.ndarray | None) -> np.ndarray:
     dc_m : numpy.ndarray
         Change of each cable's length since the previous row (m).
     shape_m : numpy.ndarray or None
-        The ramp's deviation from even steps (:func:`ramp_shape`); None for one step.
+        The ramp's deviation from even steps (:func:`predict_ramp`); None for one step.
 
     Returns
     -------
@@ -101,25 +150,3 @@ def ramp_steps(dc_m: np.ndarray, shape_m: np.ndarray | None) -> np.ndarray:
     if shape_m is None:
         return dc_m[:, None, :]
     return dc_m[:, None, :] / shape_m.shape[1] + shape_m
-
-
-def log_ramp_shape(rig: Rig, rest_m: np.ndarray, tau_A_Nm: np.ndarray, R: np.ndarray) -> np.ndarray:
-    """:func:`ramp_shape` for a log's rows in time order (each ramp from the log's previous row).
-
-    Parameters
-    ----------
-    rig : Rig
-        The nominal rig.
-    rest_m, tau_A_Nm : numpy.ndarray
-        The rows' rest lengths (n, 6) and measured moments (n, 3), in time order.
-    R : numpy.ndarray
-        Poses (n, 3, 3) near the rows' equilibria (measured or predicted).
-
-    Returns
-    -------
-    numpy.ndarray
-        (n, S, 6); zeros on the first row.
-    """
-    rest_m, tau_A_Nm, R = (np.asarray(a, float) for a in (rest_m, tau_A_Nm, R))
-    prev = np.r_[0, np.arange(len(rest_m) - 1)]
-    return ramp_shape(rig, rest_m[prev], tau_A_Nm[prev], R[prev], rest_m, tau_A_Nm, R)

@@ -27,7 +27,6 @@ from ..measurement.logfile import MeasurementLog
 from ..model import kinematics as kin
 from ..model.rig import Rig
 from .augmented import AugmentedModel, Rows, cable_steps, log_steps
-from .friction_ramp import log_ramp_shape
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -146,8 +145,7 @@ def compute_residuals(rig: Rig, log: MeasurementLog, noise: InstrumentNoise | No
     sol = model.predict_poses(rows0, theta, R_meas)
     lengths, _ = kin.cable_terms(R_meas, np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m))
     rows = Rows(log.rest_lengths_m, log.tau_ext_A_Nm, np.asarray(log.cycle), cable_steps(log.cycle, lengths),
-                log_steps_m=log_steps(lengths), rest_steps_m=log_steps(np.asarray(log.rest_lengths_m, float)),
-                ramp_shape_m=log_ramp_shape(rig, log.rest_lengths_m, log.tau_ext_A_Nm, R_meas))
+                log_steps_m=log_steps(lengths), rest_steps_m=log_steps(np.asarray(log.rest_lengths_m, float)))
     g = model.balance(R_meas, rows, theta)
     G = kin.tangent(lambda R: model.balance(R, rows, theta), R_meas, g)
     whiten = np.linalg.inv(np.linalg.cholesky(pose_noise_cov(G, noise)))

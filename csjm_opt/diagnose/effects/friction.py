@@ -119,7 +119,7 @@ def ramp_input(dc_m: np.ndarray, dl_m: np.ndarray, shape_m: np.ndarray | None, t
     dc_m, dl_m : numpy.ndarray
         Changes (n, 6) of the cable lengths and of the rest lengths since the previous row (m).
     shape_m : numpy.ndarray or None
-        The ramp's deviation from even steps (:func:`csjm_opt.diagnose.friction_ramp.ramp_shape`),
+        The ramp's deviation from even steps (:func:`csjm_opt.diagnose.friction_ramp.predict_ramp`),
         or None (one step).
     travel_m : numpy.ndarray
         Stick travel (n, 6) of each row and cable (m).
