@@ -51,7 +51,7 @@ def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray,
         The model's parameters.
     R_init : numpy.ndarray
         Poses (n, 3, 3) near the rows' equilibria (the measured ones); a cycle's first ramp starts
-        at the pose of the log's previous row.
+        at the measured pose of the log's previous row (``rows.entry_R``).
     substeps : int, optional
         Number of steps ``S`` along each ramp.
 
@@ -69,22 +69,29 @@ def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray,
     R_out, res = R_init.copy(), np.zeros(n)
     state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
     path = np.zeros((n, substeps + 1, 6))
-    ok = np.ones(n, bool)
+    ok, no_ramp = np.ones(n, bool), np.zeros(n, bool)
     it = 0
     for j in range(int(pos.max(initial=0)) + 1):
         idx = np.flatnonzero(pos == j)
-        prev = np.maximum(idx - 1, 0)
-        if j == 0:
-            has = rows.entry_state is not None and rows.entry_lengths_m is not None
-            s_q = rows.entry_state[idx] if has else np.full((len(idx), 6), np.nan)          # type: ignore[index]
-            c_q = rows.entry_lengths_m[idx] if has else np.full((len(idx), 6), np.nan)     # type: ignore[index]
-            R_q = R_init[prev]
+        if j == 0:              # from the log's row before the cycle, as the measured history left it
+            has = all(a is not None for a in (rows.entry_state, rows.entry_lengths_m, rows.entry_rest_m,
+                                              rows.entry_tau_A_Nm, rows.entry_R))
+            nan = np.full((len(idx), 6), np.nan)
+            s_q = rows.entry_state[idx] if has else nan                     # type: ignore[index]
+            c_q = rows.entry_lengths_m[idx] if has else nan                 # type: ignore[index]
+            l_p = rows.entry_rest_m[idx] if has else nan                    # type: ignore[index]
+            t_p = rows.entry_tau_A_Nm[idx] if has else nan[:, :3]           # type: ignore[index]
+            R_q = rows.entry_R[idx] if has else R_init[idx]                 # type: ignore[index]
         else:
             s_q, c_q, R_q = state[idx - 1], lengths[idx - 1], R_out[idx - 1]
-        fresh = np.isnan(c_q).any(axis=1)          # no history: the row itself, at the first-row state
-        l0 = np.where(fresh[:, None], l_all[idx], l_all[prev])
-        t0 = np.where(fresh[:, None], tau_all[idx], tau_all[prev])
+            l_p, t_p = l_all[idx - 1], tau_all[idx - 1]
+        fresh = (np.isnan(c_q).any(axis=1) | np.isnan(l_p).any(axis=1) | np.isnan(t_p).any(axis=1)
+                 | np.isnan(R_q).any(axis=(1, 2)))    # no history: the row itself, at the first-row state
+        l0 = np.where(fresh[:, None], l_all[idx], l_p)
+        t0 = np.where(fresh[:, None], tau_all[idx], t_p)
         R_q = np.where(fresh[:, None, None], R_init[idx], R_q)
+        c_q = np.where(fresh[:, None], np.nan, c_q)
+        no_ramp[idx] = fresh
         dl = (l_all[idx] - l0) / substeps
         path[idx, 0] = np.nan_to_num(c_q)
         base = rows.take(idx)
@@ -105,13 +112,7 @@ def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray,
             res[idx] = sol.residual_Nm
         R_out[idx], state[idx], lengths[idx] = R_q, s_q, path[idx, substeps]
     shape = ramp_shape_of(path)
-    shape[~ok] = 0.0
-    shape[np.isnan(path[:, 0]).any(axis=1) | ~np.isfinite(shape).all(axis=(1, 2))] = 0.0
-    first_rows = np.flatnonzero(pos == 0)
-    if rows.entry_lengths_m is None:
-        shape[first_rows] = 0.0
-    else:
-        shape[first_rows[np.isnan(rows.entry_lengths_m[first_rows]).any(axis=1)]] = 0.0
+    shape[~ok | no_ramp | ~np.isfinite(shape).all(axis=(1, 2))] = 0.0
     return kin.PoseSolution(R_out, res, it), shape
 
 

@@ -79,10 +79,9 @@ def _soft_clip(x: float, w: float) -> float:   # pragma: no cover (compiled)
 @njit(cache=True)
 def _ramp_play(prev: float, step: np.ndarray, i: int, j: int, w: float) -> float:   # pragma: no cover
     """The play operator over the steps ``step[i, :, j]`` of one ramp: exact stops, rounded at the end."""
-    S = step.shape[1]
-    for q in range(S - 1):
-        prev = min(1.0, max(-1.0, prev + step[i, q, j]))
-    return _soft_clip(prev + step[i, S - 1, j], w)
+    for q in range(step.shape[1]):
+        prev = _soft_clip(prev + step[i, q, j], w)
+    return prev
 
 
 @njit(cache=True)
