@@ -30,10 +30,15 @@ from ..model import kinematics as kin
 
 #: Evenly spaced inputs along each ramp between two rows (resolves one reversal of a cable's motion).
 RAMP_SUBSTEPS = 8
+#: Equilibria solved along a ramp within a cycle (a load step; the path between them is interpolated):
+#: the platform swings between cycles, within a cycle only the load moves.
+ROW_SUBSTEPS = 4
+#: Balance tolerance (N m) of the equilibria inside a ramp (the row's own is solved to the default).
+INNER_TOL_NM = 1e-8
 
 
-def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray,
-                 substeps: int = RAMP_SUBSTEPS) -> tuple[kin.PoseSolution, np.ndarray]:
+def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray, substeps: int = RAMP_SUBSTEPS,
+                 row_substeps: int = ROW_SUBSTEPS) -> tuple[kin.PoseSolution, np.ndarray]:
     """Poses a path-dependent model predicts for every row, stepped along the ramps, and the ramps' shape.
 
     Rows are stepped in order within their cycle (all cycles at once); a cycle's first row ramps
@@ -53,7 +58,10 @@ def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray,
         Poses (n, 3, 3) near the rows' equilibria (the measured ones); a cycle's first ramp starts
         at the measured pose of the log's previous row (``rows.entry_R``).
     substeps : int, optional
-        Number of steps ``S`` along each ramp.
+        Number of steps ``S`` along each ramp (equilibria solved along the ramp into a cycle).
+    row_substeps : int, optional
+        Equilibria solved along a ramp within a cycle (a divisor of ``S``; the points between
+        them are interpolated linearly).
 
     Returns
     -------
@@ -92,22 +100,25 @@ def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray,
         R_q = np.where(fresh[:, None, None], R_init[idx], R_q)
         c_q = np.where(fresh[:, None], np.nan, c_q)
         no_ramp[idx] = fresh
-        dl = (l_all[idx] - l0) / substeps
+        every = 1 if j == 0 else max(substeps // row_substeps, 1)
+        dl = (l_all[idx] - l0) * (every / substeps)
         path[idx, 0] = np.nan_to_num(c_q)
         base = rows.take(idx)
-        for q in range(1, substeps + 1):
+        for q in range(every, substeps + 1, every):
             f = q / substeps
             sub = dataclasses.replace(base, rest_lengths_m=l0 + f * (l_all[idx] - l0),
                                       tau_meas_A_Nm=t0 + f * (tau_all[idx] - t0), rest_steps_m=dl,
                                       log_steps_m=None, state_prev=np.nan_to_num(s_q), lengths_prev_m=c_q,
                                       ramp_shape_m=None)
-            sol = kin.solve_poses(lambda R, sub=sub: model.balance(R, sub, theta), R_q)  # type: ignore[misc]
+            sol = kin.solve_poses(lambda R, sub=sub: model.balance(R, sub, theta), R_q,  # type: ignore[misc]
+                                  tol_Nm=1e-10 if q == substeps else INNER_TOL_NM)
             _, ev = model.evaluate(sol.R, sub, theta)
             ok[idx] &= sol.converged(1e-6)
             R_q = sol.R
             s_q = ev.state_out if ev.state_out is not None else np.zeros((len(idx), 6))
             c_q = np.where(fresh[:, None], np.nan, ev.lengths_m)
-            path[idx, q] = ev.lengths_m
+            for h in range(1, every + 1):          # interpolated points between the solved ones
+                path[idx, q - every + h] = path[idx, q - every] + (h / every) * (ev.lengths_m - path[idx, q - every])
             it = max(it, sol.iterations)
             res[idx] = sol.residual_Nm
         R_out[idx], state[idx], lengths[idx] = R_q, s_q, path[idx, substeps]

@@ -78,9 +78,10 @@ def _soft_clip(x: float, w: float) -> float:   # pragma: no cover (compiled)
 
 @njit(cache=True)
 def _ramp_play(prev: float, step: np.ndarray, i: int, j: int, w: float) -> float:   # pragma: no cover
-    """The play operator over the steps ``step[i, :, j]`` of one ramp: exact stops, rounded at the end."""
-    for q in range(step.shape[1]):
-        prev = _soft_clip(prev + step[i, q, j], w)
+    """The play operator over the steps ``step[i, :, j]`` of one ramp (corners rounded over ``w / S``)."""
+    S = step.shape[1]
+    for q in range(S):
+        prev = _soft_clip(prev + step[i, q, j], w / S)
     return prev
 
 
