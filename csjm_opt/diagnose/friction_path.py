@@ -87,7 +87,7 @@ def end_state(model: AugmentedModel, rows: Rows, R_meas: np.ndarray,
     """
     if not model.path_dependent:
         return None, None
-    _, ev = model.evaluate(R_meas, with_entry(model, rows, R_meas, theta), theta)
+    _, ev = model.evaluate(R_meas, rows, theta)          # the whole log in order, at the measured poses
     if ev.state_out is None or ev.lengths_m is None:
         return None, None
     return ev.state_out[-1], ev.lengths_m[-1]

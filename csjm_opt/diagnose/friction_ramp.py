@@ -26,6 +26,7 @@ import dataclasses
 
 import numpy as np
 
+from .. import so3
 from ..model import kinematics as kin
 
 #: Evenly spaced inputs along each ramp between two rows (resolves one reversal of a cable's motion).
@@ -34,7 +35,7 @@ RAMP_SUBSTEPS = 8
 #: the platform swings between cycles, within a cycle only the load moves.
 ROW_SUBSTEPS = 4
 #: Balance tolerance (N m) of the equilibria inside a ramp (the row's own is solved to the default).
-INNER_TOL_NM = 1e-8
+INNER_TOL_NM = 1e-7
 
 
 def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray, substeps: int = RAMP_SUBSTEPS,
@@ -104,13 +105,17 @@ def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray, substeps: i
         dl = (l_all[idx] - l0) * (every / substeps)
         path[idx, 0] = np.nan_to_num(c_q)
         base = rows.take(idx)
+        R_last = R_q
         for q in range(every, substeps + 1, every):
             f = q / substeps
             sub = dataclasses.replace(base, rest_lengths_m=l0 + f * (l_all[idx] - l0),
                                       tau_meas_A_Nm=t0 + f * (tau_all[idx] - t0), rest_steps_m=dl,
                                       log_steps_m=None, state_prev=np.nan_to_num(s_q), lengths_prev_m=c_q,
                                       ramp_shape_m=None)
-            sol = kin.solve_poses(lambda R, sub=sub: model.balance(R, sub, theta), R_q,  # type: ignore[misc]
+            # start from the pose extrapolated along the last step's rotation (equal input steps)
+            guess = R_q @ so3.exp(so3.log(np.swapaxes(R_last, 1, 2) @ R_q)) if q > every else R_q
+            R_last = R_q
+            sol = kin.solve_poses(lambda R, sub=sub: model.balance(R, sub, theta), guess,  # type: ignore[misc]
                                   tol_Nm=1e-10 if q == substeps else INNER_TOL_NM)
             _, ev = model.evaluate(sol.R, sub, theta)
             ok[idx] &= sol.converged(1e-6)
