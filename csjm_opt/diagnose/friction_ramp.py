@@ -33,7 +33,7 @@ from ..model import kinematics as kin
 RAMP_SUBSTEPS = 8
 #: Equilibria solved along a ramp within a cycle (a load step; the path between them is interpolated):
 #: the platform swings between cycles, within a cycle only the load moves.
-ROW_SUBSTEPS = 4
+ROW_SUBSTEPS = 2
 #: Balance tolerance (N m) of the equilibria inside a ramp (the row's own is solved to the default).
 INNER_TOL_NM = 1e-7
 
