@@ -20,7 +20,8 @@ rows within the rig's limits:
   parameters. The null keeps the rows showing the gap itself: rows that only tell
   two look-alike explanations apart but show neither would leave the held-out
   tests of the re-diagnosis (over cycles) without the effect to see. Each predicts every candidate row (forward
-  statics, path state carried on from the end of the log);
+  statics, path state carried on from the end of the log, on the path the fit used:
+  :func:`csjm_opt.diagnose.friction_path.end_state`);
 * **design**: if ``b`` is true, the new rows show ``b``'s predictions; ``a`` refitted to
   the log and the new rows absorbs what its parameters can (linearised: its pose
   sensitivities on the new rows, with the information the log and the prior already
