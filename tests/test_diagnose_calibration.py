@@ -93,10 +93,11 @@ def _true_params(effect: str, rig, plant: Plant) -> np.ndarray:
     if effect == "hole_offsets":
         return np.r_[(plant.rig.platform_holes_A_m - rig.platform_holes_A_m).ravel(),
                      (plant.rig.base_holes_B_m - rig.base_holes_B_m).ravel()]
+    rho = plant.friction_platform_fraction           # stick factor rho / (1 - rho), first state 0 (settled)
     if effect == "friction":
-        return np.r_[plant.friction_mu_beta, 0.5, 0.1, 0.0]
+        return np.r_[plant.friction_mu_beta, rho / (1 - rho), 0.0]
     if effect == "coulomb_friction":
-        return np.r_[plant.friction_coulomb_N, 0.5, 0.1, 0.0]
+        return np.r_[plant.friction_coulomb_N, rho / (1 - rho), 0.0]
     if effect == "cable_hardening":
         return np.array([plant.hardening_per_m])
     if effect == "link_compliance":

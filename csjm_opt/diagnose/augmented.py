@@ -55,6 +55,14 @@ class Rows:
     # cycle's first row (NaN where there is none): where a predicted cycle starts.
     entry_state: np.ndarray | None = None
     entry_lengths_m: np.ndarray | None = None
+    # Shape (n, S, 6) of each cable's motion along the quasi-static ramp of the inputs into each row,
+    # as a deviation from even steps (:mod:`csjm_opt.diagnose.friction_ramp`); None: one step.
+    ramp_shape_m: np.ndarray | None = None
+    # Inputs and pose of the log's row before each cycle's first row (NaN elsewhere): where the
+    # ramp into a predicted cycle starts (set by :func:`with_entry` with the entry state).
+    entry_rest_m: np.ndarray | None = None
+    entry_tau_A_Nm: np.ndarray | None = None
+    entry_R: np.ndarray | None = None
 
     def __len__(self) -> int:
         return self.rest_lengths_m.shape[0]
@@ -67,7 +75,8 @@ class Rows:
         return Rows(self.rest_lengths_m[idx], self.tau_meas_A_Nm[idx], self.cycle[idx],
                     self.cable_steps_m[idx], sub(self.state_prev), sub(self.lengths_prev_m),
                     sub(self.log_steps_m), sub(self.rest_steps_m), sub(self.entry_state),
-                    sub(self.entry_lengths_m))
+                    sub(self.entry_lengths_m), sub(self.ramp_shape_m), sub(self.entry_rest_m),
+                    sub(self.entry_tau_A_Nm), sub(self.entry_R))
 
     @property
     def steps_since_previous(self) -> tuple[np.ndarray, np.ndarray]:
@@ -279,10 +288,15 @@ class AugmentedModel:
 
         Path-dependent models are stepped row after row within each cycle (all
         cycles at once), each row starting from the state the model itself
-        reached on the previous row: predictions use only the log's inputs.
+        reached on the previous row: predictions use only the log's inputs. Rows that carry ramps
+        (``ramp_shape_m``, a path of :func:`csjm_opt.diagnose.friction_path.on_predicted_path`) are
+        reached along the ramp of their inputs (:func:`csjm_opt.diagnose.friction_ramp.predict_ramp`).
         """
         if not self.path_dependent:
             return kin.solve_poses(lambda R: self.balance(R, rows, theta), R_init)
+        if rows.ramp_shape_m is not None:
+            from .friction_ramp import predict_ramp
+            return predict_ramp(self, rows, theta, R_init)[0]
         n = len(rows)
         R_out, res = np.array(R_init, float), np.zeros(n)
         state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
@@ -320,11 +334,15 @@ def with_entry(model: "AugmentedModel", rows: Rows, R_meas: np.ndarray, theta: n
     _, ev = model.evaluate(R_meas, rows, theta)
     n = len(rows)
     state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
+    rest, tau, R = np.full((n, 6), np.nan), np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan)
     first = np.flatnonzero(np.r_[False, rows.cycle[1:] != rows.cycle[:-1]])
     if ev.state_out is not None and ev.lengths_m is not None:
         state[first] = ev.state_out[first - 1]
         lengths[first] = ev.lengths_m[first - 1]
-    return dataclasses.replace(rows, entry_state=state, entry_lengths_m=lengths)
+        rest[first], tau[first] = rows.rest_lengths_m[first - 1], rows.tau_meas_A_Nm[first - 1]
+        R[first] = R_meas[first - 1]
+    return dataclasses.replace(rows, entry_state=state, entry_lengths_m=lengths, entry_rest_m=rest,
+                               entry_tau_A_Nm=tau, entry_R=R)
 
 
 def log_steps(lengths_m: np.ndarray) -> np.ndarray:

@@ -21,7 +21,7 @@ from scipy.optimize import least_squares
 
 from ..errors import SolverError
 from ..model import kinematics as kin
-from .augmented import N_NUISANCE, AugmentedModel
+from .augmented import N_NUISANCE, AugmentedModel, Rows
 from .residuals import ResidualTable
 
 #: Condition number (parameters in units of their scale) above which a fit is reported ill-conditioned.
@@ -44,6 +44,7 @@ class FitResult:
     jac_x: np.ndarray | None = None   # (3 n + priors, p) Jacobian of the scaled problem at the fit
     res_x: np.ndarray | None = None   # (3 n + priors,) its residuals
     free: np.ndarray | None = None    # (p,) parameters not at a bound
+    rows: Rows | None = None          # the rows fitted (path-dependent models: the path their state followed)
 
     def refit_rows(self, keep: np.ndarray) -> np.ndarray:
         """Parameters fitted to rows ``keep`` only: one Gauss-Newton step from this fit.
@@ -222,7 +223,7 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     cov = cov_x * np.outer(scales, scales)
     theta = x * scales
     zeta = linearised_zeta(model, table, theta)
-    return FitResult(model, theta, cov, rss, N, p_eff, rank, cond, zeta, Jfull, res(x), free)
+    return FitResult(model, theta, cov, rss, N, p_eff, rank, cond, zeta, Jfull, res(x), free, table.rows)
 
 
 def objective(model: AugmentedModel, table: ResidualTable, theta: np.ndarray) -> float:

@@ -20,7 +20,8 @@ rows within the rig's limits:
   parameters. The null keeps the rows showing the gap itself: rows that only tell
   two look-alike explanations apart but show neither would leave the held-out
   tests of the re-diagnosis (over cycles) without the effect to see. Each predicts every candidate row (forward
-  statics, path state carried on from the end of the log);
+  statics, path state carried on from the end of the log, on the path the fit used:
+  :func:`csjm_opt.diagnose.friction_path.end_state`);
 * **design**: if ``b`` is true, the new rows show ``b``'s predictions; ``a`` refitted to
   the log and the new rows absorbs what its parameters can (linearised: its pose
   sensitivities on the new rows, with the information the log and the prior already
@@ -54,11 +55,12 @@ from ..errors import InvalidInput
 from ..model import kinematics as kin
 from ..model.rig import Rig
 from ._decision import ALPHA, LEAD_NATS
-from .augmented import Rows, cable_steps, log_steps, with_entry
+from .augmented import Rows, cable_steps, log_steps
 from .candidates import N_CANDIDATES, candidate_cycles
 from .effects import EFFECTS
 from .evidence import prior_of
 from .fit import data_jacobian
+from .friction_path import end_state
 from .loads import Load, default_load_set
 from .protocol import PROTOCOL_COLUMNS, Suggestion, protocol_text, suggestion_markdown
 from .result import Diagnosis
@@ -150,12 +152,9 @@ def _predict(sc: CandidateScore, d: Diagnosis, cands: list[dict], rig: Rig) -> t
     """
     model, theta = sc.fit.model, sc.fit.theta
     train = d.train
-    full = with_entry(model, train.rows, train.R_meas, theta)
-    last_state = last_len = None
-    if model.path_dependent:
-        _, ev = model.evaluate(train.R_meas, full, theta)
-        if ev.state_out is not None and ev.lengths_m is not None:
-            last_state, last_len = ev.state_out[-1], ev.lengths_m[-1]
+    # the state the log leaves, on the path the fit itself used (measured steps or the predicted path)
+    last_state, last_len = end_state(model, sc.fit.rows if sc.fit.rows is not None else train.rows,
+                                     train.R_meas, theta)
     l = np.concatenate([np.repeat(c["rest_lengths_m"][None], len(c["loads"]), 0) for c in cands])
     tau = np.concatenate([c["tau"] for c in cands])
     R0 = np.concatenate([c["R"] for c in cands])

@@ -11,15 +11,30 @@ while the cable sticks. Two laws, chosen by the data
 
 The band position ``s_i in [-1, 1]`` follows the cable as a play (stop) operator::
 
-    s_i[j] = clip(s_i[j-1] + (dc_i[j] + w dl_i[j]) / travel_i[j], -1, 1)
+    s_i[j] = clip(s_i[j-1] + (dc_i[j] + f dl_i[j]) / travel_i[j], -1, 1)
     travel_i = f * band_i / k_i        (band_i = mu_beta_i T_i or F_i)
 
 ``dc`` is the change of the cable's geometric length since the previous row and
 ``dl`` the change of its commanded rest length: while the cable sticks at the
 guide, drawing it out (``dc > 0``) raises the platform side's tension and
 paying out the drive (``dl > 0``) lowers the drive side's, both moving ``s``
-up; ``w >= 0`` weighs the drive side (the compliance share on either side of
-the sticking point). ``f -> 0`` is pure sliding (``s = sign(dc)``).
+up. For a cable stuck at one point between a platform-side segment holding a
+share ``rho`` of its compliance and a drive-side segment holding ``1 - rho``,
+the friction force changes by ``k (dc / rho + dl / (1 - rho))``; with the band
+written as the deviation of ``T_p`` from the elastic tension ``k (c - l)``,
+that is ``(k / band) (dc / f + dl)`` with ``f = rho / (1 - rho)``: one
+parameter, the stick travel factor ``f``, weighs both (a weight of ``dl`` of
+its own would only be identified by the few changes of rest length between
+cycles, and wandered there to unphysical values). MuJoCo's tendon friction is
+the limit ``f -> 0`` (the tendon's length is held while it sticks). ``f -> 0``
+is pure sliding (``s = sign(dc)``).
+
+Between rows the rig moves along a quasi-static ramp of its inputs, and the play
+operator remembers the extremes of its input: each row's change is applied in
+``RAMP_SUBSTEPS`` steps along the shape of the ramp
+(:mod:`csjm_opt.diagnose.friction_ramp`), so a cable that draws out and back in
+while the platform swings to the next cycle's pose leaves the state the swing
+leaves, not the state of one step.
 
 Memory: rows are in time order, and nobody relaxes the cables between load
 cycles, so the state is carried through the whole log: a cycle's first row
@@ -30,7 +45,7 @@ that is re-homed between cycles). The length changes come from the measured
 poses when fitting, and from the model's own predicted poses, row after row,
 when predicting a held-out cycle, which starts where the measured history before
 it leaves the state (:func:`csjm_opt.diagnose.augmented.with_entry`).
-Nine parameters: six band sizes, ``f``, ``w``, ``first_row_state``.
+Eight parameters: six band sizes, ``f``, ``first_row_state``.
 """
 
 from __future__ import annotations
@@ -38,6 +53,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..friction_ramp import ramp_steps
 from .base import Effect
 
 #: Smallest stick travel (m): keeps the play operator continuous in the pose for
@@ -50,45 +66,94 @@ LAWS = ("capstan", "coulomb")
 MEMORIES = ("carried", "reset")
 
 
-def _clip_band(s: np.ndarray) -> np.ndarray:
-    """``clip(s, -1, 1)`` with corners rounded over ``CORNER`` (forward solves need continuity of slope)."""
-    w = CORNER
-    return -1.0 + w * np.logaddexp(0.0, (s + 1.0) / w) - w * np.logaddexp(0.0, (s - 1.0) / w)
+@njit(cache=True)
+def _soft_clip(x: float, w: float) -> float:   # pragma: no cover (compiled)
+    """``clip(x, -1, 1)`` with corners rounded over ``w`` (forward solves need continuity of slope)."""
+    a = (x + 1.0) / w
+    b = (x - 1.0) / w
+    sp_a = a + np.log1p(np.exp(-a)) if a > 0 else np.log1p(np.exp(a))
+    sp_b = b + np.log1p(np.exp(-b)) if b > 0 else np.log1p(np.exp(b))
+    return -1.0 + w * sp_a - w * sp_b
+
+
+@njit(cache=True)
+def _ramp_play(prev: float, step: np.ndarray, i: int, j: int, w: float) -> float:   # pragma: no cover
+    """The play operator over the steps ``step[i, :, j]`` of one ramp (corners rounded over ``w / S``)."""
+    S = step.shape[1]
+    for q in range(S):
+        prev = _soft_clip(prev + step[i, q, j], w / S)
+    return prev
 
 
 @njit(cache=True)
 def _carried_band(step: np.ndarray, s0: float, w: float) -> np.ndarray:   # pragma: no cover (compiled)
-    """The play operator over the whole log in order (compiled; same rounding as :func:`_clip_band`)."""
-    n, m = step.shape
+    """The play operator over the whole log in order, ramp by ramp (``step`` (n, S, 6))."""
+    n, _, m = step.shape
     s = np.empty((n, m))
     for j in range(m):
         prev = s0
         s[0, j] = s0
         for i in range(1, n):
-            x = prev + step[i, j]
-            a = (x + 1.0) / w
-            b = (x - 1.0) / w
-            sp_a = a + np.log1p(np.exp(-a)) if a > 0 else np.log1p(np.exp(a))
-            sp_b = b + np.log1p(np.exp(-b)) if b > 0 else np.log1p(np.exp(b))
-            prev = -1.0 + w * sp_a - w * sp_b
+            prev = _ramp_play(prev, step, i, j, w)
             s[i, j] = prev
     return s
+
+
+@njit(cache=True)
+def _rows_band(prev: np.ndarray, step: np.ndarray, w: float) -> np.ndarray:   # pragma: no cover (compiled)
+    """The play operator over each row's own ramp from the states ``prev`` (n, 6) (rows independent)."""
+    n, _, m = step.shape
+    s = np.empty((n, m))
+    for i in range(n):
+        for j in range(m):
+            s[i, j] = _ramp_play(prev[i, j], step, i, j, w)
+    return s
+
+
+def ramp_input(dc_m: np.ndarray, dl_m: np.ndarray, shape_m: np.ndarray | None, travel_m: np.ndarray,
+               rest_weight: float) -> np.ndarray:
+    """The play operator's input steps (n, S, 6) along each row's ramp, in units of the stick travel.
+
+    Parameters
+    ----------
+    dc_m, dl_m : numpy.ndarray
+        Changes (n, 6) of the cable lengths and of the rest lengths since the previous row (m).
+    shape_m : numpy.ndarray or None
+        The ramp's deviation from even steps (:func:`csjm_opt.diagnose.friction_ramp.predict_ramp`),
+        or None (one step).
+    travel_m : numpy.ndarray
+        Stick travel (n, 6) of each row and cable (m).
+    rest_weight : float
+        Weight of the rest-length change (the stick travel factor: one compliance split).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(dc_q + w dl / S) / travel``; the rest lengths ramp evenly.
+    """
+    dc_q = ramp_steps(np.asarray(dc_m, float), shape_m)
+    S = dc_q.shape[1]
+    return np.ascontiguousarray((dc_q + (rest_weight / S) * np.asarray(dl_m, float)[:, None, :])
+                                / travel_m[:, None, :], dtype=np.float64)
 
 
 def band_position(rows, travel_m: np.ndarray, s0: float = 0.0, rest_weight: float = 0.0,
                   carried: bool = True) -> np.ndarray:
     """``s`` (n, 6) of the play operator over the log's rows (``travel_m`` (n, 6) > 0).
 
+    Each row is reached from the previous row of the log along the ramp of its inputs
+    (``rows.ramp_shape_m``; one step where it is None).
+
     Parameters
     ----------
     rows : Rows
-        The log's rows in time order (steps at the measured poses).
+        The log's rows in time order (steps at the measured or predicted poses).
     travel_m : numpy.ndarray
         Stick travel of each row and cable (m).
     s0 : float, optional
         State of the log's first row (and of every cycle's first row unless ``carried``).
     rest_weight : float, optional
-        Weight ``w`` of the rest-length change.
+        Weight of the rest-length change (the stick travel factor: one compliance split).
     carried : bool, optional
         Carry the state across cycle boundaries.
 
@@ -97,17 +162,17 @@ def band_position(rows, travel_m: np.ndarray, s0: float = 0.0, rest_weight: floa
     numpy.ndarray
     """
     dc, dl = rows.steps_since_previous
-    step = (dc + rest_weight * dl) / travel_m
-    s = np.full_like(step, s0)
+    step = ramp_input(dc, dl, rows.ramp_shape_m, travel_m, rest_weight)
     if not carried:
+        s = np.full(dc.shape, float(s0))
         for idx in rows.sequence:
-            s[idx] = _clip_band(s[idx - 1] + step[idx])
+            s[idx] = _rows_band(np.ascontiguousarray(s[idx - 1]), np.ascontiguousarray(step[idx]), CORNER)
         return s
-    return _carried_band(np.ascontiguousarray(step, dtype=np.float64), float(s0), CORNER)
+    return _carried_band(step, float(s0), CORNER)
 
 
 class Friction(Effect):
-    """Dry cable friction: six band sizes, the stick travel factor, the drive-side weight, the first state."""
+    """Dry cable friction: six band sizes, the stick travel factor, the first state."""
 
     name = "friction"
     path_dependent = True
@@ -131,11 +196,11 @@ class Friction(Effect):
         -------
         tuple of str
             Six band sizes (``mu_beta_i`` for the capstan law, ``F_i_N`` in N for Coulomb),
-            then ``stick_travel_factor``, ``rest_step_weight`` and ``first_row_state``.
+            then ``stick_travel_factor`` and ``first_row_state``.
         """
         unit = "" if self.law == "capstan" else "_N"
         return (tuple(f"{self._band}_{i + 1}{unit}" for i in range(6))
-                + ("stick_travel_factor", "rest_step_weight", "first_row_state"))
+                + ("stick_travel_factor", "first_row_state"))
 
     @property
     def scales(self):
@@ -144,10 +209,10 @@ class Friction(Effect):
         Returns
         -------
         numpy.ndarray
-            Band scale (0.03, or 2 % of ``t_max_N`` in N) for the six bands, 0.5 for the other three.
+            Band scale (0.03, or 2 % of ``t_max_N`` in N) for the six bands, 0.5 for the other two.
         """
         band = 0.03 if self.law == "capstan" else 0.02 * self.t_max_N
-        return np.r_[np.full(6, band), 0.5, 0.5, 0.5]
+        return np.r_[np.full(6, band), 0.5, 0.5]
 
     @property
     def lower_bounds(self):
@@ -156,9 +221,9 @@ class Friction(Effect):
         Returns
         -------
         numpy.ndarray
-            Zero for the bands, stick factor and weight; -1 for the first state.
+            Zero for the bands and the stick factor; -1 for the first state.
         """
-        return np.r_[np.zeros(8), -1.0]
+        return np.r_[np.zeros(7), -1.0]
 
     @property
     def upper_bounds(self):
@@ -167,15 +232,15 @@ class Friction(Effect):
         Returns
         -------
         numpy.ndarray
-            Unbounded for the bands, stick factor and weight; 1 for the first state.
+            Unbounded for the bands and the stick factor; 1 for the first state.
         """
-        return np.r_[np.full(8, np.inf), 1.0]
+        return np.r_[np.full(7, np.inf), 1.0]
 
     def default_ranges(self):
         """Plausible ranges of the friction parameters.
 
         Capstan factors up to 0.3 (35 % tension band: a badly worn guide), or Coulomb forces up to 10 % of
-        the rig's largest tension; stick factor and drive-side weight up to 2; first state in [-1, 1].
+        the rig's largest tension; stick factor up to 2; first state in [-1, 1].
 
         Returns
         -------
@@ -184,17 +249,17 @@ class Friction(Effect):
         """
         top = 0.3 if self.law == "capstan" else 0.1 * self.t_max_N
         return {**{n: (0.0, top) for n in self.param_names[:6]},
-                "stick_travel_factor": (0.0, 2.0), "rest_step_weight": (0.0, 2.0), "first_row_state": (-1.0, 1.0)}
+                "stick_travel_factor": (0.0, 2.0), "first_row_state": (-1.0, 1.0)}
 
     def x0(self) -> np.ndarray:
-        """Starting values: no friction, stick factor 0.5, drive-side weight 0.1, first state 0.
+        """Starting values: no friction, stick factor 0.5, first state 0.
 
         Returns
         -------
         numpy.ndarray
-            The nine starting values.
+            The eight starting values.
         """
-        return np.r_[np.zeros(6), 0.5, 0.1, 0.0]
+        return np.r_[np.zeros(6), 0.5, 0.0]
 
     def adjust_tension(self, ev, stretch_m, T_N, p):
         """Platform-side tensions with dry friction, ``T exp(mu_beta_i s_i)`` or ``max(T + F_i s_i, 0)``.
@@ -211,14 +276,15 @@ class Friction(Effect):
         T_N : numpy.ndarray
             Tensions from the tension law so far (N), shape (n, 6).
         p : numpy.ndarray
-            Six band sizes, the stick travel factor, the drive-side weight, the first state.
+            Six band sizes, the stick travel factor, the first state.
 
         Returns
         -------
         numpy.ndarray
             The changed tensions (N), shape (n, 6).
         """
-        band, factor, w, s0 = p[:6], p[6], p[7], p[8]
+        band, factor, s0 = p[:6], p[6], p[7]
+        w = factor                                   # one compliance split weighs both sides
         k = ev.cable_stiffness_N_per_m
         size = band * np.maximum(T_N, 1e-3) if self.law == "capstan" else band * np.ones_like(T_N)
         travel = np.maximum(factor * size / k, MIN_TRAVEL_M)
@@ -228,8 +294,9 @@ class Friction(Effect):
         else:                                        # one row per cycle, sequential prediction
             first = np.isnan(rows.lengths_prev_m)
             _, dl = rows.steps_since_previous
-            step = np.where(first, 0.0, ev.lengths_m - np.nan_to_num(rows.lengths_prev_m) + w * dl)
-            s = np.where(first, s0, _clip_band(rows.state_prev + step / travel))
+            dc = np.where(first, 0.0, ev.lengths_m - np.nan_to_num(rows.lengths_prev_m))
+            step = ramp_input(dc, np.where(first, 0.0, dl), rows.ramp_shape_m, travel, w)
+            s = np.where(first, s0, _rows_band(np.ascontiguousarray(rows.state_prev, dtype=np.float64), step, CORNER))
         ev.state_out = s
         if self.law == "capstan":
             return T_N * np.exp(s * band)
