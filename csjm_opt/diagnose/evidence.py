@@ -1,9 +1,13 @@
 """Laplace approximation of a model's log marginal likelihood under its prior ranges.
 
-Every parameter gets a proper Gaussian prior from its plausible range ``(lo, hi)``
-(:meth:`~csjm_opt.diagnose.effects.base.Effect.ranges`): mean the nominal value
-(0, clipped into the range), standard deviation a quarter of the range (the range is
-+-2 sd); a parameter without a finite range gets ten times its typical scale. Around
+Every parameter gets a proper prior from its plausible range ``(lo, hi)``
+(:meth:`~csjm_opt.diagnose.effects.base.Effect.ranges`), the range being the prior's
+central 95 % (+-2 sd): a Gaussian with mean the nominal value (0, clipped into the range)
+and standard deviation a quarter of the range; where the nominal value sits on a bound the
+parameter cannot cross (a friction band, a compliance's diagonal: the optimiser's bound
+equals the range's end), a **half-normal** on the allowed side from that bound, with the
+whole range as its 2 sd (sd half the range). A parameter without a finite range gets a
+Gaussian of ten times its typical scale. Around
 the fit, the whitened residual is linear in the parameters, ``r(x) = r0 + J (x - x0)``
 (the fit's own Jacobian), and with noise variance ``sigma^2`` (the same for every
 model of a diagnosis) the evidence of the linear-Gaussian model is exact::
@@ -14,13 +18,21 @@ The second term is the Occam factor: a parameter the log determines well
 (posterior much narrower than its prior) costs about ``log(prior sd / posterior sd)``,
 one it cannot determine costs nothing, so a 36-parameter effect pays only for the
 subspace the log identifies, and a 3-parameter effect that explains the same
-residual is preferred. This is the criterion that prices flexibility in the rule
+residual is preferred.
+
+A half-normal prior is the Gaussian one truncated at its mean and doubled, so its evidence is
+the Gaussian evidence times ``2 P(x_i on the allowed side)`` under the Gaussian posterior; the
+probability is taken from each bounded parameter's posterior marginal (their correlations
+ignored). Against a full Gaussian of the same sd, a parameter the log puts well inside the
+range gains ``log 2`` and one whose posterior straddles the bound less: a full Gaussian
+spends half its mass on impossible values. This is the criterion that prices flexibility in the rule
 (:mod:`csjm_opt.diagnose.selection`), next to the held-out checks.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.special import log_ndtr
 
 from .augmented import N_NUISANCE
 from .fit import FitResult
@@ -32,7 +44,7 @@ NUISANCE_SD_M = 1e-3
 
 
 def prior_of(fit: FitResult) -> tuple[np.ndarray, np.ndarray]:
-    """``(mean, sd)`` of the Gaussian prior of every parameter of ``fit.model`` (SI units).
+    """``(mean, sd)`` of the prior of every parameter of ``fit.model`` (SI units).
 
     Parameters
     ----------
@@ -41,21 +53,50 @@ def prior_of(fit: FitResult) -> tuple[np.ndarray, np.ndarray]:
     Returns
     -------
     tuple of numpy.ndarray
+        For a half-normal parameter (:func:`prior_sides`) the mean is its bound and the sd
+        that of the half-normal.
     """
+    return _prior(fit)[:2]
+
+
+def prior_sides(fit: FitResult) -> np.ndarray:
+    """Side of each parameter's half-normal prior: ``+1`` (above its bound), ``-1`` (below), 0 (Gaussian).
+
+    A prior is half-normal when the nominal value (0 clipped into the plausible range) is an end of
+    the range that the optimiser's bound forbids crossing (a friction band or a compliance's
+    diagonal cannot be negative).
+
+    Parameters
+    ----------
+    fit : FitResult
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    return _prior(fit)[2]
+
+
+def _prior(fit: FitResult) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     model = fit.model
     mean = [np.zeros(N_NUISANCE)]
     sd = [np.full(N_NUISANCE, NUISANCE_SD_M)]
+    side = [np.zeros(N_NUISANCE)]
     for e in model.effects:
         rng = e.ranges()
-        for name, scale in zip(e.param_names, e.scales):
+        for name, scale, lb, ub in zip(e.param_names, e.scales, e.lower_bounds, e.upper_bounds):
             lo, hi = rng.get(name, (-np.inf, np.inf))
             if np.isfinite(lo) and np.isfinite(hi):
-                mean.append(np.array([min(max(0.0, lo), hi)]))
-                sd.append(np.array([(hi - lo) / 4.0]))
+                mu = min(max(0.0, lo), hi)
+                half = 1.0 if (mu == lo and lb == lo) else -1.0 if (mu == hi and ub == hi) else 0.0
+                mean.append(np.array([mu]))
+                sd.append(np.array([(hi - lo) / (2.0 if half else 4.0)]))
+                side.append(np.array([half]))
             else:
                 mean.append(np.zeros(1))
                 sd.append(np.array([UNBOUNDED_SD_SCALES * scale]))
-    return np.concatenate(mean), np.concatenate(sd)
+                side.append(np.zeros(1))
+    return np.concatenate(mean), np.concatenate(sd), np.concatenate(side)
 
 
 def log_evidence(fit: FitResult, noise_scale: float) -> float:
@@ -79,7 +120,7 @@ def log_evidence(fit: FitResult, noise_scale: float) -> float:
     J = fit.jac_x[:n]                          # d r / d x, x = theta / scales
     r0 = fit.res_x[:n]
     x0 = fit.theta / scales
-    m, sd = prior_of(fit)
+    m, sd, side = _prior(fit)
     m, sd = m / scales, sd / scales
     s2 = float(noise_scale) ** 2
     # MAP of the linearised problem: (J^T J / s2 + S^-2) dx = -(J^T r0 / s2 + S^-2 (x0 - m))
@@ -92,4 +133,10 @@ def log_evidence(fit: FitResult, noise_scale: float) -> float:
     quad = float(r @ r / s2 + np.sum(((x - m) / sd) ** 2))
     M = np.eye(len(x)) + (sd[:, None] * (J.T @ J) * sd[None, :]) / s2
     sign, logdet = np.linalg.slogdet(M)
-    return float(-0.5 * quad - 0.5 * logdet)
+    # half-normal priors: the Gaussian evidence times 2 P(allowed side) under the posterior marginals
+    h = np.flatnonzero(side)
+    trunc = 0.0
+    if h.size:
+        post_sd = np.sqrt(np.maximum(np.diag(np.linalg.inv(A))[h], 1e-300))
+        trunc = float(np.sum(np.log(2.0) + log_ndtr(side[h] * (x[h] - m[h]) / post_sd)))
+    return float(-0.5 * quad - 0.5 * logdet + trunc)
