@@ -140,3 +140,31 @@ def log_evidence(fit: FitResult, noise_scale: float) -> float:
         post_sd = np.sqrt(np.maximum(np.diag(np.linalg.inv(A))[h], 1e-300))
         trunc = float(np.sum(np.log(2.0) + log_ndtr(side[h] * (x[h] - m[h]) / post_sd)))
     return float(-0.5 * quad - 0.5 * logdet + trunc)
+
+
+def effective_parameters(fit: FitResult, noise_scale: float) -> float:
+    """Number of parameters the log determines under the priors, ``sum lambda / (1 + lambda)``.
+
+    ``lambda`` are the eigenvalues of ``S J^T J S / s^2`` (prior sds ``S``, whitened Jacobian ``J``):
+    a direction the log pins down counts one, one it cannot see counts nothing. Over the noise, the
+    expected log evidence of a model is its log evidence on the noise-free data minus
+    ``(n - effective_parameters) / 2`` (the noise a model cannot follow), so this is what the study's
+    identifiability oracle adds to a noise-free evidence.
+
+    Parameters
+    ----------
+    fit : FitResult
+    noise_scale : float
+
+    Returns
+    -------
+    float
+    """
+    if fit.jac_x is None:
+        return float("nan")
+    J = fit.jac_x[:fit.n_obs]
+    _, sd = prior_of(fit)
+    sd = sd / fit.model.scales
+    lam = np.linalg.eigvalsh((sd[:, None] * (J.T @ J) * sd[None, :]) / float(noise_scale) ** 2)
+    lam = np.maximum(lam, 0.0)
+    return float(np.sum(lam / (1.0 + lam)))
