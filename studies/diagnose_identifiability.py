@@ -9,7 +9,7 @@ against the whole vocabulary, which this oracle measures for each study log:
 1. the same plant, rig, design and seed as the study log, with the instrument noise OFF
    (the noise-free truth log);
 2. every model of the vocabulary (the null model, each single, each pair; friction's law and
-   memory chosen by evidence as the diagnosis does) fitted to it, whitened with the log's TRUE
+   memory chosen per model by evidence) fitted to it, whitened with the log's TRUE
    instrument noise (so the noise scale is 1);
 3. each model's *expected* log evidence over the noise, ``log Z(noise-free) + p_eff / 2``
    (:func:`csjm_opt.diagnose.evidence.effective_parameters`; the ``-n/2`` shared by all models
@@ -69,7 +69,7 @@ def _oracle(job: dict) -> dict:
 
     from csjm_opt.diagnose import EFFECTS, make_effect
     from csjm_opt.diagnose.augmented import AugmentedModel
-    from csjm_opt.diagnose.fit import fit_model
+    from csjm_opt.diagnose.evidence import effective_parameters
     from csjm_opt.diagnose.residuals import compute_residuals
     from csjm_opt.diagnose.scoring import fit_on_path
     from csjm_opt.diagnose.selection import VARIANTS
@@ -80,33 +80,31 @@ def _oracle(job: dict) -> dict:
     clean = _simulate(rig, job["cycles"], job_seed(job) + [7], plant, InstrumentNoise.none())
     table = compute_residuals(rig, clean, noise)          # whitened by the TRUE noise: scale 1
     names = list(EFFECTS)
-    options: dict[str, dict] = {}
-    for n in names:                                       # the variant with the highest evidence
-        opts = VARIANTS.get(n, [])
-        best = (-np.inf, {})
-        for opt in opts:
-            try:
-                f = fit_model(AugmentedModel(rig, [make_effect(n, rig, **opt)]), table)
-                best = max(best, (expected_log_evidence(f), opt), key=lambda b: b[0])
-            except (np.linalg.LinAlgError, FloatingPointError):
-                pass
-        options[n] = best[1]
     models = [()] + [(n,) for n in names] + list(itertools.combinations(names, 2))
     ev: dict[str, float] = {}
     chi2: dict[str, float] = {}
     peff: dict[str, float] = {}
-    from csjm_opt.diagnose.evidence import effective_parameters
-
+    chosen: dict[str, dict] = {}
     with np.errstate(all="ignore"):
         for m in models:
             key = "+".join(m) or "nominal_refit"
-            try:
-                f, _ = fit_on_path(AugmentedModel(rig, [make_effect(n, rig, **options[n]) for n in m]), table)
-            except (np.linalg.LinAlgError, FloatingPointError) as exc:
+            # every variant of a variant effect (friction's law and memory), the best one kept: per model
+            varied = [n for n in m if VARIANTS.get(n)]
+            best = None
+            for opt in (VARIANTS[varied[0]] if varied else [{}]):
+                try:
+                    model = AugmentedModel(rig, [make_effect(n, rig, **(opt if n in varied else {})) for n in m])
+                    f, _ = fit_on_path(model, table)
+                except (np.linalg.LinAlgError, FloatingPointError) as exc:
+                    print(f"{job['id']}: {key} {opt} failed: {exc}", file=sys.stderr)
+                    continue
+                e = expected_log_evidence(f)
+                if best is None or e > best[0]:
+                    best = (e, f, opt)
+            if best is None:
                 ev[key] = float("nan")
-                print(f"{job['id']}: {key} failed: {exc}", file=sys.stderr)
                 continue
-            ev[key] = expected_log_evidence(f)
+            ev[key], f, chosen[key] = best[0], best[1], best[2]
             chi2[key] = float(f.rss)
             peff[key] = effective_parameters(f, 1.0)
     true = sorted(truth(job), key=names.index)
@@ -117,7 +115,7 @@ def _oracle(job: dict) -> dict:
             "plant": job.get("plant", "quasistatic"), "truth": true, "truth_model": tkey,
             "margin_nats": float(ev[tkey] - rivals[best_rival]), "best_rival": best_rival,
             "truth_chi2": chi2.get(tkey), "rival_chi2": chi2.get(best_rival), "rows": len(clean),
-            "log_evidence": ev, "chi2": chi2, "p_eff": peff, "options": options,
+            "log_evidence": ev, "chi2": chi2, "p_eff": peff, "variants": {k: v for k, v in chosen.items() if v},
             "seconds": time.perf_counter() - t0}
 
 
