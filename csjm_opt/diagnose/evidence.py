@@ -14,6 +14,11 @@ model of a diagnosis) the evidence of the linear-Gaussian model is exact::
 
     -2 log Z = min_x [ |r(x)|^2 / sigma^2 + |S^-1 (x - m)|^2 ] + log det(I + S J^T J S / sigma^2) + const
 
+(exact for the linearised model; the linearisation, though, holds only near the fit: a parameter
+whose step to the linearised posterior mode would exceed ``TRUST_PRIOR_SDS`` prior sds is held at its
+fitted value and pays its prior density there. A friction fit that followed a flat direction to a
+stick-travel factor of 1,300 (prior range 0-2: the friction term then acts as a per-cable stiffness,
+a stand-in for hole offsets) was otherwise credited as if the factor could return to 0 at no cost.)
 The second term is the Occam factor: a parameter the log determines well
 (posterior much narrower than its prior) costs about ``log(prior sd / posterior sd)``,
 one it cannot determine costs nothing, so a 36-parameter effect pays only for the
@@ -39,6 +44,9 @@ from .fit import FitResult
 
 #: Prior sd of a parameter without a finite range, in units of its scale.
 UNBOUNDED_SD_SCALES = 10.0
+#: Largest step (in prior sds) of a parameter from its fitted value to the linearised posterior mode that the
+#: evidence trusts; beyond it the parameter is held at its fitted value (the linearisation is local).
+TRUST_PRIOR_SDS = 2.0
 #: Prior sd of the nuisance (common pretension offset), m: drives zeroed to a fraction of a mm.
 NUISANCE_SD_M = 1e-3
 
@@ -128,6 +136,15 @@ def log_evidence(fit: FitResult, noise_scale: float) -> float:
     A = J.T @ J / s2 + P
     b = J.T @ r0 / s2 + P @ (x0 - m)
     dx = -np.linalg.solve(A, b)
+    # the linearisation holds near the fit only: a parameter whose step would travel more than
+    # TRUST_PRIOR_SDS prior sds (a flat direction the fit followed far out, where the prior says the
+    # value is implausible) keeps its fitted value, and its prior density there is paid
+    far = np.abs(dx) > TRUST_PRIOR_SDS * sd
+    if far.any():
+        near = ~far
+        dx = np.zeros_like(dx)
+        if near.any():
+            dx[near] = -np.linalg.solve(A[np.ix_(near, near)], b[near])
     r = r0 + J @ dx
     x = x0 + dx
     quad = float(r @ r / s2 + np.sum(((x - m) / sd) ** 2))
