@@ -93,3 +93,27 @@ def test_occam_factor_prefers_the_simple_model_on_an_effect_free_log(rig):
     s = float(np.sqrt(null.rss / (null.n_obs - 1)))
     assert holes.rss < null.rss
     assert log_evidence(holes, s) < log_evidence(null, s)
+
+
+def test_a_flat_direction_followed_far_out_pays_its_prior_density(rig):
+    """A parameter the log does not see (its Jacobian column zeroed) integrates to 1 under its prior in the
+    linear-Gaussian model, wherever the fit left it, as long as that is within the trusted step; a fit left
+    10 prior sds out is held there and pays ``10^2 / 2`` nats (the linearisation is local)."""
+    import dataclasses
+
+    fit = fit_model(AugmentedModel(rig, [make_effect("sensor_bias", rig)]),
+                    compute_residuals(rig, simulate_experiment(rig, 3, np.random.default_rng(36), steps=2)))
+    n, k = fit.n_obs, 2                       # k: bias_y (index 0 is the nuisance)
+    J = fit.jac_x.copy()
+    J[:n, k] = 0.0
+    m, sd = prior_of(fit)
+    s = 1.2
+
+    def moved(z):
+        theta = fit.theta.copy()
+        theta[k] = m[k] + z * sd[k]
+        return dataclasses.replace(fit, theta=theta, jac_x=J)
+
+    base = log_evidence(moved(0.0), s)
+    assert abs(log_evidence(moved(1.5), s) - base) < 1e-8 * max(1.0, abs(base))
+    assert abs(log_evidence(moved(10.0), s) - (base - 50.0)) < 1e-6 * max(1.0, abs(base))
