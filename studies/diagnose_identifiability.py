@@ -9,7 +9,7 @@ against the whole vocabulary, which this oracle measures for each study log:
 1. the same plant, rig, design and seed as the study log, with the instrument noise OFF
    (the noise-free truth log);
 2. every model of the vocabulary (the null model, each single, each pair; friction's law and
-   memory chosen per model by evidence) fitted to it, whitened with the log's TRUE
+   memory chosen per model by the evidence of its fit, as the diagnosis does) fitted to it, whitened with the log's TRUE
    instrument noise (so the noise scale is 1);
 3. each model's *expected* log evidence over the noise, ``log Z(noise-free) + p_eff / 2``
    (:func:`csjm_opt.diagnose.evidence.effective_parameters`; the ``-n/2`` shared by all models
@@ -70,6 +70,7 @@ def _oracle(job: dict) -> dict:
     from csjm_opt.diagnose import EFFECTS, make_effect
     from csjm_opt.diagnose.augmented import AugmentedModel
     from csjm_opt.diagnose.evidence import effective_parameters
+    from csjm_opt.diagnose.fit import fit_model
     from csjm_opt.diagnose.residuals import compute_residuals
     from csjm_opt.diagnose.scoring import fit_on_path
     from csjm_opt.diagnose.selection import VARIANTS
@@ -94,13 +95,16 @@ def _oracle(job: dict) -> dict:
             for opt in (VARIANTS[varied[0]] if varied else [{}]):
                 try:
                     model = AugmentedModel(rig, [make_effect(n, rig, **(opt if n in varied else {})) for n in m])
-                    f, _ = fit_on_path(model, table)
+                    f = fit_model(model, table) if varied else fit_on_path(model, table)[0]
                 except (np.linalg.LinAlgError, FloatingPointError) as exc:
                     print(f"{job['id']}: {key} {opt} failed: {exc}", file=sys.stderr)
                     continue
                 e = expected_log_evidence(f)
                 if best is None or e > best[0]:
                     best = (e, f, opt)
+            if best is not None and varied:          # the chosen variant along its own predicted path
+                f = fit_on_path(best[1].model, table)[0]
+                best = (expected_log_evidence(f), f, best[2])
             if best is None:
                 ev[key] = float("nan")
                 continue
