@@ -25,7 +25,8 @@ Rule (constants below; ``m`` candidates tried):
    model that explains the gap beats a simpler one that does not.
    *Pairs*: the seeds are the first effect and the singles with the lowest
    held-out errors (``PAIR_SEEDS`` in all, the whole vocabulary: every pair is
-   fitted, so no wrong first pick hides the right pair); each seed is paired with every other effect, and a pair is
+   fitted, so no wrong first pick hides the right pair); each seed is paired with every other effect (a
+   variant effect's law chosen again on the pair model), and a pair is
    detected by the same test against the best of its two singles and the
    first effect, at ``ALPHA`` over the number of pairs fitted (two wrong
    effects that together mimic the right one do not beat it).
