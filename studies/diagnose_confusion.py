@@ -372,6 +372,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--limit", type=int, default=None, help="stop after this many new logs")
     ap.add_argument("--multiples", nargs="+", type=float, default=None, help="only these severities")
     ap.add_argument("--only", nargs="+", default=None, help="only logs injecting these effects")
+    ap.add_argument("--including", nargs="+", default=None,
+                    help="only logs injecting all of these effects (e.g. every pair with friction)")
     ap.add_argument("--kinds", nargs="+", default=["none", "single", "pair", "outside"],
                     help="kinds of log to run (several runs may append to the same OUT.jsonl)")
     ap.add_argument("--scatter-mm", type=float, default=0.0,
@@ -388,7 +390,8 @@ def main(argv: list[str] | None = None) -> int:
                 for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs, plant)
                 if j["id"] not in done and j["kind"] in args.kinds
                 and (args.multiples is None or j["multiple"] in args.multiples)
-                and (args.only is None or set(j["effects"]) <= set(args.only))]
+                and (args.only is None or set(j["effects"]) <= set(args.only))
+                and (args.including is None or set(args.including) <= set(j["effects"]))]
         if args.scatter_mm > 0.0:
             todo = [{**j, "scatter_mm": args.scatter_mm, "id": f"{j['id']}-scatter{args.scatter_mm:g}mm"} for j in todo]
             todo = [j for j in todo if j["id"] not in done]

@@ -245,3 +245,20 @@ def test_secondary_alternatives_are_the_non_separable_stand_ins_of_the_second_ef
              sep("B", "C", False), sep("B", "D", True), sep("B", "E", False), sep("B", "F", False)]
     assert secondary_alternatives(Ctx(), pairs, {}, object(), "A", "B") == ["C"]
     assert secondary_alternatives(Ctx(), pairs, {}, object(), "A", "none") == []
+
+
+def test_a_pair_chooses_the_friction_law_with_its_partner_fitted(rig):
+    """Injected ground truth: capstan friction (cycles carried over) plus a mass/COM error; the variant of
+    the pair model friction + mass_com is chosen with the mass/COM error fitted alongside."""
+    from csjm_opt.diagnose.effects import make_effect
+    from csjm_opt.diagnose.selection import _Context, _variant
+    from csjm_opt.measurement.instruments import InstrumentNoise
+    from csjm_opt.testbed import inject, make_plant
+
+    plant = inject(make_plant(rig, "friction", 4.0, np.random.default_rng(31)), "mass_com", 6.0,
+                   np.random.default_rng(32))
+    log = simulate_experiment(rig, 5, np.random.default_rng(31), effect=plant, noise=InstrumentNoise.paper(),
+                              steps=3)
+    ctx = _Context(rig, compute_residuals(rig, log), None)
+    chosen = _variant(ctx, rig, "friction", None, [make_effect("mass_com", rig)])
+    assert chosen == {"law": "capstan", "memory": "carried"}

@@ -109,16 +109,38 @@ def folds_by_cycle(cycle: np.ndarray, k: int = 5) -> list[np.ndarray]:
     return [np.flatnonzero(np.isin(cycle, ids[f::k])) for f in range(k)]
 
 
-def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | None,
-          folds: list[np.ndarray] | None) -> CandidateScore:
-    """Fit on all training rows; held-out residuals from ``test`` or the folds."""
+def fit_on_path(model: AugmentedModel, train: ResidualTable) -> tuple[FitResult, ResidualTable]:
+    """The fit of ``model`` on all of ``train`` that a diagnosis scores, and the table it was fitted on.
+
+    A path-dependent model (friction with memory) is refitted with its state driven along the poses
+    it predicts itself (:func:`~csjm_opt.diagnose.friction_path.on_predicted_path`); that fit is kept
+    when it fits the rows better.
+
+    Parameters
+    ----------
+    model : AugmentedModel
+    train : ResidualTable
+
+    Returns
+    -------
+    tuple of (FitResult, ResidualTable)
+    """
     full = fit_model(model, train)
     if model.path_dependent:          # friction state along the model's own path, if it fits better
         path = on_predicted_path(model, train, full.theta)
         on_path = fit_model(model, path, full.theta)
         if on_path.rss < full.rss:
-            train, full = path, on_path
-            test = None if test is None else on_predicted_path(model, test, full.theta)
+            return on_path, path
+    return full, train
+
+
+def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | None,
+          folds: list[np.ndarray] | None) -> CandidateScore:
+    """Fit on all training rows; held-out residuals from ``test`` or the folds."""
+    full, path = fit_on_path(model, train)
+    if path is not train:
+        train = path
+        test = None if test is None else on_predicted_path(model, test, full.theta)
     sol = model.predict_poses(with_entry(model, train.rows, train.R_meas, full.theta), full.theta, train.R_meas)
     train_zeta = pose_residuals(sol.R, train.R_meas)
     failed = int(np.sum(~sol.converged(1e-6)))

@@ -25,7 +25,8 @@ Rule (constants below; ``m`` candidates tried):
    model that explains the gap beats a simpler one that does not.
    *Pairs*: the seeds are the first effect and the singles with the lowest
    held-out errors (``PAIR_SEEDS`` in all, the whole vocabulary: every pair is
-   fitted, so no wrong first pick hides the right pair); each seed is paired with every other effect, and a pair is
+   fitted, so no wrong first pick hides the right pair); each seed is paired with every other effect (a
+   variant effect's law chosen again on the pair model), and a pair is
    detected by the same test against the best of its two singles and the
    first effect, at ``ALPHA`` over the number of pairs fitted (two wrong
    effects that together mimic the right one do not beat it).
@@ -301,8 +302,13 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
     for a, b in todo:
         entry = next(p for p in pairs if set(p["effects"]) == {a, b})
         try:
-            sc = ctx.score([make_effect(a, rig, ranges, **options.get(a, {})),
-                            make_effect(b, rig, ranges, **options.get(b, {}))])
+            # an effect's variant (friction's law and memory) is chosen on the model being fitted: a single
+            # fit that had to absorb the partner effect may prefer another law than the pair does
+            opt_a = _variant(ctx, rig, a, ranges, [make_effect(b, rig, ranges, **options.get(b, {}))]) \
+                if a in VARIANTS else options.get(a, {})
+            opt_b = _variant(ctx, rig, b, ranges, [make_effect(a, rig, ranges, **opt_a)]) \
+                if b in VARIANTS else options.get(b, {})
+            sc = ctx.score([make_effect(a, rig, ranges, **opt_a), make_effect(b, rig, ranges, **opt_b)])
         except (np.linalg.LinAlgError, CsjmError, FloatingPointError) as exc:
             entry["error"] = f"fit failed: {exc}"
             tick(1)
@@ -332,11 +338,13 @@ VARIANTS: dict[str, list[dict]] = {"friction": [{"law": law, "memory": mem} for 
                                                 for mem in ("carried", "reset")]}
 
 
-def _variant(ctx: _Context, rig: Rig, name: str, ranges) -> dict:
+def _variant(ctx: _Context, rig: Rig, name: str, ranges, partners: Sequence = ()) -> dict:
     """The variant of ``name`` (e.g. friction's law and memory) with the highest evidence on the training rows.
 
     The noise scale is the best variant's (whitened RMS): the variants then differ by their fit and by what
     their priors say of the fitted parameters (a fit that needs a parameter far outside its range pays).
+    ``partners`` are the other effects of the model the variant is for (a pair's second effect): the variant
+    is a discrete parameter of that model and is chosen with them fitted alongside.
     """
     options = VARIANTS.get(name, [])
     if len(options) < 2:
@@ -344,7 +352,8 @@ def _variant(ctx: _Context, rig: Rig, name: str, ranges) -> dict:
     fits: list[FitResult | None] = []
     for opt in options:
         try:
-            fits.append(fit_model(AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), ctx.train))
+            fits.append(fit_model(AugmentedModel(rig, [make_effect(name, rig, ranges, **opt), *partners]),
+                                  ctx.train))
         except (np.linalg.LinAlgError, CsjmError, FloatingPointError):
             fits.append(None)
     ok = [f for f in fits if f is not None]
