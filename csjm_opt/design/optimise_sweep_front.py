@@ -75,6 +75,10 @@ RADIUS = 0.05
 MIN_BRANCH_EVALUATIONS = 6
 #: Most trust-region steps of the largest-workspace search.
 ANCHOR_STEPS = 8
+#: Starts ascended before the first branch is chosen (the largest of their local maxima is traced first).
+RACE = 2
+#: Designs closer than this (scaled variables, infinity norm) lead to the same local maximum.
+APART = 0.1
 
 
 @dataclasses.dataclass
@@ -222,9 +226,42 @@ def _branch(work: _Work, m: QuadModel, points: int | None, end: tuple[float, flo
     return m
 
 
+def _race(work: _Work, models: list[QuadModel], race: int) -> tuple[list[QuadModel], list[QuadModel]]:
+    """Ascend F from the ``race`` starts of largest F that lie apart; the local maxima, largest first.
+
+    A start's F says little about the local maximum its ascent reaches (on a space with several
+    local maxima the best start may sit in the basin of a lower one, and one quadratic model does not
+    predict a distant maximum), so the branch is chosen by the maxima themselves: the first ascent
+    keeps half of the evaluations left, each further one half of what is left then. Maxima within
+    APART of a better one are the same maximum and dropped.
+
+    Returns
+    -------
+    anchors : list of QuadModel
+        The distinct local maxima reached (largest F first).
+    rest : list of QuadModel
+        The other starts that hold a pose, largest F first (for further branches).
+    """
+    order = [int(k) for k in np.argsort([-m.F for m in models]) if models[k].F > 0.0]
+    reached: list[QuadModel] = []
+    raced: list[int] = []
+    for k in order:
+        if len(raced) >= max(race, 1) or (raced and work.left() < MIN_BRANCH_EVALUATIONS):
+            break
+        if any(np.max(np.abs(models[k].u - x.u)) < APART for x in [models[j] for j in raced] + reached):
+            continue
+        raced.append(k)
+        reached.append(_ascent(work, models[k], "F", ANCHOR_STEPS, keep=max((work.left() + 1) // 2, 2)))
+    anchors: list[QuadModel] = []
+    for m in sorted(reached, key=lambda x: -x.F):
+        if all(np.max(np.abs(m.u - a.u)) >= APART for a in anchors):
+            anchors.append(m)
+    return anchors, [models[k] for k in order if k not in raced]
+
+
 def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, points: int | None = None,
                 max_evaluations: int | None = None, starts: list[dict[str, float]] | None = None,
-                branches: int = 2) -> SweepFrontResult:
+                branches: int = 2, race: int = RACE) -> SweepFrontResult:
     """Trace the front in the sweep's metrics (see the module docstring).
 
     Parameters
@@ -244,6 +281,10 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
         Most fronts traced, from the starts of largest ``F`` that lead to different largest-workspace
         designs (mirror-image geometries are separate local optima); a further branch only uses what
         the previous ones left of the budget.
+
+    race : int
+        Starts (of largest ``F``, apart from each other) ascended before a branch is chosen: the
+        branches are traced from their local maxima, largest first (:func:`_race`).
 
     Returns
     -------
@@ -267,13 +308,14 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
     models = [work.twins(u) for u in u_starts]
     if max(m.F for m in models) <= 0.0:
         raise DesignError("no start holds any of the sweep's sample poses", "starts")
+    anchors, rest = _race(work, models, race)
     ends: list[np.ndarray] = []
-    for k in np.argsort([-m.F for m in models])[:max(branches, 1)]:
-        if models[k].F <= 0.0 or work.left() < (1 if not ends else MIN_BRANCH_EVALUATIONS):
+    for m in anchors + rest:
+        if len(ends) >= max(branches, 1) or work.left() < (1 if not ends else MIN_BRANCH_EVALUATIONS):
             break
-        if ends and min(np.max(np.abs(models[k].u - e)) for e in ends) < 0.1:
+        if ends and min(np.max(np.abs(m.u - e)) for e in ends) < APART:
             continue                                # starts near a traced branch lead to it again
-        m = _ascent(work, models[k], "F", ANCHOR_STEPS, keep=2)      # the largest workspace
+        m = _ascent(work, m, "F", ANCHOR_STEPS, keep=2)      # the largest workspace (done for a race's anchor)
         work.score(m.u, None, (m.F, m.S))
         if not ends:            # the front's other end first: the stiffest design, from the stiffest start
             held = [j for j in range(len(models)) if models[j].F > 0.0]
