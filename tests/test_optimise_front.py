@@ -231,7 +231,7 @@ def test_race_ascends_to_the_largest_local_maximum_not_from_the_best_start():
     for race, limit in ((2, 22), (1, 22)):
         work = front_mod._Work(limit, _two_bumps, None, None)
         models = [work.twins(u) for u in starts]
-        anchors, rest = front_mod._race(work, models, race)
+        anchors, rest = front_mod.race_starts(work, models, race, 6)
         assert work.twins_n <= limit
         assert len(anchors) + len(rest) == 3
         if race == 2:
