@@ -34,9 +34,6 @@ from .optimise_sweep_surrogate import sweep_surrogate
 MIN_RADIUS, MAX_RADIUS = 1e-3, 0.25
 #: The largest-workspace search stops when the model promises less than this gain in F.
 F_TOL = 5e-4
-#: The race between starts stops its ascents at this promised gain: it ranks the local maxima, which
-#: needs F to within their difference, not to F_TOL (the winner's ascent then goes on to F_TOL).
-RACE_TOL = 4 * F_TOL
 #: Most trust-region steps of the largest-workspace search.
 ANCHOR_STEPS = 8
 #: Designs closer than this (scaled variables, infinity norm) lead to the same local maximum.
@@ -214,7 +211,7 @@ def next_point(m: QuadModel, radius: float, F0: float, S0: float, scale: tuple[f
     return F0 - hi, d, binds
 
 
-def ascent(work: Any, m: QuadModel, part: str, steps: int, keep: int, tol: float = F_TOL) -> QuadModel:
+def ascent(work: Any, m: QuadModel, part: str, steps: int, keep: int) -> QuadModel:
     """Trust-region Newton ascent of ``part`` (``"F"`` or ``"S"``) from ``m``, keeping ``keep`` evaluations.
 
     Parameters
@@ -229,15 +226,14 @@ def ascent(work: Any, m: QuadModel, part: str, steps: int, keep: int, tol: float
         Most trust-region steps.
     keep : int
         Evaluations left untouched.
-    tol : float
-        The ascent stops where its model promises less gain than this (relative to S for ``"S"``).
 
     Returns
     -------
     QuadModel
-        The model at the last accepted design.
+        The model at the last accepted design (the ascent stops where its model promises less than
+        :data:`F_TOL`, relative to S for ``"S"``).
     """
-    radius, tol = MAX_RADIUS, tol * (1.0 if part == "F" else max(abs(m.S), 1.0))
+    radius, tol = MAX_RADIUS, F_TOL * (1.0 if part == "F" else max(abs(m.S), 1.0))
     for _ in range(steps):
         if work.left() <= keep:
             break
@@ -261,9 +257,8 @@ def race_starts(work: Any, models: list[QuadModel], race: int,
     A start's F says little about the local maximum its ascent reaches (on a space with several
     local maxima the best start may sit in the basin of a lower one, and one quadratic model does not
     predict a distant maximum), so the branch is chosen by the maxima themselves: the first ascent
-    keeps half of the evaluations left, each further one half of what is left then. The ascents stop
-    at :data:`RACE_TOL` (ranking the maxima needs no more). Maxima within APART of a better one are
-    the same maximum and dropped.
+    keeps half of the evaluations left, each further one half of what is left then. Maxima within
+    APART of a better one are the same maximum and dropped.
 
     Parameters
     ----------
@@ -292,8 +287,7 @@ def race_starts(work: Any, models: list[QuadModel], race: int,
         if any(np.max(np.abs(models[k].u - x.u)) < APART for x in [models[j] for j in raced] + reached):
             continue
         raced.append(k)
-        reached.append(ascent(work, models[k], "F", ANCHOR_STEPS, keep=max((work.left() + 1) // 2, 2),
-                              tol=RACE_TOL))
+        reached.append(ascent(work, models[k], "F", ANCHOR_STEPS, keep=max((work.left() + 1) // 2, 2)))
     anchors: list[QuadModel] = []
     for m in sorted(reached, key=lambda x: -x.F):
         if all(np.max(np.abs(m.u - a.u)) >= APART for a in anchors):
