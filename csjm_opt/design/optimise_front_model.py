@@ -211,7 +211,8 @@ def next_point(m: QuadModel, radius: float, F0: float, S0: float, scale: tuple[f
     return F0 - hi, d, binds
 
 
-def ascent(work: Any, m: QuadModel, part: str, steps: int, keep: int) -> QuadModel:
+def ascent(work: Any, m: QuadModel, part: str, steps: int, keep: int,
+           known: list[np.ndarray] | None = None) -> QuadModel:
     """Trust-region Newton ascent of ``part`` (``"F"`` or ``"S"``) from ``m``, keeping ``keep`` evaluations.
 
     Parameters
@@ -226,6 +227,8 @@ def ascent(work: Any, m: QuadModel, part: str, steps: int, keep: int) -> QuadMod
         Most trust-region steps.
     keep : int
         Evaluations left untouched.
+    known : list of ndarray, optional
+        Local maxima already reached: the ascent stops within :data:`APART` of one (it leads there).
 
     Returns
     -------
@@ -247,6 +250,8 @@ def ascent(work: Any, m: QuadModel, part: str, steps: int, keep: int) -> QuadMod
         radius = trust_radius(radius, rho, d)
         if rho > 0.1:
             m = trial
+            if known and min(np.max(np.abs(m.u - k)) for k in known) < APART:
+                break
     return m
 
 
@@ -257,8 +262,9 @@ def race_starts(work: Any, models: list[QuadModel], race: int,
     A start's F says little about the local maximum its ascent reaches (on a space with several
     local maxima the best start may sit in the basin of a lower one, and one quadratic model does not
     predict a distant maximum), so the branch is chosen by the maxima themselves: the first ascent
-    keeps half of the evaluations left, each further one half of what is left then. Maxima within
-    APART of a better one are the same maximum and dropped.
+    keeps half of the evaluations left, each further one half of what is left then, and stops when it
+    comes within APART of a maximum already reached (it leads there). Maxima within APART of a better
+    one are the same maximum and dropped.
 
     Parameters
     ----------
@@ -287,7 +293,8 @@ def race_starts(work: Any, models: list[QuadModel], race: int,
         if any(np.max(np.abs(models[k].u - x.u)) < APART for x in [models[j] for j in raced] + reached):
             continue
         raced.append(k)
-        reached.append(ascent(work, models[k], "F", ANCHOR_STEPS, keep=max((work.left() + 1) // 2, 2)))
+        reached.append(ascent(work, models[k], "F", ANCHOR_STEPS, keep=max((work.left() + 1) // 2, 2),
+                              known=[x.u for x in reached]))
     anchors: list[QuadModel] = []
     for m in sorted(reached, key=lambda x: -x.F):
         if all(np.max(np.abs(m.u - a.u)) >= APART for a in anchors):

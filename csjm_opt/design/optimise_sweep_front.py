@@ -13,7 +13,7 @@ models (:mod:`csjm_opt.design.optimise_front_model`):
    :data:`~csjm_opt.design.optimise_front_model.F_TOL`), and the larger one, ``F*``, is the first branch's anchor
    (the start of largest ``F`` may sit in the basin of a lower maximum); then
    the front's other end, the stiffest design, by the same steps on ``S`` from
-   the start of largest ``S`` (with at most a third of the evaluations left):
+   the design of largest ``S`` evaluated so far (starts and ascents) (with at most a third of the evaluations left):
    on a design space with mirror-image geometries it may lie on another
    branch, and it sets the spacing of the front's points;
 2. predictor-corrector continuation down the front, one evaluation per point:
@@ -135,6 +135,7 @@ class _Work:
         self.t0 = time.perf_counter()
         self._twins, self.settings, self.evaluation = twins, settings, evaluation
         self.records: list[dict[str, Any]] = []
+        self.models: list[QuadModel] = []          # every evaluation of the twins
 
     def left(self) -> int:
         return 10 ** 9 if self.limit is None else self.limit - self.twins_n - self.sweep_n
@@ -142,7 +143,8 @@ class _Work:
     def twins(self, u: np.ndarray) -> QuadModel:
         assert self.left() >= 1
         self.twins_n += 1
-        return self._twins(u)
+        self.models.append(self._twins(u))
+        return self.models[-1]
 
     def score(self, u: np.ndarray, eps: float | None, model: tuple[float, float]) -> dict[str, Any] | None:
         """Score a design by the sweep's evaluator (None, and no evaluation, for a design already scored)."""
@@ -264,10 +266,10 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
             continue                                # starts near a traced branch lead to it again
         m = ascent(work, m, "F", ANCHOR_STEPS, keep=2)      # the largest workspace (done for a race's anchor)
         work.score(m.u, None, (m.F, m.S))
-        if not ends:            # the front's other end first: the stiffest design, from the stiffest start
-            held = [j for j in range(len(models)) if models[j].F > 0.0]
-            stiff = ascent(work, models[max(held, key=lambda j: models[j].S)], "S", ANCHOR_STEPS,
-                            keep=max(work.left() * 2 // 3, 2))
+        if not ends:    # the front's other end first: the stiffest design, from the stiffest one evaluated
+            held = [x for x in work.models if x.F > 0.0]
+            stiff = ascent(work, max(held, key=lambda x: x.S), "S", ANCHOR_STEPS,
+                           keep=max(work.left() * 2 // 3, 2))
             if work.left() >= 1 and np.max(np.abs(stiff.u - m.u)) > 1e-9:
                 work.score(stiff.u, None, (stiff.F, stiff.S))
             end = (stiff.F, stiff.S)
