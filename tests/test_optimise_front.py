@@ -240,3 +240,17 @@ def test_race_ascends_to_the_largest_local_maximum_not_from_the_best_start():
             assert len(anchors) == 2 and np.max(np.abs(anchors[1].u - np.array([0.15, 0.85]))) < 0.02
         else:
             assert np.max(np.abs(anchors[0].u - np.array([0.15, 0.85]))) < 0.02
+
+
+def test_race_stops_an_ascent_that_reaches_a_known_maximum():
+    # two starts in the wide bump's basin: the second ascent stops within APART of the first's maximum,
+    # so it costs fewer evaluations than the same ascent alone, and the race reports one maximum
+    starts = [np.array([0.5, 0.1]), np.array([0.45, 0.55])]
+    work = front_mod._Work(None, _two_bumps, None, None)
+    anchors, _ = front_mod.race_starts(work, [work.twins(u) for u in starts], 2, 6)
+    raced = work.twins_n - 2
+    alone = front_mod._Work(None, _two_bumps, None, None)
+    solo = [front_mod.ascent(alone, alone.twins(u), "F", front_mod.ANCHOR_STEPS, keep=0) for u in starts]
+    assert len(anchors) == 1 and np.max(np.abs(anchors[0].u - solo[0].u)) < 1e-9
+    assert np.max(np.abs(solo[1].u - solo[0].u)) < front_mod.APART      # the same maximum, independently
+    assert raced < alone.twins_n - 2
