@@ -205,3 +205,52 @@ def test_multistart_on_processes_and_dask_gives_the_serial_designs(tmp_path):
     pytest.importorskip("distributed")
     on_dask = optimise(settings, starts=starts, workers=1, dask=True, progress=False)
     _same_designs(serial, on_dask)
+
+
+def _two_bumps(u: np.ndarray) -> QuadModel:
+    """A toy F with two basins: a narrow lower bump (0.86 at (0.15, 0.85)) and a wide higher one (0.87 at
+    (0.8, 0.2)); value, exact gradient and Hessian (S is flat)."""
+    F, g, H = 0.0, np.zeros(2), np.zeros((2, 2))
+    for a, c, s in ((0.86, np.array([0.15, 0.85]), 0.12), (0.87, np.array([0.8, 0.2]), 0.3)):
+        r = u - c
+        e = a * math.exp(-r @ r / (2 * s * s))
+        F += e
+        g += -e * r / s ** 2
+        H += e * (np.outer(r, r) / s ** 4 - np.eye(2) / s ** 2)
+    return QuadModel(np.array(u, float), F, 0.0, g, np.zeros(2), H, np.zeros((2, 2)))
+
+
+def test_race_ascends_to_the_largest_local_maximum_not_from_the_best_start():
+    # the start of largest F sits in the lower bump's basin; the global maximum, found by brute force on a
+    # grid, is the other bump's: the race (two starts ascended) must reach it, the best start alone must not
+    grid = np.stack(np.meshgrid(np.linspace(0, 1, 401), np.linspace(0, 1, 401)), -1).reshape(-1, 2)
+    values = np.array([_two_bumps(u).F for u in grid])
+    u_max = grid[np.argmax(values)]
+    starts = [np.array([0.2, 0.8]), np.array([0.5, 0.1]), np.array([0.45, 0.55])]
+    assert max(range(3), key=lambda k: _two_bumps(starts[k]).F) == 0      # the best start: the lower basin
+    for race, limit in ((2, 22), (1, 22)):
+        work = front_mod._Work(limit, _two_bumps, None, None)
+        models = [work.twins(u) for u in starts]
+        anchors, rest = front_mod.race_starts(work, models, race, 6)
+        assert work.twins_n <= limit
+        assert len(anchors) + len(rest) == 3
+        if race == 2:
+            assert np.max(np.abs(anchors[0].u - u_max)) < 0.02
+            assert anchors[0].F >= values.max() - 1e-3
+            assert len(anchors) == 2 and np.max(np.abs(anchors[1].u - np.array([0.15, 0.85]))) < 0.02
+        else:
+            assert np.max(np.abs(anchors[0].u - np.array([0.15, 0.85]))) < 0.02
+
+
+def test_race_stops_an_ascent_that_reaches_a_known_maximum():
+    # two starts in the wide bump's basin: the second ascent stops within APART of the first's maximum,
+    # so it costs fewer evaluations than the same ascent alone, and the race reports one maximum
+    starts = [np.array([0.5, 0.1]), np.array([0.45, 0.55])]
+    work = front_mod._Work(None, _two_bumps, None, None)
+    anchors, _ = front_mod.race_starts(work, [work.twins(u) for u in starts], 2, 6)
+    raced = work.twins_n - 2
+    alone = front_mod._Work(None, _two_bumps, None, None)
+    solo = [front_mod.ascent(alone, alone.twins(u), "F", front_mod.ANCHOR_STEPS, keep=0) for u in starts]
+    assert len(anchors) == 1 and np.max(np.abs(anchors[0].u - solo[0].u)) < 1e-9
+    assert np.max(np.abs(solo[1].u - solo[0].u)) < front_mod.APART      # the same maximum, independently
+    assert raced < alone.twins_n - 2

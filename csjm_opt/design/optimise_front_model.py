@@ -12,7 +12,9 @@ no evaluation of the twins: it is a small dense problem in ``n`` variables,
 solved by SLSQP from several starting steps (the model need not be concave).
 :func:`next_point` finds the model's front point a given length beyond the
 last one; :func:`trust_radius` updates the trust region from the ratio of
-actual to predicted change (:func:`ratio`).
+actual to predicted change (:func:`ratio`). :func:`ascent` is the
+trust-region Newton ascent of one twin, :func:`race_starts` the ascents from
+several starts whose largest local maximum anchors the front.
 """
 
 from __future__ import annotations
@@ -30,6 +32,12 @@ from .optimise_sweep_surrogate import sweep_surrogate
 
 #: Smallest and largest trust-region radius (scaled variables, infinity norm).
 MIN_RADIUS, MAX_RADIUS = 1e-3, 0.25
+#: The largest-workspace search stops when the model promises less than this gain in F.
+F_TOL = 5e-4
+#: Most trust-region steps of the largest-workspace search.
+ANCHOR_STEPS = 8
+#: Designs closer than this (scaled variables, infinity norm) lead to the same local maximum.
+APART = 0.1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -201,3 +209,94 @@ def next_point(m: QuadModel, radius: float, F0: float, S0: float, scale: tuple[f
         else:
             lo = mid
     return F0 - hi, d, binds
+
+
+def ascent(work: Any, m: QuadModel, part: str, steps: int, keep: int,
+           known: list[np.ndarray] | None = None) -> QuadModel:
+    """Trust-region Newton ascent of ``part`` (``"F"`` or ``"S"``) from ``m``, keeping ``keep`` evaluations.
+
+    Parameters
+    ----------
+    work : object
+        The evaluation counter: ``left()`` evaluations left, ``twins(u)`` one evaluation.
+    m : QuadModel
+        The start.
+    part : str
+        ``"F"`` or ``"S"``.
+    steps : int
+        Most trust-region steps.
+    keep : int
+        Evaluations left untouched.
+    known : list of ndarray, optional
+        Local maxima already reached: the ascent stops within :data:`APART` of one (it leads there).
+
+    Returns
+    -------
+    QuadModel
+        The model at the last accepted design (the ascent stops where its model promises less than
+        :data:`F_TOL`, relative to S for ``"S"``).
+    """
+    radius, tol = MAX_RADIUS, F_TOL * (1.0 if part == "F" else max(abs(m.S), 1.0))
+    for _ in range(steps):
+        if work.left() <= keep:
+            break
+        d, _ = best_step(m, part, radius)
+        value = m.part(part)[0]
+        gain = m.predict(d)[0 if part == "F" else 1] - value
+        if gain < tol:
+            break
+        trial = work.twins(on_box(m.u + d))
+        rho = ratio(trial.part(part)[0] - value, gain)
+        radius = trust_radius(radius, rho, d)
+        if rho > 0.1:
+            m = trial
+            if known and min(np.max(np.abs(m.u - k)) for k in known) < APART:
+                break
+    return m
+
+
+def race_starts(work: Any, models: list[QuadModel], race: int,
+                min_left: int) -> tuple[list[QuadModel], list[QuadModel]]:
+    """Ascend F from the ``race`` starts of largest F that lie apart; the local maxima, largest first.
+
+    A start's F says little about the local maximum its ascent reaches (on a space with several
+    local maxima the best start may sit in the basin of a lower one, and one quadratic model does not
+    predict a distant maximum), so the branch is chosen by the maxima themselves: the first ascent
+    keeps half of the evaluations left, each further one half of what is left then, and stops when it
+    comes within APART of a maximum already reached (it leads there). Maxima within APART of a better
+    one are the same maximum and dropped.
+
+    Parameters
+    ----------
+    work : object
+        The evaluation counter (as for :func:`ascent`).
+    models : list of QuadModel
+        The evaluated starts.
+    race : int
+        Most starts ascended.
+    min_left : int
+        A further start is ascended only with this many evaluations left.
+
+    Returns
+    -------
+    anchors : list of QuadModel
+        The distinct local maxima reached (largest F first).
+    rest : list of QuadModel
+        The other starts that hold a pose, largest F first (for further branches).
+    """
+    order = [int(k) for k in np.argsort([-m.F for m in models]) if models[k].F > 0.0]
+    reached: list[QuadModel] = []
+    raced: list[int] = []
+    for k in order:
+        if len(raced) >= max(race, 1) or (raced and work.left() < min_left):
+            break
+        if any(np.max(np.abs(models[k].u - x.u)) < APART for x in [models[j] for j in raced] + reached):
+            continue
+        raced.append(k)
+        reached.append(ascent(work, models[k], "F", ANCHOR_STEPS, keep=max((work.left() + 1) // 2, 2),
+                              known=[x.u for x in reached]))
+    anchors: list[QuadModel] = []
+    for m in sorted(reached, key=lambda x: -x.F):
+        if all(np.max(np.abs(m.u - a.u)) >= APART for a in anchors):
+            anchors.append(m)
+    return anchors, [models[k] for k in order if k not in raced]

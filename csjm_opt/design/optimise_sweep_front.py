@@ -7,11 +7,13 @@ those metrics (:mod:`csjm_opt.design.optimise_sweep_surrogate`), with exact
 first and second derivatives, by a trust-region method on their quadratic
 models (:mod:`csjm_opt.design.optimise_front_model`):
 
-1. the space-filling starts are evaluated (one evaluation each); from the one
-   of largest ``F``, trust-region Newton steps on ``F`` reach the largest
-   workspace ``F*`` (until the model promises less than :data:`F_TOL`); then
+1. the space-filling starts are evaluated (one evaluation each); from the two
+   of largest ``F`` that lie apart, trust-region Newton steps on ``F`` reach
+   their local maxima of the workspace (until the model promises less than
+   :data:`~csjm_opt.design.optimise_front_model.F_TOL`), and the larger one, ``F*``, is the first branch's anchor
+   (the start of largest ``F`` may sit in the basin of a lower maximum); then
    the front's other end, the stiffest design, by the same steps on ``S`` from
-   the start of largest ``S`` (with at most a third of the evaluations left):
+   the design of largest ``S`` evaluated so far (starts and ascents) (with at most a third of the evaluations left):
    on a design space with mirror-image geometries it may lie on another
    branch, and it sets the spacing of the front's points;
 2. predictor-corrector continuation down the front, one evaluation per point:
@@ -46,13 +48,15 @@ from ..errors import DesignError
 from .design_evaluation import design_id, evaluate_design
 from .evaluation_settings import EvaluationSettings
 from .optimise_front_model import (
-    MAX_RADIUS,
+    ANCHOR_STEPS,
+    APART,
     MIN_RADIUS,
     QuadModel,
-    best_step,
+    ascent,
     model_function,
     next_point,
     on_box,
+    race_starts,
     ratio,
     trust_radius,
 )
@@ -63,8 +67,6 @@ from .optimise_settings import OptimiseSettings
 FRONT_STEP, MAX_FRONT_STEP = 0.015, 0.06
 #: Radius (scaled variables) within which the model's stiffest design estimates the end of the front.
 END_RADIUS = 0.25
-#: The largest-workspace search stops when the model promises less than this gain in F.
-F_TOL = 5e-4
 #: A front point counts as on the front when its F is at most this far below its epsilon.
 F_SLACK = 2e-3
 #: Initial trust-region radius of the front (scaled variables, infinity norm; its bounds are in
@@ -73,8 +75,8 @@ RADIUS = 0.05
 #: A further branch starts only with this many evaluations left (an ascent step, its scoring, a corrector
 #: and two front points, at the least).
 MIN_BRANCH_EVALUATIONS = 6
-#: Most trust-region steps of the largest-workspace search.
-ANCHOR_STEPS = 8
+#: Starts ascended before the first branch is chosen (the largest of their local maxima is traced first).
+RACE = 2
 
 
 @dataclasses.dataclass
@@ -133,6 +135,7 @@ class _Work:
         self.t0 = time.perf_counter()
         self._twins, self.settings, self.evaluation = twins, settings, evaluation
         self.records: list[dict[str, Any]] = []
+        self.models: list[QuadModel] = []          # every evaluation of the twins
 
     def left(self) -> int:
         return 10 ** 9 if self.limit is None else self.limit - self.twins_n - self.sweep_n
@@ -140,7 +143,8 @@ class _Work:
     def twins(self, u: np.ndarray) -> QuadModel:
         assert self.left() >= 1
         self.twins_n += 1
-        return self._twins(u)
+        self.models.append(self._twins(u))
+        return self.models[-1]
 
     def score(self, u: np.ndarray, eps: float | None, model: tuple[float, float]) -> dict[str, Any] | None:
         """Score a design by the sweep's evaluator (None, and no evaluation, for a design already scored)."""
@@ -158,25 +162,6 @@ class _Work:
         rec["elapsed_s"] = time.perf_counter() - self.t0
         self.records.append(rec)
         return rec
-
-
-def _ascent(work: _Work, m: QuadModel, part: str, steps: int, keep: int) -> QuadModel:
-    """Trust-region Newton ascent of ``part`` ("F" or "S") from ``m``, keeping ``keep`` evaluations."""
-    radius, tol = MAX_RADIUS, F_TOL * (1.0 if part == "F" else max(abs(m.S), 1.0))
-    for _ in range(steps):
-        if work.left() <= keep:
-            break
-        d, _ = best_step(m, part, radius)
-        value = m.part(part)[0]
-        gain = m.predict(d)[0 if part == "F" else 1] - value
-        if gain < tol:
-            break
-        trial = work.twins(on_box(m.u + d))
-        rho = ratio(trial.part(part)[0] - value, gain)
-        radius = trust_radius(radius, rho, d)
-        if rho > 0.1:
-            m = trial
-    return m
 
 
 def _step_length(F0: float, S0: float, end: tuple[float, float], left: int, scale: tuple[float, float]) -> float:
@@ -224,7 +209,7 @@ def _branch(work: _Work, m: QuadModel, points: int | None, end: tuple[float, flo
 
 def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, points: int | None = None,
                 max_evaluations: int | None = None, starts: list[dict[str, float]] | None = None,
-                branches: int = 2) -> SweepFrontResult:
+                branches: int = 2, race: int = RACE) -> SweepFrontResult:
     """Trace the front in the sweep's metrics (see the module docstring).
 
     Parameters
@@ -244,6 +229,11 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
         Most fronts traced, from the starts of largest ``F`` that lead to different largest-workspace
         designs (mirror-image geometries are separate local optima); a further branch only uses what
         the previous ones left of the budget.
+
+    race : int
+        Starts (of largest ``F``, apart from each other) ascended before a branch is chosen: the
+        branches are traced from their local maxima, largest first
+        (:func:`~csjm_opt.design.optimise_front_model.race_starts`).
 
     Returns
     -------
@@ -267,18 +257,19 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
     models = [work.twins(u) for u in u_starts]
     if max(m.F for m in models) <= 0.0:
         raise DesignError("no start holds any of the sweep's sample poses", "starts")
+    anchors, rest = race_starts(work, models, race, MIN_BRANCH_EVALUATIONS)
     ends: list[np.ndarray] = []
-    for k in np.argsort([-m.F for m in models])[:max(branches, 1)]:
-        if models[k].F <= 0.0 or work.left() < (1 if not ends else MIN_BRANCH_EVALUATIONS):
+    for m in anchors + rest:
+        if len(ends) >= max(branches, 1) or work.left() < (1 if not ends else MIN_BRANCH_EVALUATIONS):
             break
-        if ends and min(np.max(np.abs(models[k].u - e)) for e in ends) < 0.1:
+        if ends and min(np.max(np.abs(m.u - e)) for e in ends) < APART:
             continue                                # starts near a traced branch lead to it again
-        m = _ascent(work, models[k], "F", ANCHOR_STEPS, keep=2)      # the largest workspace
+        m = ascent(work, m, "F", ANCHOR_STEPS, keep=2)      # the largest workspace (done for a race's anchor)
         work.score(m.u, None, (m.F, m.S))
-        if not ends:            # the front's other end first: the stiffest design, from the stiffest start
-            held = [j for j in range(len(models)) if models[j].F > 0.0]
-            stiff = _ascent(work, models[max(held, key=lambda j: models[j].S)], "S", ANCHOR_STEPS,
-                            keep=max(work.left() * 2 // 3, 2))
+        if not ends:    # the front's other end first: the stiffest design, from the stiffest one evaluated
+            held = [x for x in work.models if x.F > 0.0]
+            stiff = ascent(work, max(held, key=lambda x: x.S), "S", ANCHOR_STEPS,
+                           keep=max(work.left() * 2 // 3, 2))
             if work.left() >= 1 and np.max(np.abs(stiff.u - m.u)) > 1e-9:
                 work.score(stiff.u, None, (stiff.F, stiff.S))
             end = (stiff.F, stiff.S)
