@@ -8,6 +8,7 @@ import json
 import casadi as ca
 import numpy as np
 import pytest
+from design_files import tiny_design_toml
 
 from csjm_opt.cli.app import main
 from csjm_opt.design.certify import certify
@@ -20,33 +21,14 @@ from csjm_opt.design.sampling import tilt_torsion_rotations
 from csjm_opt.errors import DesignError
 from csjm_opt.model.rig import Rig
 
-TINY = """
-[sweep]
-method = "grid"
-[base]
-platform_gamma_deg = 60.0
-base_radius_m = 0.075
-base_gamma_deg = 20.0
-[parameters.platform_radius_m]
-min = 0.04
-max = 0.06
-num = 3
-[sampling]
-orientations = 100
-max_tilt_deg = 10.0
-max_torsion_deg = 5.0
-[loads]
-tau_ext = [[0.0, 0.0, 0.0], [0.5, 0.0, 0.0]]
-[optimise]
+TINY = tiny_design_toml(orientations=100, max_tilt_deg=10.0, max_torsion_deg=5.0,
+                        tau_ext=[[0.0, 0.0, 0.0], [0.5, 0.0, 0.0]], optimise="""
 objective = "stiffness"
 pareto_with = ""
 orientations = 4
 certify_orientations = 300
 starts = 1
-min_cable_distance_m = 0.0
-min_link_clearance_m = 0.0
-max_exit_angle_deg = 90.0
-"""
+""")
 
 
 def _file(tmp_path, text=TINY, name="tiny.toml"):

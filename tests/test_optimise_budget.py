@@ -10,40 +10,22 @@ from __future__ import annotations
 import dataclasses
 
 import pytest
+from design_files import tiny_design_toml
 
 import csjm_opt.design.optimisation as opt_mod
 from csjm_opt.design.optimise_budget import EVALUATIONS_PER_ITERATION, STOPPED
 from csjm_opt.design.optimise_settings import read_optimise_file
 from csjm_opt.errors import DesignError
 
-FILE = """
-[sweep]
-method = "grid"
-[base]
-platform_gamma_deg = 60.0
-base_radius_m = 0.075
-base_gamma_deg = 20.0
-[parameters.platform_radius_m]
-min = 0.04
-max = 0.06
-num = 3
-[sampling]
-orientations = 100
-max_tilt_deg = 30.0
-max_torsion_deg = 15.0
-[loads]
-tau_ext = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]
-[optimise]
+FILE = tiny_design_toml(orientations=100, max_tilt_deg=30.0, max_torsion_deg=15.0,
+                        tau_ext=[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], optimise="""
 objective = "range"
 pareto_with = "stiffness"
 pareto_points = 3
 orientations = 6
 certify_orientations = 300
 starts = 2
-min_cable_distance_m = 0.0
-min_link_clearance_m = 0.0
-max_exit_angle_deg = 90.0
-"""
+""")
 
 
 @pytest.fixture

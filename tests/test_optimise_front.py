@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from design_files import tiny_design_toml
 
 import csjm_opt.design.optimise_sweep_front as front_mod
 from csjm_opt.design.design_evaluation import evaluate_design
@@ -18,33 +19,14 @@ from csjm_opt.design.optimise_sweep_surrogate import MARGIN_SOFTMIN_NM, sweep_su
 from csjm_opt.errors import DesignError
 from csjm_opt.model.numeric import Model
 
-TINY = """
-[sweep]
-method = "grid"
-[base]
-platform_gamma_deg = 60.0
-base_radius_m = 0.075
-base_gamma_deg = 20.0
-[parameters.platform_radius_m]
-min = 0.04
-max = 0.06
-num = 3
-[sampling]
-orientations = 60
-max_tilt_deg = 40.0
-max_torsion_deg = 20.0
-[loads]
-tau_ext = [[0.0, 0.0, 0.0], [1.5, 0.0, 0.0]]
-[optimise]
+TINY = tiny_design_toml(orientations=60, max_tilt_deg=40.0, max_torsion_deg=20.0,
+                        tau_ext=[[0.0, 0.0, 0.0], [1.5, 0.0, 0.0]], optimise="""
 objective = "stiffness"
 pareto_with = ""
 orientations = 4
 certify_orientations = 200
 starts = 2
-min_cable_distance_m = 0.0
-min_link_clearance_m = 0.0
-max_exit_angle_deg = 90.0
-"""
+""")
 
 
 @pytest.fixture
