@@ -67,7 +67,7 @@ def resolve_workers(workers: int | None) -> int:
 
 
 def map_ordered(fn: Callable, shared: tuple, items: Sequence, workers: int,
-                tick: Callable[[int], object] = lambda n=1: None) -> list:
+                tick: Callable[[int], object] | None = None) -> list:
     """``[fn(*shared, item) for item in items]``, on up to ``workers`` forked processes.
 
     Parameters
@@ -88,6 +88,7 @@ def map_ordered(fn: Callable, shared: tuple, items: Sequence, workers: int,
     list
         The results in the order of ``items``.
     """
+    tick = tick or _no_tick
     if workers <= 1 or len(items) < 2 or "fork" not in mp.get_all_start_methods():
         out = []
         for item in items:
@@ -100,6 +101,10 @@ def map_ordered(fn: Callable, shared: tuple, items: Sequence, workers: int,
         for _ in as_completed(futures):
             tick(1)
         return [f.result() for f in futures]
+
+
+def _no_tick(n: int = 1) -> None:
+    return None
 
 
 def _init(fn: Callable, shared: tuple) -> None:
