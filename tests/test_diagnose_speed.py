@@ -94,3 +94,17 @@ def test_jacobian_from_the_residuals_balance_and_tangent_equals_a_fresh_one(rig,
     theta = model.x0() + np.r_[1e-5, np.full(6, 0.05), 0.0, 0.2]
     _, g0, G = _linearised(model, table, theta)
     np.testing.assert_array_equal(data_jacobian(model, table, theta, (g0, G)), data_jacobian(model, table, theta))
+
+
+def _default_in_worker(_: int) -> int:
+    from csjm_opt.diagnose.pool import default_workers
+
+    return default_workers()
+
+
+def test_a_pool_worker_fits_serially_by_default():
+    """A study's worker process diagnoses on one core (its pool spreads the logs over the cores)."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(1) as ex:
+        assert ex.submit(_default_in_worker, 0).result() == 1

@@ -175,16 +175,21 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     prior = model.prior_sd
     has_prior = np.isfinite(prior)
     W = table.whiten
-    # the balance and tangent at the last point evaluated: the optimiser asks for the Jacobian where it has
-    # just evaluated the residuals, and both start from the same g and G (computed once, bit for bit the same)
-    last: dict = {}
+    # linearised residuals, balance and tangent at the last points evaluated: the optimiser asks for the
+    # Jacobian where it has just evaluated the residuals (both start from the same g and G), and the result
+    # is built at a point evaluated before; each is computed once (bit for bit what a new evaluation gives)
+    last: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+    def linearised(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        key = theta.tobytes()
+        if key not in last:
+            last[key] = _linearised(model, table, theta)
+            while len(last) > 4:
+                last.pop(next(iter(last)))
+        return last[key]
 
     def data_res(x: np.ndarray) -> np.ndarray:
-        theta = x * scales
-        zeta, g0, G = _linearised(model, table, theta)
-        last.clear()
-        last[theta.tobytes()] = (g0, G)
-        return np.einsum("nij,nj->ni", W, zeta).ravel()
+        return np.einsum("nij,nj->ni", W, linearised(x * scales)[0]).ravel()
 
     def res(x: np.ndarray) -> np.ndarray:
         r = data_res(x)
@@ -194,7 +199,7 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
 
     def jac(x: np.ndarray) -> np.ndarray:
         theta = x * scales
-        Jd = data_jacobian(model, table, theta, last.get(theta.tobytes()))
+        Jd = data_jacobian(model, table, theta, linearised(theta)[1:])
         if has_prior.any():
             P = np.zeros((int(has_prior.sum()), len(x)))
             P[np.arange(P.shape[0]), np.flatnonzero(has_prior)] = scales[has_prior] / prior[has_prior]
@@ -230,7 +235,7 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     cov_x[np.ix_(free, free)] = JtJ_inv * sigma2
     cov = cov_x * np.outer(scales, scales)
     theta = x * scales
-    zeta = linearised_zeta(model, table, theta)
+    zeta = linearised(theta)[0]
     return FitResult(model, theta, cov, rss, N, p_eff, rank, cond, zeta, Jfull, res(x), free, table.rows)
 
 

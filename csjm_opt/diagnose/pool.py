@@ -6,8 +6,8 @@ floating-point warnings off, as in :func:`csjm_opt.diagnose.diagnose`), and the 
 the order of the items, so a parallel diagnosis is identical to a serial one.
 
 Workers are forked (the shared state, rows and noise estimates, is inherited, not pickled); where
-``fork`` is not available, or in a daemonic process (a worker of a study's pool, which may not have
-children), the fits run serially.
+``fork`` is not available the fits run serially, and by default also in a process that is itself a
+worker of a pool (a study diagnosing several logs at once uses the cores already).
 """
 
 from __future__ import annotations
@@ -31,9 +31,10 @@ def default_workers() -> int:
     Returns
     -------
     int
-        ``len(os.sched_getaffinity(0))`` (or ``os.cpu_count()``); 1 inside a daemonic process.
+        ``len(os.sched_getaffinity(0))`` (or ``os.cpu_count()``); 1 in a process started by
+        :mod:`multiprocessing` (a worker of a pool: the pool spreads the work over the cores already).
     """
-    if mp.current_process().daemon:
+    if mp.current_process().daemon or mp.parent_process() is not None:
         return 1
     try:
         return max(len(os.sched_getaffinity(0)), 1)
