@@ -108,3 +108,25 @@ def test_a_pool_worker_fits_serially_by_default():
 
     with ProcessPoolExecutor(1) as ex:
         assert ex.submit(_default_in_worker, 0).result() == 1
+
+
+def test_soft_clip_equals_its_formula_to_the_last_bit():
+    """The shortcut of the softplus (its linear tail not evaluated) changes no bit of the rounded clip."""
+    from numba import njit
+
+    from csjm_opt.diagnose.effects.friction import _soft_clip
+
+    @njit
+    def formula(x, w):                      # the formula in full, compiled as the package's is
+        a, b = (x + 1.0) / w, (x - 1.0) / w
+        sp_a = a + np.log1p(np.exp(-a)) if a > 0 else np.log1p(np.exp(a))
+        sp_b = b + np.log1p(np.exp(-b)) if b > 0 else np.log1p(np.exp(b))
+        return -1.0 + w * sp_a - w * sp_b
+
+    rng = np.random.default_rng(3)
+    for w in (0.02 / 8, 0.02, 0.3):
+        xs = np.r_[rng.uniform(-3, 3, 4000), rng.normal(1, 5 * w, 2000), rng.normal(-1, 5 * w, 2000),
+                   -1 + w * np.linspace(35, 45, 500), 1 + w * np.linspace(35, 45, 500)]
+        got = np.array([_soft_clip(float(x), w) for x in xs])
+        want = np.array([formula(float(x), w) for x in xs])
+        np.testing.assert_array_equal(got, want)

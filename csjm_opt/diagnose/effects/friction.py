@@ -61,6 +61,8 @@ from .base import Effect
 MIN_TRAVEL_M = 5e-6
 #: Rounding of the band's edges (in units of the half band).
 CORNER = 0.02
+#: Above this, ``a + log1p(exp(-a))`` rounds to ``a`` (``exp(-40) < 1e-17``, half an ulp of 40 is 3.6e-15).
+SOFTPLUS_LINEAR = 40.0
 #: Friction laws and memory modes.
 LAWS = ("capstan", "coulomb")
 MEMORIES = ("carried", "reset")
@@ -72,11 +74,15 @@ BAND_MEMO = 16
 @njit(cache=True)
 def _soft_clip(x: float, w: float) -> float:   # pragma: no cover (compiled)
     """``clip(x, -1, 1)`` with corners rounded over ``w`` (forward solves need continuity of slope)."""
-    a = (x + 1.0) / w
-    b = (x - 1.0) / w
-    sp_a = a + np.log1p(np.exp(-a)) if a > 0 else np.log1p(np.exp(a))
-    sp_b = b + np.log1p(np.exp(-b)) if b > 0 else np.log1p(np.exp(b))
-    return -1.0 + w * sp_a - w * sp_b
+    return -1.0 + w * _softplus((x + 1.0) / w) - w * _softplus((x - 1.0) / w)
+
+
+@njit(cache=True)
+def _softplus(a: float) -> float:   # pragma: no cover (compiled)
+    """``log(1 + exp(a))``; above ``SOFTPLUS_LINEAR`` it is ``a`` to the last bit, and is not evaluated."""
+    if a > SOFTPLUS_LINEAR:
+        return a
+    return a + np.log1p(np.exp(-a)) if a > 0 else np.log1p(np.exp(a))
 
 
 @njit(cache=True)
