@@ -130,3 +130,14 @@ def test_soft_clip_equals_its_formula_to_the_last_bit():
         got = np.array([_soft_clip(float(x), w) for x in xs])
         want = np.array([formula(float(x), w) for x in xs])
         np.testing.assert_array_equal(got, want)
+
+
+def _fail_on_three(x: int) -> int:
+    if x == 3:
+        raise ValueError("three")
+    return x
+
+
+def test_an_error_in_a_worker_reaches_the_caller():
+    with pytest.raises(ValueError, match="three"):
+        map_ordered(_fail_on_three, (), list(range(6)), 2)

@@ -99,8 +99,13 @@ def map_ordered(fn: Callable, shared: tuple, items: Sequence, workers: int,
     with ProcessPoolExecutor(min(workers, len(items)), mp_context=mp.get_context("fork"),
                              initializer=_init, initargs=(fn, shared)) as ex:
         futures = [ex.submit(_call, item) for item in items]
-        for _ in as_completed(futures):
-            tick(1)
+        try:
+            for f in as_completed(futures):
+                f.result()                  # an error (or Ctrl-C) stops the rest at once
+                tick(1)
+        except BaseException:
+            ex.shutdown(wait=False, cancel_futures=True)
+            raise
         return [f.result() for f in futures]
 
 
