@@ -141,3 +141,13 @@ def _fail_on_three(x: int) -> int:
 def test_an_error_in_a_worker_reaches_the_caller():
     with pytest.raises(ValueError, match="three"):
         map_ordered(_fail_on_three, (), list(range(6)), 2)
+
+
+def test_the_environment_sets_the_default_workers(monkeypatch):
+    from csjm_opt.diagnose.pool import default_workers
+
+    monkeypatch.setenv("CSJM_WORKERS", "3")
+    assert default_workers() == 3
+    monkeypatch.setenv("CSJM_WORKERS", "two")
+    with pytest.raises(InvalidInput, match="CSJM_WORKERS"):
+        default_workers()

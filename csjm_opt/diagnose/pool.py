@@ -7,7 +7,9 @@ the order of the items, so a parallel diagnosis is identical to a serial one.
 
 Workers are forked (the shared state, rows and noise estimates, is inherited, not pickled); where
 ``fork`` is not available the fits run serially, and by default also in a process that is itself a
-worker of a pool (a study diagnosing several logs at once uses the cores already).
+worker of a pool (a study diagnosing several logs at once uses the cores already). The environment
+variable ``CSJM_WORKERS`` sets the default (e.g. ``CSJM_WORKERS=1`` on a shared machine, or under a
+test runner that runs several processes itself).
 """
 
 from __future__ import annotations
@@ -31,9 +33,20 @@ def default_workers() -> int:
     Returns
     -------
     int
-        ``len(os.sched_getaffinity(0))`` (or ``os.cpu_count()``); 1 in a process started by
-        :mod:`multiprocessing` (a worker of a pool: the pool spreads the work over the cores already).
+        ``CSJM_WORKERS`` when set; else ``len(os.sched_getaffinity(0))`` (or ``os.cpu_count()``), and 1
+        in a process started by :mod:`multiprocessing` (a worker of a pool: the pool spreads the work
+        over the cores already).
+
+    Raises
+    ------
+    InvalidInput
+        ``CSJM_WORKERS`` is not a positive integer.
     """
+    env = os.environ.get("CSJM_WORKERS", "").strip()
+    if env:
+        if not env.isdigit() or int(env) < 1:
+            raise InvalidInput(f"CSJM_WORKERS must be a positive integer (got {env!r})", "CSJM_WORKERS")
+        return int(env)
     if mp.current_process().daemon or mp.parent_process() is not None:
         return 1
     try:
