@@ -118,8 +118,9 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
         Further rows (e.g. a suggested experiment, run after ``log``): appended to the training
         log as later cycles, after checking that they come from this rig.
     workers : int, optional
-        Worker processes for the candidates' and pairs' fits (default: the cores this process may
-        use, :func:`csjm_opt.diagnose.pool.default_workers`; 1: serial). The result does not depend on it.
+        Worker processes for the candidates' and pairs' fits (default: ``CSJM_WORKERS``, else the cores
+        this process may use, :func:`csjm_opt.diagnose.pool.default_workers`; 1: serial). The result does
+        not depend on it.
 
     Returns
     -------
