@@ -1,19 +1,28 @@
 """Diagnosis speed: 200-row logs, all eight candidates and the pair search (target: under 30 s on 2 cores),
 and ``--suggest 60`` on an ambiguous log (target: under 60 s).
 
-Run: python benchmarks/bench_diagnose.py [--cycles 22] [--repeat 1] [--no-progress]
+Run: python benchmarks/bench_diagnose.py [--cycles 22] [--repeat 1] [--workers N] [--baseline DIR]
+[--cases coulomb_friction ...] [--no-progress]
 
 Prints wall and CPU time (the box may be shared: CPU seconds of this process are what
-a 2-core machine of one's own would spend, wall time what it took here). Baseline
-measured in the same run: the singles-only diagnosis (``secondary=False``) on the
-same log, and one candidate fitted the direct way, ``scipy.optimize.least_squares``
-on *forward-statics* pose residuals (a full equilibrium solve of every row at every
-evaluation), against the linearised fit the package uses.
+a 2-core machine of one's own would spend, wall time what it took here). The full diagnosis
+runs twice: on one core (``workers=1``, wall = CPU on a quiet box) and on ``--workers``
+processes (default: the machine's cores; the CPU time of the workers is not this process's,
+so only wall time is printed there). Baselines measured in the same run: the singles-only
+diagnosis (``secondary=False``) on the same log; with ``--baseline DIR``, the diagnosis of
+another checkout of the package (e.g. the previous release) on the same log, in a subprocess,
+repeats interleaved with this code's (the ratio old / new of medians); and one candidate fitted
+the direct way, ``scipy.optimize.least_squares`` on *forward-statics* pose residuals (a full
+equilibrium solve of every row at every evaluation), against the linearised fit the package uses.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import resource
+import subprocess
 import sys
 import time
 from functools import partial
@@ -52,29 +61,78 @@ def timed(fn) -> tuple[object, float, float]:
     return out, time.perf_counter() - t0, time.process_time() - c0
 
 
+def children_cpu() -> float:
+    """CPU seconds of this process's finished child processes (the diagnosis's workers)."""
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+BASELINE = """
+import json, sys, time
+import numpy as np
+import csjm_opt as co
+from csjm_opt.diagnose import diagnose
+from csjm_opt.testbed import simulate_experiment
+effect = json.loads(sys.argv[1])
+log = simulate_experiment(co.paper_rig(), int(sys.argv[2]), np.random.default_rng(0), effect=effect)
+t0, c0 = time.perf_counter(), time.process_time()
+d = diagnose(co.paper_rig(), log)
+print(json.dumps([time.perf_counter() - t0, time.process_time() - c0, d.selected, d.secondary["effect"]]))
+"""
+
+
+def baseline_run(tree: str, effect, cycles: int) -> tuple[float, float, str]:
+    """Wall and CPU seconds of the diagnosis of the checkout ``tree`` on the same log, and its verdict."""
+    env = {**os.environ, "PYTHONPATH": tree}
+    out = subprocess.run([sys.executable, "-c", BASELINE, json.dumps(effect), str(cycles)], env=env,
+                         capture_output=True, text=True, check=True, cwd=tree)
+    wall, cpu, sel, sec = json.loads(out.stdout.strip().splitlines()[-1])
+    return wall, cpu, f"{sel} + {sec}"
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cycles", type=int, default=22, help="9 rows per cycle (22 -> 198 rows)")
     ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--workers", type=int, default=None, help="worker processes (default: the cores)")
+    ap.add_argument("--baseline", default=None, help="another checkout of the package to time on the same logs")
+    ap.add_argument("--cases", nargs="+", default=["none", "friction+sensor_bias", "coulomb_friction", "hole_offsets"])
     ap.add_argument("--no-progress", action="store_true")
+    ap.add_argument("--no-extras", action="store_true", help="only the diagnosis cases (no --suggest, no direct fit)")
     args = ap.parse_args()
     bar = None if args.no_progress else partial(tqdm, file=sys.stderr, leave=False)
     rig = co.paper_rig()
-    for effect in ("none", ["friction", "sensor_bias"], "coulomb_friction", "hole_offsets"):
+    for case in args.cases:
+        effect = case.split("+") if "+" in case else case
         log = simulate_experiment(rig, args.cycles, np.random.default_rng(0), effect=effect)
-        full, single = [], []
+        full, par, single, old = [], [], [], []
         for _ in range(args.repeat):
-            d, wall, cpu = timed(lambda log=log: diagnose(rig, log, progress=bar))
+            d, wall, cpu = timed(lambda log=log: diagnose(rig, log, progress=bar, workers=1))
             full.append((wall, cpu))
-            _, wall1, cpu1 = timed(lambda log=log: diagnose(rig, log, secondary=False))
+            k0 = children_cpu()
+            dp, wall_p, cpu_p = timed(lambda log=log: diagnose(rig, log, progress=bar, workers=args.workers))
+            par.append((wall_p, cpu_p + children_cpu() - k0))
+            if dp.as_json() != d.as_json():
+                print(f"  {case}: the diagnosis on workers differs from the serial one", file=sys.stderr)
+            _, wall1, cpu1 = timed(lambda log=log: diagnose(rig, log, secondary=False, workers=1))
             single.append((wall1, cpu1))
+            if args.baseline:
+                old.append(baseline_run(args.baseline, effect, args.cycles))
         j = d.as_json()
         fw, fc = np.median(full, axis=0)
         sw, sc = np.median(single, axis=0)
-        print(f"{len(log)} rows, injected {effect}: singles + pairs {fw:.1f} s wall / {fc:.1f} s CPU "
-              f"(target < 30 s); singles only {sw:.1f} s wall / {sc:.1f} s CPU; ratio {fc / sc:.2f}x CPU "
-              f"-> selected {j['selected']} + {j['secondary']['effect']}, "
+        pw, pc = np.median(par, axis=0)
+        print(f"{len(log)} rows, injected {case}: singles + pairs on one core {fw:.1f} s wall / {fc:.1f} s CPU, "
+              f"on {args.workers or 'all'} cores {pw:.1f} s wall / {pc:.1f} s CPU with the workers' "
+              f"(target < 30 s on 2 cores; load average {os.getloadavg()[0]:.1f}); singles only "
+              f"{sw:.1f} s wall / {sc:.1f} s CPU -> selected {j['selected']} + {j['secondary']['effect']}, "
               f"gap {1e3 * j['gap']['before_rad']:.2f} -> {1e3 * j['gap']['after_rad']:.2f} mrad")
+        if old:
+            ow, oc = np.median([o[:2] for o in old], axis=0)
+            print(f"  baseline {args.baseline}: {ow:.1f} s wall / {oc:.1f} s CPU -> {old[-1][2]}; "
+                  f"ratio old / new {oc / fc:.2f}x CPU on one core, {ow / pw:.2f}x wall on all cores")
+    if args.no_extras:
+        return 0
 
     log_s = simulate_experiment(rig, 12, np.random.default_rng(2), effect=["tracker_registration", "sensor_bias"])
     d = diagnose(rig, log_s)

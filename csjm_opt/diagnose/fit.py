@@ -175,9 +175,21 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     prior = model.prior_sd
     has_prior = np.isfinite(prior)
     W = table.whiten
+    # linearised residuals, balance and tangent at the last points evaluated: the optimiser asks for the
+    # Jacobian where it has just evaluated the residuals (both start from the same g and G), and the result
+    # is built at a point evaluated before; each is computed once (bit for bit what a new evaluation gives)
+    last: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+    def linearised(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        key = theta.tobytes()
+        if key not in last:
+            last[key] = _linearised(model, table, theta)
+            while len(last) > 4:
+                last.pop(next(iter(last)))
+        return last[key]
 
     def data_res(x: np.ndarray) -> np.ndarray:
-        return np.einsum("nij,nj->ni", W, linearised_zeta(model, table, x * scales)).ravel()
+        return np.einsum("nij,nj->ni", W, linearised(x * scales)[0]).ravel()
 
     def res(x: np.ndarray) -> np.ndarray:
         r = data_res(x)
@@ -186,7 +198,8 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
         return r
 
     def jac(x: np.ndarray) -> np.ndarray:
-        Jd = data_jacobian(model, table, x * scales)
+        theta = x * scales
+        Jd = data_jacobian(model, table, theta, linearised(theta)[1:])
         if has_prior.any():
             P = np.zeros((int(has_prior.sum()), len(x)))
             P[np.arange(P.shape[0]), np.flatnonzero(has_prior)] = scales[has_prior] / prior[has_prior]
@@ -222,7 +235,7 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     cov_x[np.ix_(free, free)] = JtJ_inv * sigma2
     cov = cov_x * np.outer(scales, scales)
     theta = x * scales
-    zeta = linearised_zeta(model, table, theta)
+    zeta = linearised(theta)[0]
     return FitResult(model, theta, cov, rss, N, p_eff, rank, cond, zeta, Jfull, res(x), free, table.rows)
 
 
@@ -253,11 +266,14 @@ def _components(rows: np.ndarray) -> np.ndarray:
     return (3 * np.asarray(rows)[:, None] + np.arange(3)).ravel()
 
 
-def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray) -> np.ndarray:
+def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray,
+                  at: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Gauss-Newton Jacobian ``W G^-1 dg/dx`` (3 n, p) in units of the parameters' scales.
 
     (The ``dG/dx G^-1 g`` term vanishes at a perfect fit.) Its Gram matrix is the
-    Fisher information of the scaled parameters under whitened noise.
+    Fisher information of the scaled parameters under whitened noise. ``at``: the balance ``g``
+    and its pose tangent ``G`` at ``theta`` when the caller has them (from :func:`linearised_zeta`
+    at the same ``theta``), else they are evaluated here.
     """
     scales = model.scales
     rows, R_meas = table.rows, table.R_meas
@@ -267,8 +283,8 @@ def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray
     def g(R: np.ndarray, th: np.ndarray = theta) -> np.ndarray:
         return model.balance(R, rows, th)
 
-    g0 = g(R_meas)
-    WGinv = table.whiten @ _safe_inv(kin.tangent(g, R_meas, g0, h=1e-6))
+    g0, G = (g(R_meas), None) if at is None else at
+    WGinv = table.whiten @ _safe_inv(kin.tangent(g, R_meas, g0, h=1e-6) if G is None else G)
     Jd = np.empty((g0.size, len(x)))
     for j in range(len(x)):
         step = 1e-6 * max(1.0, abs(x[j]))
@@ -283,6 +299,12 @@ def linearised_zeta(model: AugmentedModel, table: ResidualTable, theta: np.ndarr
 
     (``g(R_meas exp(d)) ~ g + G d = 0`` gives ``R_pred = R_meas exp(-G^-1 g)``.)
     """
+    return _linearised(model, table, theta)[0]
+
+
+def _linearised(model: AugmentedModel, table: ResidualTable,
+                theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`linearised_zeta`, and the balance ``g`` (n, 3) and tangent ``G`` (n, 3, 3) it came from."""
     def g(R: np.ndarray) -> np.ndarray:
         return model.balance(R, table.rows, theta)
 
@@ -290,7 +312,7 @@ def linearised_zeta(model: AugmentedModel, table: ResidualTable, theta: np.ndarr
     G = kin.tangent(g, table.R_meas, g0, h=1e-6)
     zeta = np.einsum("nij,nj->ni", _safe_inv(G), g0)
     # a parameter trial that leaves a row without a tangent (all cables slack) costs 1 rad, not a crash
-    return np.where(np.isfinite(zeta), np.clip(zeta, -1.0, 1.0), 1.0)
+    return np.where(np.isfinite(zeta), np.clip(zeta, -1.0, 1.0), 1.0), g0, G
 
 
 def _safe_inv(G: np.ndarray) -> np.ndarray:

@@ -109,7 +109,8 @@ def folds_by_cycle(cycle: np.ndarray, k: int = 5) -> list[np.ndarray]:
     return [np.flatnonzero(np.isin(cycle, ids[f::k])) for f in range(k)]
 
 
-def fit_on_path(model: AugmentedModel, train: ResidualTable) -> tuple[FitResult, ResidualTable]:
+def fit_on_path(model: AugmentedModel, train: ResidualTable,
+                fit: FitResult | None = None) -> tuple[FitResult, ResidualTable]:
     """The fit of ``model`` on all of ``train`` that a diagnosis scores, and the table it was fitted on.
 
     A path-dependent model (friction with memory) is refitted with its state driven along the poses
@@ -120,12 +121,15 @@ def fit_on_path(model: AugmentedModel, train: ResidualTable) -> tuple[FitResult,
     ----------
     model : AugmentedModel
     train : ResidualTable
+    fit : FitResult, optional
+        ``fit_model(model, train)`` when the caller has it already (e.g. the fit that chose a
+        friction law): used instead of fitting again (the fit is deterministic, so nothing changes).
 
     Returns
     -------
     tuple of (FitResult, ResidualTable)
     """
-    full = fit_model(model, train)
+    full = fit_model(model, train) if fit is None else fit
     if model.path_dependent:          # friction state along the model's own path, if it fits better
         path = on_predicted_path(model, train, full.theta)
         on_path = fit_model(model, path, full.theta)
@@ -135,9 +139,12 @@ def fit_on_path(model: AugmentedModel, train: ResidualTable) -> tuple[FitResult,
 
 
 def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | None,
-          folds: list[np.ndarray] | None) -> CandidateScore:
-    """Fit on all training rows; held-out residuals from ``test`` or the folds."""
-    full, path = fit_on_path(model, train)
+          folds: list[np.ndarray] | None, fit: FitResult | None = None) -> CandidateScore:
+    """Fit on all training rows; held-out residuals from ``test`` or the folds.
+
+    ``fit``: the plain fit of ``model`` on ``train`` (:func:`fit_on_path`), when the caller has it.
+    """
+    full, path = fit_on_path(model, train, fit)
     if path is not train:
         train = path
         test = None if test is None else on_predicted_path(model, test, full.theta)

@@ -60,7 +60,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from ..errors import CsjmError, SolverError
+from ..errors import SolverError
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import Rig
@@ -77,14 +77,13 @@ from ._decision import (  # noqa: F401 (ALPHA and the thresholds are re-exported
     _Context,
     combine_scales,
 )
-from .augmented import AugmentedModel
 from .effects import EFFECTS, make_effect
-from .evidence import log_evidence
 from .extra import append_log
-from .fit import FitResult, fit_model
 from .localisation import localise
+from .model_fits import VARIANTS, fit_pair, fit_single, variant_fit  # noqa: F401 (VARIANTS re-exported)
 from .noise import systematic
 from .pairs import all_separabilities, secondary_alternatives
+from .pool import map_ordered, resolve_workers
 from .residuals import compute_residuals
 from .result import Diagnosis
 from .scoring import CandidateScore, paired_heldout_test
@@ -94,7 +93,7 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
              effects: Sequence[str] | None = None, noise: InstrumentNoise | None = None,
              progress: Callable | None = None, secondary: bool = True,
              ranges: Mapping[str, tuple[float, float]] | None = None,
-             extra: MeasurementLog | None = None) -> Diagnosis:
+             extra: MeasurementLog | None = None, workers: int | None = None) -> Diagnosis:
     """Residuals, noise floor, every candidate and pair scored, the verdict, localisation.
 
     Parameters
@@ -118,6 +117,10 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     extra : MeasurementLog, optional
         Further rows (e.g. a suggested experiment, run after ``log``): appended to the training
         log as later cycles, after checking that they come from this rig.
+    workers : int, optional
+        Worker processes for the candidates' and pairs' fits (default: ``CSJM_WORKERS``, else the cores
+        this process may use, :func:`csjm_opt.diagnose.pool.default_workers`; 1: serial). The result does
+        not depend on it.
 
     Returns
     -------
@@ -127,26 +130,28 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     ------
     InvalidInput
         Fewer than two cycles and no test log, an unknown effect name, a malformed log, or an
-        ``extra`` log that does not belong to this rig.
+        ``extra`` log that does not belong to this rig, or ``workers`` below 1.
     SolverError
         The nominal model cannot be evaluated on the log (singular tangents: slack cables).
 
     Notes
     -----
     The fits are many small dense problems: BLAS runs single-threaded inside (threads
-    only contend for the cores there; parallelism belongs one level up, across logs).
+    only contend for the cores there); the independent fits (candidates, pairs) run on ``workers``
+    processes (:mod:`csjm_opt.diagnose.pool`), each exactly as the serial loop would.
     """
+    workers = resolve_workers(workers)
     with threadpool_limits(1), np.errstate(all="ignore"):   # trial steps may overflow; fits guard themselves
         if extra is not None:
             log = append_log(rig, log, extra)
         try:
-            return _diagnose(rig, log, test, effects, noise, progress, secondary, ranges)
+            return _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, workers)
         except np.linalg.LinAlgError as exc:      # e.g. rows where every cable is slack at the measured pose
             raise SolverError(f"the nominal model cannot be evaluated on this log ({exc}); check that the log "
                               "belongs to this rig (cables taut at the measured poses)", "numpy") from exc
 
 
-def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Diagnosis:
+def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, workers) -> Diagnosis:
     names = list(EFFECTS) if effects is None else list(effects)
     for n in names:
         make_effect(n, rig)                        # unknown names fail here, before any fitting
@@ -161,13 +166,11 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     singles: dict[str, CandidateScore] = {}
     failed: dict[str, str] = {}
     options: dict[str, dict] = {}
-    for name in names:
-        try:
-            options[name] = _variant(ctx, rig, name, ranges)
-            singles[name] = ctx.score([make_effect(name, rig, ranges, **options[name])])
-        except (np.linalg.LinAlgError, CsjmError, FloatingPointError) as exc:   # reported, not fatal
-            failed[name] = f"fit failed: {exc}"
-        tick(1)
+    for name, (opt, sc, error) in zip(names, map_ordered(fit_single, (ctx, rig, ranges), names, workers, tick)):
+        if sc is None:                                          # reported, not fatal
+            failed[name] = str(error)
+        else:
+            options[name], singles[name] = opt, sc
     m = max(len(singles), 1)
     # the noise: the smallest of the estimates (a misfit, e.g. friction hysteresis, only inflates one)
     floor0 = min([ctx.noise_floor(baseline)] + [ctx.scale(sc) * baseline.instrument_floor_rad
@@ -192,7 +195,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
     seeds = ([] if first is None and not masked else
              ([first] if first is not None else []) + [n for n in by_error if n != first])[:PAIR_SEEDS]
     pairs, pair_scores = _pairs(ctx, rig, names, singles, seeds, secondary, ranges, tick, planned_pairs,
-                                baseline if masked else None, first, options)
+                                baseline if masked else None, first, options, workers)
     if bar:
         bar.close()
     selected, second, final, verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_there)
@@ -278,7 +281,8 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges) -> Di
 
 
 def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, tick, planned: int,
-           masked_base: CandidateScore | None, first: str | None, options: dict) -> tuple[list, dict]:
+           masked_base: CandidateScore | None, first: str | None, options: dict,
+           workers: int = 1) -> tuple[list, dict]:
     """Every pair's separability; each seed + each other effect fitted and tested (rule 3 / rule 6).
 
     A pair is tested against the best of its two singles and the first effect (``masked_base``,
@@ -299,21 +303,12 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
     tick(max(planned - len(todo), 0))
     m = len(singles)
     level = ALPHA / max(m * (m - 1) // 2 if masked_base is not None else len(todo), 1)
-    for a, b in todo:
+    # the pairs are independent fits: on ``workers`` processes, results in the order of ``todo``
+    for (a, b), (sc, error) in zip(todo, map_ordered(fit_pair, (ctx, rig, ranges, options), todo, workers, tick)):
         entry = next(p for p in pairs if set(p["effects"]) == {a, b})
-        try:
-            # an effect's variant (friction's law and memory) is chosen on the model being fitted: a single
-            # fit that had to absorb the partner effect may prefer another law than the pair does
-            opt_a = _variant(ctx, rig, a, ranges, [make_effect(b, rig, ranges, **options.get(b, {}))]) \
-                if a in VARIANTS else options.get(a, {})
-            opt_b = _variant(ctx, rig, b, ranges, [make_effect(a, rig, ranges, **opt_a)]) \
-                if b in VARIANTS else options.get(b, {})
-            sc = ctx.score([make_effect(a, rig, ranges, **opt_a), make_effect(b, rig, ranges, **opt_b)])
-        except (np.linalg.LinAlgError, CsjmError, FloatingPointError) as exc:
-            entry["error"] = f"fit failed: {exc}"
-            tick(1)
+        if sc is None:
+            entry["error"] = str(error)
             continue
-        tick(1)
         scores[(a, b)] = sc
         rivals = [singles[a], singles[b]] + ([singles[first]] if first is not None else [])
         base = masked_base or min(rivals, key=lambda c: c.heldout_mse)
@@ -332,36 +327,9 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
     return pairs, scores
 
 
-#: Variants of an effect the data choose between (same number of parameters: the highest Laplace evidence
-#: of the training fit wins, at one noise scale for all: the best fit, unless it needs implausible parameters).
-VARIANTS: dict[str, list[dict]] = {"friction": [{"law": law, "memory": mem} for law in ("capstan", "coulomb")
-                                                for mem in ("carried", "reset")]}
-
-
 def _variant(ctx: _Context, rig: Rig, name: str, ranges, partners: Sequence = ()) -> dict:
-    """The variant of ``name`` (e.g. friction's law and memory) with the highest evidence on the training rows.
-
-    The noise scale is the best variant's (whitened RMS): the variants then differ by their fit and by what
-    their priors say of the fitted parameters (a fit that needs a parameter far outside its range pays).
-    ``partners`` are the other effects of the model the variant is for (a pair's second effect): the variant
-    is a discrete parameter of that model and is chosen with them fitted alongside.
-    """
-    options = VARIANTS.get(name, [])
-    if len(options) < 2:
-        return options[0] if options else {}
-    fits: list[FitResult | None] = []
-    for opt in options:
-        try:
-            fits.append(fit_model(AugmentedModel(rig, [make_effect(name, rig, ranges, **opt), *partners]),
-                                  ctx.train))
-        except (np.linalg.LinAlgError, CsjmError, FloatingPointError):
-            fits.append(None)
-    ok = [f for f in fits if f is not None]
-    if not ok:
-        return options[0]
-    scale = float(np.sqrt(max(min(f.rss for f in ok) / max(ok[0].n_obs, 1), 1e-12)))
-    ev = [-np.inf if f is None else log_evidence(f, scale) for f in fits]
-    return options[int(np.nanargmax(np.where(np.isfinite(ev), ev, -np.inf)))]
+    """The variant of ``name`` with the highest evidence, ``partners`` after it (:func:`.model_fits.variant_fit`)."""
+    return variant_fit(ctx, rig, name, ranges, after=partners)[0]
 
 
 def _n_pair_fits(n_seeds: int, n: int) -> int:

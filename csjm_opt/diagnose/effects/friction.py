@@ -61,19 +61,28 @@ from .base import Effect
 MIN_TRAVEL_M = 5e-6
 #: Rounding of the band's edges (in units of the half band).
 CORNER = 0.02
+#: Above this, ``a + log1p(exp(-a))`` rounds to ``a`` (``exp(-40) < 1e-17``, half an ulp of 40 is 3.6e-15).
+SOFTPLUS_LINEAR = 40.0
 #: Friction laws and memory modes.
 LAWS = ("capstan", "coulomb")
 MEMORIES = ("carried", "reset")
+#: Band positions kept per effect (a fit's Jacobian and pose tangent re-evaluate the log at the same stick
+#: travels: every column of a parameter the travel does not depend on, every pose step under the Coulomb law).
+BAND_MEMO = 16
 
 
 @njit(cache=True)
 def _soft_clip(x: float, w: float) -> float:   # pragma: no cover (compiled)
     """``clip(x, -1, 1)`` with corners rounded over ``w`` (forward solves need continuity of slope)."""
-    a = (x + 1.0) / w
-    b = (x - 1.0) / w
-    sp_a = a + np.log1p(np.exp(-a)) if a > 0 else np.log1p(np.exp(a))
-    sp_b = b + np.log1p(np.exp(-b)) if b > 0 else np.log1p(np.exp(b))
-    return -1.0 + w * sp_a - w * sp_b
+    return -1.0 + w * _softplus((x + 1.0) / w) - w * _softplus((x - 1.0) / w)
+
+
+@njit(cache=True)
+def _softplus(a: float) -> float:   # pragma: no cover (compiled)
+    """``log(1 + exp(a))``; above ``SOFTPLUS_LINEAR`` it is ``a`` to the last bit, and is not evaluated."""
+    if a > SOFTPLUS_LINEAR:
+        return a
+    return a + np.log1p(np.exp(-a)) if a > 0 else np.log1p(np.exp(a))
 
 
 @njit(cache=True)
@@ -183,6 +192,31 @@ class Friction(Effect):
         if law not in LAWS or memory not in MEMORIES:
             raise ValueError(f"law must be one of {LAWS} and memory one of {MEMORIES}")
         self.law, self.memory, self.t_max_N = law, memory, float(t_max_N)
+        self._memo: dict = {}
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state["_memo"] = {}               # a cache, not state: not pickled (fits travel back from workers)
+        return state
+
+    def _band_position(self, rows, travel_m: np.ndarray, s0: float, rest_weight: float) -> np.ndarray:
+        """:func:`band_position` of the whole log, remembered for the last ``BAND_MEMO`` inputs.
+
+        The play operator is a deterministic function of the rows and of these inputs, so a remembered
+        result is the one a new evaluation would return, bit for bit.
+        """
+        travel_m = np.ascontiguousarray(travel_m, dtype=np.float64)
+        key = (id(rows), travel_m.tobytes(), float(s0), float(rest_weight), self.memory)
+        memo = self.__dict__.setdefault("_memo", {})
+        hit = memo.pop(key, None)
+        if hit is not None and hit[0] is rows:
+            memo[key] = hit                          # most recently used last
+            return hit[1].copy()
+        s = band_position(rows, travel_m, s0, rest_weight, self.memory == "carried")
+        memo[key] = (rows, s.copy())                 # the rows held: their id stays theirs while cached
+        while len(memo) > BAND_MEMO:
+            memo.pop(next(iter(memo)))
+        return s
 
     @property
     def _band(self) -> str:
@@ -290,7 +324,7 @@ class Friction(Effect):
         travel = np.maximum(factor * size / k, MIN_TRAVEL_M)
         rows = ev.rows
         if rows.state_prev is None:                  # whole log at measured poses
-            s = band_position(rows, travel, s0, w, self.memory == "carried")
+            s = self._band_position(rows, travel, s0, w)
         else:                                        # one row per cycle, sequential prediction
             first = np.isnan(rows.lengths_prev_m)
             _, dl = rows.steps_since_previous
