@@ -12,6 +12,9 @@ import numpy as np
 import pytest
 
 matplotlib.use("Agg")   # the tests write figures to files only (the library never picks a backend)
+# pytest-xdist already runs the tests on every core: a diagnosis runs its fits serially here
+# (tests that check the parallel path pass ``workers=`` explicitly).
+os.environ.setdefault("CSJM_WORKERS", "1")
 
 import csjm_opt as co  # noqa: E402
 

@@ -137,3 +137,12 @@ def test_extra_log_from_another_rig_is_refused(logs, tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "another rig" in err
     assert foreign.read_text() == before and not (tmp_path / "o.json").exists()
+
+
+def test_workers_below_one_is_refused_in_one_line(logs, tmp_path, capsys):
+    data, _ = logs
+    assert main(["diagnose", str(data), "--workers", "0", "--json", str(tmp_path / "x.json"),
+                 "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "workers" in err
+    assert not (tmp_path / "x.json").exists()

@@ -61,6 +61,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="the lab's load set for --suggest ([[load]] name, mass_kg, point_A_m; default: masses at "
                         "+-x, +-y of the platform reaching 1/3, 2/3 and all of the log's largest moment)")
     p.add_argument("--seed", type=int, default=0, help="seed of --suggest's candidate draw")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="processes for the independent fits (default: $CSJM_WORKERS, else the usable cores; 1: serial)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -127,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
 
         progress = partial(tqdm, file=sys.stderr, disable=None, leave=False)
     diagnosis = diagnose(rig, log, test, effects=args.effects, progress=progress, ranges=_priors(args.prior),
-                         extra=extra)
+                         extra=extra, workers=args.workers)
     result = diagnosis.as_json()
     suggestion = None
     if args.suggest is not None:
