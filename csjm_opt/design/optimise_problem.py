@@ -56,6 +56,7 @@ from .optimise_symbols import (
     SIZE_SCALE_M,
     STIFFNESS_SCALE_NM_PER_RAD,
     design_sym,
+    initial_load_tensions,
     pose_bounds,
     pose_constraints,
     rotation_sym,
@@ -175,13 +176,9 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
     q0 = min(max(q0 / _SCALE[obj], q_lo), q_hi)
     loads = np.asarray(req.loads, float)
     n_t = 6 * (loads.shape[0] - 1) * n_slots
-    x0 = np.concatenate([u0, [q0], _initial_tensions(built.design, u0, q0, np.array(p_q), padded, loads)])
     n_s = N_TENSIONS * n_slots if _shaping(settings) else 0
-    if n_s:
-        A0, B0, rig0, qv0, _ = (np.array(v) for v in built.design(u0, q0, p_q))
-        _, T0 = pose_constraints(1, False).map(n_slots, "serial")(A0, B0, rig0, qv0, padded.T, loads[:1].T,
-                                                                   np.zeros((0, n_slots)))
-        x0 = np.concatenate([x0, initial_tensions(np.array(T0), rig0[1, 0], rig0[2, 0])])
+    x0 = np.concatenate([u0, [q0], initial_load_tensions(built.design, u0, q0, np.array(p_q), padded, loads),
+                         initial_tensions(built.design, u0, q0, np.array(p_q), padded, loads) if n_s else []])
     lbx = np.concatenate([np.zeros(len(names)), [q_lo], np.zeros(n_t + n_s)])
     ubx = np.concatenate([np.ones(len(names)), [q_hi], np.full(n_t + n_s, np.inf)])
     return Problem(solver=built.solver, x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=built.lbg, ubg=built.ubg,
@@ -308,19 +305,3 @@ def _objective_bounds(settings: OptimiseSettings, scale: float) -> tuple[float, 
     if obj == "range":
         return 1e-3, 1.0
     return 0.0, math.inf            # size, shaping
-
-
-def _initial_tensions(design: Any, u0: np.ndarray, q0: float, pq: np.ndarray, angles: np.ndarray,
-                      loads: np.ndarray) -> np.ndarray:
-    """Least-squares tensions of every load k >= 1 at the start, clipped to the tension box, scaled."""
-    n_l, n_o = loads.shape[0], angles.shape[0]
-    if n_l == 1:
-        return np.zeros(0)
-    A, B, rig, q, _ = (np.array(v) for v in design(u0, q0, pq))
-    F = pose_constraints(n_l, False).map(n_o, "serial")
-    out = []
-    for k in range(1, n_l):
-        rows = np.repeat(loads[k:k + 1], n_l, axis=0)
-        _, T0 = F(A, B, rig, q, angles.T, rows.T, np.zeros((6 * (n_l - 1), n_o)))
-        out.append(np.clip(np.array(T0), rig[1, 0], rig[2, 0]) / rig[2, 0])
-    return np.stack(out, axis=1).transpose(2, 1, 0).reshape(-1)

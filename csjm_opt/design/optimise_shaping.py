@@ -35,7 +35,13 @@ from ..model.casadi_model import build_functions
 from ..model.numeric import Model
 from ..model.rig import Rig
 from .certify import TOLERANCES, Check
-from .optimise_symbols import MARGIN_SCALE_N, MOMENT_SCALE_NM, STIFFNESS_SCALE_NM_PER_RAD, rotation_sym
+from .optimise_symbols import (
+    MARGIN_SCALE_N,
+    MOMENT_SCALE_NM,
+    STIFFNESS_SCALE_NM_PER_RAD,
+    pose_constraints,
+    rotation_sym,
+)
 from .sampling import OrientationSampling, tilt_torsion_rotations
 from .shaping_range import AXES, directional_stiffness_range
 
@@ -127,22 +133,34 @@ def shaping_block(A: Any, B: Any, rig: Any, q: Any, ang: Any, load: np.ndarray, 
     return ca.vec(g), np.tile(lo, n_slots), np.tile(hi, n_slots)
 
 
-def initial_tensions(T0: np.ndarray, t_min_N: float, t_max_N: float) -> np.ndarray:
+def initial_tensions(design: Any, u0: np.ndarray, q0: float, pq: np.ndarray, angles: np.ndarray,
+                     loads: np.ndarray) -> np.ndarray:
     """Start values of the tension vectors: the stiffness load's least-squares tensions, clipped, for all six.
 
     Parameters
     ----------
-    T0 : ndarray, shape (6, n_slots)
-        Least-squares tensions of the stiffness load per slot (N).
-    t_min_N, t_max_N : float
-        Tension range.
+    design : casadi.Function
+        ``(u, q, pq) -> (A, B, rig, q, s_shape)`` of the optimisation problem.
+    u0 : ndarray
+        Scaled design variables.
+    q0 : float
+        Objective variable (scaled).
+    pq : ndarray
+        Held values.
+    angles : ndarray, shape (n_slots, 3)
+        Orientations at range scale 1.
+    loads : ndarray, shape (m, 3)
+        Loads (row 0 the stiffness load).
 
     Returns
     -------
     ndarray, shape (36 n_slots,)
-        Scaled by ``t_max_N``, slot by slot.
+        Scaled by t_max, slot by slot.
     """
-    T = np.clip(np.asarray(T0, float), t_min_N, t_max_N) / t_max_N
+    A, B, rig, q, _ = (np.array(v) for v in design(u0, q0, pq))
+    n = angles.shape[0]
+    _, T0 = pose_constraints(1, False).map(n, "serial")(A, B, rig, q, angles.T, loads[:1].T, np.zeros((0, n)))
+    T = np.clip(np.array(T0), rig[1, 0], rig[2, 0]) / rig[2, 0]
     return np.tile(T, (2 * len(AXES), 1)).T.reshape(-1)
 
 
