@@ -129,3 +129,20 @@ def test_front_with_shaping_and_bad_key(tmp_path, capsys):
     path.write_text(TINY.replace('pareto_with = ""', 'pareto_with = "shaping"'))
     with pytest.raises(DesignError, match="pareto_with"):
         read_optimise_file(path)
+
+
+def test_epsilon_front_between_range_and_shaping(tmp_path):
+    # wider range, where the shaping range shrinks as the set grows: a trade-off the front must show
+    text = TINY.replace('objective = "shaping"', 'objective = "range"').replace(
+        'pareto_with = ""', 'pareto_with = "shaping"\npareto_points = 2').replace(
+        "max_tilt_deg = 10.0", "max_tilt_deg = 60.0").replace("max_torsion_deg = 5.0", "max_torsion_deg = 40.0")
+    path = tmp_path / "front.toml"
+    path.write_text(text)
+    out = tmp_path / "out"
+    assert main(["optimise", str(path), "--out", str(out), "--no-progress"]) == 0
+    designs = json.loads((out / "result.json").read_text())["designs"]
+    assert len(designs) == 2 and all(d["ok"] for d in designs)
+    first, second = designs
+    assert second["epsilon"]["shaping"] > first["objectives"]["shaping"]
+    assert second["objectives"]["shaping"] >= second["epsilon"]["shaping"] - 1e-6    # the held value, certified
+    assert second["objectives"]["range"] < first["objectives"]["range"]               # paid for in range
