@@ -146,3 +146,16 @@ def test_epsilon_front_between_range_and_shaping(tmp_path):
     assert second["epsilon"]["shaping"] > first["objectives"]["shaping"]
     assert second["objectives"]["shaping"] >= second["epsilon"]["shaping"] - 1e-6    # the held value, certified
     assert second["objectives"]["range"] < first["objectives"]["range"]               # paid for in range
+
+
+def test_unreachable_shaping_range_names_itself(settings):
+    # a held shaping range far above what any design reaches: IPOPT fails, and the diagnosis names the
+    # shaping range (not the hole spacing or the contacts, which come before it in the constraint vector)
+    from csjm_opt.design.optimise_diagnosis import violation
+
+    held = settings.replace(objective="range", pareto_with="shaping")
+    pb = build_problem(held, ANGLES, {"platform_radius_m": 0.05}, [], {"shaping": 1000.0})
+    sol = pb.solver(x0=pb.x0, p=pb.p, lbx=pb.lbx, ubx=pb.ubx, lbg=pb.lbg, ubg=pb.ubg)
+    assert not pb.solver.stats()["success"]
+    name, angles, amount = violation(held, ANGLES, pb, np.array(sol["x"]).ravel(), sol)
+    assert name.startswith("shaping range") and angles is not None and amount > 1.0

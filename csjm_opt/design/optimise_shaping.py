@@ -47,6 +47,8 @@ from .shaping_range import AXES, directional_stiffness_range
 
 #: Tension vectors per orientation: (T_hi, T_lo) for each axis, six cables each.
 N_TENSIONS = 2 * len(AXES) * 6
+#: Constraint rows per orientation: 12 bounds and 3 equilibrium rows per tension vector, one epigraph row per axis.
+SHAPING_ROWS = 2 * len(AXES) * 15 + len(AXES)
 #: Worst dense orientations refined by the certification's pattern search, its rounds and first steps (deg).
 LOCAL_SEEDS = 4
 LOCAL_ROUNDS = 10
@@ -306,5 +308,5 @@ def with_shaping(check: Check, settings: Any, rig: Rig, values: dict[str, float]
                                orientations=check.orientations + count)
 
 
-__all__ = ["N_TENSIONS", "dense_angles", "initial_tensions", "lp_shaping_range", "shaping_block",
+__all__ = ["N_TENSIONS", "SHAPING_ROWS", "dense_angles", "initial_tensions", "lp_shaping_range", "shaping_block",
            "shaping_bounds", "shaping_check", "shaping_pose_constraints", "with_shaping"]
