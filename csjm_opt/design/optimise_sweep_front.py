@@ -12,10 +12,12 @@ models (:mod:`csjm_opt.design.optimise_front_model`):
    their local maxima of the workspace (until the model promises less than
    :data:`~csjm_opt.design.optimise_front_model.F_TOL`), and the larger one, ``F*``, is the first branch's anchor
    (the start of largest ``F`` may sit in the basin of a lower maximum); then
-   the front's other end, the stiffest design, by the same steps on ``S`` from
-   the design of largest ``S`` evaluated so far (starts and ascents) (with at most a third of the evaluations left):
-   on a design space with mirror-image geometries it may lie on another
-   branch, and it sets the spacing of the front's points;
+   the front's other end, the stiffest design, by the same steps on ``S``,
+   raced like the first end: from the ``race`` designs of largest ``S``
+   evaluated so far (starts and ascents) that lie apart, the largest of the
+   maxima reached, every distinct one scored (with at most a third of the
+   evaluations left): on a design space with mirror-image geometries it may
+   lie on another branch, and it sets the spacing of the front's points;
 2. predictor-corrector continuation down the front, one evaluation per point:
    from the models at the last front point, the next point is the model's
    solution of ``max S subject to F >= eps`` in the trust region, ``eps``
