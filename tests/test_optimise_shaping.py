@@ -131,13 +131,15 @@ def test_front_with_shaping_and_bad_key(tmp_path, capsys):
         read_optimise_file(path)
 
 
+#: A wider range, where the shaping range shrinks as the set grows: a trade-off between range and shaping.
+FRONT = TINY.replace('objective = "shaping"', 'objective = "range"').replace(
+    'pareto_with = ""', 'pareto_with = "shaping"\npareto_points = 2').replace(
+    "max_tilt_deg = 10.0", "max_tilt_deg = 60.0").replace("max_torsion_deg = 5.0", "max_torsion_deg = 40.0")
+
+
 def test_epsilon_front_between_range_and_shaping(tmp_path):
-    # wider range, where the shaping range shrinks as the set grows: a trade-off the front must show
-    text = TINY.replace('objective = "shaping"', 'objective = "range"').replace(
-        'pareto_with = ""', 'pareto_with = "shaping"\npareto_points = 2').replace(
-        "max_tilt_deg = 10.0", "max_tilt_deg = 60.0").replace("max_torsion_deg = 5.0", "max_torsion_deg = 40.0")
     path = tmp_path / "front.toml"
-    path.write_text(text)
+    path.write_text(FRONT)
     out = tmp_path / "out"
     assert main(["optimise", str(path), "--out", str(out), "--no-progress"]) == 0
     designs = json.loads((out / "result.json").read_text())["designs"]
@@ -148,13 +150,15 @@ def test_epsilon_front_between_range_and_shaping(tmp_path):
     assert second["objectives"]["range"] < first["objectives"]["range"]               # paid for in range
 
 
-def test_unreachable_shaping_range_names_itself(settings):
+def test_unreachable_shaping_range_names_itself(tmp_path):
     # a held shaping range far above what any design reaches: the diagnosis (here at the start point, where
     # the epigraph rows are violated by about the held value) names the shaping range and an orientation,
     # not the hole spacing or the contacts, which come before it in the constraint vector
     from csjm_opt.design.optimise_diagnosis import violation
 
-    held = settings.replace(objective="range", pareto_with="shaping")
+    path = tmp_path / "front.toml"
+    path.write_text(FRONT)
+    held = read_optimise_file(path)[1]             # the front test's settings: its solver is reused
     pb = build_problem(held, ANGLES, {"platform_radius_m": 0.05}, [], {"shaping": 1000.0})
     g = pb.constraints_of(pb.x0, pb.p)
     name, angles, amount = violation(held, ANGLES, pb, pb.x0, {"g": g})
