@@ -193,6 +193,8 @@ _SCALE = {"stiffness": STIFFNESS_SCALE_NM_PER_RAD, "tension_margin": MARGIN_SCAL
 def _shaping(settings: OptimiseSettings) -> bool:
     """Whether the shaping range is the objective or the front's other quantity."""
     return "shaping" in (settings.objective, settings.pareto_with)
+
+
 #: Orientation and contact slots come in multiples of this (a solver is reused for all sizes below).
 SLOT_STEP = 16
 #: Contact slots of every solver (a round with more builds a larger one).
