@@ -27,7 +27,7 @@ from .optimise_diagnosis import infeasible, violation
 from .optimise_problem import Contact, build_problem
 from .optimise_result import OptimisationResult, OptimisedDesign, design_rig_of, objectives_of
 from .optimise_settings import OptimiseSettings
-from .optimise_shaping import with_shaping
+from .optimise_shaping import objective_shortfall_only, with_shaping
 from .optimise_starts import space_filling_starts, sweep_starts
 from .sampling import OrientationSampling
 
@@ -233,7 +233,7 @@ def _certified_solve(settings: OptimiseSettings, start: dict[str, float], epsilo
     assert check is not None
     objectives = objectives_of(settings, params, check, values)
     return OptimisedDesign(params=params, objectives=objectives, certified=check.as_dict(), epsilon=dict(epsilon),
-                           rounds=rounds, ok=check.ok)
+                           rounds=rounds, ok=check.ok or objective_shortfall_only(settings, check))
 
 
 def _scale(name: str) -> float:

@@ -308,5 +308,28 @@ def with_shaping(check: Check, settings: Any, rig: Rig, values: dict[str, float]
                                orientations=check.orientations + count)
 
 
-__all__ = ["N_TENSIONS", "SHAPING_ROWS", "dense_angles", "initial_tensions", "lp_shaping_range", "shaping_block",
-           "shaping_bounds", "shaping_check", "shaping_pose_constraints", "with_shaping"]
+def objective_shortfall_only(settings: Any, check: Check) -> bool:
+    """Whether the only shortfall of a certification is the shaping range as the objective (not a requirement).
+
+    The rounds add the orientations where the dense LP falls short of the value the solve claimed;
+    when they run out with the shaping range the objective, the design still holds every requirement
+    and its certified objective is the dense LP's value (:func:`~.optimise_result.objectives_of`),
+    so it is a certified design. A held shaping range (a front's epsilon) is a requirement and must hold.
+
+    Parameters
+    ----------
+    settings : OptimiseSettings
+    check : Check
+        The last certification.
+
+    Returns
+    -------
+    bool
+    """
+    failing = [k for k, (v, _) in check.worst.items() if v < -TOLERANCES[k if not k.startswith("load ") else "load"]]
+    return settings.objective == "shaping" and failing == ["shaping"] and math.isfinite(check.worst["shaping"][0])
+
+
+__all__ = ["N_TENSIONS", "SHAPING_ROWS", "dense_angles", "initial_tensions", "lp_shaping_range",
+           "objective_shortfall_only", "shaping_block", "shaping_bounds", "shaping_check", "shaping_pose_constraints",
+           "with_shaping"]
