@@ -236,3 +236,29 @@ def test_race_stops_an_ascent_that_reaches_a_known_maximum():
     assert len(anchors) == 1 and np.max(np.abs(anchors[0].u - solo[0].u)) < 1e-9
     assert np.max(np.abs(solo[1].u - solo[0].u)) < front_mod.APART      # the same maximum, independently
     assert raced < alone.twins_n - 2
+
+
+def _two_bumps_S(u):
+    """The two bumps as the stiffness S (F = 1 everywhere: every design holds poses)."""
+    m = _two_bumps(u)
+    return QuadModel(m.u, 1.0, m.F, np.zeros(2), m.gF, np.zeros((2, 2)), m.HF)
+
+
+def test_stiffest_end_is_raced_like_the_first_end():
+    # the stiffest evaluated design sits in the lower bump's basin: racing two designs reaches the global
+    # maximum of S (brute force on a grid), one alone does not; both maxima are scored
+    grid = np.stack(np.meshgrid(np.linspace(0, 1, 401), np.linspace(0, 1, 401)), -1).reshape(-1, 2)
+    u_max = grid[np.argmax([_two_bumps(u).F for u in grid])]
+    for race in (2, 1):
+        work = front_mod._Work(22, _two_bumps_S, None, None)
+        scored = []
+        work.score = lambda u, eps, model: scored.append(np.array(u))     # the sweep's evaluator is not needed
+        for u in (np.array([0.2, 0.8]), np.array([0.5, 0.1]), np.array([0.45, 0.55])):
+            work.twins(u)
+        end = front_mod._stiffest(work, work.models[0], race)
+        assert work.twins_n <= 22
+        if race == 2:
+            assert np.max(np.abs(end.u - u_max)) < 0.02
+            assert len(scored) == 2
+        else:
+            assert np.max(np.abs(end.u - np.array([0.15, 0.85]))) < 0.02

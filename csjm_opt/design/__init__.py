@@ -10,7 +10,8 @@ settings in :mod:`.evaluation_settings`), :mod:`.store` (crash-safe JSON Lines r
 processes or Dask, result in :mod:`.sweep_result`), :mod:`.interference` (cable-cable and
 cable-link distances, exit angles), :mod:`.optimisation` (IPOPT on the sweep's vocabulary, problem in
 :mod:`.optimise_problem`, settings in :mod:`.optimise_settings`, results in :mod:`.optimise_result`, starts
-in :mod:`.optimise_starts`, dense check in :mod:`.certify`, evaluation bound in :mod:`.optimise_budget`),
+in :mod:`.optimise_starts`, dense check in :mod:`.certify`, evaluation bound in :mod:`.optimise_budget`,
+the shaping-range objective and its exact LP check in :mod:`.optimise_shaping`),
 :mod:`.optimise_sweep_front` (the front in the sweep's own metrics, on the smooth twins of
 :mod:`.optimise_sweep_surrogate` and their quadratic models in :mod:`.optimise_front_model`).
 """
@@ -28,6 +29,7 @@ from .interference import Interference, interference, pose_interference, segment
 from .metrics import DesignMetrics, LoadSet, MetricOptions, PoseMetrics, evaluate, evaluate_poses
 from .optimisation import OptimisationResult, OptimisedDesign, design_rig_of, optimise
 from .optimise_settings import OptimiseSettings, Requirements, read_optimise_file
+from .optimise_shaping import lp_shaping_range
 from .optimise_sweep_front import SweepFrontResult, sweep_front
 from .sampling import OrientationSampling, tilt_torsion_angles, tilt_torsion_rotations
 from .sweep import SweepResult, evaluate_design, run_sweep
@@ -38,6 +40,6 @@ __all__ = [
     "OptimisationResult", "OptimiseSettings", "OptimisedDesign", "OrientationSampling", "PAPER_DESIGN",
     "PARAMETERS", "PoseMetrics", "Requirements", "SweepFrontResult", "SweepResult", "SweepSpec", "certify",
     "check_holes", "design_holes", "design_rig", "design_rig_of", "evaluate", "evaluate_design", "evaluate_poses",
-    "interference", "optimise", "pose_interference", "read_optimise_file", "run_sweep", "segment_distance",
-    "sweep_front", "tilt_torsion_angles", "tilt_torsion_rotations",
+    "interference", "lp_shaping_range", "optimise", "pose_interference", "read_optimise_file", "run_sweep",
+    "segment_distance", "sweep_front", "tilt_torsion_angles", "tilt_torsion_rotations"
 ]

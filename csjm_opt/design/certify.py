@@ -36,7 +36,7 @@ from .sampling import OrientationSampling, tilt_torsion_rotations
 
 #: Tolerance of each slack (its units): round-off, not a design margin.
 TOLERANCES = {"tension": 1e-6, "stiffness": 1e-6, "load": 1e-6, "cable distance": 1e-9,
-              "link clearance": 1e-9, "exit angle": 1e-6}
+              "link clearance": 1e-9, "exit angle": 1e-6, "shaping": 1e-6}
 #: Worst samples per requirement refined by the local search, its rounds and first steps (deg).
 LOCAL_SEEDS = 4
 LOCAL_ROUNDS = 10

@@ -27,6 +27,7 @@ from .optimise_diagnosis import infeasible, violation
 from .optimise_problem import Contact, build_problem
 from .optimise_result import OptimisationResult, OptimisedDesign, design_rig_of, objectives_of
 from .optimise_settings import OptimiseSettings
+from .optimise_shaping import objective_shortfall_only, with_shaping
 from .optimise_starts import space_filling_starts, sweep_starts
 from .sampling import OrientationSampling
 
@@ -220,6 +221,8 @@ def _certified_solve(settings: OptimiseSettings, start: dict[str, float], epsilo
         rig = design_rig_of(settings, params)
         check = certify(rig, settings.requirements, values["range"], values["stiffness"], values["tension_margin"],
                         n=settings.certify_orientations, seed=settings.seed + 7919)
+        if "shaping" in (settings.objective, settings.pareto_with):
+            check = with_shaping(check, settings, rig, values)
         budget.used += 1
         budget.dense += check.orientations
         if check.ok or budget.left() <= 0:
@@ -230,20 +233,20 @@ def _certified_solve(settings: OptimiseSettings, start: dict[str, float], epsilo
     assert check is not None
     objectives = objectives_of(settings, params, check, values)
     return OptimisedDesign(params=params, objectives=objectives, certified=check.as_dict(), epsilon=dict(epsilon),
-                           rounds=rounds, ok=check.ok)
+                           rounds=rounds, ok=check.ok or objective_shortfall_only(settings, check))
 
 
 def _scale(name: str) -> float:
     from .optimise_problem import MARGIN_SCALE_N, SIZE_SCALE_M, STIFFNESS_SCALE_NM_PER_RAD
 
     return {"stiffness": STIFFNESS_SCALE_NM_PER_RAD, "tension_margin": MARGIN_SCALE_N, "range": 1.0,
-            "size": SIZE_SCALE_M}[name]
+            "size": SIZE_SCALE_M, "shaping": STIFFNESS_SCALE_NM_PER_RAD}[name]
 
 
 def _values(settings: OptimiseSettings, epsilon: dict[str, float], q_obj: float) -> dict[str, float]:
     req = settings.requirements
     v = {"stiffness": req.min_stiffness_Nm_per_rad, "tension_margin": req.tension_margin_N,
-         "range": req.range_scale, "size": math.inf, **epsilon}
+         "range": req.range_scale, "size": math.inf, "shaping": 0.0, **epsilon}
     v[settings.objective] = q_obj
     return v
 

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..errors import InfeasibleRequirement
 from .optimise_settings import OptimiseSettings
+from .optimise_shaping import SHAPING_ROWS
 
 
 def violation(settings: OptimiseSettings, angles: np.ndarray, pb: Any, x: np.ndarray, sol: Any) -> tuple:
@@ -37,10 +38,13 @@ def violation(settings: OptimiseSettings, angles: np.ndarray, pb: Any, x: np.nda
     per = len(names)
     n_pose = per * pb.n_slots
     scale = settings.requirements.range_scale if settings.objective != "range" else float(x[pb.objective_index])
-    if k < n_pose:
-        o, c = divmod(k, per)
+    n_shaping = SHAPING_ROWS * pb.n_slots if "shaping" in (settings.objective, settings.pareto_with) else 0
+    if k < n_pose or k >= len(g) - n_shaping:
+        o, c = divmod(k, per) if k < n_pose else divmod(k - (len(g) - n_shaping), SHAPING_ROWS)
         a = (angles[o] if o < angles.shape[0] else np.zeros(3)) * np.array([scale, 1.0, scale])
-        return names[c], tuple(math.degrees(v) for v in a), float(viol[k])
+        name = names[c] if k < n_pose else ("shaping range (smallest LP range about " + "xyz"[c - SHAPING_ROWS + 3]
+                                            + ")" if c >= SHAPING_ROWS - 3 else "tensions of the shaping range")
+        return name, tuple(math.degrees(v) for v in a), float(viol[k])
     return "hole spacing or cable contact", None, float(viol[k])
 
 

@@ -23,7 +23,10 @@ max_torsion; R = I always included):
   the closest points found for the current design (the points are updated
   between rounds of :mod:`csjm_opt.design.certify`, which checks the exact
   distance);
-* holes of a body at least the hole spacing apart.
+* holes of a body at least the hole spacing apart;
+* with the shaping range in play (objective or front), per orientation and axis
+  two more tension vectors and the epigraph rows of
+  :mod:`csjm_opt.design.optimise_shaping`.
 
 The objective is one of :data:`OBJECTIVES`; the others are constraints at
 their required values, or at an epsilon value for a Pareto front. The model
@@ -44,6 +47,7 @@ import numpy as np
 from .interference import PAIRS
 from .optimise_budget import BOUNDED_OPTIONS, IterationStop
 from .optimise_settings import OptimiseSettings
+from .optimise_shaping import N_TENSIONS, initial_tensions, shaping_block
 from .optimise_symbols import (
     HESSIAN,
     LENGTH_SCALE_M,
@@ -52,6 +56,7 @@ from .optimise_symbols import (
     SIZE_SCALE_M,
     STIFFNESS_SCALE_NM_PER_RAD,
     design_sym,
+    initial_load_tensions,
     pose_bounds,
     pose_constraints,
     rotation_sym,
@@ -105,7 +110,7 @@ class _Built:
 def _quantity_values(settings: OptimiseSettings, epsilon: dict[str, float]) -> dict[str, float]:
     req = settings.requirements
     values = {"stiffness": req.min_stiffness_Nm_per_rad, "tension_margin": req.tension_margin_N,
-              "range": req.range_scale, "size": _NO_SIZE_LIMIT_M}
+              "range": req.range_scale, "size": _NO_SIZE_LIMIT_M, "shaping": 0.0}
     values.update(epsilon)
     return values
 
@@ -145,7 +150,7 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
     built = _built_for(settings, n_slots, n_contacts, bounded)
     padded = np.vstack([angles, np.zeros((n_slots - angles.shape[0], 3))])
     values = _quantity_values(settings, epsilon)
-    p_q = [values["tension_margin"], values["stiffness"], values["range"], values["size"]]
+    p_q = [values["tension_margin"], values["stiffness"], values["range"], values["size"], values["shaping"]]
     p_c = np.zeros((n_contacts, _CONTACT_WIDTH))
     p_c[:, -1] = -1.0                                   # unused slot: needs a negative distance
     link, req = settings.link, settings.requirements
@@ -166,20 +171,30 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
     q_lo, q_hi = _objective_bounds(settings, _SCALE[obj])
     q0 = objective_start if objective_start is not None else {"stiffness": req.min_stiffness_Nm_per_rad,
                                                               "tension_margin": req.tension_margin_N,
-                                                              "range": 0.5, "size": SIZE_SCALE_M}[obj]
+                                                              "range": 0.5, "size": SIZE_SCALE_M,
+                                                              "shaping": 0.0}[obj]
     q0 = min(max(q0 / _SCALE[obj], q_lo), q_hi)
     loads = np.asarray(req.loads, float)
     n_t = 6 * (loads.shape[0] - 1) * n_slots
-    x0 = np.concatenate([u0, [q0], _initial_tensions(built.design, u0, q0, np.array(p_q), padded, loads)])
-    lbx = np.concatenate([np.zeros(len(names)), [q_lo], np.zeros(n_t)])
-    ubx = np.concatenate([np.ones(len(names)), [q_hi], np.full(n_t, np.inf)])
+    n_s = N_TENSIONS * n_slots if _shaping(settings) else 0
+    x0 = np.concatenate([u0, [q0], initial_load_tensions(built.design, u0, q0, np.array(p_q), padded, loads),
+                         initial_tensions(built.design, u0, q0, np.array(p_q), padded, loads) if n_s else []])
+    lbx = np.concatenate([np.zeros(len(names)), [q_lo], np.zeros(n_t + n_s)])
+    ubx = np.concatenate([np.ones(len(names)), [q_hi], np.full(n_t + n_s, np.inf)])
     return Problem(solver=built.solver, x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=built.lbg, ubg=built.ubg,
                    n_design=len(names), objective_index=len(names), design_of=built.design_of,
                    constraints_of=built.constraints_of, n_slots=n_slots, stop=built.stop)
 
 
 _SCALE = {"stiffness": STIFFNESS_SCALE_NM_PER_RAD, "tension_margin": MARGIN_SCALE_N, "range": 1.0,
-          "size": SIZE_SCALE_M}
+          "size": SIZE_SCALE_M, "shaping": STIFFNESS_SCALE_NM_PER_RAD}
+
+
+def _shaping(settings: OptimiseSettings) -> bool:
+    """Whether the shaping range is the objective or the front's other quantity."""
+    return "shaping" in (settings.objective, settings.pareto_with)
+
+
 #: Orientation and contact slots come in multiples of this (a solver is reused for all sizes below).
 SLOT_STEP = 16
 #: Contact slots of every solver (a round with more builds a larger one).
@@ -224,12 +239,12 @@ def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int, bounded: b
     exit_limit = req.max_exit_angle_deg < 180
     obj = settings.objective
     u, q_var = ca.SX.sym("u", n_d), ca.SX.sym("q")
-    pq = ca.SX.sym("pq", 4)
-    held = {"tension_margin": pq[0], "stiffness": pq[1], "range": pq[2], "size": pq[3]}
+    pq = ca.SX.sym("pq", 5)
+    held = {"tension_margin": pq[0], "stiffness": pq[1], "range": pq[2], "size": pq[3], "shaping": pq[4]}
     q = {k: (q_var * _SCALE[k] if k == obj else v) for k, v in held.items()}
     p, A, B, rig = design_sym(settings, u)
     qv = ca.vertcat(q["tension_margin"], q["stiffness"], q["range"], math.cos(math.radians(req.max_exit_angle_deg)))
-    design = ca.Function("design", [u, q_var, pq], [A, B, rig, qv])
+    design = ca.Function("design", [u, q_var, pq], [A, B, rig, qv, q["shaping"]])
     pc = ca.SX.sym("pc", _CONTACT_WIDTH, n_contacts)
     fixed: list[Any] = []
     for c in range(n_contacts):
@@ -249,20 +264,25 @@ def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int, bounded: b
     g_fixed = ca.Function("fixed", [u, q_var, pq, pc], [ca.vertcat(*fixed)])
 
     n_t = 6 * (n_l - 1) * n_slots
-    x = ca.MX.sym("x", n_d + 1 + n_t)
-    par = ca.MX.sym("p", 3 * n_slots + 4 + _CONTACT_WIDTH * n_contacts)
+    n_s = N_TENSIONS * n_slots if _shaping(settings) else 0
+    x = ca.MX.sym("x", n_d + 1 + n_t + n_s)
+    par = ca.MX.sym("p", 3 * n_slots + 5 + _CONTACT_WIDTH * n_contacts)
     ux, qx = x[:n_d], x[n_d]
     ang = ca.reshape(par[:3 * n_slots], 3, n_slots)
-    pq_m = par[3 * n_slots:3 * n_slots + 4]
-    pc_m = ca.reshape(par[3 * n_slots + 4:], _CONTACT_WIDTH, n_contacts)
-    A_m, B_m, rig_m, q_m = design(ux, qx, pq_m)
+    pq_m = par[3 * n_slots:3 * n_slots + 5]
+    pc_m = ca.reshape(par[3 * n_slots + 5:], _CONTACT_WIDTH, n_contacts)
+    A_m, B_m, rig_m, q_m, s_shape = design(ux, qx, pq_m)
     F = pose_constraints(n_l, exit_limit).map(n_slots, "serial")
-    g_pose, _ = F(A_m, B_m, rig_m, q_m, ang, ca.DM(loads.T), ca.reshape(x[n_d + 1:], 6 * (n_l - 1), n_slots))
+    g_pose, _ = F(A_m, B_m, rig_m, q_m, ang, ca.DM(loads.T), ca.reshape(x[n_d + 1:n_d + 1 + n_t], 6 * (n_l - 1),
+                                                                          n_slots))
     g = ca.vertcat(ca.vec(g_pose), g_fixed(ux, qx, pq_m, pc_m))
     lo_pose, hi_pose = pose_bounds(n_l, exit_limit)
     n_fixed = g_fixed.size1_out(0)
     lbg = np.concatenate([np.tile(lo_pose, n_slots), np.zeros(n_fixed)])
     ubg = np.concatenate([np.tile(hi_pose, n_slots), np.full(n_fixed, np.inf)])
+    if n_s:                                             # the shaping epigraph (optimise_shaping)
+        g_s, lo_s, hi_s = shaping_block(A_m, B_m, rig_m, q_m, ang, loads[0], x[n_d + 1 + n_t:], s_shape, n_slots)
+        g, lbg, ubg = ca.vertcat(g, g_s), np.concatenate([lbg, lo_s]), np.concatenate([ubg, hi_s])
     sign = -1.0 if obj != "size" else 1.0
     opts: dict[str, Any] = {"ipopt": {"print_level": 0, "max_iter": MAX_ITER, "tol": 1e-9, "acceptable_tol": 1e-7,
                                       "constr_viol_tol": 1e-9, "mu_strategy": "adaptive", "sb": "yes",
@@ -286,20 +306,4 @@ def _objective_bounds(settings: OptimiseSettings, scale: float) -> tuple[float, 
         return req.tension_margin_N / scale, math.inf
     if obj == "range":
         return 1e-3, 1.0
-    return 0.0, math.inf
-
-
-def _initial_tensions(design: Any, u0: np.ndarray, q0: float, pq: np.ndarray, angles: np.ndarray,
-                      loads: np.ndarray) -> np.ndarray:
-    """Least-squares tensions of every load k >= 1 at the start, clipped to the tension box, scaled."""
-    n_l, n_o = loads.shape[0], angles.shape[0]
-    if n_l == 1:
-        return np.zeros(0)
-    A, B, rig, q = (np.array(v) for v in design(u0, q0, pq))
-    F = pose_constraints(n_l, False).map(n_o, "serial")
-    out = []
-    for k in range(1, n_l):
-        rows = np.repeat(loads[k:k + 1], n_l, axis=0)
-        _, T0 = F(A, B, rig, q, angles.T, rows.T, np.zeros((6 * (n_l - 1), n_o)))
-        out.append(np.clip(np.array(T0), rig[1, 0], rig[2, 0]) / rig[2, 0])
-    return np.stack(out, axis=1).transpose(2, 1, 0).reshape(-1)
+    return 0.0, math.inf            # size, shaping

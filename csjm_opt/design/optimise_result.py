@@ -91,14 +91,16 @@ def objectives_of(settings: OptimiseSettings, params: dict[str, float], check: A
     Returns
     -------
     dict of str to float
-        ``range``, ``stiffness`` (N m/rad), ``tension_margin`` (N) and ``size`` (m).
+        ``range``, ``stiffness`` (N m/rad), ``tension_margin`` (N) and ``size`` (m); ``shaping``
+        (N m/rad, the certified smallest LP shaping range) where the check holds it.
     """
     rig = design_rig_of(settings, params)
     size = float(max(np.hypot(*rig.platform_holes_A_m[:, :2].T).max(), np.hypot(*rig.base_holes_B_m[:, :2].T).max()))
     return {"range": values["range"],
             "stiffness": values["stiffness"] + check.worst["stiffness"][0],
             "tension_margin": values["tension_margin"] + check.worst["tension"][0],
-            "size": size}
+            "size": size,
+            **({"shaping": values["shaping"] + check.worst["shaping"][0]} if "shaping" in check.worst else {})}
 
 
 __all__ = ["OptimisationResult", "OptimisedDesign", "design_rig_of", "objectives_of"]

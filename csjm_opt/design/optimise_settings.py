@@ -4,7 +4,7 @@ A sweep file (:mod:`csjm_opt.design.sweep_file`) works as it stands; the
 section only changes the defaults::
 
     [optimise]
-    objective = "range"            # "stiffness", "tension_margin", "range" or "size"
+    objective = "range"            # "stiffness", "tension_margin", "range", "size" or "shaping"
     pareto_with = "stiffness"      # second objective of an epsilon-constraint front ("" = none)
     pareto_points = 4              # designs on the front
     variables = ["platform_gamma_deg", "base_gamma_deg"]   # default: the swept parameters,
@@ -43,8 +43,9 @@ from ..model.rig import STANDARD_GRAVITY_B
 from .geometry import SCALAR_PARAMETERS
 from .sweep_file import SweepSpec, read_sweep_toml
 
-#: Objectives (each maximised, except "size", minimised).
-OBJECTIVES = ("stiffness", "tension_margin", "range", "size")
+#: Objectives (each maximised, except "size", minimised). "shaping" is the smallest shaping range
+#: (N m/rad) over the required orientations and the axes x, y, z (:mod:`.optimise_shaping`).
+OBJECTIVES = ("stiffness", "tension_margin", "range", "size", "shaping")
 _DEFAULTS: dict[str, Any] = {
     "objective": "range", "pareto_with": "stiffness", "pareto_points": 4, "range_scale": 1.0,
     "min_stiffness_Nm_per_rad": 1.0, "tension_margin_N": 0.0, "min_cable_distance_m": 0.002,

@@ -12,10 +12,12 @@ models (:mod:`csjm_opt.design.optimise_front_model`):
    their local maxima of the workspace (until the model promises less than
    :data:`~csjm_opt.design.optimise_front_model.F_TOL`), and the larger one, ``F*``, is the first branch's anchor
    (the start of largest ``F`` may sit in the basin of a lower maximum); then
-   the front's other end, the stiffest design, by the same steps on ``S`` from
-   the design of largest ``S`` evaluated so far (starts and ascents) (with at most a third of the evaluations left):
-   on a design space with mirror-image geometries it may lie on another
-   branch, and it sets the spacing of the front's points;
+   the front's other end, the stiffest design, by the same steps on ``S``,
+   raced like the first end: from the ``race`` designs of largest ``S``
+   evaluated so far (starts and ascents) that lie apart, the largest of the
+   maxima reached, every distinct one scored (with at most a third of the
+   evaluations left): on a design space with mirror-image geometries it may
+   lie on another branch, and it sets the spacing of the front's points;
 2. predictor-corrector continuation down the front, one evaluation per point:
    from the models at the last front point, the next point is the model's
    solution of ``max S subject to F >= eps`` in the trust region, ``eps``
@@ -207,6 +209,33 @@ def _branch(work: _Work, m: QuadModel, points: int | None, end: tuple[float, flo
     return m
 
 
+def _stiffest(work: _Work, anchor: QuadModel, race: int) -> QuadModel:
+    """The front's stiffest design: S ascended from the ``race`` stiffest designs evaluated that lie apart.
+
+    As for the first end (:func:`~csjm_opt.design.optimise_front_model.race_starts`), the design of
+    largest S may sit in the basin of a lower local maximum, so the maxima are compared, not their
+    starts. The ascents share a third of the evaluations left (the first half of it, a later one stops
+    where it comes within APART of a maximum already reached); every distinct maximum is scored.
+    """
+    held = sorted((x for x in work.models if x.F > 0.0), key=lambda x: -x.S)
+    floor = max(work.left() * 2 // 3, 2)
+    reached: list[QuadModel] = []
+    for k, x in enumerate(h for i, h in enumerate(held) if all(np.max(np.abs(h.u - g.u)) >= APART
+                                                              for g in held[:i])):
+        if k >= max(race, 1) or (k and work.left() <= floor + 1):
+            break
+        keep = floor + (work.left() - floor) // 2 if k == 0 and race > 1 else floor
+        reached.append(ascent(work, x, "S", ANCHOR_STEPS, keep=keep, known=[r.u for r in reached]))
+    distinct: list[QuadModel] = []
+    for r in sorted(reached, key=lambda x: -x.S):
+        if all(np.max(np.abs(r.u - d.u)) >= APART for d in distinct):
+            distinct.append(r)
+    for r in distinct:
+        if work.left() >= 1 and np.max(np.abs(r.u - anchor.u)) > 1e-9:
+            work.score(r.u, None, (r.F, r.S))
+    return distinct[0]
+
+
 def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, points: int | None = None,
                 max_evaluations: int | None = None, starts: list[dict[str, float]] | None = None,
                 branches: int = 2, race: int = RACE) -> SweepFrontResult:
@@ -266,12 +295,8 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
             continue                                # starts near a traced branch lead to it again
         m = ascent(work, m, "F", ANCHOR_STEPS, keep=2)      # the largest workspace (done for a race's anchor)
         work.score(m.u, None, (m.F, m.S))
-        if not ends:    # the front's other end first: the stiffest design, from the stiffest one evaluated
-            held = [x for x in work.models if x.F > 0.0]
-            stiff = ascent(work, max(held, key=lambda x: x.S), "S", ANCHOR_STEPS,
-                           keep=max(work.left() * 2 // 3, 2))
-            if work.left() >= 1 and np.max(np.abs(stiff.u - m.u)) > 1e-9:
-                work.score(stiff.u, None, (stiff.F, stiff.S))
+        if not ends:    # the front's other end first: the stiffest design, raced like the first end
+            stiff = _stiffest(work, m, race)
             end = (stiff.F, stiff.S)
         ends.append(_branch(work, m, points, end).u)
     return SweepFrontResult(records=work.records, evaluations=work.twins_n + work.sweep_n,

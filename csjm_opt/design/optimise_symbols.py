@@ -195,3 +195,40 @@ def pose_bounds(n_loads: int, exit_limit: bool) -> tuple[np.ndarray, np.ndarray]
         lo.append(np.zeros(12))
         hi.append(np.full(12, np.inf))
     return np.concatenate(lo), np.concatenate(hi)
+
+
+def initial_load_tensions(design: Any, u0: np.ndarray, q0: float, pq: np.ndarray, angles: np.ndarray,
+                          loads: np.ndarray) -> np.ndarray:
+    """Least-squares tensions of every load k >= 1 at the start, clipped to the tension box, scaled.
+
+    Parameters
+    ----------
+    design : casadi.Function
+        ``(u, q, pq) -> (A, B, rig, q, s_shape)`` of the optimisation problem.
+    u0 : ndarray
+        Scaled design variables.
+    q0 : float
+        Objective variable (scaled).
+    pq : ndarray
+        Held values.
+    angles : ndarray, shape (n_slots, 3)
+        Orientations at range scale 1.
+    loads : ndarray, shape (m, 3)
+        Loads (row 0 the stiffness load).
+
+    Returns
+    -------
+    ndarray
+        ``T_jk / t_max``, slot by slot.
+    """
+    n_l, n_o = loads.shape[0], angles.shape[0]
+    if n_l == 1:
+        return np.zeros(0)
+    A, B, rig, q, _ = (np.array(v) for v in design(u0, q0, pq))
+    F = pose_constraints(n_l, False).map(n_o, "serial")
+    out = []
+    for k in range(1, n_l):
+        rows = np.repeat(loads[k:k + 1], n_l, axis=0)
+        _, T0 = F(A, B, rig, q, angles.T, rows.T, np.zeros((6 * (n_l - 1), n_o)))
+        out.append(np.clip(np.array(T0), rig[1, 0], rig[2, 0]) / rig[2, 0])
+    return np.stack(out, axis=1).transpose(2, 1, 0).reshape(-1)
