@@ -117,6 +117,15 @@ def test_optimum_matches_brute_force_and_cli_certifies_it(tmp_path, settings):
     assert d["objectives"]["shaping"] <= brute[-1] + 1e-6
     assert d["certified"]["shaping"]["slack"] >= -1e-6
     assert d["objectives"]["shaping"] == pytest.approx(on_dense, rel=0.05)
+    # csjm report shows the certified shaping range beside the other objectives
+    assert main(["report", str(out), "--out", str(tmp_path / "rep")]) == 0
+    table = next(line for line in (tmp_path / "rep" / "index.md").read_text().splitlines()
+                 if "shaping range (N m/rad)" in line)
+    header = [c.strip() for c in table.strip("| ").split("|")]
+    md = (tmp_path / "rep" / "index.md").read_text().splitlines()
+    row = next(line for line in md if line.startswith("| design_000"))
+    cell = [c.strip() for c in row.strip("| ").split("|")][header.index("shaping range (N m/rad)")]
+    assert float(cell) == pytest.approx(d["objectives"]["shaping"], rel=4e-3)   # 3 significant digits
 
 
 def test_front_with_shaping_and_bad_key(tmp_path, capsys):

@@ -178,6 +178,9 @@ def write_optimisation_report(result_dir: str | Path, out_dir: str | Path) -> Pa
         Column("range scale", fmt="fix3"), Column("min stiffness", "N m/rad"), Column("tension margin", "N"),
         Column("closest cables", "mm", scale=1e3), Column("link clearance", "mm", scale=1e3),
         Column("certified", fmt="text")]
+    shaping = any("shaping" in d["objectives"] for d in doc["designs"])
+    if shaping:      # the certified smallest LP shaping range, where the objective or the front holds it
+        cols.insert(len(names) + 4, Column("shaping range", "N m/rad"))
     rows = []
     req = doc["requirements"]
     for k, d in enumerate(doc["designs"]):
@@ -185,7 +188,9 @@ def write_optimisation_report(result_dir: str | Path, out_dir: str | Path) -> Pa
         rows.append([f"design_{k:03d}"] + [Cell(d["params"][n], src=("designs", k, "params", n)) for n in names] + [
             Cell(d["objectives"]["range"], src=("designs", k, "objectives", "range")),
             Cell(d["objectives"]["stiffness"], src=("designs", k, "objectives", "stiffness")),
-            Cell(d["objectives"]["tension_margin"], src=("designs", k, "objectives", "tension_margin")),
+            Cell(d["objectives"]["tension_margin"], src=("designs", k, "objectives", "tension_margin"))] + (
+            [Cell(d["objectives"]["shaping"], src=("designs", k, "objectives", "shaping"))
+             if "shaping" in d["objectives"] else "-"] if shaping else []) + [
             c["cable distance"]["slack"] + req["min_cable_distance_m"],
             c["link clearance"]["slack"] + req["min_link_clearance_m"], "yes" if d["ok"] else "NO"])
     verdict = (f"{len(doc['designs'])} designs, every one re-checked on {doc['certify_orientations']} dense "
