@@ -189,7 +189,21 @@ def _run_one(job: dict) -> dict:
             "true_plausible": all(c.get("plausible", False) for c in j["candidates"] if c["effect"] in truth(job)),
             "remaining_p": j["remaining_signature"]["p_value"], "gap_signature_p": j["gap_signature"]["p_value"],
             "detected": [c["effect"] for c in j["candidates"] if c.get("significant")],
+            "models": model_summary(j),
             "seconds_diagnose": time.perf_counter() - t1, "seconds": time.perf_counter() - t0}
+
+
+def model_summary(j: dict) -> dict:
+    """Per single and fitted pair: what the verdict's rules read (evidence, tests, closure, separability).
+
+    Kept in each record so that a warning rule can be evaluated again on stored logs.
+    """
+    keys = ("log_evidence", "significant", "plausible", "closes_gap", "fraction_explained", "p_value",
+            "p_value_vs_first", "improvement_rad", "separable", "max_correlation", "evidence_gain",
+            "supported_by_evidence", "significant_heldout", "tested_against", "fitted", "residual_signature_p")
+    out = {c["effect"]: {k: c.get(k) for k in keys if k in c} for c in j["candidates"]}
+    out.update({"+".join(p["effects"]): {k: p.get(k) for k in keys if k in p} for p in j["pairs"]})
+    return out
 
 
 def hash_name(name: str) -> int:
