@@ -194,20 +194,26 @@ def _run_one(job: dict) -> dict:
             "true_plausible": all(c.get("plausible", False) for c in j["candidates"] if c["effect"] in truth(job)),
             "remaining_p": j["remaining_signature"]["p_value"], "gap_signature_p": j["gap_signature"]["p_value"],
             "detected": [c["effect"] for c in j["candidates"] if c.get("significant")],
-            "models": model_summary(j),
+            "models": model_summary(j, d),
             "seconds_diagnose": time.perf_counter() - t1, "seconds": time.perf_counter() - t0}
 
 
-def model_summary(j: dict) -> dict:
+def model_summary(j: dict, d=None) -> dict:
     """Per single and fitted pair: what the verdict's rules read (evidence, tests, closure, separability).
 
-    Kept in each record so that a warning rule can be evaluated again on stored logs.
+    Kept in each record so that a warning rule can be evaluated again on stored logs; with the
+    diagnosis ``d``, also each model's per-cycle held-out MSE (for paired held-out tests between models).
     """
     keys = ("log_evidence", "significant", "plausible", "closes_gap", "fraction_explained", "p_value",
             "p_value_vs_first", "improvement_rad", "separable", "max_correlation", "evidence_gain",
             "supported_by_evidence", "significant_heldout", "tested_against", "fitted", "residual_signature_p")
     out = {c["effect"]: {k: c.get(k) for k in keys if k in c} for c in j["candidates"]}
     out.update({"+".join(p["effects"]): {k: p.get(k) for k in keys if k in p} for p in j["pairs"]})
+    if d is not None:
+        scores = [("nominal_refit", d.baseline), *d.candidates.items(),
+                  *(("+".join(k), sc) for k, sc in d.pair_scores.items())]
+        for name, sc in scores:
+            out.setdefault(name, {})["cycle_mse"] = [v for _, v in sorted(sc.cycle_mse().items())]
     return out
 
 
