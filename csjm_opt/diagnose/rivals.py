@@ -1,0 +1,142 @@
+"""Rivals the log does not rule out: a verdict the evidence does not single out says which.
+
+A lab acts on a verdict, so a named model must carry a warning naming every other model of the
+vocabulary that explains the log about as well. A *rival* is a fitted single or pair, other than
+the verdict ``V``, that is plausible and closes the gap (the same two conditions a verdict must
+meet). It is *unsettled* when neither of the diagnosis's two yardsticks rules it out:
+
+* **It adds to the verdict** (``V`` plus one more effect ``X``) and its log evidence is higher
+  than ``V``'s: the priors prefer ``X`` present, while the held-out test did not confirm it (a
+  confirmed ``X`` would have been named). ``X`` may be present too; the log does not decide.
+  A superfluous ``X`` pays its Occam factor (about ``log(prior sd / posterior sd)`` per
+  parameter the log determines), so on a log where ``V`` is the whole truth this is rare.
+* **It replaces the verdict** (neither contains the other) and its evidence is higher than
+  ``V``'s, or within ``EVIDENCE_MIN`` nats of it (not decisively less probable: a Bayes factor
+  below 100) while ``V`` does not beat it on held-out cycles (one-sided paired test of per-cycle
+  held-out MSE, ``p >= HELDOUT_ALPHA``): it closes the same gap within the noise.
+
+A model that is part of the verdict (``A`` for ``V = A + B``) is no rival: the pair beat it on
+held-out cycles or by a decisive Bayes factor, or it would not have been named.
+"""
+
+from __future__ import annotations
+
+from typing import Collection, Mapping
+
+import numpy as np
+
+from ._decision import EVIDENCE_MIN, HELDOUT_ALPHA
+from .scoring import CandidateScore, paired_heldout_test
+
+
+class _Cycles:
+    """Per-cycle held-out MSE in the form :func:`~.scoring.paired_heldout_test` reads."""
+
+    def __init__(self, cycle_mse):
+        self._mse = dict(enumerate(cycle_mse)) if not isinstance(cycle_mse, Mapping) else dict(cycle_mse)
+
+    def cycle_mse(self) -> dict:
+        return self._mse
+
+
+def _effects(name: str) -> frozenset[str]:
+    return frozenset(name.split("+"))
+
+
+def unsettled_rivals(models: Mapping[str, Mapping], verdict: str, skip: Collection[str] = ()) -> list[dict]:
+    """The rivals of ``verdict`` that the log does not rule out (see module doc), most probable first.
+
+    Parameters
+    ----------
+    models : mapping
+        Model name (``"a"`` or ``"a+b"``) -> ``{"log_evidence": float, "acceptable": bool,
+        "cycle_mse": sequence or mapping of per-cycle held-out MSE}``; ``acceptable`` = plausible
+        and closes the gap. Must hold ``verdict``.
+    verdict : str
+        The named model (a single, or ``"a+b"``).
+    skip : collection of str, optional
+        Models already named by another warning (compared as sets of effects).
+
+    Returns
+    -------
+    list of dict
+        ``{"model", "nats" (its log evidence minus the verdict's), "heldout_p" (one-sided p that the
+        verdict's per-cycle held-out MSE is lower), "adds" (the effects it adds to the verdict, or
+        ``[]`` when it replaces it)}``.
+    """
+    v = models[verdict]
+    named = _effects(verdict)
+    skipped = {_effects(s) for s in skip}
+    ev_v = float(v["log_evidence"])
+    out = []
+    for name, m in models.items():
+        eff = _effects(name)
+        if eff == named or eff <= named or eff in skipped or not m.get("acceptable"):
+            continue
+        ev = m.get("log_evidence")
+        if ev is None or not np.isfinite(ev):
+            continue
+        nats = float(ev) - ev_v
+        p = paired_heldout_test(_Cycles(m["cycle_mse"]), _Cycles(v["cycle_mse"]))   # type: ignore[arg-type]
+        adds = sorted(eff - named) if named < eff else []
+        if nats > 0.0 or (not adds and nats > -EVIDENCE_MIN and p >= HELDOUT_ALPHA):
+            out.append({"model": name, "nats": nats, "heldout_p": p, "adds": adds})
+    return sorted(out, key=lambda r: -r["nats"])
+
+
+def rival_warning(verdict: str, rival: dict) -> str:
+    """The warning that names one unsettled rival (:func:`unsettled_rivals`).
+
+    Parameters
+    ----------
+    verdict : str
+    rival : dict
+        One entry of :func:`unsettled_rivals`.
+
+    Returns
+    -------
+    str
+    """
+    if rival["adds"]:
+        x = " + ".join(rival["adds"])
+        return (f"{rival['model']} has {rival['nats']:.1f} nats more evidence than {verdict} alone, but {x} did "
+                f"not improve it significantly on held-out cycles: {x} may be present too; the log does not decide")
+    if rival["nats"] > 0:
+        return (f"{rival['model']} also closes the gap and has {rival['nats']:.1f} nats more evidence than {verdict}: "
+                f"the log does not single out {verdict}")
+    return (f"{rival['model']} closes the gap as well: its evidence is within {EVIDENCE_MIN:g} nats of {verdict}'s "
+            f"({rival['nats']:+.1f}) and {verdict} does not beat it on held-out cycles (p = {rival['heldout_p']:.2f}): "
+            f"the log does not single out {verdict}")
+
+
+def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mapping[str, Mapping],
+                  pairs: list, pair_scores: Mapping[tuple, CandidateScore]) -> dict[str, dict]:
+    """The ``models`` argument of :func:`unsettled_rivals` from a diagnosis's scores.
+
+    Parameters
+    ----------
+    evidence : callable
+        ``CandidateScore -> log evidence`` (the diagnosis context's, one noise scale for all).
+    singles : mapping
+        Single effect -> its score.
+    tests : mapping
+        Single effect -> its test entry (``plausible``, ``closes_gap``).
+    pairs : list of dict
+        Pair entries (``effects``, ``fitted``, ``plausible``, ``closes_gap``).
+    pair_scores : mapping
+        ``(a, b)`` -> score of each fitted pair.
+
+    Returns
+    -------
+    dict
+    """
+    out = {n: {"log_evidence": evidence(sc), "cycle_mse": sc.cycle_mse(),
+               "acceptable": bool(tests[n].get("plausible") and tests[n].get("closes_gap"))}
+           for n, sc in singles.items()}
+    for p in pairs:
+        key = tuple(p["effects"])
+        if p.get("fitted") and key in pair_scores:
+            sc = pair_scores[key]
+            out["+".join(key)] = {"log_evidence": evidence(sc), "cycle_mse": sc.cycle_mse(),
+                                  "acceptable": bool(p.get("plausible") and p.get("closes_gap"))}
+    return out

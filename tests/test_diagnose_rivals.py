@@ -1,0 +1,63 @@
+"""Rivals the log does not rule out (csjm_opt.diagnose.rivals): the stated rule, and its held-out part
+against the closed-form power of a paired t-test (noncentral t), an independent construction."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats
+
+from csjm_opt.diagnose._decision import EVIDENCE_MIN, HELDOUT_ALPHA
+from csjm_opt.diagnose.rivals import rival_warning, unsettled_rivals
+
+N_CYCLES = 12
+
+
+def _model(ev, cycle_mse, acceptable=True):
+    return {"log_evidence": ev, "cycle_mse": list(cycle_mse), "acceptable": acceptable}
+
+
+def test_the_stated_rule_on_constructed_models():
+    """Nested: listed iff more probable; replacing: listed iff within EVIDENCE_MIN and not beaten on held-out
+    cycles; parts of the verdict, unacceptable and already-warned models never."""
+    rng = np.random.default_rng(3)
+    same = np.exp(rng.normal(0.0, 0.1, N_CYCLES))             # held-out errors like the verdict's
+    worse = 3.0 * np.ones(N_CYCLES)                           # the verdict beats it on every cycle
+    one = np.ones(N_CYCLES)
+    models = {
+        "A+B": _model(0.0, one),                               # the verdict
+        "A": _model(-1.0, same), "B": _model(-50.0, same),     # parts of the verdict: never rivals
+        "C": _model(-EVIDENCE_MIN / 2, same),                  # replaces it, close, same errors: listed
+        "D": _model(-EVIDENCE_MIN / 2, worse),                 # close in evidence, beaten held-out: not
+        "E": _model(-2 * EVIDENCE_MIN, same),                  # decisively less probable: not
+        "C+D": _model(+3.0, worse),                            # more probable: listed even though beaten held-out
+        "A+F": _model(-1.0, same, acceptable=False),           # does not close the gap / implausible: not
+        "A+G": _model(-1.0, same),                             # already warned about (skip): not
+    }
+    got = unsettled_rivals(models, "A+B", skip=["G+A"])
+    assert [r["model"] for r in got] == ["C+D", "C"]
+    assert all(r["adds"] == [] for r in got)
+    # a single verdict: a pair that adds to it is listed only when the evidence prefers it
+    single = {"A": _model(0.0, one), "A+B": _model(2.0, same), "A+C": _model(-0.5, same), "B": _model(-20.0, same)}
+    got = unsettled_rivals(single, "A")
+    assert [(r["model"], r["adds"]) for r in got] == [("A+B", ["B"])]
+    assert "B may be present too" in rival_warning("A", got[0])
+    assert unsettled_rivals({"A": _model(0.0, one)}, "A") == []
+
+
+def test_heldout_part_matches_the_noncentral_t_power():
+    """Rival errors with per-cycle log ratios N(delta, s^2) to the verdict's: the rule lists the rival (within
+    EVIDENCE_MIN) exactly when the one-sided paired t-test fails at HELDOUT_ALPHA, i.e. with probability
+    1 - power, the power from the noncentral t distribution (scipy.stats.nct)."""
+    rng = np.random.default_rng(11)
+    n, s, draws = N_CYCLES, 0.3, 600
+    t_crit = stats.t.ppf(1 - HELDOUT_ALPHA, n - 1)
+    for delta in (0.0, 0.1, 0.25):
+        listed = 0
+        for _ in range(draws):
+            d = rng.normal(delta, s, n)
+            models = {"A": _model(0.0, np.ones(n)), "C": _model(-1.0, np.exp(d))}
+            listed += bool(unsettled_rivals(models, "A"))
+        power = 1 - stats.nct.cdf(t_crit, n - 1, delta * np.sqrt(n) / s)
+        expected = 1 - power
+        sd = np.sqrt(expected * (1 - expected) / draws)
+        assert abs(listed / draws - expected) < 4 * sd + 1e-3, (delta, listed / draws, expected)
