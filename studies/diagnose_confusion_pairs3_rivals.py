@@ -51,7 +51,7 @@ def _rate(k: int, n: int) -> str:
 
 def summarise(records: list[dict]) -> str:
     """Markdown: warning rates with and without the rival rule, and the wrong verdicts' warnings."""
-    lines = ["| logs | n | warned (other rules) | warned (with rival rule) | fired by rival rule |",
+    lines = ["| logs | n | warned (other rules) | warned (with rival rule) | warned by the rival rule alone |",
              "|---|---|---|---|---|"]
     groups: dict[str, list[dict]] = {}
     for r in records:
@@ -73,7 +73,7 @@ def summarise(records: list[dict]) -> str:
         old = [bool(old_warnings(r)) for r in rs]
         new = [o or bool(v) for o, v in zip(old, riv)]
         lines.append(f"| {key} | {len(rs)} | {_rate(sum(old), len(rs))} | {_rate(sum(new), len(rs))} | "
-                     f"{_rate(sum(bool(v) for v in riv), len(rs))} |")
+                     f"{_rate(sum(n and not o for o, n in zip(old, new)), len(rs))} |")
         for r, v, o in zip(rs, riv, old):
             if v or ("wrong" in key):
                 detail.append(f"| {r['id']} | {r['selected']} + {r['secondary']} | {'yes' if o else 'no'} | "
