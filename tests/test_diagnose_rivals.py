@@ -61,3 +61,27 @@ def test_heldout_part_matches_the_noncentral_t_power():
         expected = 1 - power
         sd = np.sqrt(expected * (1 - expected) / draws)
         assert abs(listed / draws - expected) < 4 * sd + 1e-3, (delta, listed / draws, expected)
+
+
+def test_scored_models_reads_acceptability_and_errors_from_the_diagnosis_pieces():
+    """Singles take plausibility and closure from their tests, pairs from their entries; unfitted pairs are
+    left out; the evidence comes from the given function."""
+    from csjm_opt.diagnose.rivals import scored_models
+
+    class Score:
+        def __init__(self, ev, mse):
+            self.ev, self.mse = ev, mse
+
+        def cycle_mse(self):
+            return dict(enumerate(self.mse))
+
+    singles = {"A": Score(-1.0, [1.0, 2.0]), "B": Score(-2.0, [2.0, 2.0])}
+    tests = {"A": {"plausible": True, "closes_gap": True}, "B": {"plausible": True, "closes_gap": False}}
+    pairs = [{"effects": ["A", "B"], "fitted": True, "plausible": True, "closes_gap": True},
+             {"effects": ["A", "C"], "fitted": False, "plausible": True, "closes_gap": True}]
+    got = scored_models(lambda sc: sc.ev, singles, tests, pairs, {("A", "B"): Score(3.0, [0.5, 0.5])})
+    assert set(got) == {"A", "B", "A+B"}
+    assert [got[k]["acceptable"] for k in ("A", "B", "A+B")] == [True, False, True]
+    assert got["A+B"]["log_evidence"] == 3.0 and got["A"]["cycle_mse"] == {0: 1.0, 1: 2.0}
+    # the verdict A: A+B adds B with 4 more nats -> listed as "B may be present too"
+    assert [r["adds"] for r in unsettled_rivals(got, "A")] == [["B"]]
