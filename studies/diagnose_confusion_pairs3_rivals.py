@@ -31,7 +31,7 @@ def rivals_of(r: dict) -> list[dict]:
     if not models or r["selected"] in ("none", "unexplained") or verdict not in models:
         return []
     ms = {n: {"log_evidence": m.get("log_evidence"), "cycle_mse": m.get("cycle_mse") or [],
-              "acceptable": bool(m.get("plausible") and m.get("closes_gap") and m.get("fitted", True))}
+              "plausible": bool(m.get("plausible") and m.get("fitted", True)), "closes_gap": bool(m.get("closes_gap"))}
           for n, m in models.items() if n != "nominal_refit" and m.get("cycle_mse")}
     if verdict not in ms:
         return []

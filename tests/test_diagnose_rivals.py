@@ -12,13 +12,14 @@ from csjm_opt.diagnose.rivals import rival_warning, unsettled_rivals
 N_CYCLES = 12
 
 
-def _model(ev, cycle_mse, acceptable=True):
-    return {"log_evidence": ev, "cycle_mse": list(cycle_mse), "acceptable": acceptable}
+def _model(ev, cycle_mse, plausible=True, closes=True):
+    return {"log_evidence": ev, "cycle_mse": list(cycle_mse), "plausible": plausible, "closes_gap": closes}
 
 
 def test_the_stated_rule_on_constructed_models():
     """Nested: listed iff more probable; replacing: listed iff within EVIDENCE_MIN and not beaten on held-out
-    cycles; parts of the verdict, unacceptable and already-warned models never."""
+    cycles; a rival short of the closure threshold only when the verdict does not beat it on held-out cycles;
+    parts of the verdict, implausible and already-warned models never."""
     rng = np.random.default_rng(3)
     same = np.exp(rng.normal(0.0, 0.1, N_CYCLES))             # held-out errors like the verdict's
     worse = 3.0 * np.ones(N_CYCLES)                           # the verdict beats it on every cycle
@@ -30,11 +31,15 @@ def test_the_stated_rule_on_constructed_models():
         "D": _model(-EVIDENCE_MIN / 2, worse),                 # close in evidence, beaten held-out: not
         "E": _model(-2 * EVIDENCE_MIN, same),                  # decisively less probable: not
         "C+D": _model(+3.0, worse),                            # more probable: listed even though beaten held-out
-        "A+F": _model(-1.0, same, acceptable=False),           # does not close the gap / implausible: not
+        "A+F": _model(-1.0, same, plausible=False),            # implausible: not
         "A+G": _model(-1.0, same),                             # already warned about (skip): not
+        "H": _model(+20.0, same, closes=False),                # short of the threshold, tied held-out: listed
+        "I": _model(+20.0, worse, closes=False),               # short of the threshold, beaten held-out: not
     }
     got = unsettled_rivals(models, "A+B", skip=["G+A"])
-    assert [r["model"] for r in got] == ["C+D", "C"]
+    assert [r["model"] for r in got] == ["H", "C+D", "C"]
+    assert [r["closes_gap"] for r in got] == [False, True, True]
+    assert "within the noise" in rival_warning("A+B", got[0])
     assert all(r["adds"] == [] for r in got)
     # a single verdict: a pair that adds to it is listed only when the evidence prefers it
     single = {"A": _model(0.0, one), "A+B": _model(2.0, same), "A+C": _model(-0.5, same), "B": _model(-20.0, same)}
@@ -75,13 +80,13 @@ def test_scored_models_reads_acceptability_and_errors_from_the_diagnosis_pieces(
         def cycle_mse(self):
             return dict(enumerate(self.mse))
 
-    singles = {"A": Score(-1.0, [1.0, 2.0]), "B": Score(-2.0, [2.0, 2.0])}
+    singles = {"A": Score(-1.0, [1.0, 2.0, 1.5]), "B": Score(-2.0, [20.0, 30.0, 31.0])}
     tests = {"A": {"plausible": True, "closes_gap": True}, "B": {"plausible": True, "closes_gap": False}}
     pairs = [{"effects": ["A", "B"], "fitted": True, "plausible": True, "closes_gap": True},
              {"effects": ["A", "C"], "fitted": False, "plausible": True, "closes_gap": True}]
-    got = scored_models(lambda sc: sc.ev, singles, tests, pairs, {("A", "B"): Score(3.0, [0.5, 0.5])})
+    got = scored_models(lambda sc: sc.ev, singles, tests, pairs, {("A", "B"): Score(3.0, [0.5, 0.5, 0.6])})
     assert set(got) == {"A", "B", "A+B"}
-    assert [got[k]["acceptable"] for k in ("A", "B", "A+B")] == [True, False, True]
-    assert got["A+B"]["log_evidence"] == 3.0 and got["A"]["cycle_mse"] == {0: 1.0, 1: 2.0}
+    assert [got[k]["closes_gap"] for k in ("A", "B", "A+B")] == [True, False, True]
+    assert got["A+B"]["log_evidence"] == 3.0 and got["A"]["cycle_mse"] == {0: 1.0, 1: 2.0, 2: 1.5}
     # the verdict A: A+B adds B with 4 more nats -> listed as "B may be present too"
     assert [r["adds"] for r in unsettled_rivals(got, "A")] == [["B"]]

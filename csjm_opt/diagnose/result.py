@@ -34,8 +34,9 @@
                         close the gap with higher evidence than the named one (not confirmed on
                         held-out cycles); evidence_margin is the named model's lead in nats;
                         unsettled_rivals are every model the log does not rule out (one adding an
-                        effect with higher evidence, or one replacing the verdict within
-                        EVIDENCE_MIN nats that it does not beat on held-out cycles; rivals.py)
+                        effect with higher evidence, or one replacing the verdict with higher
+                        evidence or within EVIDENCE_MIN nats while the verdict does not beat it
+                        on held-out cycles; rivals.py)
     significance        the decision rule's constants and tests
     gap                 {before_rad, after_rad, fraction_explained, systematic_before_rad,
                          systematic_after_rad, noise_floor_after_rad, fraction_explained_by_nominal_refit,

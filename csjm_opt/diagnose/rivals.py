@@ -3,7 +3,10 @@
 A lab acts on a verdict, so a named model must carry a warning naming every other model of the
 vocabulary that explains the log about as well. A *rival* is a fitted single or pair, other than
 the verdict ``V``, that is plausible and closes the gap (the same two conditions a verdict must
-meet). It is *unsettled* when neither of the diagnosis's two yardsticks rules it out:
+meet), or closes it *within the noise*: its own estimate of the closed share falls short of
+``CLOSE_FRACTION``, but ``V``, which closes, does not beat it on held-out cycles (one-sided paired
+test of per-cycle held-out MSE, ``p >= HELDOUT_ALPHA``), so the shortfall is not significant. It
+is *unsettled* when neither of the diagnosis's two yardsticks rules it out:
 
 * **It adds to the verdict** (``V`` plus one more effect ``X``) and its log evidence is higher
   than ``V``'s: the priors prefer ``X`` present, while the held-out test did not confirm it (a
@@ -12,8 +15,8 @@ meet). It is *unsettled* when neither of the diagnosis's two yardsticks rules it
   parameter the log determines), so on a log where ``V`` is the whole truth this is rare.
 * **It replaces the verdict** (neither contains the other) and its evidence is higher than
   ``V``'s, or within ``EVIDENCE_MIN`` nats of it (not decisively less probable: a Bayes factor
-  below 100) while ``V`` does not beat it on held-out cycles (one-sided paired test of per-cycle
-  held-out MSE, ``p >= HELDOUT_ALPHA``): it closes the same gap within the noise.
+  below 100) while ``V`` does not beat it on held-out cycles (``p >= HELDOUT_ALPHA``): it closes
+  the same gap within the noise.
 
 A model that is part of the verdict (``A`` for ``V = A + B``) is no rival: the pair beat it on
 held-out cycles or by a decisive Bayes factor, or it would not have been named.
@@ -49,9 +52,9 @@ def unsettled_rivals(models: Mapping[str, Mapping], verdict: str, skip: Collecti
     Parameters
     ----------
     models : mapping
-        Model name (``"a"`` or ``"a+b"``) -> ``{"log_evidence": float, "acceptable": bool,
-        "cycle_mse": sequence or mapping of per-cycle held-out MSE}``; ``acceptable`` = plausible
-        and closes the gap. Must hold ``verdict``.
+        Model name (``"a"`` or ``"a+b"``) -> ``{"log_evidence": float, "plausible": bool,
+        "closes_gap": bool, "cycle_mse": sequence or mapping of per-cycle held-out MSE}``. Must
+        hold ``verdict``.
     verdict : str
         The named model (a single, or ``"a+b"``).
     skip : collection of str, optional
@@ -62,7 +65,7 @@ def unsettled_rivals(models: Mapping[str, Mapping], verdict: str, skip: Collecti
     list of dict
         ``{"model", "nats" (its log evidence minus the verdict's), "heldout_p" (one-sided p that the
         verdict's per-cycle held-out MSE is lower), "adds" (the effects it adds to the verdict, or
-        ``[]`` when it replaces it)}``.
+        ``[]`` when it replaces it), "closes_gap" (its own estimate reaches ``CLOSE_FRACTION``)}``.
     """
     v = models[verdict]
     named = _effects(verdict)
@@ -71,16 +74,20 @@ def unsettled_rivals(models: Mapping[str, Mapping], verdict: str, skip: Collecti
     out = []
     for name, m in models.items():
         eff = _effects(name)
-        if eff == named or eff <= named or eff in skipped or not m.get("acceptable"):
+        if eff == named or eff <= named or eff in skipped or not m.get("plausible"):
             continue
         ev = m.get("log_evidence")
-        if ev is None or not np.isfinite(ev):
+        if ev is None or not np.isfinite(ev) or not len(m.get("cycle_mse") or ()):
             continue
         nats = float(ev) - ev_v
         p = paired_heldout_test(_Cycles(m["cycle_mse"]), _Cycles(v["cycle_mse"]))   # type: ignore[arg-type]
+        tied = p >= HELDOUT_ALPHA                   # the verdict does not beat it on held-out cycles
+        if not (m.get("closes_gap") or tied):
+            continue
         adds = sorted(eff - named) if named < eff else []
-        if nats > 0.0 or (not adds and nats > -EVIDENCE_MIN and p >= HELDOUT_ALPHA):
-            out.append({"model": name, "nats": nats, "heldout_p": p, "adds": adds})
+        if nats > 0.0 or (not adds and nats > -EVIDENCE_MIN and tied):
+            out.append({"model": name, "nats": nats, "heldout_p": p, "adds": adds,
+                        "closes_gap": bool(m.get("closes_gap"))})
     return sorted(out, key=lambda r: -r["nats"])
 
 
@@ -97,16 +104,20 @@ def rival_warning(verdict: str, rival: dict) -> str:
     -------
     str
     """
+    closes = ("closes the gap" if rival.get("closes_gap", True) else
+              f"closes the gap within the noise ({verdict} does not beat it on held-out cycles, "
+              f"p = {rival['heldout_p']:.2f})")
     if rival["adds"]:
         x = " + ".join(rival["adds"])
-        return (f"{rival['model']} has {rival['nats']:.1f} nats more evidence than {verdict} alone, but {x} did "
-                f"not improve it significantly on held-out cycles: {x} may be present too; the log does not decide")
+        return (f"{rival['model']} {closes} and has {rival['nats']:.1f} nats more evidence than {verdict} alone, but "
+                f"{x} did not improve it significantly on held-out cycles: {x} may be present too; the log does not "
+                "decide")
     if rival["nats"] > 0:
-        return (f"{rival['model']} also closes the gap and has {rival['nats']:.1f} nats more evidence than {verdict}: "
+        return (f"{rival['model']} {closes} and has {rival['nats']:.1f} nats more evidence than {verdict}: "
                 f"the log does not single out {verdict}")
-    return (f"{rival['model']} closes the gap as well: its evidence is within {EVIDENCE_MIN:g} nats of {verdict}'s "
-            f"({rival['nats']:+.1f}) and {verdict} does not beat it on held-out cycles (p = {rival['heldout_p']:.2f}): "
-            f"the log does not single out {verdict}")
+    return (f"{rival['model']} closes the gap as well within the noise: its evidence is within {EVIDENCE_MIN:g} nats "
+            f"of {verdict}'s ({rival['nats']:+.1f}) and {verdict} does not beat it on held-out cycles "
+            f"(p = {rival['heldout_p']:.2f}): the log does not single out {verdict}")
 
 
 def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mapping[str, Mapping],
@@ -131,12 +142,12 @@ def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mappin
     dict
     """
     out = {n: {"log_evidence": evidence(sc), "cycle_mse": sc.cycle_mse(),
-               "acceptable": bool(tests[n].get("plausible") and tests[n].get("closes_gap"))}
+               "plausible": bool(tests[n].get("plausible")), "closes_gap": bool(tests[n].get("closes_gap"))}
            for n, sc in singles.items()}
     for p in pairs:
         key = tuple(p["effects"])
         if p.get("fitted") and key in pair_scores:
             sc = pair_scores[key]
             out["+".join(key)] = {"log_evidence": evidence(sc), "cycle_mse": sc.cycle_mse(),
-                                  "acceptable": bool(p.get("plausible") and p.get("closes_gap"))}
+                                  "plausible": bool(p.get("plausible")), "closes_gap": bool(p.get("closes_gap"))}
     return out
