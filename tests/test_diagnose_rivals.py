@@ -90,3 +90,24 @@ def test_scored_models_reads_acceptability_and_errors_from_the_diagnosis_pieces(
     assert got["A+B"]["log_evidence"] == 3.0 and got["A"]["cycle_mse"] == {0: 1.0, 1: 2.0, 2: 1.5}
     # the verdict A: A+B adds B with 4 more nats -> listed as "B may be present too"
     assert [r["adds"] for r in unsettled_rivals(got, "A")] == [["B"]]
+
+
+def test_heldout_better_rivals_hold_the_bonferroni_level():
+    """K rivals as good as the verdict (per-cycle log ratios N(0, s^2), independent), decisively less probable:
+    only the held-out-better clause can list them, at HELDOUT_ALPHA / K each, so some rival is listed with
+    probability 1 - (1 - HELDOUT_ALPHA / K)^K (uniform p-values of an exact t-test); a rival whose errors are
+    a quarter of the verdict's on every cycle is always listed."""
+    rng = np.random.default_rng(5)
+    k, draws = 4, 500
+    listed = 0
+    for _ in range(draws):
+        models = {"A": _model(0.0, np.ones(N_CYCLES))}
+        models.update({f"R{i}": _model(-3 * EVIDENCE_MIN, np.exp(rng.normal(0.0, 0.3, N_CYCLES))) for i in range(k)})
+        listed += bool(unsettled_rivals(models, "A"))
+    expected = 1 - (1 - HELDOUT_ALPHA / k) ** k
+    assert abs(listed / draws - expected) < 4 * np.sqrt(expected * (1 - expected) / draws), (listed / draws, expected)
+    better = {"A": _model(0.0, np.ones(N_CYCLES)),
+              "B": _model(-3 * EVIDENCE_MIN, 0.25 * np.exp(rng.normal(0.0, 0.1, N_CYCLES)))}
+    got = unsettled_rivals(better, "A")
+    assert [r["model"] for r in got] == ["B"] and got[0]["heldout_better"]
+    assert "yardsticks disagree" in rival_warning("A", got[0])

@@ -17,6 +17,12 @@ is *unsettled* when neither of the diagnosis's two yardsticks rules it out:
   ``V``'s, or within ``EVIDENCE_MIN`` nats of it (not decisively less probable: a Bayes factor
   below 100) while ``V`` does not beat it on held-out cycles (``p >= HELDOUT_ALPHA``): it closes
   the same gap within the noise.
+* **It beats the verdict on held-out cycles** (either kind): its per-cycle held-out MSE is lower
+  in the one-sided paired test at ``HELDOUT_ALPHA`` divided by the number of rivals that close the
+  gap (Bonferroni: when the verdict is right and every rival as good, a false warning of this kind
+  has probability at most ``HELDOUT_ALPHA``). The verdict is the evidence's pick among the
+  models that close the gap; the held-out errors prefer the rival, the same kind of confirmation
+  the evidence route of the decision asks of a pair.
 
 A model that is part of the verdict (``A`` for ``V = A + B``) is no rival: the pair beat it on
 held-out cycles or by a decisive Bayes factor, or it would not have been named.
@@ -64,30 +70,36 @@ def unsettled_rivals(models: Mapping[str, Mapping], verdict: str, skip: Collecti
     -------
     list of dict
         ``{"model", "nats" (its log evidence minus the verdict's), "heldout_p" (one-sided p that the
-        verdict's per-cycle held-out MSE is lower), "adds" (the effects it adds to the verdict, or
-        ``[]`` when it replaces it), "closes_gap" (its own estimate reaches ``CLOSE_FRACTION``)}``.
+        verdict's per-cycle held-out MSE is lower), "heldout_better_p" (the same, that the rival's
+        is lower), "heldout_better" (significant, Bonferroni over the rivals that close the gap),
+        "adds" (the effects it adds to the verdict, or ``[]`` when it replaces it), "closes_gap"
+        (its own estimate reaches ``CLOSE_FRACTION``)}``.
     """
     v = models[verdict]
     named = _effects(verdict)
     skipped = {_effects(s) for s in skip}
     ev_v = float(v["log_evidence"])
+    rivals = {name: m for name, m in models.items() if not _effects(name) <= named and m.get("plausible")
+              and m.get("log_evidence") is not None and np.isfinite(m["log_evidence"])
+              and len(m.get("cycle_mse") or ())}
+    n_closing = max(sum(bool(m.get("closes_gap")) for m in rivals.values()), 1)
     out = []
-    for name, m in models.items():
+    for name, m in rivals.items():
         eff = _effects(name)
-        if eff == named or eff <= named or eff in skipped or not m.get("plausible"):
+        if eff in skipped:
             continue
-        ev = m.get("log_evidence")
-        if ev is None or not np.isfinite(ev) or not len(m.get("cycle_mse") or ()):
-            continue
-        nats = float(ev) - ev_v
+        nats = float(m["log_evidence"]) - ev_v
         p = paired_heldout_test(_Cycles(m["cycle_mse"]), _Cycles(v["cycle_mse"]))   # type: ignore[arg-type]
+        p_better = paired_heldout_test(_Cycles(v["cycle_mse"]), _Cycles(m["cycle_mse"]))  # type: ignore[arg-type]
         tied = p >= HELDOUT_ALPHA                   # the verdict does not beat it on held-out cycles
         if not (m.get("closes_gap") or tied):
             continue
         adds = sorted(eff - named) if named < eff else []
-        if nats > 0.0 or (not adds and nats > -EVIDENCE_MIN and tied):
+        better = bool(m.get("closes_gap")) and p_better < HELDOUT_ALPHA / n_closing
+        if nats > 0.0 or better or (not adds and nats > -EVIDENCE_MIN and tied):
             out.append({"model": name, "nats": nats, "heldout_p": p, "adds": adds,
-                        "closes_gap": bool(m.get("closes_gap"))})
+                        "closes_gap": bool(m.get("closes_gap")), "heldout_better_p": p_better,
+                        "heldout_better": better})
     return sorted(out, key=lambda r: -r["nats"])
 
 
@@ -107,6 +119,12 @@ def rival_warning(verdict: str, rival: dict) -> str:
     closes = ("closes the gap" if rival.get("closes_gap", True) else
               f"closes the gap within the noise ({verdict} does not beat it on held-out cycles, "
               f"p = {rival['heldout_p']:.2f})")
+    if rival.get("heldout_better") and rival["nats"] <= 0:
+        what = (f"{' + '.join(rival['adds'])} may be present too" if rival["adds"] else
+                f"the log does not single out {verdict}")
+        return (f"{rival['model']} closes the gap with lower held-out errors than {verdict} (paired test "
+                f"p = {rival['heldout_better_p']:.3f}) but {-rival['nats']:.1f} nats less evidence: the two "
+                f"yardsticks disagree; {what}")
     if rival["adds"]:
         x = " + ".join(rival["adds"])
         return (f"{rival['model']} {closes} and has {rival['nats']:.1f} nats more evidence than {verdict} alone, but "
