@@ -49,8 +49,12 @@ MULTIPLES = (1.5, 3.0, 6.0, 10.0)
 OUTSIDE_MULTIPLES = (3.0, 6.0)
 
 
-def jobs(n_rigs: int, none_per_rig: int, cycles: int, pair_rigs: int, plant: str = "quasistatic") -> list[dict]:
-    """The study's logs, most informative first (a partial run still answers the main questions)."""
+def jobs(n_rigs: int, none_per_rig: int, cycles: int, pair_rigs: int, plant: str = "quasistatic",
+         first_rig: int = 0) -> list[dict]:
+    """The study's logs, most informative first (a partial run still answers the main questions).
+
+    Rigs ``first_rig, ..., first_rig + n_rigs - 1`` (a check set of rigs not looked at: ``first_rig=10``).
+    """
     from csjm_opt.testbed import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES
 
     out: list[dict] = []
@@ -61,21 +65,22 @@ def jobs(n_rigs: int, none_per_rig: int, cycles: int, pair_rigs: int, plant: str
                     "effects": list(effects), "multiple": mult, "rig": rig, "rep": rep, "cycles": cycles,
                     "plant": plant})
 
-    for rig in range(n_rigs):
+    rigs = range(first_rig, first_rig + n_rigs)
+    for rig in rigs:
         for rep in range(none_per_rig):
             add("none", [], 0.0, rig, rep)
-    for rig in range(n_rigs):
+    for rig in rigs:
         for e in singles:
             add("single", [e], 3.0, rig)
         for e in OUTSIDE_NAMES:
             add("outside", [e], 3.0, rig)
     for i, pair in enumerate(itertools.combinations(EFFECT_NAMES, 2)):
         for r in range(pair_rigs):
-            add("pair", list(pair), 3.0, (i + r * 7) % n_rigs)
-    for rig in range(n_rigs):
+            add("pair", list(pair), 3.0, first_rig + (i + r * 7) % n_rigs)
+    for rig in rigs:
         for e in singles:
             add("single", [e], 10.0, rig)
-    for rig in range(n_rigs):
+    for rig in rigs:
         for e in singles:
             add("single", [e], 1.5, rig)
             add("single", [e], 6.0, rig)
@@ -189,7 +194,27 @@ def _run_one(job: dict) -> dict:
             "true_plausible": all(c.get("plausible", False) for c in j["candidates"] if c["effect"] in truth(job)),
             "remaining_p": j["remaining_signature"]["p_value"], "gap_signature_p": j["gap_signature"]["p_value"],
             "detected": [c["effect"] for c in j["candidates"] if c.get("significant")],
+            "models": model_summary(j, d),
             "seconds_diagnose": time.perf_counter() - t1, "seconds": time.perf_counter() - t0}
+
+
+def model_summary(j: dict, d=None) -> dict:
+    """Per single and fitted pair: what the verdict's rules read (evidence, tests, closure, separability).
+
+    Kept in each record so that a warning rule can be evaluated again on stored logs; with the
+    diagnosis ``d``, also each model's per-cycle held-out MSE (for paired held-out tests between models).
+    """
+    keys = ("log_evidence", "significant", "plausible", "closes_gap", "fraction_explained", "p_value",
+            "p_value_vs_first", "improvement_rad", "separable", "max_correlation", "evidence_gain",
+            "supported_by_evidence", "significant_heldout", "tested_against", "fitted", "residual_signature_p")
+    out = {c["effect"]: {k: c.get(k) for k in keys if k in c} for c in j["candidates"]}
+    out.update({"+".join(p["effects"]): {k: p.get(k) for k in keys if k in p} for p in j["pairs"]})
+    if d is not None:
+        scores = [("nominal_refit", d.baseline), *d.candidates.items(),
+                  *(("+".join(k), sc) for k, sc in d.pair_scores.items())]
+        for name, sc in scores:
+            out.setdefault(name, {})["cycle_mse"] = [v for _, v in sorted(sc.cycle_mse().items())]
+    return out
 
 
 def hash_name(name: str) -> int:
@@ -362,6 +387,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rigs", type=int, default=10)
     ap.add_argument("--none-per-rig", type=int, default=10)
+    ap.add_argument("--first-rig", type=int, default=0,
+                    help="first random rig (e.g. 10: a check set of rigs not used while developing)")
     ap.add_argument("--pair-rigs", type=int, default=2, help="rigs per pair of effects")
     ap.add_argument("--cycles", type=int, default=12, help="9 rows per cycle")
     ap.add_argument("--plants", nargs="+", default=["quasistatic"], choices=["quasistatic", "mujoco"],
@@ -387,7 +414,7 @@ def main(argv: list[str] | None = None) -> int:
     done = read_records(path)
     if not args.summarise:
         todo = [j for plant in args.plants
-                for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs, plant)
+                for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs, plant, args.first_rig)
                 if j["id"] not in done and j["kind"] in args.kinds
                 and (args.multiples is None or j["multiple"] in args.multiples)
                 and (args.only is None or set(j["effects"]) <= set(args.only))

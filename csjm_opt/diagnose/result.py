@@ -32,7 +32,11 @@
                         close the gap as well (evidence within LEAD_NATS) and are not separable from
                         the named second effect; more_probable_rivals are plausible models that
                         close the gap with higher evidence than the named one (not confirmed on
-                        held-out cycles); evidence_margin is the named model's lead in nats
+                        held-out cycles); evidence_margin is the named model's lead in nats;
+                        unsettled_rivals are every model the log does not rule out (one adding an
+                        effect with higher evidence, or one replacing the verdict with higher
+                        evidence or within EVIDENCE_MIN nats while the verdict does not beat it
+                        on held-out cycles; rivals.py)
     significance        the decision rule's constants and tests
     gap                 {before_rad, after_rad, fraction_explained, systematic_before_rad,
                          systematic_after_rad, noise_floor_after_rad, fraction_explained_by_nominal_refit,

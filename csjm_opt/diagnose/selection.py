@@ -86,6 +86,7 @@ from .pairs import all_separabilities, secondary_alternatives
 from .pool import map_ordered, resolve_workers
 from .residuals import compute_residuals
 from .result import Diagnosis
+from .rivals import rival_warning, scored_models, unsettled_rivals
 from .scoring import CandidateScore, paired_heldout_test
 
 
@@ -261,6 +262,12 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
             f"the second effect {second['effect']} is not separable on this log from "
             f"{', '.join(verdict['secondary_alternatives'])}: {selected} with either closes the gap "
             f"(evidence within {LEAD_NATS:g} nats, Fisher block correlation above the separability limit)")
+    # every other model the log does not rule out is named (rivals.py); those warned about above are not repeated
+    verdict["unsettled_rivals"] = [] if selected in ("none", "unexplained") else unsettled_rivals(
+        scored_models(ctx.evidence, singles, tests, pairs, pair_scores), final.name,
+        [*verdict["more_probable_rivals"], *alternatives,
+         *(f"{selected}+{c}" for c in verdict["secondary_alternatives"])])
+    verdict["warnings"] += [rival_warning(final.name, r) for r in verdict["unsettled_rivals"]]
     steps = [{"model": "nominal_refit", "heldout_rms_rad": baseline.heldout_rms_rad}]
     lead = selected if selected in singles else first
     if lead is not None:
