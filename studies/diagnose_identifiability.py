@@ -165,13 +165,17 @@ def summarise(oracles: dict[str, dict], records: list[dict], lead: float) -> str
                   "noise-free log, and its whitened misfit there (chi^2 with unit noise: the non-centrality a test "
                   "of the remaining residual can use). Even an ideal test that knew the misfit's direction "
                   "detects it at 1 % with probability Phi(sqrt(chi^2) - 2.33) on one log (column 'ideal power'): "
-                  "where that is small, no rule can tell the effect from the named model on that log.", "",
-                  "| effect | rig | best vocabulary model | its misfit chi^2 | ideal power | null model's chi^2 | "
-                  "verdict |", "|---|---|---|---|---|---|---|"]
+                  "where that is small, no rule can tell the effect from the named model on that log. A test that does "
+                  "not know the direction, such as the residual signature (3 regressors per cycle), has at most "
+                  "the power of a chi^2 test with 3 x cycles degrees of freedom and that non-centrality "
+                  "(column 'signature power', an upper bound: the misfit need not lie in those regressors).", "",
+                  "| effect | rig | best vocabulary model | its misfit chi^2 | ideal power | signature power | "
+                  "null model's chi^2 | verdict |", "|---|---|---|---|---|---|---|---|"]
         for r in sorted(out, key=lambda r: (r["effects"], r["rig"])):
             o = oracles[r["id"]]
             lines.append(f"| {'+'.join(r['effects'])} | {r['rig']} | {o['best_model']} | {o['best_chi2']:.1f} | "
-                         f"{_ideal_power(o['best_chi2']):.2f} | {o['null_chi2']:.1f} | "
+                         f"{_ideal_power(o['best_chi2']):.2f} | {_chi2_power(o['best_chi2'], 3 * r['cycles']):.2f} | "
+                         f"{o['null_chi2']:.1f} | "
                          f"{r['selected']} + {r['secondary']}"
                          f"{' [warned]' if r['warnings'] else ''} |")
     return "\n".join(lines) + "\n"
@@ -182,6 +186,14 @@ def _ideal_power(chi2: float, z: float = 2.326) -> float:
     from math import erf, sqrt
 
     return 0.5 * (1.0 + erf((sqrt(max(chi2, 0.0)) - z) / sqrt(2.0)))
+
+
+def _chi2_power(chi2: float, dof: int, alpha: float = 0.01) -> float:
+    """Power at ``alpha`` of a chi^2 test with ``dof`` degrees of freedom and non-centrality ``chi2``."""
+    from scipy.stats import chi2 as chi2_dist
+    from scipy.stats import ncx2
+
+    return float(ncx2.sf(chi2_dist.isf(alpha, dof), dof, max(chi2, 1e-12)))
 
 
 def main(argv: list[str] | None = None) -> int:
