@@ -80,8 +80,13 @@ class PoseSolution:
 
 
 def solve_poses(g: Residual, R_init: np.ndarray, tol_Nm: float = 1e-10, max_iter: int = 60,
-                max_step_rad: float = 0.2) -> PoseSolution:
-    """Solve ``g(R) = 0`` row-wise by damped Newton on SO(3) (batched)."""
+                max_step_rad: float = 0.2, tangent_step_rad: float = 1e-7) -> PoseSolution:
+    """Solve ``g(R) = 0`` row-wise by damped Newton on SO(3) (batched).
+
+    ``tangent_step_rad`` is the finite-difference step of the tangent (:func:`tangent`); a
+    residual that changes steeply over a narrower range of rotation (a stiff, regularised
+    stick-slip law) needs a step below that range.
+    """
     R = np.array(R_init, dtype=float)
     g0 = g(R)
     norm = np.linalg.norm(g0, axis=1)
@@ -90,7 +95,7 @@ def solve_poses(g: Residual, R_init: np.ndarray, tol_Nm: float = 1e-10, max_iter
         active = norm > tol_Nm
         if not np.any(active):
             break
-        G = tangent(g, R, g0)
+        G = tangent(g, R, g0, tangent_step_rad)
         try:
             step = -np.linalg.solve(G, g0[..., None])[..., 0]
         except np.linalg.LinAlgError:

@@ -66,6 +66,12 @@ SUBSTEPS_ROW = 8
 #: Stiffness of a stuck ball joint (N m/rad; joint friction) and the lever (m) turning SMOOTH_N into a moment.
 JOINT_STICK_NM_PER_RAD = 1e4
 JOINT_SMOOTH_M = 0.01
+#: Finite-difference step (rad) of Newton's tangent for a row whose joint is about to slip. The stuck
+#: joint's moment goes from sticking to its bound over ``SMOOTH_N * JOINT_SMOOTH_M / JOINT_STICK_NM_PER_RAD``
+#: = 2e-9 rad of rotation; the default step (1e-7 rad) straddles that transition, the tangent is wrong
+#: there and Newton stalls (about 5e-4 N m) on a slipping row. Coulomb friction cannot remove an
+#: equilibrium the frictionless rig has, so a stalled row is solved again with a step inside it.
+JOINT_TANGENT_STEP_RAD = 0.5 * SMOOTH_N * JOINT_SMOOTH_M / JOINT_STICK_NM_PER_RAD
 SUBSTEPS_NEW_CYCLE = 16
 
 
@@ -205,6 +211,8 @@ class Plant:
                     return self._balance(R, l, tau_q, u, mr_q)[0]
 
                 sol = kin.solve_poses(g, R, tol_Nm=1e-10)
+                if not np.all(sol.converged(1e-7)) and self.joint_friction_Nm > 0:
+                    sol = kin.solve_poses(g, R, tol_Nm=1e-10, tangent_step_rad=JOINT_TANGENT_STEP_RAD)
                 if not np.all(sol.converged(1e-7)):
                     bad = idx[~sol.converged(1e-7)]
                     raise NoEquilibrium(f"plant has no equilibrium for rows {bad.tolist()}", "diverged",
