@@ -39,8 +39,8 @@ from .optimise_symbols import (
     MARGIN_SCALE_N,
     MOMENT_SCALE_NM,
     STIFFNESS_SCALE_NM_PER_RAD,
-    pose_constraints,
     rotation_sym,
+    start_tensions,
 )
 from .sampling import OrientationSampling, tilt_torsion_rotations
 from .shaping_range import AXES, directional_stiffness_range
@@ -159,10 +159,7 @@ def initial_tensions(design: Any, u0: np.ndarray, q0: float, pq: np.ndarray, ang
     ndarray, shape (36 n_slots,)
         Scaled by t_max, slot by slot.
     """
-    A, B, rig, q, _ = (np.array(v) for v in design(u0, q0, pq))
-    n = angles.shape[0]
-    _, T0 = pose_constraints(1, False).map(n, "serial")(A, B, rig, q, angles.T, loads[:1].T, np.zeros((0, n)))
-    T = np.clip(np.array(T0), rig[1, 0], rig[2, 0]) / rig[2, 0]
+    T = start_tensions(design, u0, q0, pq, angles, loads[0])
     return np.tile(T, (2 * len(AXES), 1)).T.reshape(-1)
 
 

@@ -221,14 +221,38 @@ def initial_load_tensions(design: Any, u0: np.ndarray, q0: float, pq: np.ndarray
     ndarray
         ``T_jk / t_max``, slot by slot.
     """
-    n_l, n_o = loads.shape[0], angles.shape[0]
-    if n_l == 1:
+    if loads.shape[0] == 1:
         return np.zeros(0)
-    A, B, rig, q, _ = (np.array(v) for v in design(u0, q0, pq))
-    F = pose_constraints(n_l, False).map(n_o, "serial")
-    out = []
-    for k in range(1, n_l):
-        rows = np.repeat(loads[k:k + 1], n_l, axis=0)
-        _, T0 = F(A, B, rig, q, angles.T, rows.T, np.zeros((6 * (n_l - 1), n_o)))
-        out.append(np.clip(np.array(T0), rig[1, 0], rig[2, 0]) / rig[2, 0])
+    out = [start_tensions(design, u0, q0, pq, angles, load) for load in loads[1:]]
     return np.stack(out, axis=1).transpose(2, 1, 0).reshape(-1)
+
+
+def start_tensions(design: Any, u0: np.ndarray, q0: float, pq: np.ndarray, angles: np.ndarray,
+                   load: np.ndarray) -> np.ndarray:
+    """Least-squares tensions holding one load at each orientation at the start, clipped, scaled.
+
+    Parameters
+    ----------
+    design : casadi.Function
+        ``(u, q, pq) -> (A, B, rig, q, s_shape)`` of the optimisation problem.
+    u0 : ndarray
+        Scaled design variables.
+    q0 : float
+        Objective variable (scaled).
+    pq : ndarray
+        Held values.
+    angles : ndarray, shape (n_slots, 3)
+        Orientations at range scale 1.
+    load : ndarray, shape (3,)
+        The load (N m in {A}).
+
+    Returns
+    -------
+    ndarray, shape (6, n_slots)
+        The tensions clipped to ``[t_min, t_max]``, divided by ``t_max``.
+    """
+    A, B, rig, q, _ = (np.array(v) for v in design(u0, q0, pq))
+    n = angles.shape[0]
+    _, T0 = pose_constraints(1, False).map(n, "serial")(A, B, rig, q, angles.T,
+                                                        np.asarray(load, float).reshape(3, 1), np.zeros((0, n)))
+    return np.clip(np.array(T0), rig[1, 0], rig[2, 0]) / rig[2, 0]
