@@ -232,17 +232,6 @@ def test_joint_friction_agrees_between_the_plants(rig, cycle):
         assert so3.angle_between(R_m[i], R_q[i]) < 0.1 * size
 
 
-def test_former_names_are_the_renamed_classes():
-    """``testbed.MujocoPlant`` and ``testbed.Protocol`` still work (renamed: the control loop's
-    ``MujocoPlant`` and the identification ``measurement.Protocol`` are other things)."""
-    import csjm_opt.testbed as tb
-    from csjm_opt.control.plants import MujocoPlant as ControlPlant
-    from csjm_opt.measurement import Protocol as IdentificationProtocol
-
-    assert tb.MujocoPlant is tb.MujocoTestbedPlant and tb.Protocol is tb.LogProtocol
-    assert tb.MujocoTestbedPlant is not ControlPlant and tb.LogProtocol is not IdentificationProtocol
-
-
 def test_remaining_travel_is_the_distance_left_to_the_equilibrium(rig, cycle):
     """Overdamped approach: ``|K^-1 c v|`` is the distance still to go (toolkit statics), up to the inertia term."""
     import mujoco

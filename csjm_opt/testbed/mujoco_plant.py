@@ -40,8 +40,7 @@ Not to be confused with :class:`csjm_opt.control.plants.MujocoPlant`: that one i
 *closed loop's* plant, the nominal rig stepped in real time under a controller's commands
 (inertia, winch rate limits, no injected effects, no settling). This one *settles* every
 row of a log statically, with effects injected, to make diagnosis logs; both build their
-engine model with :func:`csjm_opt.model.mjcf.rig_to_mjcf`. (``MujocoPlant`` is this class's
-former name, kept as an alias.)
+engine model with :func:`csjm_opt.model.mjcf.rig_to_mjcf`.
 """
 
 from __future__ import annotations
@@ -260,10 +259,6 @@ class MujocoTestbedPlant:
                 slip += np.maximum(row.tensions_N - p.drum_slip_threshold_N, 0.0) * p.drum_slip_compliance_m_per_N
         return rows
 
-
-#: The class's former name (kept for existing code). Not :class:`csjm_opt.control.plants.MujocoPlant`,
-#: the closed loop's time-stepped plant (see the module doc).
-MujocoPlant = MujocoTestbedPlant
 
 
 def as_mujoco(plant: Plant, **options) -> MujocoTestbedPlant:

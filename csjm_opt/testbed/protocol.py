@@ -30,8 +30,6 @@ Two protocol formats exist, and :func:`read_protocol` reads both:
   ``load_kg`` at points of the tool, whose moment follows the pose, and the planned pose;
 * :class:`csjm_opt.measurement.protocol.Protocol` (``csjm plan-experiment`` writes it, for
   identification): a force ``load_N`` of fixed direction ``dir_*`` in {B} at a platform point.
-
-``Protocol`` in this module is :class:`LogProtocol`'s former name, kept as an alias.
 """
 
 from __future__ import annotations
@@ -96,10 +94,6 @@ class LogProtocol:
     def __len__(self) -> int:
         return len(self.cycle)
 
-
-#: The class's former name (kept for existing code); not :class:`csjm_opt.measurement.protocol.Protocol`
-#: (see the module doc).
-Protocol = LogProtocol
 
 
 def read_protocol(path_or_text: str | Path, source: str | None = None) -> LogProtocol | LoadProtocol:
