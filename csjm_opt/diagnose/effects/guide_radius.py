@@ -35,7 +35,7 @@ from .base import Effect
 
 #: Plausible guide radius (m): an eyelet or a hole's rounded edge on a rig of this size.
 RANGE_M = 1e-2
-#: Where the fit starts (m): inside the range (see :meth:`GuideRadius.x0`).
+#: A start of the fit inside the range (m; see :meth:`GuideRadius.extra_starts`).
 START_M = 1e-3
 #: Largest radius the optimiser may try (m).
 BOUND_M = 5e-2
@@ -149,19 +149,20 @@ class GuideRadius(Effect):
         """
         return np.array([BOUND_M])
 
-    def x0(self):
-        """Start the fit at ``START_M``, inside the range, not on the bound ``r = 0``.
+    def extra_starts(self):
+        """A further start inside the range, at ``START_M``.
 
         The optimiser (``least_squares``, trust region) sizes its first step by the start's own
-        size; from a start on the bound (the nominal model) every step was about 1e-10 of the
-        scale and it stopped there (``ftol``), leaving a 2.7 mm eyelet at ``r = 0``.
+        size; from the nominal start alone (``r = 0``, on the bound, moved inside by about 1e-10)
+        its steps stayed that small and it stopped there (``ftol``), leaving a 2.7 mm eyelet at
+        ``r = 0``. The nominal start stays (it costs two evaluations when it stops at once).
 
         Returns
         -------
-        numpy.ndarray
-            ``[START_M]`` (m).
+        list of numpy.ndarray
+            ``[[START_M]]`` (m).
         """
-        return np.array([START_M])
+        return [np.array([START_M])]
 
     def default_ranges(self):
         """Up to 10 mm: an eyelet or the rounded edge of a guide hole on a rig of this size."""
