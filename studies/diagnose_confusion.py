@@ -300,7 +300,7 @@ def summarise(records: list[dict]) -> str:
     lines += [f"| eyelet radius (now in the vocabulary as `guide_radius`): named `guide_radius` | - | "
               f"{_rate(modelled, lambda r: r['selected'] == 'guide_radius')} |",
               f"| eyelet radius: another name without a warning | never | "
-              f"{_rate(modelled, lambda r: r['selected'] not in NOT_NAMED + ('guide_radius',) and not r['warnings'])} |"]
+              f"{_rate(modelled, lambda r: r['selected'] not in (*NOT_NAMED, 'guide_radius') and not r['warnings'])} |"]
     # a warning that the named model is implausible, or may stand in for an effect outside the vocabulary
     # (the residual-structure warning and the flexibility warning both say so)
     honest = lambda r: r["selected"] == "unexplained" or any(  # noqa: E731
