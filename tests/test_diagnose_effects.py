@@ -30,7 +30,8 @@ def test_vocabulary():
     from csjm_opt.diagnose import VOCABULARY
 
     assert VOCABULARY == ("none", "hole_offsets", "friction", "cable_hardening", "link_compliance",
-                          "sensor_bias", "mass_com", "tracker_registration", "stiffness_scale", "unexplained")
+                          "sensor_bias", "mass_com", "tracker_registration", "stiffness_scale", "guide_radius",
+                          "unexplained")
 
 
 def test_nominal_residuals_vanish_on_noise_free_nominal_data(clean_table):

@@ -8,6 +8,7 @@ from ...errors import InvalidInput
 from .base import Effect
 from .cable_hardening import CableHardening
 from .friction import Friction
+from .guide_radius import GuideRadius, guide_axis
 from .hole_offsets import HoleOffsets
 from .link_compliance import LinkCompliance
 from .mass_com import MassCom
@@ -25,6 +26,7 @@ EFFECTS: dict[str, type[Effect]] = {
     "mass_com": MassCom,
     "tracker_registration": TrackerRegistration,
     "stiffness_scale": StiffnessScale,
+    "guide_radius": GuideRadius,
 }
 
 
@@ -37,7 +39,8 @@ def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] |
     name : str
         One of :data:`EFFECTS`.
     rig : Rig, optional
-        Supplies the nominal mass (``mass_com``) and gravity (``tracker_registration``).
+        Supplies the nominal mass (``mass_com``), gravity (``tracker_registration``) and base plane
+        (``guide_radius``).
     ranges : mapping, optional
         Prior-range overrides, parameter name or fnmatch pattern -> ``(lo, hi)``.
     **options
@@ -60,6 +63,8 @@ def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] |
         effect = MassCom(rig.platform_mass_kg)
     elif cls is TrackerRegistration and rig is not None:
         effect = TrackerRegistration(rig.gravity_B_m_per_s2)
+    elif cls is GuideRadius and rig is not None:
+        effect = GuideRadius(guide_axis(rig.base_holes_B_m))
     elif cls is Friction:
         effect = Friction(t_max_N=rig.t_max_N if rig is not None else 100.0, **options)
     else:
@@ -67,5 +72,5 @@ def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] |
     return effect.with_ranges(ranges)
 
 
-__all__ = ["EFFECTS", "CableHardening", "Effect", "Friction", "HoleOffsets", "LinkCompliance",
+__all__ = ["EFFECTS", "CableHardening", "Effect", "Friction", "GuideRadius", "HoleOffsets", "LinkCompliance",
            "MassCom", "SensorBias", "StiffnessScale", "TrackerRegistration", "make_effect"]
