@@ -86,10 +86,10 @@ def block_z(fit, terms: dict, effect_index: int) -> dict:
 
 def probe(job: dict) -> dict:
     """The probe record of one log (see module doc)."""
-    import csjm_opt.diagnose._decision as dec
     from diagnose_confusion import _simulate, build_plant, job_seed
     from diagnose_identifiability import expected_log_evidence
 
+    import csjm_opt.diagnose._decision as dec
     from csjm_opt.diagnose import diagnose, make_effect
     from csjm_opt.diagnose.augmented import AugmentedModel
     from csjm_opt.diagnose.residuals import compute_residuals
