@@ -92,6 +92,7 @@ def probe(job: dict) -> dict:
     import csjm_opt.diagnose._decision as dec
     from csjm_opt.diagnose import diagnose, make_effect
     from csjm_opt.diagnose.augmented import AugmentedModel
+    from csjm_opt.diagnose.evidence import log_evidence
     from csjm_opt.diagnose.residuals import compute_residuals
     from csjm_opt.diagnose.scoring import fit_on_path
     from csjm_opt.measurement.instruments import InstrumentNoise
@@ -118,12 +119,17 @@ def probe(job: dict) -> dict:
            "sigma": float(s), "warnings": v["warnings"], "rivals": []}
     tv = evidence_terms(final.fit, s)
     clean = None
-    for riv in v.get("unsettled_rivals", []):
+    # every pair that adds one effect to the verdict and leads it by the linearised evidence (the rule before)
+    named = [e.name for e in final.fit.model.effects]
+    ev_v = log_evidence(final.fit, s)
+    cands = []
+    for key, sc in d.pair_scores.items():
+        if set(named) < set(key) and log_evidence(sc.fit, s) > ev_v:
+            cands.append({"model": "+".join(key), "adds": sorted(set(key) - set(named)),
+                          "nats": log_evidence(sc.fit, s) - ev_v})
+    for riv in cands:
         key = tuple(riv["model"].split("+"))
-        sc = d.pair_scores.get(key) or d.pair_scores.get(key[::-1])
-        if sc is None or not riv["adds"]:
-            out["rivals"].append({"model": riv["model"], "adds": riv["adds"], "nats": riv["nats"]})
-            continue
+        sc = d.pair_scores[key]
         names = [e.name for e in sc.fit.model.effects]
         xi = names.index(riv["adds"][0])
         tp = evidence_terms(sc.fit, s)
