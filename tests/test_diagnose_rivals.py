@@ -111,3 +111,63 @@ def test_heldout_better_rivals_hold_the_bonferroni_level():
     got = unsettled_rivals(better, "A")
     assert [r["model"] for r in got] == ["B"] and got[0]["heldout_better"]
     assert "yardsticks disagree" in rival_warning("A", got[0])
+
+
+def test_evidence_leads_are_taken_at_the_fitted_parameters():
+    """A rival whose lead exists only at its linearised mode (the fit reached a worse misfit) is not listed; one
+    whose fit realises the lead is, with both leads reported; entries without the fitted evidence fall back."""
+    one = np.ones(N_CYCLES)
+    rng = np.random.default_rng(7)
+    same = np.exp(rng.normal(0.0, 0.1, N_CYCLES))
+
+    def m(lin, fitted, mse):
+        return {**_model(lin, mse), "log_evidence_at_fit": fitted}
+
+    models = {"A": m(0.0, -0.5, one),
+              "A+B": m(10.0, -5.0, same),        # linearised +10 nats, as fitted -4.5: not more probable
+              "A+C": m(-1.0, 2.0, same)}         # linearised -1, as fitted +2.5: more probable
+    got = unsettled_rivals(models, "A")
+    assert [r["model"] for r in got] == ["A+C"]
+    assert abs(got[0]["nats"] - 2.5) < 1e-12 and abs(got[0]["nats_linearised"] + 1.0) < 1e-12
+    assert "2.5 nats more evidence" in rival_warning("A", got[0])
+    # without the fitted evidence the linearised one decides (records made before it was kept)
+    plain = {k: {kk: vv for kk, vv in v.items() if kk != "log_evidence_at_fit"} for k, v in models.items()}
+    assert [r["model"] for r in unsettled_rivals(plain, "A")] == ["A+B"]
+
+
+def test_scored_models_gives_the_evidence_at_the_fit_from_the_context_noise_scale(rig):
+    """``log_evidence_at_fit`` is the evidence module's, at the ``sigma`` of the context whose ``evidence`` is
+    passed (or the explicit noise scale), and never above the linearised evidence."""
+    from csjm_opt.diagnose.augmented import AugmentedModel
+    from csjm_opt.diagnose.effects import make_effect
+    from csjm_opt.diagnose.evidence import log_evidence
+    from csjm_opt.diagnose.fit import fit_model
+    from csjm_opt.diagnose.residuals import compute_residuals
+    from csjm_opt.diagnose.rivals import scored_models
+    from csjm_opt.testbed import simulate_experiment
+
+    t = compute_residuals(rig, simulate_experiment(rig, 2, np.random.default_rng(4), effect="sensor_bias",
+                                                   severity=2.0, steps=2))
+    fit = fit_model(AugmentedModel(rig, [make_effect("sensor_bias", rig)]), t)
+
+    class Score:
+        def __init__(self, f):
+            self.fit = f
+
+        def cycle_mse(self):
+            return {0: 1.0, 1: 1.0}
+
+    class Ctx:
+        sigma = 1.7
+
+        def evidence(self, sc):
+            return log_evidence(sc.fit, self.sigma)
+
+    tests = {"sensor_bias": {"plausible": True, "closes_gap": True}}
+    got = scored_models(Ctx().evidence, {"sensor_bias": Score(fit)}, tests, [], {})["sensor_bias"]
+    assert got["log_evidence_at_fit"] == log_evidence(fit, 1.7, at_fit=True)
+    assert got["log_evidence_at_fit"] <= got["log_evidence"] + 1e-9
+    explicit = scored_models(lambda sc: 0.0, {"sensor_bias": Score(fit)}, tests, [], {}, noise_scale=0.9)
+    assert explicit["sensor_bias"]["log_evidence_at_fit"] == log_evidence(fit, 0.9, at_fit=True)
+    assert scored_models(lambda sc: 0.0, {"sensor_bias": Score(fit)}, tests, [], {})["sensor_bias"][
+        "log_evidence_at_fit"] is None
