@@ -171,3 +171,24 @@ def test_scored_models_gives_the_evidence_at_the_fit_from_the_context_noise_scal
     assert explicit["sensor_bias"]["log_evidence_at_fit"] == log_evidence(fit, 0.9, at_fit=True)
     assert scored_models(lambda sc: 0.0, {"sensor_bias": Score(fit)}, tests, [], {})["sensor_bias"][
         "log_evidence_at_fit"] is None
+
+
+def test_held_out_ties_to_round_off_are_not_improvements():
+    """A rival whose added effect fitted to zero predicts every cycle to round-off of the verdict:
+    no evidence either way (p = 1), where a shared 1e-15 'improvement' once gave p = 0. A real
+    improvement shared by every cycle stays significant, and noisy differences get scipy's t-test."""
+    from csjm_opt.diagnose.rivals import _Cycles
+    from csjm_opt.diagnose.scoring import paired_heldout_test
+
+    rng = np.random.default_rng(3)
+    mse = rng.uniform(1e-6, 4e-6, 12)
+    same = _Cycles(mse * (1.0 - 1e-14))
+    assert paired_heldout_test(_Cycles(mse), same) == 1.0
+    assert unsettled_rivals({"a": {"log_evidence": 0.0, "plausible": True, "closes_gap": True, "cycle_mse": list(mse)},
+                             "a+b": {"log_evidence": -3.0, "plausible": True, "closes_gap": True,
+                                     "cycle_mse": list(mse * (1.0 - 1e-14))}}, "a") == []
+    assert paired_heldout_test(_Cycles(mse), _Cycles(0.9 * mse)) == 0.0
+    other = mse * np.exp(rng.normal(0.05, 0.1, 12))
+    d = np.log(other / mse)
+    assert np.isclose(paired_heldout_test(_Cycles(other), _Cycles(mse)),
+                      stats.ttest_1samp(d, 0.0, alternative="greater").pvalue)

@@ -25,6 +25,9 @@ from .fit import FitResult, data_jacobian, fit_model, objective
 from .friction_path import on_predicted_path
 from .residuals import ResidualTable, pose_noise_cov, pose_residuals, rms
 
+#: Held-out MSE ratios within this of 1 (as a log) are ties: below the precision of the fits.
+TIE_LOG_RATIO = 1e-6
+
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class CandidateScore:
@@ -223,12 +226,16 @@ def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
     """One-sided p-value that ``b``'s per-cycle held-out MSE is lower than ``a``'s.
 
     Paired t-test over cycles of ``log(MSE_a / MSE_b)``: cycles with large loads have large
-    errors under both models, and the log ratio keeps them from drowning the rest.
+    errors under both models, and the log ratio keeps them from drowning the rest. Ratios within
+    ``TIE_LOG_RATIO`` of 1 are ties (the fits' own precision: a model whose added effect fitted to
+    zero predicts the same cycles to round-off), so identical predictions give ``p = 1``, not a
+    "significant" improvement of 1e-15 that every cycle shares.
     """
     ma, mb = a.cycle_mse(), b.cycle_mse()
     tiny = 1e-30
     d = np.array([np.log((ma[c] + tiny) / (mb[c] + tiny)) for c in ma])
-    if len(d) < 2 or np.allclose(d, d[0]):
+    d[np.abs(d) < TIE_LOG_RATIO] = 0.0
+    if len(d) < 2 or np.allclose(d, d[0], rtol=0.0, atol=TIE_LOG_RATIO):
         return 0.0 if d.mean() > 0 else 1.0
     return float(stats.ttest_1samp(d, 0.0, alternative="greater").pvalue)
 

@@ -264,7 +264,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
             f"(evidence within {LEAD_NATS:g} nats, Fisher block correlation above the separability limit)")
     # every other model the log does not rule out is named (rivals.py); those warned about above are not repeated
     verdict["unsettled_rivals"] = [] if selected in ("none", "unexplained") else unsettled_rivals(
-        scored_models(ctx.evidence, singles, tests, pairs, pair_scores), final.name,
+        scored_models(ctx.evidence, singles, tests, pairs, pair_scores, noise_scale=ctx.sigma), final.name,
         [*verdict["more_probable_rivals"], *alternatives,
          *(f"{selected}+{c}" for c in verdict["secondary_alternatives"])])
     verdict["warnings"] += [rival_warning(final.name, r) for r in verdict["unsettled_rivals"]]
