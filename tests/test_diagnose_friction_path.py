@@ -45,3 +45,27 @@ def test_path_independent_models_are_left_alone(rig):
     table = compute_residuals(rig, _log(rig, InstrumentNoise.none()))
     model = AugmentedModel(rig, [make_effect("sensor_bias", rig)])
     assert on_predicted_path(model, table, model.x0()) is table
+
+
+def test_path_steps_are_the_cables_own_lengths_between_the_models_holes(rig):
+    """With hole offsets in the model, the friction state is driven by each cable's length between its
+    *offset* holes (written out here: |R (a_i + da_i) - (b_i + db_i)|), not between the nominal ones."""
+    from csjm_opt.diagnose.augmented import with_entry
+    from csjm_opt.diagnose.friction_ramp import predict_ramp
+
+    table = compute_residuals(rig, _log(rig, InstrumentNoise.none()))
+    model = AugmentedModel(rig, [make_effect("hole_offsets", rig), make_effect("friction", rig, law="coulomb")])
+    theta = model.x0()
+    offsets = np.random.default_rng(3).normal(0.0, 2e-3, 36)          # 2 mm holes offsets
+    theta[1:37] = offsets
+    theta[37:43] = 0.5                                                   # 0.5 N of friction on each cable
+    path = on_predicted_path(model, table, theta)
+    sol, _ = predict_ramp(model, with_entry(model, table.rows, table.R_meas, theta), theta, table.R_meas)
+    a = np.asarray(rig.platform_holes_A_m) + offsets[:18].reshape(6, 3)
+    b = np.asarray(rig.base_holes_B_m) + offsets[18:].reshape(6, 3)
+    lengths = np.linalg.norm(np.einsum("nij,kj->nki", sol.R, a) - b[None], axis=2)
+    assert np.all(sol.converged(1e-6))
+    np.testing.assert_allclose(path.rows.log_steps_m[1:], np.diff(lengths, axis=0), atol=1e-12)
+    nominal = np.linalg.norm(np.einsum("nij,kj->nki", sol.R, np.asarray(rig.platform_holes_A_m))
+                             - np.asarray(rig.base_holes_B_m)[None], axis=2)
+    assert np.abs(np.diff(nominal, axis=0) - path.rows.log_steps_m[1:]).max() > 5e-6   # the offsets matter

@@ -23,7 +23,6 @@ import dataclasses
 
 import numpy as np
 
-from ..model import kinematics as kin
 from .augmented import AugmentedModel, Rows, cable_steps, log_steps, with_entry
 from .friction_ramp import predict_ramp
 from .residuals import ResidualTable
@@ -45,17 +44,21 @@ def on_predicted_path(model: AugmentedModel, table: ResidualTable, theta: np.nda
     -------
     ResidualTable
         The same table whose ``rows`` carry the cable length changes (since the previous row of the
-        log and of the cycle) along the predicted poses, and the shape of the predicted ramp into
-        each row (``ramp_shape_m``); rows whose prediction did not converge keep their measured steps.
+        log and of the cycle) along the predicted poses (each cable's length between its holes as the
+        model places them, at the cable platform's pose: not the measured body's), and the shape of
+        the predicted ramp into each row (``ramp_shape_m``); rows whose prediction did not converge
+        keep their measured steps.
     """
     if not model.path_dependent:
         return table
     sol, shape = predict_ramp(model, with_entry(model, table.rows, table.R_meas, theta), theta, table.R_meas)
     ok = np.all(np.isfinite(sol.R.reshape(len(table), -1)), axis=1) & sol.converged(1e-6)
     R = np.where(ok[:, None, None], sol.R, table.R_meas)
-    A = np.asarray(model.rig.platform_holes_A_m, float)
-    B = np.asarray(model.rig.base_holes_B_m, float)
-    lengths, _ = kin.cable_terms(R, A, B)
+    # the cables' own lengths: at the cable platform's pose and the model's hole geometry (a link's twist,
+    # a tracker registration and hole offsets all stand between the measured body and the cables)
+    _, ev = model.evaluate(R, table.rows, theta)
+    lengths = ev.lengths_m
+    assert lengths is not None                           # set by every evaluation
     rows = dataclasses.replace(table.rows, log_steps_m=log_steps(lengths),
                                cable_steps_m=cable_steps(table.cycle, lengths), ramp_shape_m=shape)
     return dataclasses.replace(table, rows=rows)
