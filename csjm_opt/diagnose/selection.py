@@ -63,6 +63,7 @@ from threadpoolctl import threadpool_limits
 from ..errors import SolverError
 from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
+from ..measurement.rig_fit import check_log_rig
 from ..model.rig import Rig
 from ._decision import (  # noqa: F401 (ALPHA and the thresholds are re-exported)
     ALPHA,
@@ -94,7 +95,8 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
              effects: Sequence[str] | None = None, noise: InstrumentNoise | None = None,
              progress: Callable | None = None, secondary: bool = True,
              ranges: Mapping[str, tuple[float, float]] | None = None,
-             extra: MeasurementLog | None = None, workers: int | None = None) -> Diagnosis:
+             extra: MeasurementLog | None = None, workers: int | None = None,
+             check_rig: bool = True) -> Diagnosis:
     """Residuals, noise floor, every candidate and pair scored, the verdict, localisation.
 
     Parameters
@@ -122,6 +124,9 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
         Worker processes for the candidates' and pairs' fits (default: ``CSJM_WORKERS``, else the cores
         this process may use, :func:`csjm_opt.diagnose.pool.default_workers`; 1: serial). The result does
         not depend on it.
+    check_rig : bool, optional
+        Refuse a log (``log``, ``test``, ``extra``) that ``rig`` cannot have produced
+        (:func:`csjm_opt.measurement.rig_fit.check_log_rig`).
 
     Returns
     -------
@@ -131,7 +136,9 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     ------
     InvalidInput
         Fewer than two cycles and no test log, an unknown effect name, a malformed log, or an
-        ``extra`` log that does not belong to this rig, or ``workers`` below 1.
+        ``extra`` log that does not belong to this rig, or ``workers`` below 1; a
+        :class:`~csjm_opt.errors.LogRigMismatch` when a log's first rows are out of equilibrium with
+        the rig's cables (``check_rig``).
     SolverError
         The nominal model cannot be evaluated on the log (singular tangents: slack cables).
 
@@ -142,6 +149,10 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     processes (:mod:`csjm_opt.diagnose.pool`), each exactly as the serial loop would.
     """
     workers = resolve_workers(workers)
+    if check_rig:
+        for what, one in (("log", log), ("test log", test), ("extra log", extra)):
+            if one is not None:
+                check_log_rig(rig, one, what=one.source or what)
     with threadpool_limits(1), np.errstate(all="ignore"):   # trial steps may overflow; fits guard themselves
         if extra is not None:
             log = append_log(rig, log, extra)
