@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ._atomic_write import _file_mode
+
 
 def figure():
     """``matplotlib.pyplot`` (imported on first use; the backend is the caller's choice)."""
@@ -47,6 +49,7 @@ def save(fig, path: str | Path) -> Path:
     try:
         constrained = isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine)
         fig.savefig(tmp, dpi=120, bbox_inches=None if constrained else "tight")
+        os.chmod(tmp, _file_mode())                # mkstemp's 0600 would make the figure private
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
