@@ -1,6 +1,6 @@
 """The front in the sweep's own metrics by optimisation, against the sweep of the same space, in the same run.
 
-The optimiser: ``sweep_front`` (``csjm optimise studies/paper_sweep.toml --sweep-front
+The optimiser: ``sweep_front`` (``csjm optimise studies/paper_sweep/paper_sweep.toml --sweep-front
 --max-evaluations 22``, a tenth of the sweep): smooth twins of the workspace
 fraction and the minimum stiffness on the sweep's 1,000 sample orientations,
 trust-region steps on their exact quadratic models, every design scored by the
@@ -30,7 +30,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 #: A tenth of the sweep's 225 designs.
 BUDGET = 22
-sys.path.insert(0, str(HERE.parent / "studies"))
+sys.path.insert(0, str(HERE.parent))        # the repository root, for studies.optimise_paper
 
 from csjm_opt.design import optimise_problem  # noqa: E402
 from csjm_opt.design.optimisation import optimise  # noqa: E402
@@ -50,9 +50,9 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=1, help="processes of the sweep")
     parser.add_argument("--range-front", action="store_true", help="also time optimise() (range x stiffness)")
     args = parser.parse_args()
-    from optimise_paper import hypervolume
+    from studies.optimise_paper.optimise_paper import hypervolume
 
-    spec, settings = read_optimise_file(HERE.parent / "studies" / "paper_sweep.toml")
+    spec, settings = read_optimise_file(HERE.parent / "studies" / "paper_sweep" / "paper_sweep.toml")
     t_front, t_sweep, t_range, evals, hv_f, hv_s, runs = [], [], [], [], [], [], []
     for _ in range(args.repeats):
         t0 = time.perf_counter()

@@ -108,7 +108,7 @@ def test_bad_toml_file(tmp_path):
 
 
 def test_shipped_paper_sweep_parses_and_contains_the_papers_circles():
-    spec = SweepSpec.from_toml(REPO / "studies" / "paper_sweep.toml")
+    spec = SweepSpec.from_toml(REPO / "studies" / "paper_sweep" / "paper_sweep.toml")
     assert len(spec.designs()) >= 50
     assert spec.settings.base["platform_radius_m"] == pytest.approx(0.05795, abs=1e-5)
 
@@ -200,7 +200,7 @@ def test_unreachable_scheduler_is_a_clear_error(tmp_path):
 def test_study_script_makes_figures_and_places_the_paper(tmp_path):
     import importlib.util
 
-    spec = importlib.util.spec_from_file_location("paper_sweep_study", REPO / "studies" / "paper_sweep.py")
+    spec = importlib.util.spec_from_file_location("paper_sweep_study", REPO / "studies" / "paper_sweep" / "paper_sweep.py")
     study = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(study)
     toml = tmp_path / "s.toml"

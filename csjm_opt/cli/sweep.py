@@ -26,7 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     """
     p = sub.add_parser(
         "sweep", help=command_help("sweep"),
-        description="Evaluate every design of a sweep description (TOML; see studies/paper_sweep.toml "
+        description="Evaluate every design of a sweep description (TOML; see studies/paper_sweep/paper_sweep.toml "
         "and docs/guide/design.md): wrench-feasible workspace, stiffness, tension and wrench margins, "
         "shaping range. Results are appended to RESULTS (JSON Lines) as designs finish; "
         "running again with the same RESULTS resumes, skipping finished designs.")
