@@ -1,9 +1,9 @@
 """Every validation log checked against its own rig and against every other rig.
 
-Usage: python -m studies.log_rig_check.log_rig_check [VALIDATION_DIR] [-o OUT.md]
+Usage: python -m studies.log_rig_check.log_rig_check VALIDATION_DIR [-o OUT.md]
 
-Runs :func:`csjm_opt.measurement.rig_fit.log_rig_fit` on each log of
-``../shared/validation`` (three folders, 94 logs) with each of the six rig files and the
+Runs :func:`csjm_opt.measurement.rig_fit.log_rig_fit` on each log of the validation set made
+outside the project (three folders, 94 logs) with each of the six rig files and the
 paper rig, and writes a table: the median per-cable tension error (N) and whether the
 check accepts. The own rig must accept every log.
 """
@@ -23,7 +23,7 @@ from csjm_opt.model.rig import Rig, paper_rig
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("validation", nargs="?", default="../shared/validation")
+    ap.add_argument("validation", help="the validation set's folder (oracle_hard/, mujoco_a/, mujoco_b/)")
     ap.add_argument("-o", "--out", default=None, help="markdown table to write (default: stdout)")
     a = ap.parse_args(argv)
     rigs = {os.path.relpath(f, a.validation): Rig.from_toml(f)
