@@ -15,8 +15,8 @@ from ..measurement.logfile import MeasurementLog
 from ..model.rig import load_rig
 from ..testbed.injection import inject, make_plant
 from ..testbed.mujoco_plant import PLANTS
-from ..testbed.plant import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, Plant
-from ..testbed.protocol import read_protocol, simulate_protocol
+from ..testbed.plant import DEPRECATED_NAMES, EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, Plant
+from ..testbed.protocol import LogProtocol, read_protocol, simulate_protocol
 from ._options import check_outputs, int_in
 from .commands import command_help
 
@@ -52,6 +52,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "starts from the state where it settled")
     p.add_argument("-o", "--output", required=True, metavar="LOG.csv", help="measured log to write")
     p.add_argument("--json", metavar="PATH", help="write a summary (with the injected truth) as JSON ('-' = stdout)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.set_defaults(func=run)
 
 
@@ -77,6 +78,10 @@ def parse_effects(items: list[str]) -> list[tuple[str, float]]:
         name = name.strip()
         if name == "none":
             continue
+        if name in DEPRECATED_NAMES:
+            print(f"csjm simulate: warning: --effect {name} is now called {DEPRECATED_NAMES[name]}; the old name "
+                  "will go", file=sys.stderr)
+            name = DEPRECATED_NAMES[name]
         if name not in KNOWN:
             raise InvalidInput(f"--effect: unknown effect {name!r}; expected one of {', '.join(KNOWN)}", "--effect")
         try:
@@ -89,12 +94,18 @@ def parse_effects(items: list[str]) -> list[tuple[str, float]]:
     return out
 
 
-def truth(plant) -> dict:
+def truth(plant, rig=None) -> dict:
     """The injected parameters of a plant that differ from the nominal one (JSON-ready).
+
+    Effects that change the rig itself (``hole_offsets``, ``mass_com``, ``stiffness_scale``) are
+    reported against ``rig``, the nominal rig: the true holes and their offsets (m), mass (kg) and
+    centre of mass (m, in {A}), and the cable stiffness (N/m) with its factor.
 
     Parameters
     ----------
-    plant : Plant or MujocoPlant
+    plant : Plant or MujocoTestbedPlant
+    rig : Rig, optional
+        The nominal rig (default: the plant's own rig, so no rig differences).
 
     Returns
     -------
@@ -102,13 +113,30 @@ def truth(plant) -> dict:
     """
     p: Plant = plant if isinstance(plant, Plant) else plant.plant
     nominal = Plant.nominal(p.rig)
-    out = {}
+    out: dict = {}
     for name in ("hardening_per_m", "friction_mu_beta", "friction_coulomb_N", "joint_friction_Nm",
-                 "link_compliance_rad_per_Nm", "sensor_bias_A_Nm", "tracker_rotation_B", "eyelet_radius_m",
+                 "link_compliance_rad_per_Nm", "sensor_bias_A_Nm", "tracker_rotation_B", "guide_radius_m",
                  "sensor_drift_A_Nm_per_row", "drum_slip_compliance_m_per_N"):
+        if not hasattr(p, name):
+            continue
         v, v0 = np.asarray(getattr(p, name), float), np.asarray(getattr(nominal, name), float)
         if v.shape != v0.shape or not np.allclose(v, v0, rtol=0, atol=0):
             out[name] = v.tolist()
+    if rig is not None:
+        true, nom = p.rig, rig
+        dA = np.asarray(true.platform_holes_A_m) - np.asarray(nom.platform_holes_A_m)
+        dB = np.asarray(true.base_holes_B_m) - np.asarray(nom.base_holes_B_m)
+        if np.any(dA != 0) or np.any(dB != 0):
+            out["hole_offsets"] = {"platform_holes_A_m": np.asarray(true.platform_holes_A_m).tolist(),
+                                   "base_holes_B_m": np.asarray(true.base_holes_B_m).tolist(),
+                                   "dA_m": dA.tolist(), "dB_m": dB.tolist()}
+        if true.platform_mass_kg != nom.platform_mass_kg or np.any(np.asarray(true.com_A_m) != np.asarray(nom.com_A_m)):
+            out["mass_com"] = {"mass_kg": true.platform_mass_kg, "com_A_m": np.asarray(true.com_A_m).tolist(),
+                               "mass_ratio": true.platform_mass_kg / nom.platform_mass_kg,
+                               "com_shift_A_m": (np.asarray(true.com_A_m) - np.asarray(nom.com_A_m)).tolist()}
+        k, k0 = np.asarray(true.cable_stiffness_N_per_m), np.asarray(nom.cable_stiffness_N_per_m)
+        if np.any(k != k0):
+            out["stiffness_scale"] = {"cable_stiffness_N_per_m": k.tolist(), "factor": (k / k0).tolist()}
     return out
 
 
@@ -144,15 +172,18 @@ def run(args: argparse.Namespace) -> int:
     after = MeasurementLog.from_csv(args.after) if args.after else None
     from tqdm import tqdm
 
-    with tqdm(total=len(proto) + (len(after) if after is not None else 0), file=sys.stderr, unit="row",
-              desc=f"simulate ({args.plant})", disable=None) as bar:
+    # an identification protocol settles its dead weights in a few passes over the rows: no known total
+    total = len(proto) + (len(after) if after is not None else 0) if isinstance(proto, LogProtocol) else None
+    with tqdm(total=total, file=sys.stderr, unit="row",
+              desc=f"simulate ({args.plant})", disable=args.no_progress,
+              mininterval=0.5 if sys.stderr.isatty() else 5.0) as bar:
         log = simulate_protocol(rig, proto, plant, rng=rng, noise=noise, persistent=not args.relaxed, after=after,
                                 progress=bar.update)
     seconds = time.perf_counter() - t0
     path = atomic_write_text(args.output, log.to_text())
     summary = {"output": str(path), "protocol": str(args.protocol), "rows": len(log), "cycles": len(log.cycle_ids),
                "plant": args.plant, "persistent": not args.relaxed, "noise": args.noise, "seed": args.seed,
-               "effects": [{"name": n, "severity": s} for n, s in effects], "truth": truth(plant),
+               "effects": [{"name": n, "severity": s} for n, s in effects], "truth": truth(plant, rig),
                "seconds": seconds}
     if args.json:
         atomic_write_json(args.json, summary)

@@ -37,7 +37,9 @@ the noise instead (a better instrument), not the plausibility of the effect.
 Outside the diagnosis's vocabulary (:data:`~csjm_opt.testbed.plant.OUTSIDE_NAMES`):
 
 ================  ===========================================================
-eyelet_radius     guide eyelets of radius 3 mm * severity
+guide_radius      guide eyelets of radius 3 mm * severity (``eyelet_radius``: the
+                  old name, deprecated); the diagnosis has modelled it since the
+                  eyelet round, the testbed keeps it among these
 sensor_drift      F/T offset drifting by 0.5 mN m per row * severity, random
                   direction (0.1 N m over a 200-row log)
 drum_slip         cables slip on their drums above 55 % of the tension range,
@@ -50,6 +52,7 @@ joint_friction    Coulomb friction at the ball joint, 0.03 N m * severity per
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from collections.abc import Iterable
 from typing import Any
 
@@ -58,7 +61,7 @@ import numpy as np
 from .. import so3
 from ..errors import InvalidInput
 from ..model.rig import Rig
-from .plant import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, Plant
+from .plant import DEPRECATED_NAMES, EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, Plant
 
 #: Largest severity whose injected magnitudes stay within the diagnosis's default priors (see above).
 PLAUSIBLE_SEVERITY = {"hole_offsets": 1.2, "friction": 7.0, "cable_hardening": 15.0, "link_compliance": 8.0,
@@ -93,6 +96,10 @@ def inject(plant, effect: str, severity: float, rng: np.random.Generator):
     InvalidInput
         Unknown effect name (or one the MuJoCo plant cannot realise).
     """
+    if effect in DEPRECATED_NAMES:
+        warnings.warn(f"the effect {effect!r} is now called {DEPRECATED_NAMES[effect]!r}; the old name will go",
+                      DeprecationWarning, stacklevel=2)
+        effect = DEPRECATED_NAMES[effect]
     if not isinstance(plant, Plant):            # a MujocoTestbedPlant: inject into its description
         return dataclasses.replace(plant, plant=inject(plant.plant, effect, severity, rng))
     s = float(severity)
@@ -123,8 +130,8 @@ def inject(plant, effect: str, severity: float, rng: np.random.Generator):
         changes = {"rig": rig.replace(cable_stiffness_N_per_m=factor * np.asarray(rig.cable_stiffness_N_per_m))}
     elif effect == "joint_friction":
         changes = {"joint_friction_Nm": 0.03 * s}
-    elif effect == "eyelet_radius":
-        changes = {"eyelet_radius_m": 3e-3 * s}
+    elif effect == "guide_radius":
+        changes = {"guide_radius_m": 3e-3 * s}
     elif effect == "sensor_drift":
         changes = {"sensor_drift_A_Nm_per_row": 5e-4 * s * _unit(rng)}
     elif effect == "drum_slip":

@@ -19,7 +19,7 @@ calls (``respond``, ``measured_moment``, ``measured_pose``). The engine model is
   pose are the tool's;
 * drum slip: rest lengths lengthened after each row (re-homed every cycle);
 * sensor bias, drift and tracker registration: on the readings, as the
-  quasi-static plant. A finite eyelet radius is not available here.
+  quasi-static plant. A finite guide radius is not available here.
 
 Settling a row: the rest lengths and the load move from the previous row's
 to this row's over ``ramp_s`` (``friction_ramp_s`` on a plant with friction; heavy
@@ -58,7 +58,7 @@ from .plant import Plant
 #: The plants a study or ``csjm simulate`` can use.
 PLANTS = ("quasi-static", "mujoco")
 #: Effects of the quasi-static testbed the MuJoCo plant cannot realise.
-MUJOCO_UNSUPPORTED = ("eyelet_radius",)
+MUJOCO_UNSUPPORTED = ("guide_radius",)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -144,8 +144,8 @@ class MujocoTestbedPlant:
     noslip_tolerance: float = 1e-12
 
     def __post_init__(self) -> None:
-        if self.plant.eyelet_radius_m > 0:
-            raise InvalidInput("the MuJoCo plant has no eyelet radius (quasi-static plant only)", "effect")
+        if self.plant.guide_radius_m > 0:
+            raise InvalidInput("the MuJoCo plant has no guide radius (quasi-static plant only)", "effect")
 
     @property
     def rig(self):
@@ -287,7 +287,7 @@ def as_mujoco(plant: Plant, **options) -> MujocoTestbedPlant:
     Raises
     ------
     InvalidInput
-        An effect MuJoCo cannot realise (eyelet radius).
+        An effect MuJoCo cannot realise (guide radius).
     """
     return MujocoTestbedPlant(plant, **options)
 

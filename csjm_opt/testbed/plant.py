@@ -34,7 +34,7 @@ Physics (independent of the diagnosis's fitting models where it can be):
 
 Effects outside the diagnosis's vocabulary (to test that it says so):
 
-* finite eyelet radius: each base guide is a ring of radius ``r`` in the base
+* finite guide radius (``guide_radius``, an eyelet): each base guide is a ring of radius ``r`` in the base
   plane; the cable leaves it at the rim, on the side towards the platform
   hole, so the effective base hole moves with the cable's direction;
 * thermal drift of the F/T sensor: the moment offset grows linearly with the
@@ -89,7 +89,9 @@ EFFECT_NAMES = ("hole_offsets", "friction", "cable_hardening", "link_compliance"
 #: Further laws of a vocabulary effect the testbed can inject, and the vocabulary name a diagnosis should give.
 VARIANT_NAMES = {"coulomb_friction": "friction"}
 #: Effects the testbed simulates that the diagnosis has no model for.
-OUTSIDE_NAMES = ("eyelet_radius", "sensor_drift", "drum_slip", "joint_friction")
+OUTSIDE_NAMES = ("guide_radius", "sensor_drift", "drum_slip", "joint_friction")
+#: Old effect names still accepted (with a DeprecationWarning) -> their name now.
+DEPRECATED_NAMES = {"eyelet_radius": "guide_radius"}
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -107,7 +109,7 @@ class Plant:
     sensor_bias_A_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
     tracker_rotation_B: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))   # Q_B
     marker_rotation_A: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))    # Q_A
-    eyelet_radius_m: float = 0.0
+    guide_radius_m: float = 0.0
     sensor_drift_A_Nm_per_row: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
     drum_slip_threshold_N: float = np.inf
     drum_slip_compliance_m_per_N: float = 0.0
@@ -258,12 +260,12 @@ class Plant:
     def _base_holes(self, R_c: np.ndarray) -> np.ndarray:
         """Effective base holes (n, 6, 3) or (6, 3): on the eyelet's rim, towards the platform hole."""
         B = np.asarray(self.rig.base_holes_B_m)
-        if self.eyelet_radius_m <= 0:
+        if self.guide_radius_m <= 0:
             return B
         a_B = np.einsum("nij,kj->nki", R_c, np.asarray(self.rig.platform_holes_A_m))    # R a_i
         d = a_B - B
         d[..., 2] = 0.0
-        return B + self.eyelet_radius_m * d / np.linalg.norm(d, axis=-1, keepdims=True)
+        return B + self.guide_radius_m * d / np.linalg.norm(d, axis=-1, keepdims=True)
 
     def _lengths(self, R_m: np.ndarray) -> np.ndarray:
         """Cable lengths at measured-body poses (the link's twist neglected; used for drum slip)."""

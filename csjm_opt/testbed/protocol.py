@@ -341,7 +341,7 @@ def simulate_protocol(rig: Rig, protocol: str | Path | LogProtocol | LoadProtoco
         if after is not None:
             raise InvalidInput("--after is not supported for identification protocols (forces fixed in {B})",
                                "after")
-        return run_protocol(truth, load_protocol, rng, noise)
+        return run_protocol(truth, load_protocol, rng, noise, progress=progress)
     assert proto is not None
     R_start = proto.planned_R if proto.planned_R is not None else _nominal(rig, proto)[0]
     if after is None:

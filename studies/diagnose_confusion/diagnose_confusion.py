@@ -99,7 +99,7 @@ def run_one(job: dict) -> dict:
 
 
 #: Testbed effects of its ``outside`` list that the vocabulary now models, and their right name.
-MODELLED_OUTSIDE = {"eyelet_radius": "guide_radius"}
+MODELLED_OUTSIDE = {"guide_radius": "guide_radius", "eyelet_radius": "guide_radius"}  # the old name too
 NOT_NAMED = ("none", "unexplained")
 
 
@@ -152,8 +152,13 @@ def build_plant(job: dict):
     return rig, noise, study_plant(job, plant), severities, factor
 
 
+#: Effects renamed since their records were made: seeded by the old name, so that a log is remade as it was.
+SEED_NAMES = {"guide_radius": "eyelet_radius"}
+
+
 def job_seed(job: dict) -> list[int]:
-    return [job["rig"], job["rep"], int(10 * job["multiple"]), *[hash_name(e) for e in job["effects"]]]
+    return [job["rig"], job["rep"], int(10 * job["multiple"]),
+            *[hash_name(SEED_NAMES.get(e, e)) for e in job["effects"]]]
 
 
 def simulate_job(job: dict):

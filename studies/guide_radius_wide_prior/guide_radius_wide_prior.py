@@ -22,7 +22,7 @@ def main() -> None:
     from csjm_opt.diagnose import diagnose
 
     for rig_id, cycles in ((1, 12), (8, 24)):
-        job = {"kind": "outside", "effects": ["eyelet_radius"], "multiple": 3.0, "rig": rig_id, "rep": 0,
+        job = {"kind": "outside", "effects": ["guide_radius"], "multiple": 3.0, "rig": rig_id, "rep": 0,
                "cycles": cycles, "plant": "quasistatic"}
         rig, _, log, severities, _ = simulate_job(job)
         j = diagnose(rig, log, ranges={"guide_radius_m": (0.0, 0.02)}).as_json()
