@@ -200,7 +200,8 @@ def test_unreachable_scheduler_is_a_clear_error(tmp_path):
 def test_study_script_makes_figures_and_places_the_paper(tmp_path):
     import importlib.util
 
-    spec = importlib.util.spec_from_file_location("paper_sweep_study", REPO / "studies" / "paper_sweep" / "paper_sweep.py")
+    path = REPO / "studies" / "paper_sweep" / "paper_sweep.py"
+    spec = importlib.util.spec_from_file_location("paper_sweep_study", path)
     study = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(study)
     toml = tmp_path / "s.toml"

@@ -1,4 +1,4 @@
-"""The MuJoCo part of ``csjm demo`` (and of ``studies/dynamic_controllers/dynamic_controllers.py``): controllers with dynamics.
+"""The MuJoCo part of ``csjm demo`` (and of ``studies/dynamic_controllers/``): controllers with dynamics.
 
 The paper rig follows a tilt-and-torsion reference (10 deg tilt about x and
 15 deg torsion about z, both ``sin(pi t)``: 0.5 Hz) while an external moment

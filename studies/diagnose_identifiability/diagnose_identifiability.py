@@ -23,9 +23,11 @@ is the study's, not the tool's: it knows the noise and the plant, the diagnosis 
 
 Usage::
 
-    python -m studies.diagnose_identifiability.diagnose_identifiability --records studies/diagnose_confusion/diagnose_confusion_pairs.jsonl \
+    python -m studies.diagnose_identifiability.diagnose_identifiability \
+        --records studies/diagnose_confusion/diagnose_confusion_pairs.jsonl \
         --out studies/diagnose_identifiability [--kinds pair] [--plants quasistatic]
-    python -m studies.diagnose_identifiability.diagnose_identifiability --out studies/diagnose_identifiability --summarise \
+    python -m studies.diagnose_identifiability.diagnose_identifiability \
+        --out studies/diagnose_identifiability --summarise \
         --records studies/diagnose_confusion_pairs2.jsonl
 
 Results: one JSON line per log in ``OUT.jsonl`` (resumable); with ``--records`` the summary
@@ -64,8 +66,6 @@ def oracle(job: dict) -> dict:
 
 
 def _oracle(job: dict) -> dict:
-    from studies.diagnose_confusion.diagnose_confusion import _simulate, build_plant, job_seed, truth
-
     from csjm_opt.diagnose import EFFECTS, make_effect
     from csjm_opt.diagnose.augmented import AugmentedModel
     from csjm_opt.diagnose.evidence import effective_parameters
@@ -74,6 +74,7 @@ def _oracle(job: dict) -> dict:
     from csjm_opt.diagnose.scoring import fit_on_path
     from csjm_opt.diagnose.selection import VARIANTS
     from csjm_opt.measurement.instruments import InstrumentNoise
+    from studies.diagnose_confusion.diagnose_confusion import _simulate, build_plant, job_seed, truth
 
     t0 = time.perf_counter()
     rig, noise, plant, _, _ = build_plant(job)

@@ -18,7 +18,8 @@ with the plant's bias and noise, as ``csjm simulate PROTOCOL --after LOG`` does 
 
 Usage::
 
-    python -m studies.diagnose_loop.diagnose_loop [--rigs 10] [--rows 60] [--workers 2] [--out studies/diagnose_loop/diagnose_loop]
+    python -m studies.diagnose_loop.diagnose_loop [--rigs 10] [--rows 60] [--workers 2]
+        [--out studies/diagnose_loop/diagnose_loop]
         [--plants quasistatic mujoco] [--summarise]
 
 One JSON line per case in ``OUT.jsonl`` (resumable), tables in ``OUT.md``, figure ``OUT.png``.
@@ -133,10 +134,9 @@ def run_one(job: dict) -> dict:
 
 
 def _run_one(job: dict) -> dict:
-    from studies.diagnose_confusion.diagnose_confusion import build_plant, job_seed, truth
-
     from csjm_opt.diagnose import diagnose
     from csjm_opt.diagnose.suggest import suggest_experiment
+    from studies.diagnose_confusion.diagnose_confusion import build_plant, job_seed, truth
 
     t0, plant0 = time.perf_counter(), PLANT_SECONDS[0]
     rig, noise, plant, severities, factor = build_plant(job)

@@ -17,7 +17,8 @@ verdict, which should carry a warning.
 
 Usage::
 
-    python -m studies.diagnose_rivals_at_fit.diagnose_rivals_at_fit --plants mujoco --kinds none single --first-rig 10 --rigs 3 \
+    python -m studies.diagnose_rivals_at_fit.diagnose_rivals_at_fit --plants mujoco --kinds none single \
+        --first-rig 10 --rigs 3 \
         --multiples 0 3 --out studies/out/mjcover_rivals_mujoco [--ids ID ...] [--summarise]
 """
 
@@ -32,12 +33,11 @@ from studies._runner import finished, read_records, run_and_append  # noqa: E402
 
 def run_one(job: dict) -> dict:
     """One log: the confusion record of the current code, and the rival rule both ways on its models."""
-    from studies.diagnose_confusion import diagnose_confusion as dc
-
     import csjm_opt.diagnose as dg
     import csjm_opt.diagnose._decision as dec
     from csjm_opt.diagnose.rivals import scored_models, unsettled_rivals
     from csjm_opt.errors import CsjmError
+    from studies.diagnose_confusion import diagnose_confusion as dc
 
     ctxs: list = []
     diags: list = []

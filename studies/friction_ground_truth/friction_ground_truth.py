@@ -28,21 +28,19 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
-from pathlib import Path
 
 import numpy as np
 
 
-
 def record(job: dict, ramp_s: float, cycle_ramp_s: float) -> dict:
     """Make the job's MuJoCo log at the given ramps; per-row friction forces and noise-free readings."""
-    from studies.diagnose_confusion import diagnose_confusion as dc
     import mujoco
 
     from csjm_opt.measurement.instruments import InstrumentNoise
     from csjm_opt.testbed import mujoco_engine as me
     from csjm_opt.testbed.mujoco_plant import as_mujoco
     from csjm_opt.testbed.mujoco_statics import tendon_jacobian
+    from studies.diagnose_confusion import diagnose_confusion as dc
 
     rows: list[dict] = []
     last: dict = {}

@@ -13,7 +13,6 @@ Usage::
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 from studies.diagnose_confusion.diagnose_confusion import simulate_job  # noqa: E402
 

@@ -8,7 +8,8 @@ too (rows not at rest by the settle bound, the friction certificate's worst marg
 
 Usage::
 
-    python -m studies.oov_inspect.oov_inspect --records studies/diagnose_confusion/diagnose_confusion_oov_quasistatic.jsonl \
+    python -m studies.oov_inspect.oov_inspect \
+        --records studies/diagnose_confusion/diagnose_confusion_oov_quasistatic.jsonl \
         --ids 'quasistatic:outside:drum_slip:3:4:0' [--diagnose] [--out /tmp/oov-inspect]
 """
 

@@ -2,7 +2,8 @@
 
 Usage::
 
-    python -m studies.optimise_paper_seeds.optimise_paper_seeds OUT.jsonl --seeds 20-29 [--sweep studies/paper_sweep/paper_sweep.toml]
+    python -m studies.optimise_paper_seeds.optimise_paper_seeds OUT.jsonl --seeds 20-29
+        [--sweep studies/paper_sweep/paper_sweep.toml]
 
 Per start set (the Halton seed of the space-filling starts) runs ``sweep_front`` with
 ``--max-evaluations 22`` (a tenth of the sweep) on the paper's design space and appends
@@ -23,11 +24,10 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 
-from studies.optimise_paper.optimise_paper import BUDGET, hypervolume  # noqa: E402
-
 from csjm_opt.design.optimise_settings import read_optimise_file  # noqa: E402
 from csjm_opt.design.optimise_sweep_front import sweep_front  # noqa: E402
 from csjm_opt.design.sweep import run_sweep  # noqa: E402
+from studies.optimise_paper.optimise_paper import BUDGET, hypervolume  # noqa: E402
 
 
 def _pts(records: list[dict]) -> np.ndarray:

@@ -2,7 +2,8 @@
 
 Usage::
 
-    python -m studies.optimise_paper_shaping.optimise_paper_shaping OUTDIR [--sweep studies/paper_sweep/paper_sweep.toml] [--workers 1]
+    python -m studies.optimise_paper_shaping.optimise_paper_shaping OUTDIR
+        [--sweep studies/paper_sweep/paper_sweep.toml] [--workers 1]
 
 On the design space of ``studies/paper_sweep/paper_sweep.toml`` (the two hexagons' central
 angles), at the paper design's certified range scale (``paper_design.range`` of
@@ -74,7 +75,8 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         spec, settings = read_optimise_file(args.sweep)
-        paper_s = json.loads((HERE.parent / "optimise_paper" / "optimise_paper.json").read_text())["paper_design"]["range"]
+        paper_json = HERE.parent / "optimise_paper" / "optimise_paper.json"
+        paper_s = json.loads(paper_json.read_text())["paper_design"]["range"]
         settings = settings.replace(objective="shaping", pareto_with="", requirements=dataclasses.replace(
             settings.requirements, range_scale=paper_s))
         cached = args.outdir / "optimised_shaping.json"

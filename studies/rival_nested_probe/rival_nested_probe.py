@@ -21,10 +21,8 @@ import argparse
 import json
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
-
 
 
 def evidence_terms(fit, s: float) -> dict:
@@ -85,9 +83,6 @@ def block_z(fit, terms: dict, effect_index: int) -> dict:
 
 def probe(job: dict) -> dict:
     """The probe record of one log (see module doc)."""
-    from studies.diagnose_confusion.diagnose_confusion import _simulate, build_plant, job_seed
-    from studies.diagnose_identifiability.diagnose_identifiability import expected_log_evidence
-
     import csjm_opt.diagnose._decision as dec
     from csjm_opt.diagnose import diagnose, make_effect
     from csjm_opt.diagnose.augmented import AugmentedModel
@@ -95,6 +90,8 @@ def probe(job: dict) -> dict:
     from csjm_opt.diagnose.residuals import compute_residuals
     from csjm_opt.diagnose.scoring import fit_on_path
     from csjm_opt.measurement.instruments import InstrumentNoise
+    from studies.diagnose_confusion.diagnose_confusion import _simulate, build_plant, job_seed
+    from studies.diagnose_identifiability.diagnose_identifiability import expected_log_evidence
 
     t0 = time.perf_counter()
     ctxs: list = []

@@ -10,7 +10,8 @@ against the load fraction) on both plants, with Coulomb friction and without.
 
 Usage::
 
-    python -m studies.testbed_plants.testbed_plants [--rigs 3] [--cycles 4] [--out studies/testbed_plants/testbed_plants]
+    python -m studies.testbed_plants.testbed_plants [--rigs 3] [--cycles 4]
+        [--out studies/testbed_plants/testbed_plants]
 
 Writes ``OUT.md`` (the table) and ``OUT.png`` (the figure).
 """
