@@ -140,6 +140,24 @@ def truth(plant, rig=None) -> dict:
     return out
 
 
+class _LazyBar:
+    """A tqdm bar opened at the first row simulated: a protocol refused before any row prints one line only."""
+
+    def __init__(self, **options):
+        self.options, self.bar = options, None
+
+    def update(self, n: int = 1) -> None:
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(**self.options)
+        self.bar.update(n)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``csjm simulate`` with parsed ``args``.
 
@@ -170,15 +188,15 @@ def run(args: argparse.Namespace) -> int:
     noise = InstrumentNoise.paper() if args.noise == "paper" else InstrumentNoise.none()
     t0 = time.perf_counter()
     after = MeasurementLog.from_csv(args.after) if args.after else None
-    from tqdm import tqdm
-
     # an identification protocol settles its dead weights in a few passes over the rows: no known total
     total = len(proto) + (len(after) if after is not None else 0) if isinstance(proto, LogProtocol) else None
-    with tqdm(total=total, file=sys.stderr, unit="row",
-              desc=f"simulate ({args.plant})", disable=args.no_progress,
-              mininterval=0.5 if sys.stderr.isatty() else 5.0) as bar:
+    bar = _LazyBar(total=total, file=sys.stderr, unit="row", desc=f"simulate ({args.plant})",
+                   disable=args.no_progress, mininterval=0.5 if sys.stderr.isatty() else 5.0)
+    try:
         log = simulate_protocol(rig, proto, plant, rng=rng, noise=noise, persistent=not args.relaxed, after=after,
                                 progress=bar.update)
+    finally:
+        bar.close()
     seconds = time.perf_counter() - t0
     path = atomic_write_text(args.output, log.to_text())
     summary = {"output": str(path), "protocol": str(args.protocol), "rows": len(log), "cycles": len(log.cycle_ids),
