@@ -49,7 +49,7 @@ def mujoco_settle(rig, protocol):
     """True poses and dead-weight moments of every protocol row, settled in MuJoCo."""
     import mujoco
 
-    from csjm_opt.testbed.mujoco_reference import build, rotation, settle
+    from csjm_opt.testbed.mujoco.reference import build, rotation, settle
 
     l = protocol.rest_lengths_m[0]
     R_ref, _, ok = settle(rig, l, np.eye(3), np.zeros(3))

@@ -115,7 +115,7 @@ def test_rig_link_section_round_trip_and_errors(tmp_path):
 
 def test_sweep_records_interference_and_applies_the_rule():
     from csjm_opt.design.design_evaluation import evaluate_design
-    from csjm_opt.design.sweep_file import SweepSpec
+    from csjm_opt.design.sweep.spec import SweepSpec
 
     data = {"base": {}, "parameters": {"oo_a_m": {"values": [0.08]}},
             "sampling": {"orientations": 40, "max_tilt_deg": 20.0, "max_torsion_deg": 10.0},
@@ -134,8 +134,8 @@ def test_sweep_records_interference_and_applies_the_rule():
 
 
 def test_certify_finds_failures_the_optimiser_never_saw():
-    from csjm_opt.design.certify import certify, slacks
-    from csjm_opt.design.optimise_settings import Requirements
+    from csjm_opt.design.optimise.dense_check import certify, slacks
+    from csjm_opt.design.optimise.settings import Requirements
 
     rig = paper_rig()
     req = Requirements(max_tilt_deg=45.0, max_torsion_deg=30.0, loads=np.array([[0.0, 0.0, 0.0], [3.0, 0, 0]]),
@@ -152,9 +152,9 @@ def test_certify_finds_failures_the_optimiser_never_saw():
 
 
 def test_certified_tensions_are_the_planners_where_no_bound_is_active():
-    from csjm_opt.design.certify import slacks
     from csjm_opt.design.metrics import LoadSet, MetricOptions, evaluate_poses
-    from csjm_opt.design.optimise_settings import Requirements
+    from csjm_opt.design.optimise.dense_check import slacks
+    from csjm_opt.design.optimise.settings import Requirements
 
     rig = paper_rig()
     req = Requirements(max_tilt_deg=30.0, max_torsion_deg=20.0, loads=np.zeros((1, 3)))

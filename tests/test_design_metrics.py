@@ -14,8 +14,8 @@ from csjm_opt.design import LoadSet, MetricOptions, OrientationSampling, design_
 from csjm_opt.design.geometry import GeometryLimits
 from csjm_opt.design.metrics import stiffness_affine_parts
 from csjm_opt.design.shaping_range import directional_stiffness_range
-from csjm_opt.design.sweep import evaluate_design
-from csjm_opt.design.sweep_file import EvaluationSettings
+from csjm_opt.design.sweep.runner import evaluate_design
+from csjm_opt.design.sweep.spec import EvaluationSettings
 
 #: The load set of studies/paper_sweep.toml (N m, {A}, weight excluded).
 LOADS = LoadSet(np.array([[0, 0, 0], [3, 0, 0], [-3, 0, 0], [0, 3, 0], [0, -3, 0], [0, 0, 1], [0, 0, -1.0]]))

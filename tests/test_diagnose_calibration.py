@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 
 from csjm_opt import so3
+from csjm_opt.diagnose.data.localisation import remaining_signature
+from csjm_opt.diagnose.data.residuals import compute_residuals
 from csjm_opt.diagnose.effects import make_effect
-from csjm_opt.diagnose.fit import FitResult
-from csjm_opt.diagnose.localisation import remaining_signature
-from csjm_opt.diagnose.residuals import compute_residuals
-from csjm_opt.diagnose.scoring import folds_by_cycle
+from csjm_opt.diagnose.fitting.gauss_newton import FitResult
+from csjm_opt.diagnose.selection.scoring import folds_by_cycle
 from csjm_opt.errors import RigFileError
 from csjm_opt.testbed import Plant, inject, random_rig, simulate_experiment
 from csjm_opt.testbed.injection import PLAUSIBLE_SEVERITY

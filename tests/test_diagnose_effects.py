@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from csjm_opt import so3
-from csjm_opt.diagnose.augmented import N_NUISANCE, AugmentedModel, with_entry
+from csjm_opt.diagnose.data.residuals import compute_residuals, pose_residuals
 from csjm_opt.diagnose.effects import EFFECTS, make_effect
-from csjm_opt.diagnose.fit import fit_model, linearised_zeta
-from csjm_opt.diagnose.residuals import compute_residuals, pose_residuals
+from csjm_opt.diagnose.fitting.augmented import N_NUISANCE, AugmentedModel, with_entry
+from csjm_opt.diagnose.fitting.gauss_newton import fit_model, linearised_zeta
 from csjm_opt.errors import InvalidInput
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.model.statics import solve_equilibrium

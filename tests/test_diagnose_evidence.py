@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from csjm_opt.diagnose.augmented import AugmentedModel
+from csjm_opt.diagnose.data.residuals import compute_residuals
 from csjm_opt.diagnose.effects import make_effect
-from csjm_opt.diagnose.evidence import log_evidence, prior_of, prior_sides
-from csjm_opt.diagnose.fit import fit_model
-from csjm_opt.diagnose.residuals import compute_residuals
+from csjm_opt.diagnose.fitting.augmented import AugmentedModel
+from csjm_opt.diagnose.fitting.evidence import log_evidence, prior_of, prior_sides
+from csjm_opt.diagnose.fitting.gauss_newton import fit_model
 from csjm_opt.testbed import simulate_experiment
 
 

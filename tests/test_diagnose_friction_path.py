@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from csjm_opt.diagnose.augmented import AugmentedModel
+from csjm_opt.diagnose.data.residuals import compute_residuals
 from csjm_opt.diagnose.effects import make_effect
-from csjm_opt.diagnose.fit import fit_model
-from csjm_opt.diagnose.friction_path import on_predicted_path
-from csjm_opt.diagnose.residuals import compute_residuals
+from csjm_opt.diagnose.fitting.augmented import AugmentedModel
+from csjm_opt.diagnose.fitting.friction_path import on_predicted_path
+from csjm_opt.diagnose.fitting.gauss_newton import fit_model
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.testbed import simulate_experiment
 
@@ -50,8 +50,8 @@ def test_path_independent_models_are_left_alone(rig):
 def test_path_steps_are_the_cables_own_lengths_between_the_models_holes(rig):
     """With hole offsets in the model, the friction state is driven by each cable's length between its
     *offset* holes (written out here: |R (a_i + da_i) - (b_i + db_i)|), not between the nominal ones."""
-    from csjm_opt.diagnose.augmented import with_entry
-    from csjm_opt.diagnose.friction_ramp import predict_ramp
+    from csjm_opt.diagnose.fitting.augmented import with_entry
+    from csjm_opt.diagnose.fitting.friction_ramp import predict_ramp
 
     table = compute_residuals(rig, _log(rig, InstrumentNoise.none()))
     model = AugmentedModel(rig, [make_effect("hole_offsets", rig), make_effect("friction", rig, law="coulomb")])

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from csjm_opt.diagnose.augmented import AugmentedModel, Rows, with_entry
+from csjm_opt.diagnose.data.residuals import compute_residuals, pose_residuals
 from csjm_opt.diagnose.effects import make_effect
 from csjm_opt.diagnose.effects.friction import CORNER, band_position
-from csjm_opt.diagnose.fit import fit_model
-from csjm_opt.diagnose.friction_path import end_state, on_predicted_path
-from csjm_opt.diagnose.friction_ramp import predict_ramp, ramp_shape_of
-from csjm_opt.diagnose.residuals import compute_residuals, pose_residuals
+from csjm_opt.diagnose.fitting.augmented import AugmentedModel, Rows, with_entry
+from csjm_opt.diagnose.fitting.friction_path import end_state, on_predicted_path
+from csjm_opt.diagnose.fitting.friction_ramp import predict_ramp, ramp_shape_of
+from csjm_opt.diagnose.fitting.gauss_newton import fit_model
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.testbed import simulate_experiment
 from csjm_opt.testbed.plant import Plant

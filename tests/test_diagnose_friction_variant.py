@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from csjm_opt.diagnose.residuals import compute_residuals
-from csjm_opt.diagnose.selection import _Context, _variant
+from csjm_opt.diagnose.data.residuals import compute_residuals
+from csjm_opt.diagnose.selection.decision import _Context, _variant
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.testbed import simulate_experiment
 

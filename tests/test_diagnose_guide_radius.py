@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from csjm_opt import so3
-from csjm_opt.diagnose.augmented import AugmentedModel, Rows
+from csjm_opt.diagnose.data.residuals import compute_residuals
 from csjm_opt.diagnose.effects import EFFECTS, GuideRadius, guide_axis, make_effect
 from csjm_opt.diagnose.effects.guide_radius import ring_exit_points
-from csjm_opt.diagnose.fit import fit_model
-from csjm_opt.diagnose.residuals import compute_residuals
+from csjm_opt.diagnose.fitting.augmented import AugmentedModel, Rows
+from csjm_opt.diagnose.fitting.gauss_newton import fit_model
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.testbed import make_plant, simulate_experiment
 

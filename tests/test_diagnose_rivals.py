@@ -1,4 +1,4 @@
-"""Rivals the log does not rule out (csjm_opt.diagnose.rivals): the stated rule, and its held-out part
+"""Rivals the log does not rule out (csjm_opt.diagnose.selection.rivals): the stated rule, and its held-out part
 against the closed-form power of a paired t-test (noncentral t), an independent construction."""
 
 from __future__ import annotations
@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from csjm_opt.diagnose._decision import EVIDENCE_MIN, HELDOUT_ALPHA
-from csjm_opt.diagnose.rivals import rival_warning, unsettled_rivals
+from csjm_opt.diagnose.decision_rule import EVIDENCE_MIN, HELDOUT_ALPHA
+from csjm_opt.diagnose.selection.rivals import rival_warning, unsettled_rivals
 
 N_CYCLES = 12
 
@@ -71,7 +71,7 @@ def test_heldout_part_matches_the_noncentral_t_power():
 def test_scored_models_reads_acceptability_and_errors_from_the_diagnosis_pieces():
     """Singles take plausibility and closure from their tests, pairs from their entries; unfitted pairs are
     left out; the evidence comes from the given function."""
-    from csjm_opt.diagnose.rivals import scored_models
+    from csjm_opt.diagnose.selection.rivals import scored_models
 
     class Score:
         def __init__(self, ev, mse):
@@ -138,12 +138,12 @@ def test_evidence_leads_are_taken_at_the_fitted_parameters():
 def test_scored_models_gives_the_evidence_at_the_fit_from_the_context_noise_scale(rig):
     """``log_evidence_at_fit`` is the evidence module's, at the ``sigma`` of the context whose ``evidence`` is
     passed (or the explicit noise scale), and never above the linearised evidence."""
-    from csjm_opt.diagnose.augmented import AugmentedModel
+    from csjm_opt.diagnose.data.residuals import compute_residuals
     from csjm_opt.diagnose.effects import make_effect
-    from csjm_opt.diagnose.evidence import log_evidence
-    from csjm_opt.diagnose.fit import fit_model
-    from csjm_opt.diagnose.residuals import compute_residuals
-    from csjm_opt.diagnose.rivals import scored_models
+    from csjm_opt.diagnose.fitting.augmented import AugmentedModel
+    from csjm_opt.diagnose.fitting.evidence import log_evidence
+    from csjm_opt.diagnose.fitting.gauss_newton import fit_model
+    from csjm_opt.diagnose.selection.rivals import scored_models
     from csjm_opt.testbed import simulate_experiment
 
     t = compute_residuals(rig, simulate_experiment(rig, 2, np.random.default_rng(4), effect="sensor_bias",
@@ -177,8 +177,8 @@ def test_held_out_ties_to_round_off_are_not_improvements():
     """A rival whose added effect fitted to zero predicts every cycle to round-off of the verdict:
     no evidence either way (p = 1), where a shared 1e-15 'improvement' once gave p = 0. A real
     improvement shared by every cycle stays significant, and noisy differences get scipy's t-test."""
-    from csjm_opt.diagnose.rivals import _Cycles
-    from csjm_opt.diagnose.scoring import paired_heldout_test
+    from csjm_opt.diagnose.selection.rivals import _Cycles
+    from csjm_opt.diagnose.selection.scoring import paired_heldout_test
 
     rng = np.random.default_rng(3)
     mse = rng.uniform(1e-6, 4e-6, 12)

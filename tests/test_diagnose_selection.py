@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 from csjm_opt.diagnose import diagnose
-from csjm_opt.diagnose._decision import LEAD_NATS
-from csjm_opt.diagnose.localisation import remaining_signature
-from csjm_opt.diagnose.noise import noise_floor
-from csjm_opt.diagnose.pairs import block_correlation
-from csjm_opt.diagnose.residuals import compute_residuals
-from csjm_opt.diagnose.scoring import folds_by_cycle
+from csjm_opt.diagnose.data.localisation import remaining_signature
+from csjm_opt.diagnose.data.noise import noise_floor
+from csjm_opt.diagnose.data.residuals import compute_residuals
+from csjm_opt.diagnose.decision_rule import LEAD_NATS
+from csjm_opt.diagnose.selection.pairs import block_correlation
+from csjm_opt.diagnose.selection.scoring import folds_by_cycle
 from csjm_opt.errors import InvalidInput
 from csjm_opt.testbed import simulate_experiment
 
@@ -203,11 +203,11 @@ def test_fold_estimates_agree_with_refits_for_models_that_change_their_own_tange
     """Link compliance + stiffness scale (nearly interchangeable, both change the model's tangent):
     each held-out fold's parameters predict the held-out rows as well as a full refit on the
     fold's rows does (the one-step shortcut had wandered along the weak direction)."""
-    from csjm_opt.diagnose.augmented import AugmentedModel, with_entry
+    from csjm_opt.diagnose.data.residuals import pose_residuals, rms
     from csjm_opt.diagnose.effects import make_effect
-    from csjm_opt.diagnose.fit import fit_model
-    from csjm_opt.diagnose.residuals import pose_residuals, rms
-    from csjm_opt.diagnose.scoring import _fold_fit
+    from csjm_opt.diagnose.fitting.augmented import AugmentedModel, with_entry
+    from csjm_opt.diagnose.fitting.gauss_newton import fit_model
+    from csjm_opt.diagnose.selection.scoring import _fold_fit
 
     log = simulate_experiment(rig, 6, np.random.default_rng(41), effect=["link_compliance", "stiffness_scale"],
                               severity=3.0, steps=3)
@@ -227,7 +227,7 @@ def test_fold_estimates_agree_with_refits_for_models_that_change_their_own_tange
 def test_secondary_alternatives_are_the_non_separable_stand_ins_of_the_second_effect():
     """A + B named; A + C lists C only if it closes the gap about as well (evidence within
     LEAD_NATS) and C cannot be told from B on the log."""
-    from csjm_opt.diagnose.pairs import secondary_alternatives
+    from csjm_opt.diagnose.selection.pairs import secondary_alternatives
 
     class Ctx:
         def evidence(self, sc):
@@ -251,7 +251,7 @@ def test_a_pair_chooses_the_friction_law_with_its_partner_fitted(rig):
     """Injected ground truth: capstan friction (cycles carried over) plus a mass/COM error; the variant of
     the pair model friction + mass_com is chosen with the mass/COM error fitted alongside."""
     from csjm_opt.diagnose.effects import make_effect
-    from csjm_opt.diagnose.selection import _Context, _variant
+    from csjm_opt.diagnose.selection.decision import _Context, _variant
     from csjm_opt.measurement.instruments import InstrumentNoise
     from csjm_opt.testbed import inject, make_plant
 

@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 from csjm_opt.diagnose import diagnose
-from csjm_opt.diagnose.augmented import AugmentedModel
+from csjm_opt.diagnose.data.residuals import compute_residuals
 from csjm_opt.diagnose.effects import make_effect
 from csjm_opt.diagnose.effects.friction import band_position
-from csjm_opt.diagnose.fit import _linearised, data_jacobian, fit_model
-from csjm_opt.diagnose.pool import map_ordered, resolve_workers
-from csjm_opt.diagnose.residuals import compute_residuals
-from csjm_opt.diagnose.scoring import score
+from csjm_opt.diagnose.fitting.augmented import AugmentedModel
+from csjm_opt.diagnose.fitting.gauss_newton import _linearised, data_jacobian, fit_model
+from csjm_opt.diagnose.fitting.pool import map_ordered, resolve_workers
+from csjm_opt.diagnose.selection.scoring import score
 from csjm_opt.errors import InvalidInput
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.testbed import simulate_experiment
@@ -97,7 +97,7 @@ def test_jacobian_from_the_residuals_balance_and_tangent_equals_a_fresh_one(rig,
 
 
 def _default_in_worker(_: int) -> int:
-    from csjm_opt.diagnose.pool import default_workers
+    from csjm_opt.diagnose.fitting.pool import default_workers
 
     return default_workers()
 
@@ -144,7 +144,7 @@ def test_an_error_in_a_worker_reaches_the_caller():
 
 
 def test_the_environment_sets_the_default_workers(monkeypatch):
-    from csjm_opt.diagnose.pool import default_workers
+    from csjm_opt.diagnose.fitting.pool import default_workers
 
     monkeypatch.setenv("CSJM_WORKERS", "3")
     assert default_workers() == 3

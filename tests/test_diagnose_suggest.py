@@ -6,9 +6,14 @@ import numpy as np
 import pytest
 
 from csjm_opt.diagnose import diagnose
-from csjm_opt.diagnose.extra import append_log, check_rows_belong
-from csjm_opt.diagnose.loads import Load, default_load_set, load_load_set
-from csjm_opt.diagnose.suggest import PROTOCOL_COLUMNS, candidate_cycles, protocol_text, suggest_experiment
+from csjm_opt.diagnose.data.extra import append_log, check_rows_belong
+from csjm_opt.diagnose.suggest.dead_weights import Load, default_load_set, load_load_set
+from csjm_opt.diagnose.suggest.experiment import (
+    PROTOCOL_COLUMNS,
+    candidate_cycles,
+    protocol_text,
+    suggest_experiment,
+)
 from csjm_opt.errors import InvalidInput
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.model import kinematics as kin
@@ -127,7 +132,7 @@ def test_suggested_rows_show_the_effect_not_only_the_lookalike_difference(rig):
     d = diagnose(rig, log, effects=["link_compliance", "stiffness_scale"])
     s = suggest_experiment(rig, d, 30, seed=2)
     assert s is not None and s.hypotheses[-1] == "none" and len(s.cycle) <= 30
-    from csjm_opt.diagnose.residuals import compute_residuals
+    from csjm_opt.diagnose.data.residuals import compute_residuals
     from csjm_opt.testbed import simulate_protocol
 
     rows = simulate_protocol(rig, protocol_text(s), "link_compliance", 1.0, rng=np.random.default_rng(5),

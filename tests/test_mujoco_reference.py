@@ -1,4 +1,4 @@
-"""Statics and stiffness against MuJoCo (an independent engine model of the rig: csjm_opt.testbed.mujoco_reference)."""
+"""Statics and stiffness against MuJoCo (an independent engine model of the rig: csjm_opt.testbed.mujoco.reference)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import csjm_opt as co
-import csjm_opt.testbed.mujoco_reference as ref
+import csjm_opt.testbed.mujoco.reference as ref
 from csjm_opt import so3
 from csjm_opt.model.perturbation import stiffness_from_engine
 

@@ -11,12 +11,12 @@ import pytest
 from design_files import tiny_design_toml
 
 from csjm_opt.cli.app import main
-from csjm_opt.design.certify import certify
 from csjm_opt.design.geometry import design_holes
-from csjm_opt.design.optimisation import design_rig_of
-from csjm_opt.design.optimise_problem import build_problem
-from csjm_opt.design.optimise_settings import read_optimise_file
-from csjm_opt.design.optimise_symbols import holes_sym, rotation_sym
+from csjm_opt.design.optimise.dense_check import certify
+from csjm_opt.design.optimise.problem import build_problem
+from csjm_opt.design.optimise.runner import design_rig_of
+from csjm_opt.design.optimise.settings import read_optimise_file
+from csjm_opt.design.optimise.symbols import holes_sym, rotation_sym
 from csjm_opt.design.sampling import tilt_torsion_rotations
 from csjm_opt.errors import DesignError
 from csjm_opt.model.rig import Rig

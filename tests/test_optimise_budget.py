@@ -12,9 +12,9 @@ import dataclasses
 import pytest
 from design_files import tiny_design_toml
 
-import csjm_opt.design.optimisation as opt_mod
-from csjm_opt.design.optimise_budget import EVALUATIONS_PER_ITERATION, STOPPED
-from csjm_opt.design.optimise_settings import read_optimise_file
+import csjm_opt.design.optimise.runner as opt_mod
+from csjm_opt.design.optimise.budget import EVALUATIONS_PER_ITERATION, STOPPED
+from csjm_opt.design.optimise.settings import read_optimise_file
 from csjm_opt.errors import DesignError
 
 FILE = tiny_design_toml(orientations=100, max_tilt_deg=30.0, max_torsion_deg=15.0,

@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 from design_files import tiny_design_toml
 
-import csjm_opt.design.optimise_sweep_front as front_mod
+import csjm_opt.design.optimise.sweep_front as front_mod
 from csjm_opt.design.design_evaluation import evaluate_design
 from csjm_opt.design.feasibility import wrench_margin_Nm
-from csjm_opt.design.optimisation import optimise
-from csjm_opt.design.optimise_front_model import QuadModel, best_step, model_function
-from csjm_opt.design.optimise_result import design_rig_of
-from csjm_opt.design.optimise_settings import read_optimise_file
-from csjm_opt.design.optimise_sweep_surrogate import MARGIN_SOFTMIN_NM, sweep_surrogate
+from csjm_opt.design.optimise.front_model import QuadModel, best_step, model_function
+from csjm_opt.design.optimise.result import design_rig_of
+from csjm_opt.design.optimise.runner import optimise
+from csjm_opt.design.optimise.settings import read_optimise_file
+from csjm_opt.design.optimise.sweep_surrogate import MARGIN_SOFTMIN_NM, sweep_surrogate
 from csjm_opt.errors import DesignError
 from csjm_opt.model.numeric import Model
 

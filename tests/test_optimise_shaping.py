@@ -11,10 +11,10 @@ from design_files import tiny_design_toml
 from scipy.optimize import linprog
 
 from csjm_opt.cli.app import main
-from csjm_opt.design.optimisation import design_rig_of
-from csjm_opt.design.optimise_problem import build_problem
-from csjm_opt.design.optimise_settings import read_optimise_file
-from csjm_opt.design.optimise_shaping import dense_angles, lp_shaping_range
+from csjm_opt.design.optimise.problem import build_problem
+from csjm_opt.design.optimise.runner import design_rig_of
+from csjm_opt.design.optimise.settings import read_optimise_file
+from csjm_opt.design.optimise.shaping import dense_angles, lp_shaping_range
 from csjm_opt.design.sampling import tilt_torsion_rotations
 from csjm_opt.errors import DesignError
 from csjm_opt.model.numeric import Model
@@ -163,7 +163,7 @@ def test_unreachable_shaping_range_names_itself(tmp_path):
     # a held shaping range far above what any design reaches: the diagnosis (here at the start point, where
     # the epigraph rows are violated by about the held value) names the shaping range and an orientation,
     # not the hole spacing or the contacts, which come before it in the constraint vector
-    from csjm_opt.design.optimise_diagnosis import violation
+    from csjm_opt.design.optimise.diagnosis import violation
 
     path = tmp_path / "front.toml"
     path.write_text(FRONT)
@@ -178,8 +178,8 @@ def test_unreachable_shaping_range_names_itself(tmp_path):
 def test_only_the_objectives_shortfall_is_tolerated(settings):
     # the shaping range as the objective may end its rounds short of the value the solve claimed (the
     # certified objective is then the dense value); held as a front's epsilon it is a requirement
-    from csjm_opt.design.certify import Check
-    from csjm_opt.design.optimise_shaping import objective_shortfall_only
+    from csjm_opt.design.optimise.dense_check import Check
+    from csjm_opt.design.optimise.shaping import objective_shortfall_only
 
     at = (0.0, 0.0, 0.0)
     short = Check(worst={"tension": (0.5, at), "load 2": (0.1, at), "shaping": (-0.05, at)},

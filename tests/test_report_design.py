@@ -11,7 +11,7 @@ from report_html import mismatches, parse, unresolved
 
 from csjm_opt.cli import main
 from csjm_opt.model import hexagon
-from csjm_opt.report.design import pareto_layers, pareto_mask
+from csjm_opt.report.design.report import pareto_layers, pareto_mask
 
 
 def brute_force_front(x, y):

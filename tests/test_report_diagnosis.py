@@ -7,7 +7,7 @@ import copy
 import pytest
 from report_html import mismatches, parse
 
-from csjm_opt.report.diagnosis import document, headline, unit_of
+from csjm_opt.report.diagnosis.report import document, headline, unit_of
 from csjm_opt.report.render import render_html, render_markdown
 
 LOC = {"by_axis": {"x": {"rms_before_rad": 0.005, "rms_after_rad": 0.0015}},
@@ -16,7 +16,7 @@ LOC = {"by_axis": {"x": {"rms_before_rad": 0.005, "rms_after_rad": 0.0015}},
                              "p_value": 1e-9},
        "hysteresis_after": {"pairs": 12, "rms_up_minus_down_rad": 0.0034}}
 
-NEW = {  # the keys of csjm_opt.diagnose.result (as of the selection with pairs and plausibility)
+NEW = {  # the keys of csjm_opt.diagnose.selection.result (as of the selection with pairs and plausibility)
     "baseline": {"heldout_rms_rad": 0.01336, "train_rms_rad": 0.01336},
     "nominal_refit": {"heldout_rms_rad": 0.013366, "train_rms_rad": 0.013354, "bic": 525.06,
                       "params": {"dl_common_m": -1.2e-4}, "param_sd": {"dl_common_m": 1.1e-4}},

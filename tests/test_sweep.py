@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from csjm_opt.design.store import ResultStore, read_records
-from csjm_opt.design.sweep import TIMING_KEYS, run_sweep
-from csjm_opt.design.sweep_file import SweepSpec
+from csjm_opt.design.sweep.runner import TIMING_KEYS, run_sweep
+from csjm_opt.design.sweep.spec import SweepSpec
+from csjm_opt.design.sweep.store import ResultStore, read_records
 from csjm_opt.errors import DesignError
 
 REPO = Path(__file__).resolve().parents[1]

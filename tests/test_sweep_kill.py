@@ -18,8 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from csjm_opt.design.sweep import TIMING_KEYS, run_sweep
-from csjm_opt.design.sweep_file import SweepSpec
+from csjm_opt.design.sweep.runner import TIMING_KEYS, run_sweep
+from csjm_opt.design.sweep.spec import SweepSpec
 
 SWEEP = """
 [sweep]

@@ -11,7 +11,7 @@ from csjm_opt import so3
 from csjm_opt.errors import NoEquilibrium
 from csjm_opt.model.statics import solve_equilibrium
 from csjm_opt.testbed import Plant, as_mujoco, certify_static, design_cycles, make_plant
-from csjm_opt.testbed.mujoco_engine import Engine
+from csjm_opt.testbed.mujoco.engine import Engine
 
 
 @pytest.fixture(scope="module")
@@ -84,7 +84,7 @@ def test_tendon_jacobian_is_the_derivative_of_the_tendon_lengths(rig):
     """The dense tendon Jacobian (MuJoCo 4 stores it sparse) against central differences of the lengths."""
     import mujoco
 
-    from csjm_opt.testbed.mujoco_statics import tendon_jacobian
+    from csjm_opt.testbed.mujoco.statics import tendon_jacobian
 
     plant = dataclasses.replace(Plant.nominal(rig), link_compliance_rad_per_Nm=np.diag([0.006, 0.004, 0.008]))
     engine = Engine(as_mujoco(plant), np.full(6, 0.1))
@@ -184,7 +184,7 @@ def test_coulomb_rows_come_to_rest_with_the_default_noslip(rig, cycle):
 
 
 def _rot(quat):
-    from csjm_opt.testbed.mujoco_engine import _rotation
+    from csjm_opt.testbed.mujoco.engine import _rotation
 
     return _rotation(quat)
 

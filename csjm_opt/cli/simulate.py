@@ -14,7 +14,7 @@ from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import load_rig
 from ..testbed.injection import inject, make_plant
-from ..testbed.mujoco_plant import PLANTS
+from ..testbed.mujoco.plant import PLANTS
 from ..testbed.plant import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, Plant
 from ..testbed.protocol import read_protocol, simulate_protocol
 from ._options import check_outputs, int_in

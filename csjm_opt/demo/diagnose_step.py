@@ -9,7 +9,7 @@ import numpy as np
 
 from ..diagnose import diagnose
 from ..model.rig import Rig
-from ..report.diagnosis import write_report
+from ..report.diagnosis.report import write_report
 from ..report.document import (
     Block,
     Cell,

@@ -16,7 +16,6 @@ the shaping-range objective and its exact LP check in :mod:`.optimise_shaping`),
 :mod:`.optimise_sweep_surrogate` and their quadratic models in :mod:`.optimise_front_model`).
 """
 
-from .certify import Check, certify
 from .geometry import (
     PAPER_DESIGN,
     PARAMETERS,
@@ -27,13 +26,14 @@ from .geometry import (
 )
 from .interference import Interference, interference, pose_interference, segment_distance
 from .metrics import DesignMetrics, LoadSet, MetricOptions, PoseMetrics, evaluate, evaluate_poses
-from .optimisation import OptimisationResult, OptimisedDesign, design_rig_of, optimise
-from .optimise_settings import OptimiseSettings, Requirements, read_optimise_file
-from .optimise_shaping import lp_shaping_range
-from .optimise_sweep_front import SweepFrontResult, sweep_front
+from .optimise.dense_check import Check, certify
+from .optimise.runner import OptimisationResult, OptimisedDesign, design_rig_of, optimise
+from .optimise.settings import OptimiseSettings, Requirements, read_optimise_file
+from .optimise.shaping import lp_shaping_range
+from .optimise.sweep_front import SweepFrontResult, sweep_front
 from .sampling import OrientationSampling, tilt_torsion_angles, tilt_torsion_rotations
-from .sweep import SweepResult, evaluate_design, run_sweep
-from .sweep_file import EvaluationSettings, SweepSpec
+from .sweep.runner import SweepResult, evaluate_design, run_sweep
+from .sweep.spec import EvaluationSettings, SweepSpec
 
 __all__ = [
     "Check", "DesignMetrics", "EvaluationSettings", "GeometryLimits", "Interference", "LoadSet", "MetricOptions",

@@ -5,7 +5,7 @@ from __future__ import annotations
 from .certify import FrictionCertificate, certify_static
 from .cycles import CycleDesign, design_cycles, up_down
 from .injection import inject, make_plant
-from .mujoco_plant import MUJOCO_UNSUPPORTED, PLANTS, MujocoRow, MujocoTestbedPlant, as_mujoco
+from .mujoco.plant import MUJOCO_UNSUPPORTED, PLANTS, MujocoRow, MujocoTestbedPlant, as_mujoco
 from .plant import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, Plant
 from .protocol import LogProtocol, check_protocol, read_protocol, simulate_protocol
 from .protocol_run import run_protocol, settle_protocol

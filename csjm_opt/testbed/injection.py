@@ -151,7 +151,7 @@ def make_plant(rig: Rig, effects: str | Iterable[str] | None, severity: float,
     rng : numpy.random.Generator
         Draws of the effects (the same for both plants).
     plant : {"quasi-static", "mujoco"}, optional
-        The quasi-static :class:`Plant` or the :class:`~csjm_opt.testbed.mujoco_plant.MujocoTestbedPlant`.
+        The quasi-static :class:`Plant` or the :class:`~csjm_opt.testbed.mujoco.plant.MujocoTestbedPlant`.
     persistent : bool, optional
         Cycles start where the previous one settled (default) or relaxed.
 
@@ -171,7 +171,7 @@ def make_plant(rig: Rig, effects: str | Iterable[str] | None, severity: float,
         for name in ([effects] if isinstance(effects, str) else list(effects)):
             made = inject(made, name, severity, rng)
     if plant == "mujoco":
-        from .mujoco_plant import as_mujoco
+        from .mujoco.plant import as_mujoco
 
         return as_mujoco(made)
     return made

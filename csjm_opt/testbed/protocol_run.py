@@ -20,7 +20,7 @@ from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..measurement.protocol import Protocol
 from ..model.rig import Rig
-from .mujoco_plant import MujocoTestbedPlant
+from .mujoco.plant import MujocoTestbedPlant
 from .plant import Plant
 
 #: Fixed-point iterations on the dead-weight moment before giving up.

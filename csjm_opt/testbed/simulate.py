@@ -13,7 +13,7 @@ from ..measurement.logfile import MeasurementLog
 from ..model.rig import Rig
 from .cycles import design_cycles
 from .injection import make_plant
-from .mujoco_plant import MujocoTestbedPlant
+from .mujoco.plant import MujocoTestbedPlant
 from .plant import Plant
 
 
@@ -25,7 +25,7 @@ def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
 
     ``effect``: ``None``/``"none"`` (nominal plant), an effect name from the
     documented vocabulary, several names, or a ready :class:`Plant` or
-    :class:`~csjm_opt.testbed.mujoco_plant.MujocoTestbedPlant`. Rest lengths are
+    :class:`~csjm_opt.testbed.mujoco.plant.MujocoTestbedPlant`. Rest lengths are
     commanded with the *nominal* rig (as an experimenter would); the plant
     responds; the F/T reading (plus any bias) and the tracked pose get the
     instrument noise (``InstrumentNoise.paper()`` by default). ``persistent``
