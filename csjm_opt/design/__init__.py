@@ -26,11 +26,11 @@ from .geometry import (
 )
 from .interference import Interference, interference, pose_interference, segment_distance
 from .metrics import DesignMetrics, LoadSet, MetricOptions, PoseMetrics, evaluate, evaluate_poses
-from .optimise.dense_check import Check, certify
-from .optimise.runner import OptimisationResult, OptimisedDesign, design_rig_of, optimise
-from .optimise.settings import OptimiseSettings, Requirements, read_optimise_file
-from .optimise.shaping import lp_shaping_range
-from .optimise.sweep_front import SweepFrontResult, sweep_front
+from .optimisation.dense_check import Check, certify
+from .optimisation.runner import OptimisationResult, OptimisedDesign, design_rig_of, optimise
+from .optimisation.settings import OptimiseSettings, Requirements, read_optimise_file
+from .optimisation.shaping import lp_shaping_range
+from .optimisation.sweep_front import SweepFrontResult, sweep_front
 from .sampling import OrientationSampling, tilt_torsion_angles, tilt_torsion_rotations
 from .sweep.runner import SweepResult, evaluate_design, run_sweep
 from .sweep.spec import EvaluationSettings, SweepSpec

@@ -3,7 +3,7 @@
 The compiled twin of the numpy reference in :mod:`csjm_opt.model._statics_newton`
 (the method is described in :mod:`csjm_opt.model.statics`). The cable geometry
 and stiffness come from :mod:`csjm_opt.model.kernels` (tested against the
-numpy reference :mod:`csjm_opt.model.cable_terms`); ``tests/test_loop_kernels.py``
+numpy reference :mod:`csjm_opt.model.cable_terms`); ``tests/control/test_loop_kernels.py``
 checks these against those and the CasADi model. Compiled on first use and
 cached on disk (``cache=True``).
 """

@@ -80,7 +80,7 @@ _SECTIONS = {
     "loads": {"tau_ext"},
     "metrics": {"shaping_poses", "feasibility_tol_Nm", "min_hole_spacing_m", "min_cable_clearance_m",
                 "min_cable_distance_m", "min_link_clearance_m", "max_exit_angle_deg"},
-    "optimise": set(),  # read by csjm_opt.design.optimise.settings; a sweep ignores it
+    "optimise": set(),  # read by csjm_opt.design.optimisation.settings; a sweep ignores it
 }
 
 
