@@ -113,8 +113,8 @@ def _sweep_front(args: argparse.Namespace, spec: Any, settings: Any, out: Path) 
     import json
 
     from .._fileio import atomic_write_json, atomic_write_text
+    from ..design.optimisation.front import sweep_front
     from ..design.optimisation.runner import design_rig_of
-    from ..design.optimisation.sweep_front import sweep_front
 
     result = sweep_front(settings, spec.settings, max_evaluations=args.max_evaluations)
     out.mkdir(parents=True, exist_ok=True)

@@ -16,6 +16,7 @@ the shaping-range objective and its exact LP check in :mod:`.optimise_shaping`),
 :mod:`.optimise_sweep_surrogate` and their quadratic models in :mod:`.optimise_front_model`).
 """
 
+from .clearance import Interference, interference, pose_interference, segment_distance
 from .geometry import (
     PAPER_DESIGN,
     PARAMETERS,
@@ -24,22 +25,20 @@ from .geometry import (
     design_holes,
     design_rig,
 )
-from .interference import Interference, interference, pose_interference, segment_distance
-from .metrics import DesignMetrics, LoadSet, MetricOptions, PoseMetrics, evaluate, evaluate_poses
+from .metrics import DesignLoads, DesignMetrics, MetricOptions, PoseMetrics, evaluate, evaluate_poses
 from .optimisation.dense_check import Check, certify
+from .optimisation.front import SweepFrontResult, sweep_front
 from .optimisation.runner import OptimisationResult, OptimisedDesign, design_rig_of, optimise
 from .optimisation.settings import OptimiseSettings, Requirements, read_optimise_file
 from .optimisation.shaping import lp_shaping_range
-from .optimisation.sweep_front import SweepFrontResult, sweep_front
 from .sampling import OrientationSampling, tilt_torsion_angles, tilt_torsion_rotations
 from .sweep.runner import SweepResult, evaluate_design, run_sweep
 from .sweep.spec import EvaluationSettings, SweepSpec
 
-__all__ = [
-    "Check", "DesignMetrics", "EvaluationSettings", "GeometryLimits", "Interference", "LoadSet", "MetricOptions",
-    "OptimisationResult", "OptimiseSettings", "OptimisedDesign", "OrientationSampling", "PAPER_DESIGN",
-    "PARAMETERS", "PoseMetrics", "Requirements", "SweepFrontResult", "SweepResult", "SweepSpec", "certify",
-    "check_holes", "design_holes", "design_rig", "design_rig_of", "evaluate", "evaluate_design", "evaluate_poses",
-    "interference", "lp_shaping_range", "optimise", "pose_interference", "read_optimise_file", "run_sweep",
-    "segment_distance", "sweep_front", "tilt_torsion_angles", "tilt_torsion_rotations"
-]
+__all__ = ["Check", "DesignLoads", "DesignMetrics", "EvaluationSettings", "GeometryLimits", "Interference",
+           "MetricOptions", "OptimisationResult", "OptimiseSettings", "OptimisedDesign",
+           "OrientationSampling", "PAPER_DESIGN", "PARAMETERS", "PoseMetrics", "Requirements",
+           "SweepFrontResult", "SweepResult", "SweepSpec", "certify", "check_holes", "design_holes",
+           "design_rig", "design_rig_of", "evaluate", "evaluate_design", "evaluate_poses", "interference",
+           "lp_shaping_range", "optimise", "pose_interference", "read_optimise_file", "run_sweep",
+           "segment_distance", "sweep_front", "tilt_torsion_angles", "tilt_torsion_rotations"]

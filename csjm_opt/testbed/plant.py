@@ -93,7 +93,7 @@ OUTSIDE_NAMES = ("eyelet_radius", "sensor_drift", "drum_slip", "joint_friction")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
-class Plant:
+class TestbedPlant:
     """A rig with injected effects (all zero/identity = the nominal rig)."""
 
     rig: Rig                                   # true geometry, stiffness, mass, com
@@ -115,7 +115,7 @@ class Plant:
     persistent: bool = True                    # cycles start where the previous one settled
 
     @classmethod
-    def nominal(cls, rig: Rig) -> Plant:
+    def nominal(cls, rig: Rig) -> TestbedPlant:
         """The rig without effects.
 
         Parameters
@@ -124,7 +124,7 @@ class Plant:
 
         Returns
         -------
-        Plant
+        TestbedPlant
         """
         return cls(rig)
 

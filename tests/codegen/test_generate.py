@@ -15,8 +15,8 @@ import csjm_opt as co
 from csjm_opt import so3
 from csjm_opt.codegen import INFEASIBLE, ITERATION_CAP, NO_FALLBACK, SOLVED, find_compiler, generate_c, load
 from csjm_opt.errors import InfeasibleLoad, InvalidInput, NotARotation, SolverError
+from csjm_opt.model.joint_stiffness import stiffness_batch
 from csjm_opt.model.mjcf import quat_wxyz
-from csjm_opt.model.stiffness import stiffness_batch
 from csjm_opt.planning import feasibility_distance_Nm, plan_tensions_batch
 from csjm_opt.testbed.rigs import draw_rig
 from tests.conftest import cable_energy, fd_hessian

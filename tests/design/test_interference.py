@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from csjm_opt.design.interference import (
+from csjm_opt.design.clearance import (
     interference,
     point_segment_distance,
     pose_interference,
@@ -152,7 +152,7 @@ def test_certify_finds_failures_the_optimiser_never_saw():
 
 
 def test_certified_tensions_are_the_planners_where_no_bound_is_active():
-    from csjm_opt.design.metrics import LoadSet, MetricOptions, evaluate_poses
+    from csjm_opt.design.metrics import DesignLoads, MetricOptions, evaluate_poses
     from csjm_opt.design.optimisation.dense_check import slacks
     from csjm_opt.design.optimisation.settings import Requirements
 
@@ -163,6 +163,6 @@ def test_certified_tensions_are_the_planners_where_no_bound_is_active():
     sl = slacks(rig, angles, req, 0.0, 0.0)
     inside = sl["tension"] > 1e-6
     assert inside.sum() > 10
-    pm = evaluate_poses(rig, tilt_torsion_rotations(*angles.T), LoadSet(np.zeros((1, 3))), MetricOptions(0))
+    pm = evaluate_poses(rig, tilt_torsion_rotations(*angles.T), DesignLoads(np.zeros((1, 3))), MetricOptions(0))
     # the planner's (active-set QP) smallest eigenvalue equals the certification's at those poses
     assert np.allclose(pm.eig_Nm_per_rad[inside, 0], sl["stiffness"][inside], rtol=1e-8, atol=1e-8)

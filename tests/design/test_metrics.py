@@ -10,7 +10,14 @@ from scipy.optimize import linprog
 from scipy.spatial import ConvexHull
 
 import csjm_opt as co
-from csjm_opt.design import LoadSet, MetricOptions, OrientationSampling, design_rig, evaluate, evaluate_poses
+from csjm_opt.design import (
+    DesignLoads,
+    MetricOptions,
+    OrientationSampling,
+    design_rig,
+    evaluate,
+    evaluate_poses,
+)
 from csjm_opt.design.geometry import GeometryLimits
 from csjm_opt.design.metrics import stiffness_affine_parts
 from csjm_opt.design.shaping_range import directional_stiffness_range
@@ -18,7 +25,7 @@ from csjm_opt.design.sweep.runner import evaluate_design
 from csjm_opt.design.sweep.spec import EvaluationSettings
 
 #: The load set of studies/paper_sweep.toml (N m, {A}, weight excluded).
-LOADS = LoadSet(np.array([[0, 0, 0], [3, 0, 0], [-3, 0, 0], [0, 3, 0], [0, -3, 0], [0, 0, 1], [0, 0, -1.0]]))
+LOADS = DesignLoads(np.array([[0, 0, 0], [3, 0, 0], [-3, 0, 0], [0, 3, 0], [0, -3, 0], [0, 0, 1], [0, 0, -1.0]]))
 ODD_DESIGN = {"platform_radius_m": 0.06, "platform_gamma_deg": 40.0, "base_theta0_deg": 10.0,
               "A2_dz_m": 0.005, "B5_dx_m": -0.004}
 
@@ -123,7 +130,7 @@ def test_paper_design_metrics_are_stable_to_sampling_density(rig):
 
 
 def test_metric_laws(rig):
-    few = LoadSet(np.zeros((1, 3)))
+    few = DesignLoads(np.zeros((1, 3)))
     m_few = evaluate(rig, OrientationSampling(300, 45.0, 30.0), few)
     m_all = evaluate(rig, OrientationSampling(300, 45.0, 30.0), LOADS)
     assert m_all.workspace_fraction <= m_few.workspace_fraction    # more loads, never more workspace

@@ -20,7 +20,7 @@ from csjm_opt.diagnose.effects import make_effect
 from csjm_opt.diagnose.fitting.gauss_newton import FitResult
 from csjm_opt.diagnose.selection.scoring import folds_by_cycle
 from csjm_opt.errors import RigFileError
-from csjm_opt.testbed import Plant, inject, random_rig, simulate_experiment
+from csjm_opt.testbed import TestbedPlant, inject, random_rig, simulate_experiment
 from csjm_opt.testbed.injection import PLAUSIBLE_SEVERITY
 
 
@@ -88,7 +88,7 @@ def test_plausibility_allows_for_uncertainty():
     assert e.implausible(p, sd=np.array([0.04, 0.01, 0.01])) == ["bias_x_Nm"]   # 2.5 sd
 
 
-def _true_params(effect: str, rig, plant: Plant) -> np.ndarray:
+def _true_params(effect: str, rig, plant: TestbedPlant) -> np.ndarray:
     """The diagnosis's parameter vector of ``effect`` for an injected plant (independent of the fit)."""
     if effect == "hole_offsets":
         return np.r_[(plant.rig.platform_holes_A_m - rig.platform_holes_A_m).ravel(),
@@ -128,7 +128,7 @@ def test_plausible_severity_stays_inside_the_priors(effect):
         e = make_effect("friction", rig, law="coulomb") if effect == "coulomb_friction" else make_effect(effect, rig)
         for s, out in ((cap, inside), (2 * cap, outside)):
             try:
-                plant = inject(Plant.nominal(rig), effect, s, rng)
+                plant = inject(TestbedPlant.nominal(rig), effect, s, rng)
             except RigFileError:          # holes moved onto each other: not a rig at all
                 out.append(False)
                 continue

@@ -19,21 +19,21 @@ from csjm_opt.identification.experiment_design import (
     plan_experiment,
     predict_bound,
 )
-from csjm_opt.identification.load_set import LoadSet, sphere_directions
+from csjm_opt.identification.experiment_loads import ExperimentLoads, sphere_directions
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.measurement.protocol import Protocol
 from csjm_opt.model import kinematics as kin
 from csjm_opt.model.rig import paper_rig
-from csjm_opt.testbed.plant import Plant
-from csjm_opt.testbed.protocol_run import settle_protocol
+from csjm_opt.testbed.plant import TestbedPlant
+from csjm_opt.testbed.protocol_runner import settle_protocol
 
 RIG = paper_rig()
 
 
 @pytest.fixture(scope="module")
 def plans():
-    loads = LoadSet.default(RIG)
-    loads = LoadSet(loads.weights_N, loads.points_A_m, sphere_directions(16), loads.pretensions_N, 0.15)
+    loads = ExperimentLoads.default(RIG)
+    loads = ExperimentLoads(loads.weights_N, loads.points_A_m, sphere_directions(16), loads.pretensions_N, 0.15)
     plan = plan_experiment(RIG, 24, loads)
     paper = paper_protocol(RIG, 24, np.random.default_rng(0), loads=loads)
     return loads, plan, paper
@@ -41,7 +41,7 @@ def plans():
 
 def test_planned_rows_hold_on_the_testbed_plant(plans):
     loads, plan, _ = plans
-    R, _ = settle_protocol(Plant(RIG), plan.protocol)
+    R, _ = settle_protocol(TestbedPlant(RIG), plan.protocol)
     c, _ = kin.cable_terms(R, np.asarray(RIG.platform_holes_A_m), np.asarray(RIG.base_holes_B_m))
     T = np.asarray(RIG.cable_stiffness_N_per_m) * (c - plan.protocol.rest_lengths_m)
     assert T.min() >= RIG.t_min_N - 1e-6 and T.max() <= RIG.t_max_N + 1e-6

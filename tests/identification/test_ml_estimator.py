@@ -10,7 +10,7 @@ import pytest
 
 from csjm_opt import so3
 from csjm_opt.cli.app import main
-from csjm_opt.identification.crlb import crlb, sym_entries
+from csjm_opt.identification.cramer_rao import crlb, sym_entries
 from csjm_opt.identification.curvature import model_curvature, right_jacobian, weight_slopes
 from csjm_opt.identification.experiment_design import paper_protocol
 from csjm_opt.identification.identify import identify_log
@@ -18,7 +18,7 @@ from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.model.numeric import Model
 from csjm_opt.model.rig import paper_rig
 from csjm_opt.model.statics import solve_equilibrium
-from csjm_opt.testbed.protocol_run import run_protocol
+from csjm_opt.testbed.protocol_runner import run_protocol
 
 RIG = paper_rig()
 NOISE = InstrumentNoise((0.02, 0.02, 0.02), 3e-4)
@@ -146,7 +146,7 @@ def test_cli_reports_the_default_estimator(design, tmp_path, capsys):
 
 def test_dilution_correction_is_the_expected_noise_term():
     """The corrected normal equations subtract E[A(z)^T W A(z)] - A^T W A (and the rhs term), by sampling."""
-    from csjm_opt.identification.crlb import design_rows
+    from csjm_opt.identification.cramer_rao import design_rows
     from csjm_opt.identification.ml_estimator import _dilution
 
     rng = np.random.default_rng(4)

@@ -12,7 +12,7 @@ import pytest
 import csjm_opt as co
 from csjm_opt.model import cable_terms as reference
 from csjm_opt.model import kernels as kernels
-from csjm_opt.model.stiffness import is_stable
+from csjm_opt.model.joint_stiffness import is_stable
 from tests.conftest import cable_energy, fd_hessian, rodrigues
 
 REL = 1e-12

@@ -11,7 +11,7 @@ from csjm_opt.report.document import (
     Column,
     Document,
     Figure,
-    Link,
+    Hyperlink,
     Links,
     Paragraph,
     Section,
@@ -44,11 +44,11 @@ def _doc() -> Document:
                   [["a|b", Cell(0.0123456, src=("x", 0)), None], ["c", Cell(None, src=("y",)), "`code`"]],
                   "caption <i>")
     sec = Section("Step <one>", "residual 5e-15 N m: at round-off <b>", "ok",
-                  [table, Figure("fig.png", "a figure"), Links([Link("sub/index.html", "sub report", "more")]),
+                  [table, Figure("fig.png", "a figure"), Links([Hyperlink("sub/index.html", "sub report", "more")]),
                    Paragraph("see `summary.json`")])
     sec.subsections.append(Section("Detail", "second verdict.", "warn"))
     return Document("Title & more", "lead", [sec, Section("Two")], data_file="data.json",
-                    links=[Link("data.json", "data")])
+                    links=[Hyperlink("data.json", "data")])
 
 
 def test_html_escapes_text_and_carries_sources(tmp_path):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from csjm_opt import so3
-from csjm_opt.testbed import Plant, design_cycles, make_plant, simulate_experiment
+from csjm_opt.testbed import TestbedPlant, design_cycles, make_plant, simulate_experiment
 
 
 def _two_same_cycles(rig, seed=11):
@@ -55,7 +55,7 @@ def test_coulomb_band_width_scales_the_hysteresis(rig):
     up, down = 1, m - 2
     widths = []
     for F in (0.25, 0.5):
-        plant = dataclasses.replace(Plant.nominal(rig), friction_coulomb_N=np.full(6, F))
+        plant = dataclasses.replace(TestbedPlant.nominal(rig), friction_coulomb_N=np.full(6, F))
         R = plant.respond(*args)
         widths.append(so3.angle_between(R[up], R[down]))
     assert widths[0] > 1e-4

@@ -13,7 +13,7 @@ from csjm_opt.measurement.logfile import MeasurementLog
 from csjm_opt.model import kinematics as kin
 from csjm_opt.model.numeric import Model
 from csjm_opt.model.statics import solve_equilibrium
-from csjm_opt.testbed import Plant, design_cycles, make_plant, simulate_experiment, up_down
+from csjm_opt.testbed import TestbedPlant, design_cycles, make_plant, simulate_experiment, up_down
 
 
 def test_kinematics_match_the_casadi_model(rig, model):
@@ -33,7 +33,7 @@ def test_up_down_cycle_order():
 def test_nominal_plant_agrees_with_core_forward_statics(rig):
     c = design_cycles(rig, 1, np.random.default_rng(1))[0]
     n = len(c.alphas)
-    R = Plant.nominal(rig).respond(np.repeat(c.rest_lengths_m[None], n, 0), c.tau_ext_A_Nm, np.zeros(n, int),
+    R = TestbedPlant.nominal(rig).respond(np.repeat(c.rest_lengths_m[None], n, 0), c.tau_ext_A_Nm, np.zeros(n, int),
                                    np.repeat(c.R_ref[None], n, 0))
     m = Model(rig)
     for i in (0, n // 2, n - 1):
@@ -56,7 +56,7 @@ def test_simulated_log_is_a_valid_spec_log(rig, tmp_path):
 def test_noise_has_the_instrument_scale(rig):
     noise = InstrumentNoise.paper()
     rng = np.random.default_rng(3)
-    plant = Plant.nominal(rig)
+    plant = TestbedPlant.nominal(rig)
     clean = simulate_experiment(rig, 6, np.random.default_rng(3), effect=plant, noise=InstrumentNoise.none())
     noisy = simulate_experiment(rig, 6, rng, effect=plant, noise=noise)
     dtau = noisy.tau_ext_A_Nm - clean.tau_ext_A_Nm
@@ -68,7 +68,7 @@ def test_friction_plant_is_path_dependent(rig):
     c = design_cycles(rig, 1, rng)[0]
     n = len(c.alphas)
     args = (np.repeat(c.rest_lengths_m[None], n, 0), c.tau_ext_A_Nm, np.zeros(n, int), np.repeat(c.R_ref[None], n, 0))
-    R_nom = Plant.nominal(rig).respond(*args)
+    R_nom = TestbedPlant.nominal(rig).respond(*args)
     R_fr = make_plant(rig, "friction", 1.0, rng).respond(*args)
     up, down = 1, n - 2                      # same load on the way up and down
     assert c.alphas[up] == c.alphas[down]
@@ -86,7 +86,7 @@ def test_sensor_bias_and_link_compliance_laws(rig):
     assert np.all(np.linalg.eigvalsh(C) > 0)
     # with C, the measured body turns by exp(C tau_m) relative to the cable platform
     c = design_cycles(rig, 1, rng)[0]
-    plant = dataclasses.replace(Plant.nominal(rig), link_compliance_rad_per_Nm=C)
+    plant = dataclasses.replace(TestbedPlant.nominal(rig), link_compliance_rad_per_Nm=C)
     R_m = plant.respond(c.rest_lengths_m[None], c.tau_ext_A_Nm[:1], np.zeros(1, int), c.R_ref[None])[0]
     tau_m = c.tau_ext_A_Nm[0] + Model(rig).weight_moment(R_m)
     R_cable = R_m @ so3.exp(C @ tau_m).T
@@ -120,7 +120,7 @@ def test_tracker_registration_and_drift_laws(rig):
     import dataclasses
 
     Q = so3.exp([0.01, -0.02, 0.005])
-    plant = dataclasses.replace(Plant.nominal(rig), tracker_rotation_B=Q,
+    plant = dataclasses.replace(TestbedPlant.nominal(rig), tracker_rotation_B=Q,
                                 sensor_drift_A_Nm_per_row=np.array([1e-3, 0.0, 0.0]))
     R = so3.random_rotations(4, np.random.default_rng(6), 0.3)
     np.testing.assert_allclose(plant.measured_pose(R), Q @ R)
@@ -131,7 +131,7 @@ def test_tracker_registration_and_drift_laws(rig):
 def test_eyelet_moves_the_base_hole_towards_the_cable(rig):
     import dataclasses
 
-    plant = dataclasses.replace(Plant.nominal(rig), eyelet_radius_m=2e-3)
+    plant = dataclasses.replace(TestbedPlant.nominal(rig), eyelet_radius_m=2e-3)
     R = so3.random_rotations(3, np.random.default_rng(7), 0.3)
     B_eff = plant._base_holes(R)
     shift = B_eff - np.asarray(rig.base_holes_B_m)

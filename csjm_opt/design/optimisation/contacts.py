@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from ..interference import PAIRS, cable_ends_B_m, point_segment_distance, segment_distance
+from ..clearance import PAIRS, cable_ends_B_m, point_segment_distance, segment_distance
 from ..sampling import tilt_torsion_rotations
 from .problem import Contact
 from .settings import OptimiseSettings

@@ -2,7 +2,7 @@
 
 The design is evaluated with the sweep's kernels (the exact zonotope feasibility test of
 :mod:`csjm_opt.design.feasibility`, the model's J and K) and by
-:mod:`csjm_opt.design.interference`, on a Halton set of orientations of its
+:mod:`csjm_opt.design.clearance`, on a Halton set of orientations of its
 required range drawn with another seed than the optimiser's, then on the
 orientations a pattern search reaches from the worst samples of each
 requirement (tilt, azimuth and torsion moved within the range, steps halved).
@@ -29,8 +29,8 @@ import numpy as np
 
 from ...model.numeric import Model
 from ...model.rig import Rig
+from ..clearance import pose_interference
 from ..feasibility import wrench_margin_Nm
-from ..interference import pose_interference
 from ..sampling import OrientationSampling, tilt_torsion_rotations
 from .settings import Requirements
 

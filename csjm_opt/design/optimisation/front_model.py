@@ -28,7 +28,7 @@ from scipy.optimize import minimize
 
 from ..evaluation_settings import EvaluationSettings
 from .settings import OptimiseSettings
-from .sweep_surrogate import sweep_surrogate
+from .surrogates import sweep_surrogate
 
 #: Smallest and largest trust-region radius (scaled variables, infinity norm).
 MIN_RADIUS, MAX_RADIUS = 1e-3, 0.25

@@ -44,7 +44,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..interference import PAIRS
+from ..clearance import PAIRS
 from .budget import BOUNDED_OPTIONS, IterationStop
 from .settings import OptimiseSettings
 from .shaping import N_TENSIONS, initial_tensions, shaping_block

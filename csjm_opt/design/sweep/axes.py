@@ -8,8 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .._sweep_limits import MAX_DESIGNS
-from .._sweep_numbers import _float, _int
+from .._value_checks import MAX_DESIGNS, _float, _int
 
 
 @dataclasses.dataclass(frozen=True)

@@ -33,6 +33,7 @@ no process behind and no lock held: running the same command again resumes it.
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import time
 from collections.abc import Iterator
@@ -46,7 +47,6 @@ from .._dask_backend import _run_dask, dask_stream
 from .._worker_processes import _run_processes
 from ..design_evaluation import TIMING_KEYS, design_id, evaluate_design
 from ..evaluation_settings import EvaluationSettings
-from .result import SweepResult
 from .spec import SweepSpec
 from .store import ResultStore
 
@@ -164,3 +164,39 @@ def _progress(total: int, done: int, show: bool | None) -> Any:
 
     return tqdm(total=total, initial=done, desc="designs", unit="design", file=sys.stderr,
                 disable=None if show is None else not show, smoothing=0.1)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class SweepResult:
+    """Records of every design of the sweep, in sweep order, and run statistics."""
+
+    records: list[dict[str, Any]]
+    computed: int            # designs evaluated in this run
+    skipped: int             # designs found in the result file
+    seconds: float           # wall time of this run
+    complete: bool           # False when stopped early (stop_after)
+    duplicates: int = 0      # repeated lines in the result file (ignored)
+
+    @property
+    def designs_per_second(self) -> float:
+        """Designs evaluated per wall-clock second in this run (0 when none were)."""
+        return self.computed / self.seconds if self.computed and self.seconds > 0 else 0.0
+
+    def as_json(self) -> dict[str, Any]:
+        """The ``csjm sweep --json`` document.
+
+        Returns
+        -------
+        dict
+            ``{"designs": [...], "designs_per_second", "computed", "skipped", "seconds",
+            "complete"}`` (keys in docs/conventions.md).
+        """
+        designs = []
+        for r in self.records:
+            designs.append({"params": r["params"], "status": r["status"],
+                            "workspace_fraction": r["workspace_fraction"],
+                            "min_stiffness_Nm_per_rad": r["min_stiffness_Nm_per_rad"],
+                            "metrics": r["metrics"], "error": r["error"], "id": r["id"]})
+        return {"designs": designs, "designs_per_second": self.designs_per_second,
+                "computed": self.computed, "skipped": self.skipped, "seconds": self.seconds,
+                "complete": self.complete}

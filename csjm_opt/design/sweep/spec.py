@@ -55,15 +55,16 @@ from scipy.stats import qmc
 
 from ..._fileio import read_text
 from ...errors import DesignError
-from .._sweep_limits import (
+from .._value_checks import (
     MAX_DESIGNS,
     MAX_LOADS,
     MAX_ORIENTATIONS,
     MAX_SEED,
     MAX_SHAPING_POSES,
     MAX_VALUE,
+    _check_base_value,
+    _int,
 )
-from .._sweep_numbers import _check_base_value, _int
 from ..evaluation_settings import EvaluationSettings, _settings
 from ..geometry import PARAMETERS, SCALAR_PARAMETERS, design_rig
 from .axes import ParameterAxis, _axis, _axis_size

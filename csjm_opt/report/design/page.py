@@ -5,7 +5,18 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ..document import Cell, Column, Document, Figure, Link, Paragraph, Section, Table, quantity_table, sig
+from ..document import (
+    Cell,
+    Column,
+    Document,
+    Figure,
+    Hyperlink,
+    Paragraph,
+    Section,
+    Table,
+    quantity_table,
+    sig,
+)
 from .study import X_KEY, Y_KEY
 
 
@@ -79,4 +90,4 @@ def document(s: dict[str, Any], geometry: bool) -> Document:
     lead = (f"Design sweep results `{Path(s['results']).name}`" + (f" ({invalid} invalid or failed designs left out)"
                                                                    if invalid else "") + ".")
     return Document("Design study", lead, sections, data_file="design_report.json",
-                    links=[Link("design_report.json", "design_report.json", "every number of this page")])
+                    links=[Hyperlink("design_report.json", "design_report.json", "every number of this page")])

@@ -19,8 +19,7 @@ from ..folder import prepare_out_dir
 from ..render import write_document
 from .figures import geometry_figure, pareto_figure
 from .page import document
-from .pareto import pareto_layers, pareto_mask
-from .study import X_KEY, Y_KEY, DesignStudy, load_study, paper_value
+from .study import X_KEY, Y_KEY, DesignStudy, load_study, paper_value, pareto_layers, pareto_mask
 
 __all__ = ["DesignStudy", "X_KEY", "Y_KEY", "document", "geometry_figure", "load_study", "paper_value",
            "pareto_figure", "pareto_layers", "pareto_mask", "write_design_report"]

@@ -17,11 +17,10 @@ from ... import _plotting as plots
 from ..._fileio import atomic_write_json
 from ...diagnose import Diagnosis
 from ...diagnose.selection.decision import ALPHA
-from ..document import Document, Figure, Link, Paragraph, Section, format_number, sig
+from ..document import Document, Figure, Hyperlink, Paragraph, Section, format_number, sig
 from ..render import write_document
 from .figures import before_after, candidate_errors, hysteresis_loops, residual_map
-from .sections import _candidates, _gap_table, _parameters, _secondary_and_pairs, _where
-from .units import unit_of
+from .sections import _candidates, _gap_table, _parameters, _secondary_and_pairs, _where, unit_of
 from .verdict import headline
 
 FIGURES = (("residual_map.png", "Held-out residual over the pose (tilt and azimuth), nominal model and selected "
@@ -68,7 +67,7 @@ def document(j: dict[str, Any], data_name: str, alpha: float = 0.01) -> Document
     return Document(f"Sim-to-real gap diagnosis: {data_name}",
                     "Where the nominal model and the rig disagree, which unmodelled effect explains it, and how "
                     "much of the gap it closes on held-out cycles.", sections, data_file="diagnosis.json",
-                    links=[Link("diagnosis.json", "diagnosis.json", "every number of this page and more")])
+                    links=[Hyperlink("diagnosis.json", "diagnosis.json", "every number of this page and more")])
 
 
 __all__ = ["document", "headline", "unit_of"]

@@ -10,7 +10,7 @@ import numpy as np
 from ...errors import NoEquilibrium
 from ...model.dynamics import rig_dynamics
 from ...model.mjcf import quat_wxyz
-from ..certify import certify_static
+from ..static_certificate import certify_static
 from .model import has_link, plant_mjcf
 from .statics import NetForceStatics, tendon_jacobian
 

@@ -28,20 +28,20 @@ import numpy as np
 
 from ...model.dynamics import rig_dynamics
 from ...model.mjcf import rig_to_mjcf
-from ..plant import Plant
+from ..plant import TestbedPlant
 
 #: Mass (kg) left on the cable platform when the load sits on a compliant tool.
 PLATFORM_MASS_KG = 1e-6
 
 
-def plant_mjcf(plant: Plant, rest_lengths_m: np.ndarray, joint_damping_Nms_per_rad: float,
+def plant_mjcf(plant: TestbedPlant, rest_lengths_m: np.ndarray, joint_damping_Nms_per_rad: float,
                timestep_s: float = 1e-3, integrator: str = "implicitfast",
                noslip_iterations: int = 30) -> str:
     """MJCF text of ``plant`` (see the module doc).
 
     Parameters
     ----------
-    plant : Plant
+    plant : TestbedPlant
         The true rig and its injected effects.
     rest_lengths_m : (6,) array
         Initial rest lengths (changed at run time through ``tendon_lengthspring``).
@@ -93,12 +93,12 @@ def plant_mjcf(plant: Plant, rest_lengths_m: np.ndarray, joint_damping_Nms_per_r
     return ET.tostring(root, encoding="unicode")
 
 
-def has_link(plant: Plant) -> bool:
+def has_link(plant: TestbedPlant) -> bool:
     """Whether the plant has a compliant link between the cable platform and the tool.
 
     Parameters
     ----------
-    plant : Plant
+    plant : TestbedPlant
 
     Returns
     -------

@@ -1,6 +1,6 @@
 """MuJoCo as the testbed's plant: the same effects, realised in the engine's model.
 
-:class:`MujocoTestbedPlant` wraps a :class:`~csjm_opt.testbed.plant.Plant` (the
+:class:`MujocoTestbedPlant` wraps a :class:`~csjm_opt.testbed.plant.TestbedPlant` (the
 effect parameters drawn by :func:`~csjm_opt.testbed.injection.inject`, so both
 plants share effect names, parameters and random draws) and answers the same
 calls (``respond``, ``measured_moment``, ``measured_pose``). The engine model is
@@ -26,7 +26,7 @@ to this row's over ``ramp_s`` (``friction_ramp_s`` on a plant with friction; hea
 damping, implicit integration), then the engine runs until the joint speed is below
 ``speed_tol_rad_per_s``. Without friction the pose is then polished by Newton's
 method on MuJoCo's own net force to round-off; with friction it is certified
-by :func:`~csjm_opt.testbed.certify.certify_static` (friction forces within
+by :func:`~csjm_opt.testbed.static_certificate.certify_static` (friction forces within
 their bounds hold it), and MuJoCo's noslip iterations stop the soft friction
 from creeping. With ``persistent`` (the plant's setting, default) a cycle
 starts where the previous one settled; otherwise each cycle starts from its
@@ -52,8 +52,8 @@ import numpy as np
 
 from ...errors import InvalidInput
 from ...model.dynamics import rig_dynamics
-from ..certify import FrictionCertificate
-from ..plant import Plant
+from ..plant import TestbedPlant
+from ..static_certificate import FrictionCertificate
 
 #: The plants a study or ``csjm simulate`` can use.
 PLANTS = ("quasi-static", "mujoco")
@@ -97,11 +97,11 @@ class MujocoRow:
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class MujocoTestbedPlant:
-    """A :class:`Plant` realised in MuJoCo (see the module doc).
+    """A :class:`TestbedPlant` realised in MuJoCo (see the module doc).
 
     Attributes
     ----------
-    plant : Plant
+    plant : TestbedPlant
         The effects (true rig, friction, hardening, link, readings).
     ramp_s, max_settle_s : float
         Time over which a row's inputs move (frictionless plant); longest wait for rest.
@@ -133,7 +133,7 @@ class MujocoTestbedPlant:
         Its tolerance (MuJoCo's default 1e-6 leaves a stuck tendon creeping at ~2e-6 rad/s).
     """
 
-    plant: Plant
+    plant: TestbedPlant
     ramp_s: float = 0.3
     max_settle_s: float = 6.0
     speed_tol_rad_per_s: float = 1e-6
@@ -149,7 +149,7 @@ class MujocoTestbedPlant:
 
     @property
     def rig(self):
-        """The plant's *true* rig (:attr:`Plant.rig`)."""
+        """The plant's *true* rig (:attr:`TestbedPlant.rig`)."""
         return self.plant.rig
 
     @property
@@ -168,7 +168,7 @@ class MujocoTestbedPlant:
         return self.plant.persistent
 
     def measured_moment(self, tau_ext_A_Nm: np.ndarray) -> np.ndarray:
-        """F/T reading without noise (as :meth:`Plant.measured_moment`).
+        """F/T reading without noise (as :meth:`TestbedPlant.measured_moment`).
 
         Parameters
         ----------
@@ -181,7 +181,7 @@ class MujocoTestbedPlant:
         return self.plant.measured_moment(tau_ext_A_Nm)
 
     def measured_pose(self, R_true: np.ndarray) -> np.ndarray:
-        """Tracker reading without noise (as :meth:`Plant.measured_pose`).
+        """Tracker reading without noise (as :meth:`TestbedPlant.measured_pose`).
 
         Parameters
         ----------
@@ -196,7 +196,7 @@ class MujocoTestbedPlant:
     def respond(self, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray, cycle: np.ndarray,
                 R_init: np.ndarray, load_first_moment_A_kgm: np.ndarray | None = None,
                 progress: Callable[[int], object] | None = None) -> np.ndarray:
-        """True poses of the measured body (n, 3, 3), rows in time order (as :meth:`Plant.respond`).
+        """True poses of the measured body (n, 3, 3), rows in time order (as :meth:`TestbedPlant.respond`).
 
         Parameters
         ----------
@@ -206,7 +206,7 @@ class MujocoTestbedPlant:
         R_init : (n, 3, 3) array
             Start poses; used at the log's first row (and each cycle's without persistence).
         load_first_moment_A_kgm : (n, 3) array, optional
-            Dead weights on the tool, ``mass * point`` in {A} (as :meth:`Plant.respond`).
+            Dead weights on the tool, ``mass * point`` in {A} (as :meth:`TestbedPlant.respond`).
         progress : callable, optional
             Called with the number of rows just settled (e.g. ``tqdm.update``).
 
@@ -271,12 +271,12 @@ class MujocoTestbedPlant:
 
 
 
-def as_mujoco(plant: Plant, **options) -> MujocoTestbedPlant:
+def as_mujoco(plant: TestbedPlant, **options) -> MujocoTestbedPlant:
     """The same plant realised in MuJoCo.
 
     Parameters
     ----------
-    plant : Plant
+    plant : TestbedPlant
     **options
         :class:`MujocoTestbedPlant` settings (``ramp_s``, ``noslip_iterations``, ...).
 
@@ -292,12 +292,12 @@ def as_mujoco(plant: Plant, **options) -> MujocoTestbedPlant:
     return MujocoTestbedPlant(plant, **options)
 
 
-def critical_damping(plant: Plant) -> float:
+def critical_damping(plant: TestbedPlant) -> float:
     """A ball-joint damping (N m s/rad) near critical for the rig's cable stiffness and inertia.
 
     Parameters
     ----------
-    plant : Plant
+    plant : TestbedPlant
 
     Returns
     -------

@@ -7,14 +7,14 @@ import math
 import numpy as np
 import pytest
 
-import csjm_opt.design.optimisation.sweep_front as front_mod
+import csjm_opt.design.optimisation.front as front_mod
 from csjm_opt.design.design_evaluation import evaluate_design
 from csjm_opt.design.feasibility import wrench_margin_Nm
 from csjm_opt.design.optimisation.front_model import QuadModel, best_step, model_function
 from csjm_opt.design.optimisation.result import design_rig_of
 from csjm_opt.design.optimisation.runner import optimise
 from csjm_opt.design.optimisation.settings import read_optimise_file
-from csjm_opt.design.optimisation.sweep_surrogate import MARGIN_SOFTMIN_NM, sweep_surrogate
+from csjm_opt.design.optimisation.surrogates import MARGIN_SOFTMIN_NM, sweep_surrogate
 from csjm_opt.errors import DesignError
 from csjm_opt.model.numeric import Model
 from tests.design_files import tiny_design_toml

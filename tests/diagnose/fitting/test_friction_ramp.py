@@ -13,7 +13,7 @@ from csjm_opt.diagnose.fitting.friction_ramp import predict_ramp, ramp_shape_of
 from csjm_opt.diagnose.fitting.gauss_newton import fit_model
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.testbed import simulate_experiment
-from csjm_opt.testbed.plant import Plant
+from csjm_opt.testbed.plant import TestbedPlant
 
 
 def _rows(dc, shape=None):
@@ -45,7 +45,7 @@ def test_predicted_ramp_follows_the_testbed_plant(rig):
     the model with the parameters that law implies (band (1 - rho) F, stick factor rho / (1 - rho)):
     predicted along the ramps, the poses agree to a fraction of the one-step model's error."""
     F = np.array([3.0, 4.5, 6.0, 3.6, 5.4, 2.4])
-    plant = Plant(rig, friction_coulomb_N=F)
+    plant = TestbedPlant(rig, friction_coulomb_N=F)
     log = simulate_experiment(rig, 2, np.random.default_rng(5), effect=plant, noise=InstrumentNoise.none(), steps=4)
     t = compute_residuals(rig, log)
     model = AugmentedModel(rig, [make_effect("friction", rig, None, law="coulomb", memory="carried")])
@@ -70,7 +70,7 @@ def test_end_state_is_the_fitted_paths(rig):
     on the predicted path it differs from the measured-step state, and equals a plain play operator
     (brute force, in Python) driven by the path's own steps."""
     F = np.full(6, 4.0)
-    log = simulate_experiment(rig, 3, np.random.default_rng(8), effect=Plant(rig, friction_coulomb_N=F),
+    log = simulate_experiment(rig, 3, np.random.default_rng(8), effect=TestbedPlant(rig, friction_coulomb_N=F),
                               noise=InstrumentNoise.paper(), steps=3)
     t = compute_residuals(rig, log)
     model = AugmentedModel(rig, [make_effect("friction", rig, None, law="coulomb", memory="carried")])

@@ -147,14 +147,14 @@ def test_registration_error_is_named_with_hole_offsets_as_its_unseparable_altern
     import dataclasses
 
     from csjm_opt import so3
-    from csjm_opt.testbed import Plant
+    from csjm_opt.testbed import TestbedPlant
 
     axis = np.array([0.6, 0.8, 0])
     Q = so3.exp(np.radians(1.0) * axis)
     B = rig.base_holes_B_m
     turned = (so3.exp(-np.radians(1.0) * axis) @ B.T).T - B
     assert 1e-3 < np.abs(turned).max() < 4e-3                            # inside the hole prior
-    plant = dataclasses.replace(Plant.nominal(rig), tracker_rotation_B=Q)
+    plant = dataclasses.replace(TestbedPlant.nominal(rig), tracker_rotation_B=Q)
     log = simulate_experiment(rig, 6, np.random.default_rng(39), effect=plant, steps=3)
     j = diagnose(rig, log, effects=["hole_offsets", "tracker_registration", "stiffness_scale"]).as_json()
     assert j["selected"] == "tracker_registration"

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from csjm_opt import so3
-from csjm_opt.testbed import Plant, as_mujoco, design_cycles, make_plant, random_rig
+from csjm_opt.testbed import TestbedPlant, as_mujoco, design_cycles, make_plant, random_rig
 
 
 @pytest.fixture(scope="module")
@@ -31,7 +31,7 @@ def carried():
     plant = make_plant(rig, "coulomb_friction", 3.0, np.random.default_rng(6))
     args = (l, tau, cyc, R)
     R_q = dataclasses.replace(plant, friction_platform_fraction=0.01).respond(*args)
-    R_n = Plant.nominal(rig).respond(*args)
+    R_n = TestbedPlant.nominal(rig).respond(*args)
     size = np.array([so3.angle_between(a, b) for a, b in zip(R_n, R_q)])
     return plant, args, R_q, size
 

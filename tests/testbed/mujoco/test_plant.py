@@ -10,7 +10,7 @@ import pytest
 from csjm_opt import so3
 from csjm_opt.errors import NoEquilibrium
 from csjm_opt.model.statics import solve_equilibrium
-from csjm_opt.testbed import Plant, as_mujoco, certify_static, design_cycles, make_plant
+from csjm_opt.testbed import TestbedPlant, as_mujoco, certify_static, design_cycles, make_plant
 from csjm_opt.testbed.mujoco.engine import Engine
 
 
@@ -29,7 +29,7 @@ def _args(c, repeat=1):
 
 def test_nominal_mujoco_plant_agrees_with_the_toolkit_statics(rig, cycle):
     args = _args(cycle)
-    rows = as_mujoco(Plant.nominal(rig)).respond_rows(*args)
+    rows = as_mujoco(TestbedPlant.nominal(rig)).respond_rows(*args)
     for i, row in enumerate(rows):
         eq = solve_equilibrium(rig, cycle.rest_lengths_m, cycle.tau_ext_A_Nm[i], R_init=cycle.R_ref)
         assert so3.angle_between(row.R_tool, eq.R) < 1e-9
@@ -48,7 +48,7 @@ def test_small_changes_move_the_pose_by_the_tangent_stiffness(rig, cycle, what):
     else:
         true = rig.replace(platform_mass_kg=(1 + eps) * rig.platform_mass_kg)
         push = eps * eq.tau_points_A_Nm                     # the weight's moment (no other point forces)
-    row = as_mujoco(Plant(true)).respond_rows(cycle.rest_lengths_m[None], cycle.tau_ext_A_Nm[i:i + 1],
+    row = as_mujoco(TestbedPlant(true)).respond_rows(cycle.rest_lengths_m[None], cycle.tau_ext_A_Nm[i:i + 1],
                                               np.zeros(1, int), eq.R[None])[0]
     moved = so3.log(eq.R.T @ row.R_tool)
     predicted = np.linalg.solve(eq.K_tangent, push)
@@ -63,7 +63,7 @@ def test_hole_offsets_hardening_and_link_match_the_quasi_static_plant(rig, cycle
         plant = make_plant(rig, effect, severity, np.random.default_rng(3))
         R_q = plant.respond(*args)
         rows = as_mujoco(plant).respond_rows(*args)
-        nominal = Plant.nominal(rig).respond(*args)
+        nominal = TestbedPlant.nominal(rig).respond(*args)
         for i, row in enumerate(rows):
             assert so3.angle_between(row.R_tool, nominal[i]) > 1e-4, effect      # the effect shows
             assert so3.angle_between(row.R_tool, R_q[i]) < 1e-9, effect
@@ -86,7 +86,7 @@ def test_tendon_jacobian_is_the_derivative_of_the_tendon_lengths(rig):
 
     from csjm_opt.testbed.mujoco.statics import tendon_jacobian
 
-    plant = dataclasses.replace(Plant.nominal(rig), link_compliance_rad_per_Nm=np.diag([0.006, 0.004, 0.008]))
+    plant = dataclasses.replace(TestbedPlant.nominal(rig), link_compliance_rad_per_Nm=np.diag([0.006, 0.004, 0.008]))
     engine = Engine(as_mujoco(plant), np.full(6, 0.1))
     m, d = engine.m, engine.d
     rng = np.random.default_rng(8)
@@ -117,7 +117,7 @@ def _quat(v):
 
 def test_link_turns_the_tool_by_the_compliance_times_the_tool_moment(rig, cycle):
     C = np.diag([0.006, 0.004, 0.008])
-    plant = dataclasses.replace(Plant.nominal(rig), link_compliance_rad_per_Nm=C)
+    plant = dataclasses.replace(TestbedPlant.nominal(rig), link_compliance_rad_per_Nm=C)
     rows = as_mujoco(plant).respond_rows(*_args(cycle))
     g = np.asarray(rig.gravity_B_m_per_s2)
     for i, row in enumerate(rows):
@@ -132,8 +132,8 @@ def test_dead_weight_equals_a_point_force_in_the_toolkit_statics(rig, cycle):
                            R_init=cycle.R_ref)
     args = (cycle.rest_lengths_m[None], cycle.tau_ext_A_Nm[1:2], np.zeros(1, int), cycle.R_ref[None],
             (mass * point)[None])
-    assert so3.angle_between(Plant.nominal(rig).respond(*args)[0], eq.R) < 1e-9
-    assert so3.angle_between(as_mujoco(Plant.nominal(rig)).respond(*args)[0], eq.R) < 1e-9
+    assert so3.angle_between(TestbedPlant.nominal(rig).respond(*args)[0], eq.R) < 1e-9
+    assert so3.angle_between(as_mujoco(TestbedPlant.nominal(rig)).respond(*args)[0], eq.R) < 1e-9
 
 
 def test_certify_static_against_the_closed_form():
@@ -198,7 +198,7 @@ def test_mujoco_hysteresis_and_memory_across_cycles(rig, cycle, effect):
     assert so3.angle_between(R[0], R[m - 1]) > 1e-3
     # nothing changed: nothing moves (but MuJoCo's residual creep, ~1e-6 rad over the 20 s ramp to a new cycle)
     assert so3.angle_between(R[m], R[m - 1]) < 5e-6
-    R0 = as_mujoco(Plant.nominal(rig)).respond(*args)
+    R0 = as_mujoco(TestbedPlant.nominal(rig)).respond(*args)
     assert so3.angle_between(R0[0], R0[m - 1]) < 1e-10
     if effect == "joint_friction":       # relaxed cycles: the second repeats the first
         relaxed = dataclasses.replace(make_plant(rig, effect, 3.0, np.random.default_rng(5)), persistent=False)
@@ -213,7 +213,7 @@ def test_mujoco_friction_agrees_with_the_quasi_static_play_operator(rig, cycle):
     plant = make_plant(rig, "coulomb_friction", 3.0, np.random.default_rng(6))
     R_m = as_mujoco(plant).respond(*args)
     R_q = dataclasses.replace(plant, friction_platform_fraction=0.01).respond(*args)
-    R_n = Plant.nominal(rig).respond(*args)
+    R_n = TestbedPlant.nominal(rig).respond(*args)
     for i in range(1, len(R_m)):
         size = so3.angle_between(R_n[i], R_q[i])
         assert size > 3e-3
@@ -226,7 +226,7 @@ def test_joint_friction_agrees_between_the_plants(rig, cycle):
     plant = make_plant(rig, "joint_friction", 3.0, np.random.default_rng(7))
     R_m = as_mujoco(plant).respond(*args)
     R_q = plant.respond(*args)
-    R_n = Plant.nominal(rig).respond(*args)
+    R_n = TestbedPlant.nominal(rig).respond(*args)
     for i in range(1, len(R_m)):
         size = so3.angle_between(R_n[i], R_q[i])
         assert size > 1e-3
@@ -240,7 +240,7 @@ def test_remaining_travel_is_the_distance_left_to_the_equilibrium(rig, cycle):
     from csjm_opt.model.mjcf import quat_wxyz
 
     eq = solve_equilibrium(rig, cycle.rest_lengths_m, cycle.tau_ext_A_Nm[2], R_init=cycle.R_ref)
-    engine = Engine(as_mujoco(Plant.nominal(rig)), cycle.rest_lengths_m)
+    engine = Engine(as_mujoco(TestbedPlant.nominal(rig)), cycle.rest_lengths_m)
     engine.set_inputs(cycle.rest_lengths_m, cycle.tau_ext_A_Nm[2], np.zeros(3))
     engine.d.qpos[:4] = quat_wxyz(eq.R @ so3.exp(np.array([0.02, -0.01, 0.015])))
     mujoco.mj_forward(engine.m, engine.d)
@@ -256,7 +256,7 @@ def test_frictionless_rows_settle_when_the_move_outlasts_one_wait(rig, cycle):
     """A wait far shorter than the move (as a long move on a soft rig): further waits, then Newton's method,
     reach the toolkit's stable equilibrium."""
     args = _args(cycle)
-    rows = as_mujoco(Plant.nominal(rig), max_settle_s=0.05, ramp_s=0.01).respond_rows(*args)
+    rows = as_mujoco(TestbedPlant.nominal(rig), max_settle_s=0.05, ramp_s=0.01).respond_rows(*args)
     for i, row in enumerate(rows):
         eq = solve_equilibrium(rig, cycle.rest_lengths_m, cycle.tau_ext_A_Nm[i], R_init=cycle.R_ref)
         assert so3.angle_between(row.R_tool, eq.R) < 1e-9

@@ -2,7 +2,7 @@
 
 Each row commands its rest lengths and hangs its dead weight: a force fixed in {B} at a point
 of the platform, whose moment about O in {A}, ``p x (R^T f)``, depends on the pose the
-platform settles in. The plant (:class:`~csjm_opt.testbed.plant.Plant`) takes moments fixed in
+platform settles in. The plant (:class:`~csjm_opt.testbed.plant.TestbedPlant`) takes moments fixed in
 {A}, so the pose is found by a fixed-point iteration on the load (the dead weight's stiffness
 ``|p| |f|`` is small against K; the iteration stops at 1e-12 rad). The F/T sensor then reads
 that moment (plus the plant's bias and drift) with noise, the tracker the pose with noise.
@@ -21,7 +21,7 @@ from ..measurement.logfile import MeasurementLog
 from ..measurement.protocol import Protocol
 from ..model.rig import Rig
 from .mujoco.plant import MujocoTestbedPlant
-from .plant import Plant
+from .plant import TestbedPlant
 
 #: Fixed-point iterations on the dead-weight moment before giving up.
 MAX_LOAD_ITERATIONS = 60
@@ -43,13 +43,13 @@ def dead_weight_moments(R: np.ndarray, force_B_N: np.ndarray, point_A_m: np.ndar
     return np.cross(point_A_m, np.einsum("nji,nj->ni", R, force_B_N))
 
 
-def settle_protocol(plant: Plant | MujocoTestbedPlant, protocol: Protocol,
+def settle_protocol(plant: TestbedPlant | MujocoTestbedPlant, protocol: Protocol,
                     R_start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """True poses (n, 3, 3) and true external moments in {A} (n, 3) of every protocol row.
 
     Parameters
     ----------
-    plant : Plant
+    plant : TestbedPlant
     protocol : Protocol
     R_start : array (3, 3), optional
         Where the platform starts (identity by default).
@@ -65,7 +65,7 @@ def settle_protocol(plant: Plant | MujocoTestbedPlant, protocol: Protocol,
         The plant cannot hold a row's load, or the load iteration does not settle.
     """
     n = len(protocol)
-    base = plant.plant if isinstance(plant, MujocoTestbedPlant) else plant   # it wraps its Plant
+    base = plant.plant if isinstance(plant, MujocoTestbedPlant) else plant   # it wraps its TestbedPlant
     path = base.has_friction or bool(np.isfinite(base.drum_slip_threshold_N))
     cycle = protocol.cycle if path else np.arange(n)
     f, p, l = protocol.force_B_N, protocol.point_A_m, protocol.rest_lengths_m
@@ -83,13 +83,13 @@ def settle_protocol(plant: Plant | MujocoTestbedPlant, protocol: Protocol,
                         f"(last change {step:.3g} rad)", "diverged", step)
 
 
-def run_protocol(plant: Plant | MujocoTestbedPlant | Rig, protocol: Protocol, rng: np.random.Generator,
+def run_protocol(plant: TestbedPlant | MujocoTestbedPlant | Rig, protocol: Protocol, rng: np.random.Generator,
                  noise: InstrumentNoise | None = None) -> MeasurementLog:
     """The measurement log a lab would record running ``protocol`` on ``plant``.
 
     Parameters
     ----------
-    plant : Plant or Rig
+    plant : TestbedPlant or Rig
         The simulated rig (a :class:`Rig` is its nominal plant).
     protocol : Protocol
     rng : numpy.random.Generator
@@ -107,7 +107,7 @@ def run_protocol(plant: Plant | MujocoTestbedPlant | Rig, protocol: Protocol, rn
     NoEquilibrium
         As :func:`settle_protocol`.
     """
-    plant = plant if isinstance(plant, (Plant, MujocoTestbedPlant)) else Plant(plant)
+    plant = plant if isinstance(plant, (TestbedPlant, MujocoTestbedPlant)) else TestbedPlant(plant)
     noise = InstrumentNoise.paper() if noise is None else noise
     R_true, tau = settle_protocol(plant, protocol)
     tau_meas, R_meas = noise.sample(plant.measured_moment(tau), plant.measured_pose(R_true), rng)

@@ -16,9 +16,9 @@ from ..model.numeric import Model
 from ..model.rig import Rig
 from ..model.statics import EquilibriumSolver, solve_equilibrium
 from ..planning.planner import plan_tensions
-from .crlb import design_rows, row_covariances, slopes
+from .cramer_rao import design_rows, row_covariances, slopes
 from .curvature import model_curvature, weight_slopes
-from .load_set import LoadSet
+from .experiment_loads import ExperimentLoads
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -97,7 +97,7 @@ def row_information(model: Model, R_ref: np.ndarray, l: np.ndarray, K: np.ndarra
     return np.einsum("nia,nij,njb->nab", A, np.linalg.inv(V), A)
 
 
-def cycle_for(rig: Rig, model: Model, R_pose: np.ndarray, pretension_N: float, loads: LoadSet,
+def cycle_for(rig: Rig, model: Model, R_pose: np.ndarray, pretension_N: float, loads: ExperimentLoads,
               noise: InstrumentNoise) -> Cycle | None:
     """Settle every load of ``loads`` at one pose and pretension (None if the reference fails).
 
@@ -109,7 +109,7 @@ def cycle_for(rig: Rig, model: Model, R_pose: np.ndarray, pretension_N: float, l
         Pose the pretension is planned at.
     pretension_N : float
         Reference tension of the planner.
-    loads : LoadSet
+    loads : ExperimentLoads
     noise : InstrumentNoise
 
     Returns

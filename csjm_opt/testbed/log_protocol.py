@@ -51,8 +51,8 @@ from ..measurement.logfile import COLUMNS, MeasurementLog, parse_number
 from ..measurement.protocol import Protocol as LoadProtocol
 from ..model import kinematics as kin
 from ..model.rig import Rig
-from .plant import Plant
-from .protocol_run import run_protocol
+from .plant import TestbedPlant
+from .protocol_runner import run_protocol
 
 LOAD_COLUMNS = ("load_kg", "load_x_A_m", "load_y_A_m", "load_z_A_m")
 INTENDED_COLUMNS = ("intended_tau_x", "intended_tau_y", "intended_tau_z")
@@ -230,7 +230,7 @@ def _nominal(rig: Rig, protocol: LogProtocol) -> tuple[np.ndarray, np.ndarray]:
     """Nominal equilibrium poses and tensions of the protocol's rows (each row from its planned pose)."""
     n = len(protocol)
     R0 = protocol.planned_R if protocol.planned_R is not None else np.repeat(np.eye(3)[None], n, 0)
-    plant = dataclasses.replace(Plant.nominal(rig), persistent=False)
+    plant = dataclasses.replace(TestbedPlant.nominal(rig), persistent=False)
     R = plant.respond(protocol.rest_lengths_m, protocol.tau_fixed_A_Nm, np.arange(n), R0,
                       protocol.load_first_moment_A_kgm)
     c, _ = kin.cable_terms(R, np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m))
@@ -289,7 +289,7 @@ def simulate_protocol(rig: Rig, protocol: str | Path | LogProtocol | LoadProtoco
         The nominal rig (the protocol's).
     protocol : str, Path, LogProtocol or csjm_opt.measurement.protocol.Protocol
         A protocol file (or CSV text) or a read one.
-    effects : str, iterable of str, Plant, MujocoTestbedPlant or None
+    effects : str, iterable of str, TestbedPlant, MujocoTestbedPlant or None
         Effect names (injected at ``severity`` with draws from ``rng``) or a ready plant
         (the hidden truth of a study; its own kind is used, ``plant`` ignored).
     severity : float, optional

@@ -28,7 +28,7 @@ _KEYS = ("weights_N", "points_A_m", "directions", "pretensions_N", "max_rotation
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
-class LoadSet:
+class ExperimentLoads:
     """Loads and limits of an identification experiment (SI units)."""
 
     weights_N: np.ndarray         # (w,)
@@ -38,7 +38,7 @@ class LoadSet:
     max_rotation_rad: float = 0.15
 
     @classmethod
-    def default(cls, rig: Rig) -> "LoadSet":
+    def default(cls, rig: Rig) -> "ExperimentLoads":
         """The default set for ``rig`` (module docstring).
 
         Parameters
@@ -47,7 +47,7 @@ class LoadSet:
 
         Returns
         -------
-        LoadSet
+        ExperimentLoads
         """
         h = float(np.mean(np.asarray(rig.platform_holes_A_m)[:, 2]))
         r = 0.05
@@ -56,7 +56,7 @@ class LoadSet:
                    default_pretensions(rig))
 
     @classmethod
-    def from_toml(cls, path: str | Path, rig: Rig) -> "LoadSet":
+    def from_toml(cls, path: str | Path, rig: Rig) -> "ExperimentLoads":
         """Read a load set; missing keys take the defaults of :meth:`default`.
 
         Parameters
@@ -66,7 +66,7 @@ class LoadSet:
 
         Returns
         -------
-        LoadSet
+        ExperimentLoads
 
         Raises
         ------

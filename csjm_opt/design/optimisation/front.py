@@ -3,7 +3,7 @@
 ``csjm sweep`` draws its Pareto front in (``workspace_fraction``,
 ``min_stiffness_Nm_per_rad``) on its own sample orientations. :func:`sweep_front`
 traces the same front by optimisation, on the smooth twins ``F`` and ``S`` of
-those metrics (:mod:`csjm_opt.design.optimisation.sweep_surrogate`), with exact
+those metrics (:mod:`csjm_opt.design.optimisation.surrogates`), with exact
 first and second derivatives, by a trust-region method on their quadratic
 models (:mod:`csjm_opt.design.optimisation.front_model`):
 

@@ -1,11 +1,25 @@
-"""Number checks of sweep-file values; ``fail(message, key)`` builds the error naming the key."""
+"""Values of a sweep file: their size and value bounds, and the number checks.
+
+The bounds are checked before anything is allocated; ``fail(message, key)`` builds the error naming the key.
+"""
 
 from __future__ import annotations
 
 import math
 from typing import Any
 
-from ._sweep_limits import MAX_DESIGNS, MAX_VALUE
+#: Most designs in one sweep (a 1e6-design sweep takes days on a workstation).
+MAX_DESIGNS = 1_000_000
+#: Most orientations sampled per design (the metrics hold a few arrays of this length per load).
+MAX_ORIENTATIONS = 100_000
+#: Most shaping poses per design (each solves a QP family).
+MAX_SHAPING_POSES = 10_000
+#: Most rows of ``loads.tau_ext``.
+MAX_LOADS = 100
+#: Largest magnitude of any number in a sweep file (parameters are m, deg, N, N/m, kg).
+MAX_VALUE = 1e9
+#: Largest seed (numpy's generators take any integer; this keeps it a 63-bit integer).
+MAX_SEED = 2 ** 63 - 1
 
 
 def _check_base_value(value: Any, key: str, fail: Any) -> None:
