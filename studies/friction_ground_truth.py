@@ -41,7 +41,7 @@ def record(job: dict, ramp_s: float, cycle_ramp_s: float) -> dict:
     import mujoco
 
     from csjm_opt.measurement.instruments import InstrumentNoise
-    from csjm_opt.testbed import mujoco_engine as me
+    from csjm_opt.testbed.mujoco import engine as me
     from csjm_opt.testbed.mujoco.plant import as_mujoco
     from csjm_opt.testbed.mujoco.statics import tendon_jacobian
 

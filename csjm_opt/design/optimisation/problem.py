@@ -91,7 +91,7 @@ class Problem:
     design_of: Any        # casadi Function: u -> design vector (natural units)
     constraints_of: Any   # casadi Function: x, p -> g
     n_slots: int = 0      # orientation slots (the pose constraints come first, slot by slot)
-    stop: Any = None      # IterationStop of a bounded solver (optimise_budget), else None
+    stop: Any = None      # IterationStop of a bounded solver (budget.py), else None
 
 
 @dataclasses.dataclass
@@ -280,7 +280,7 @@ def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int, bounded: b
     n_fixed = g_fixed.size1_out(0)
     lbg = np.concatenate([np.tile(lo_pose, n_slots), np.zeros(n_fixed)])
     ubg = np.concatenate([np.tile(hi_pose, n_slots), np.full(n_fixed, np.inf)])
-    if n_s:                                             # the shaping epigraph (optimise_shaping)
+    if n_s:                                             # the shaping epigraph (shaping.py)
         g_s, lo_s, hi_s = shaping_block(A_m, B_m, rig_m, q_m, ang, loads[0], x[n_d + 1 + n_t:], s_shape, n_slots)
         g, lbg, ubg = ca.vertcat(g, g_s), np.concatenate([lbg, lo_s]), np.concatenate([ubg, hi_s])
     sign = -1.0 if obj != "size" else 1.0
@@ -289,7 +289,7 @@ def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int, bounded: b
                                       "hessian_approximation": HESSIAN}, "print_time": False, "expand": True}
     nlp: dict[str, Any] = {"x": x, "p": par, "f": sign * qx, "g": g}
     stop = IterationStop(x.numel(), g.numel(), par.numel()) if bounded else None
-    if stop is not None:                                # evaluations bounded (optimise_budget)
+    if stop is not None:                                # evaluations bounded (budget.py)
         opts.update(iteration_callback=stop, ipopt={**opts["ipopt"], **BOUNDED_OPTIONS})
     solver = ca.nlpsol("csjm_optimise", "ipopt", nlp, opts)
     design_of = ca.Function("design_of", [u], [ca.vertcat(*[p[n] for n in names])])

@@ -44,7 +44,7 @@ from ..geometry import SCALAR_PARAMETERS
 from ..sweep.spec import SweepSpec, read_sweep_toml
 
 #: Objectives (each maximised, except "size", minimised). "shaping" is the smallest shaping range
-#: (N m/rad) over the required orientations and the axes x, y, z (:mod:`.optimise_shaping`).
+#: (N m/rad) over the required orientations and the axes x, y, z (:mod:`.shaping`).
 OBJECTIVES = ("stiffness", "tension_margin", "range", "size", "shaping")
 _DEFAULTS: dict[str, Any] = {
     "objective": "range", "pareto_with": "stiffness", "pareto_points": 4, "range_scale": 1.0,

@@ -310,7 +310,7 @@ def objective_shortfall_only(settings: Any, check: Check) -> bool:
 
     The rounds add the orientations where the dense LP falls short of the value the solve claimed;
     when they run out with the shaping range the objective, the design still holds every requirement
-    and its certified objective is the dense LP's value (:func:`~.optimise_result.objectives_of`),
+    and its certified objective is the dense LP's value (:func:`~.result.objectives_of`),
     so it is a certified design. A held shaping range (a front's epsilon) is a requirement and must hold.
 
     Parameters
