@@ -221,7 +221,7 @@ def test_study_script_makes_figures_and_places_the_paper(tmp_path):
 @pytest.mark.parametrize("startup_s, uses_pool", [(0.0, True), (1e9, False)])
 def test_automatic_workers_choose_the_pool_only_when_it_pays(tmp_path, monkeypatch, startup_s, uses_pool):
     """``workers=None``: designs timed here first; the pool only if the rest outlasts its start-up."""
-    from csjm_opt.design import sweep as sweep_module
+    from csjm_opt.design.sweep import runner as sweep_module
 
     calls = []
     real = sweep_module._run_processes
