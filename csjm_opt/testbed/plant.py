@@ -96,6 +96,8 @@ OUTSIDE_NAMES = ("eyelet_radius", "sensor_drift", "drum_slip", "joint_friction")
 class TestbedPlant:
     """A rig with injected effects (all zero/identity = the nominal rig)."""
 
+    __test__ = False                           # a plant, not a pytest test class (its name starts with "Test")
+
     rig: Rig                                   # true geometry, stiffness, mass, com
     hardening_per_m: float = 0.0
     friction_mu_beta: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(6))
