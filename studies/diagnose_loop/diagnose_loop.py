@@ -135,7 +135,7 @@ def run_one(job: dict) -> dict:
 
 def _run_one(job: dict) -> dict:
     from csjm_opt.diagnose import diagnose
-    from csjm_opt.diagnose.suggest import suggest_experiment
+    from csjm_opt.diagnose.suggest.experiment import suggest_experiment
     from studies.diagnose_confusion.diagnose_confusion import build_plant, job_seed, truth
 
     t0, plant0 = time.perf_counter(), PLANT_SECONDS[0]
