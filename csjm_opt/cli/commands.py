@@ -28,6 +28,28 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
+# Choices the parsers offer, kept here so that building a parser imports no numerical library;
+# tests/cli check each against the module that owns it.
+#: :data:`csjm_opt.shaping.objectives.OBJECTIVES`.
+SHAPING_OBJECTIVES = ("frobenius", "eigen", "directional")
+#: :data:`csjm_opt.model.mjcf.ACTUATIONS`.
+MJCF_ACTUATIONS = ("spring", "winch", "tension")
+#: :data:`csjm_opt.testbed.mujoco.plant.PLANTS`.
+TESTBED_PLANTS = ("quasi-static", "mujoco")
+#: The diagnosis vocabulary, :data:`csjm_opt.diagnose.effects.EFFECTS` (in its order).
+DIAGNOSIS_EFFECTS = ("hole_offsets", "friction", "cable_hardening", "link_compliance", "sensor_bias", "mass_com",
+                     "tracker_registration", "stiffness_scale", "guide_radius")
+#: The effects ``csjm simulate`` injects: :data:`csjm_opt.testbed.plant.EFFECT_NAMES`, the variants
+#: (:data:`~csjm_opt.testbed.plant.VARIANT_NAMES`) and :data:`~csjm_opt.testbed.plant.OUTSIDE_NAMES`.
+TESTBED_EFFECTS = ("hole_offsets", "friction", "cable_hardening", "link_compliance", "sensor_bias", "mass_com",
+                   "tracker_registration", "stiffness_scale", "coulomb_friction", "guide_radius", "sensor_drift",
+                   "drum_slip", "joint_friction")
+#: Old effect names ``csjm simulate`` still takes: :data:`csjm_opt.testbed.plant.DEPRECATED_NAMES`.
+TESTBED_DEPRECATED = {"eyelet_radius": "guide_radius"}
+#: :data:`csjm_opt.design._value_checks.MAX_DESIGNS`.
+MAX_DESIGNS = 1_000_000
+
+
 def command_help(name: str) -> str:
     """The one-line help of command ``name``.
 

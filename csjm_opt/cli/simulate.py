@@ -10,17 +10,10 @@ import numpy as np
 
 from .._fileio import atomic_write_json, atomic_write_text
 from ..errors import InvalidInput
-from ..measurement.instruments import InstrumentNoise
-from ..measurement.logfile import MeasurementLog
-from ..model.rig import load_rig
-from ..testbed.injection import inject, make_plant
-from ..testbed.log_protocol import LogProtocol, read_protocol, simulate_protocol
-from ..testbed.mujoco.plant import PLANTS
-from ..testbed.plant import DEPRECATED_NAMES, EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, TestbedPlant
-from ._options import check_outputs, int_in
-from .commands import command_help
+from ._options import check_outputs, int_in, json_option, out_option, rig_option
+from .commands import TESTBED_DEPRECATED, TESTBED_EFFECTS, TESTBED_PLANTS, command_help
 
-KNOWN = EFFECT_NAMES + tuple(VARIANT_NAMES) + OUTSIDE_NAMES
+KNOWN = TESTBED_EFFECTS
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -33,15 +26,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     """
     p = sub.add_parser(
         "simulate", help=command_help("simulate"),
+        parents=[rig_option("rig TOML file of the protocol"), out_option("LOG.csv", "measured log to write"),
+                 json_option("a summary (with the injected truth)")],
                        description="Run a protocol (the log format with planned rest lengths, intended loads "
                        "and empty measured columns) on a testbed plant with injected effects, and write the "
                        "measured log (instrument noise added). Each cycle starts where the previous one "
                        "settled unless --relaxed.")
     p.add_argument("protocol", metavar="PROTOCOL.csv", help="the protocol to run")
-    p.add_argument("--rig", default=None, help="rig TOML file of the protocol (default: the built-in paper rig)")
     p.add_argument("--effect", action="append", default=[], metavar="NAME[=SEVERITY]",
                    help=f"inject an effect (repeatable; severity 1 = typical, default 1): one of {', '.join(KNOWN)}")
-    p.add_argument("--plant", choices=PLANTS, default="quasi-static",
+    p.add_argument("--plant", choices=TESTBED_PLANTS, default="quasi-static",
                    help="the toolkit's quasi-static plant (default) or MuJoCo with the effects in the engine model")
     p.add_argument("--seed", type=int_in(0, 2 ** 32 - 1), default=0, help="seed of the effect draws and noise")
     p.add_argument("--noise", choices=("paper", "none"), default="paper",
@@ -50,8 +44,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--after", metavar="LOG.csv", default=None,
                    help="a log run just before on the same plant (same --effect and --seed): the protocol "
                    "starts from the state where it settled")
-    p.add_argument("-o", "--output", required=True, metavar="LOG.csv", help="measured log to write")
-    p.add_argument("--json", metavar="PATH", help="write a summary (with the injected truth) as JSON ('-' = stdout)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.set_defaults(func=run)
 
@@ -78,10 +70,10 @@ def parse_effects(items: list[str]) -> list[tuple[str, float]]:
         name = name.strip()
         if name == "none":
             continue
-        if name in DEPRECATED_NAMES:
-            print(f"csjm simulate: warning: --effect {name} is now called {DEPRECATED_NAMES[name]}; the old name "
+        if name in TESTBED_DEPRECATED:
+            print(f"csjm simulate: warning: --effect {name} is now called {TESTBED_DEPRECATED[name]}; the old name "
                   "will go", file=sys.stderr)
-            name = DEPRECATED_NAMES[name]
+            name = TESTBED_DEPRECATED[name]
         if name not in KNOWN:
             raise InvalidInput(f"--effect: unknown effect {name!r}; expected one of {', '.join(KNOWN)}", "--effect")
         try:
@@ -111,6 +103,8 @@ def truth(plant, rig=None) -> dict:
     -------
     dict
     """
+    from ..testbed.plant import TestbedPlant
+
     p: TestbedPlant = plant if isinstance(plant, TestbedPlant) else plant.plant
     nominal = TestbedPlant.nominal(p.rig)
     out: dict = {}
@@ -177,7 +171,13 @@ def run(args: argparse.Namespace) -> int:
         A malformed protocol, one outside the rig's limits or written for another rig (file and line
         named), an unknown effect, or a row the simulated plant cannot hold.
     """
-    check_outputs([args.rig, args.protocol, args.after], {"-o/--output": args.output, "--json": args.json})
+    from ..measurement.instruments import InstrumentNoise
+    from ..measurement.logfile import MeasurementLog
+    from ..model.rig import load_rig
+    from ..testbed.injection import inject, make_plant
+    from ..testbed.log_protocol import LogProtocol, read_protocol, simulate_protocol
+
+    check_outputs([args.rig, args.protocol, args.after], {"-o/--out": args.out, "--json": args.json})
     effects = parse_effects(args.effect)
     rig = load_rig(args.rig)
     proto = read_protocol(args.protocol)
@@ -198,7 +198,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     seconds = time.perf_counter() - t0
-    path = atomic_write_text(args.output, log.to_text())
+    path = atomic_write_text(args.out, log.to_text())
     summary = {"output": str(path), "protocol": str(args.protocol), "rows": len(log), "cycles": len(log.cycle_ids),
                "plant": args.plant, "persistent": not args.relaxed, "noise": args.noise, "seed": args.seed,
                "effects": [{"name": n, "severity": s} for n, s in effects], "truth": truth(plant, rig),

@@ -151,6 +151,6 @@ def check_log_rig(rig: Rig, log: MeasurementLog, what: str | None = None, rows: 
             f"{name}: the rig file cannot have produced this log: its first {fit.rows} rows are out of "
             f"equilibrium with the rig's cables by {fit.median_N:.1f} N per cable (median; at most "
             f"{fit.tolerance_N:.1f} N from effects a rig can have); is it a log of another rig? Pass its "
-            "rig file with --rig (or skip the check with check_rig=False)",
+            "rig file with --rig (or skip this check: --no-rig-check, check_rig=False)",
             log.source, fit.median_N, fit.tolerance_N)
     return fit

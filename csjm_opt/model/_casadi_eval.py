@@ -9,11 +9,23 @@ JIT-compiles the function to C first).
 from __future__ import annotations
 
 import functools
+from typing import TYPE_CHECKING, Any
 
-import casadi as ca
 import numpy as np
 
-from .casadi_model import build_functions
+if TYPE_CHECKING:
+    import casadi as ca
+
+
+def build_functions() -> dict[str, Any]:
+    """The named CasADi functions (:func:`csjm_opt.model.casadi_model.build_functions`).
+
+    CasADi is imported on first use: a :class:`~csjm_opt.model.numeric.Model` that only runs its
+    compiled kernels never loads it.
+    """
+    from .casadi_model import build_functions as build
+
+    return build()
 
 
 def _stack_h(X: np.ndarray) -> np.ndarray:
@@ -89,6 +101,8 @@ def _mapped(name: str, n: int, compiled: bool = False) -> ca.Function:
 def _jit(name: str) -> ca.Function:
     f = build_functions()[name]
     mx = f.mx_in()
+    import casadi as ca
+
     try:
         return ca.Function(f"{name}_jit", mx, f.call(mx), f.name_in(), f.name_out(),
                            {"jit": True, "compiler": "shell",

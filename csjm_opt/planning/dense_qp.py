@@ -26,7 +26,6 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from scipy.optimize import linprog
 
 from . import kernels as kernels
 from .active_set import solve as _project_box_eq
@@ -115,6 +114,8 @@ def _feasible_point(A, b, lo, hi) -> np.ndarray | None:
         proj = _project_box_eq(A[None], b[None], (0.5 * (lo + hi))[None], lo[0], hi[0])
         if proj.converged[0]:
             return proj.t[0].copy()
+    from scipy.optimize import linprog  # only near the boundary of the feasible set
+
     res = linprog(np.zeros(A.shape[1]), A_eq=A, b_eq=b, bounds=list(zip(lo, hi)), method="highs")
     return res.x if res.status == 0 else None
 

@@ -24,14 +24,11 @@ tension box; a load within that tolerance always gets a plan.
 from __future__ import annotations
 
 import warnings
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import numba
 import numpy as np
-import qpsolvers
 from numpy.typing import ArrayLike
-from scipy import sparse
-from scipy.optimize import lsq_linear
 
 from .._validate import as_array, as_rotation, as_vector3
 from ..errors import InfeasibleLoad, InvalidInput, SolverError
@@ -40,6 +37,9 @@ from ..model.rig import Rig
 from . import dense_qp as dense_qp
 from . import kernels as kernels
 from .plans import TensionPlan, TensionPlanBatch
+
+if TYPE_CHECKING:        # qpsolvers and SciPy load only on the paths that use them (csjm plan needs neither)
+    import qpsolvers
 
 __all__ = ["FEASIBILITY_TOL_NM", "SOLVERS", "TensionPlan", "TensionPlanBatch", "build_tension_qp",
            "build_tension_qp_for", "feasibility_distance_Nm", "plan_tensions", "plan_tensions_batch"]
@@ -52,6 +52,9 @@ FEASIBILITY_TOL_NM = 1e-8
 def build_tension_qp(J: np.ndarray, tau_load_A_Nm: np.ndarray, t_min_N: float, t_max_N: float,
                      t_ref_N: np.ndarray) -> qpsolvers.Problem:
     """The tension QP as a :class:`qpsolvers.Problem` (dense), solver-free."""
+    import qpsolvers
+    from scipy import sparse
+
     return qpsolvers.Problem(P=sparse.identity(6, format="csc"), q=-np.asarray(t_ref_N, float),
                              A=sparse.csc_matrix(J.T), b=-np.asarray(tau_load_A_Nm, float),
                              lb=np.full(6, t_min_N), ub=np.full(6, t_max_N))
@@ -234,6 +237,8 @@ def _nearest_feasible(J: np.ndarray, tau_load: np.ndarray, lo: float, hi: float)
     if kernels.outside_margin(J, b, float(lo), float(hi)) > 0.0:   # outside: nearest point on a face, exact
         T = np.empty(6)
         return T, float(kernels.boundary_distance(J, b, float(lo), float(hi), T))
+    from scipy.optimize import lsq_linear
+
     res = lsq_linear(J.T, b, bounds=(lo, hi), method="bvls", tol=1e-14)
     T = np.clip(res.x, lo, hi)
     return T, float(np.linalg.norm(J.T @ T - b))
@@ -262,12 +267,18 @@ def _t_ref_batch(rig: Rig, t_ref_N: np.ndarray | None, n: int) -> np.ndarray:
 
 
 def _check_solver(solver: str) -> None:
-    if solver not in SOLVERS and solver not in qpsolvers.available_solvers:
+    if solver in SOLVERS:
+        return
+    import qpsolvers
+
+    if solver not in qpsolvers.available_solvers:
         raise InvalidInput(f"unknown QP solver {solver!r}; choose from "
                            f"{', '.join(SOLVERS + tuple(qpsolvers.available_solvers))}", "solver")
 
 
 def _solve_qp(problem: qpsolvers.Problem, solver: str) -> np.ndarray | None:
+    import qpsolvers
+
     opts: dict[str, Any] = {"eps_abs": 1e-9, "eps_rel": 1e-9, "verbose": False} if solver == "osqp" else {}
     try:
         with warnings.catch_warnings():  # infeasibility is reported by InfeasibleLoad instead

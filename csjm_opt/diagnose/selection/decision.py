@@ -122,7 +122,7 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
         log as later cycles, after checking that they come from this rig.
     workers : int, optional
         Worker processes for the candidates' and pairs' fits (default: ``CSJM_WORKERS``, else the cores
-        this process may use, :func:`csjm_opt.diagnose.fitting.pool.default_workers`; 1: serial). The result does
+        this process may use, :func:`csjm_opt._workers.default_workers`; 1: serial). The result does
         not depend on it.
     check_rig : bool, optional
         Refuse a log (``log``, ``test``, ``extra``) that ``rig`` cannot have produced
