@@ -8,7 +8,7 @@ from pathlib import Path
 
 from .._fileio import atomic_write_json
 from ..errors import InvalidInput
-from ._options import check_outputs, int_in
+from ._options import check_outputs, int_in, json_option, out_option
 from .commands import command_help
 
 
@@ -22,15 +22,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     """
     p = sub.add_parser(
         "demo", help=command_help("demo"),
+        parents=[out_option("DIR", "report folder (default: ./csjm_report)", required=False, default="csjm_report"),
+                 json_option("the summary")],
                        description="Plan tensions, compute and shape stiffness, simulate an "
                        "experiment, identify K, verify, diagnose; writes a report folder: index.html (open it "
                        "in a browser), README.md (the same in Markdown), figures, summary.json, and the "
                        "sub-reports experiment/index.html and diagnosis/index.html.")
-    p.add_argument("--out", default="csjm_report", help="report folder (default: ./csjm_report)")
     p.add_argument("--seed", type=int_in(0, 2 ** 63 - 1), default=0, help="random seed of the simulated experiment")
     p.add_argument("--quick", action="store_true",
                    help="every step shortened (smaller experiments, no second-effect search): ~10-20 s")
-    p.add_argument("--json", metavar="PATH", help="write the summary as JSON ('-' = stdout)")
     p.set_defaults(func=run)
 
 

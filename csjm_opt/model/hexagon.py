@@ -31,12 +31,8 @@ def circle_from_chords(d12_m: float, d23_m: float) -> tuple[float, float]:
     if not (d12_m > 0 and d23_m > 0):
         raise InvalidInput(f"chords must be positive, got d12={d12_m}, d23={d23_m}", "chords")
 
-    def ratio_gap(gamma: float) -> float:
-        return d12_m * np.sin(np.pi / 3 - gamma / 2) - d23_m * np.sin(gamma / 2)
-
-    from scipy.optimize import brentq  # here, not at import: scipy.optimize costs ~0.4 s
-
-    gamma = brentq(ratio_gap, 0.0, 2 * np.pi / 3, xtol=1e-15)
+    # d12 sin(pi/3 - x) = d23 sin(x), x = gamma/2  <=>  tan(x) = d12 sin(pi/3) / (d23 + d12 cos(pi/3))
+    gamma = 2.0 * float(np.arctan2(d12_m * np.sin(np.pi / 3), d23_m + d12_m * np.cos(np.pi / 3)))
     radius = d12_m / (2 * np.sin(gamma / 2))
     return float(radius), float(gamma)
 
