@@ -233,6 +233,7 @@ def test_automatic_workers_choose_the_pool_only_when_it_pays(tmp_path, monkeypat
 
     monkeypatch.setattr(sweep_module, "_TIMED_DESIGNS", 2)
     monkeypatch.setattr(sweep_module, "POOL_STARTUP_S", startup_s)
+    monkeypatch.setenv("CSJM_WORKERS", "2")          # the one default (tests set 1: serial everywhere)
     monkeypatch.setattr(sweep_module, "_run_processes", spy)
     spec = _spec()
     auto = run_sweep(spec, tmp_path / "auto.jsonl", progress=False)
