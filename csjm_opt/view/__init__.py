@@ -9,6 +9,8 @@ from .page import ViewPage, view_page
 from .plotly_js import PlotlyMissing
 from .state import RigState, rig_state
 from .views import designs_view, log_view, pose_view, poses_view, show
+from .workspace import tilt_boundary_deg, workspace_traces
 
 __all__ = ["PlotlyMissing", "RigState", "ViewPage", "designs_view", "log_view", "pose_view", "poses_view",
-           "rig_state", "show", "view_page"]
+           "rig_state", "show", "tilt_boundary_deg", "view_page",
+           "workspace_traces"]

@@ -154,7 +154,7 @@ td.num { text-align: right; font-variant-numeric: tabular-nums; }
 
 def view_page(frames: Sequence[Sequence[RigState]], title: str = "csjm view",
               frame_labels: Sequence[str] | None = None, panel_titles: Sequence[str] | None = None,
-              initial: int = 0, note: str = "") -> ViewPage:
+              initial: int = 0, note: str = "", extras: Sequence[Sequence[dict]] | None = None) -> ViewPage:
     """A self-contained page of rig states: ``frames[f][p]`` is frame ``f``'s panel ``p``.
 
     Parameters
@@ -171,6 +171,9 @@ def view_page(frames: Sequence[Sequence[RigState]], title: str = "csjm view",
         Frame shown first.
     note : str
         A sentence under the title (plain text).
+    extras : sequence of sequences of dict, optional
+        Per panel, plotly traces drawn in every frame (e.g. a workspace boundary); their
+        ``scene`` is set to the panel's.
 
     Returns
     -------
@@ -197,7 +200,9 @@ def view_page(frames: Sequence[Sequence[RigState]], title: str = "csjm view",
         for p, s in enumerate(f):
             scene = "scene" if p == 0 else f"scene{p + 1}"
             traces += state_traces(s, scales[p], scene, colorbar_x=(p + 1) / n_panels - 0.05 / n_panels,
-                                   show_colorbar=True)
+                                   show_colorbar=p == n_panels - 1)
+            if extras is not None:
+                traces += [{**t, "scene": scene} for t in extras[p]]
         numbers = "".join(_numbers_html(s, titles[p] if len(frames) == 1 else (s.label or titles[p]), p)
                           for p, s in enumerate(f))
         data_frames.append({"label": labels[i], "traces": traces, "numbers": numbers})

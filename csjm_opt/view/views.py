@@ -127,7 +127,8 @@ def log_view(rig: Rig, log: MeasurementLog, max_cycles: int = 40, title: str = "
 
 
 def designs_view(rigs: Sequence[Rig], labels: Sequence[str], rotvecs: ArrayLike | None = None,
-                 title: str = "csjm view: designs side by side") -> ViewPage:
+                 title: str = "csjm view: designs side by side", workspace_load_Nm: float | None = None,
+                 certified_tilt_deg: Sequence[float] | None = None, note: str = "") -> ViewPage:
     """Designs side by side (one panel each), at one or more common poses (the slider), unloaded.
 
     Parameters
@@ -138,15 +139,34 @@ def designs_view(rigs: Sequence[Rig], labels: Sequence[str], rotvecs: ArrayLike 
     rotvecs : (n, 3) array, optional
         Poses shared by every design (default: upright only).
     title : str
+    workspace_load_Nm : float, optional
+        Draw each design's tilt boundary (:func:`~csjm_opt.view.workspace.tilt_boundary_deg`: weight
+        plus test moments of this size held, K positive definite) as a ring.
+    certified_tilt_deg : sequence of float, optional
+        Per design, a certified tilt range (deg, every azimuth), drawn as a ring.
+    note : str
+        A sentence under the title.
 
     Returns
     -------
     ViewPage
     """
+    from .workspace import tilt_boundary_deg, workspace_traces
+
     rv = np.zeros((1, 3)) if rotvecs is None else np.atleast_2d(np.asarray(rotvecs, float))
     frames = [[rig_state(r, so3.exp(v), np.zeros(3), lab) for r, lab in zip(rigs, labels)] for v in rv]
     flabels = [f"pose rotvec {np.round(v, 3).tolist()} rad" for v in rv]
-    return view_page(frames, title, flabels, panel_titles=list(labels))
+    extras: list[list[dict]] = [[] for _ in rigs]
+    az = np.linspace(0.0, 360.0, 16, endpoint=False)
+    for k, r in enumerate(rigs):
+        if workspace_load_Nm is not None:
+            tilt = tilt_boundary_deg(r, az, workspace_load_Nm)
+            extras[k] += workspace_traces(r, az, tilt, f"tilt held ({tilt.min():.0f}-{tilt.max():.0f} deg)")
+        if certified_tilt_deg is not None:
+            t = float(certified_tilt_deg[k])
+            extras[k] += workspace_traces(r, az, np.full(az.shape, t), f"certified tilt {t:.1f} deg",
+                                          color="#1a7f37")
+    return view_page(frames, title, flabels, panel_titles=list(labels), extras=extras, note=note)
 
 
 def show(rig: Rig, rotvec: ArrayLike = (0.0, 0.0, 0.0), tau_ext_A_Nm: ArrayLike = (0.0, 0.0, 0.0),
