@@ -14,9 +14,9 @@ import re
 
 import numpy as np
 import pytest
+from chromium_cdp import Browser, find_chromium
 
 import csjm_opt as co
-from chromium_cdp import Browser, find_chromium
 from csjm_opt.view import pose_view
 
 CHROMIUM = find_chromium()

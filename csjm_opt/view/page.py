@@ -179,7 +179,8 @@ def view_page(frames: Sequence[Sequence[RigState]], title: str = "csjm view",
     -------
     ViewPage
     """
-    frames = [list(f) for f in frames]
+    frames_: list[list[RigState]] = [list(f) for f in frames]
+    frames = frames_
     if not frames or not frames[0]:
         from ..errors import InvalidInput
 
@@ -225,4 +226,4 @@ def view_page(frames: Sequence[Sequence[RigState]], title: str = "csjm view",
             f'<script type="application/json" id="csjm-data">{data_json}</script>\n'
             f'<script type="text/plain" id="csjm-plotly">{plotly_js_gzip_base64()}</script>\n'
             f"<script>{_SCRIPT}</script>\n</body></html>\n")
-    return ViewPage(text, frames, labels)
+    return ViewPage(text, frames_, labels)

@@ -113,7 +113,7 @@ def rig_state(rig: Rig, R: ArrayLike, tau_ext_A_Nm: ArrayLike = (0.0, 0.0, 0.0),
     try:
         plan = plan_tensions(rig, R, tau)
     except InfeasibleLoad:
-        from scipy.optimize import lsq_linear   # only for a load the rig cannot hold
+        from scipy.optimize import lsq_linear  # only for a load the rig cannot hold
 
         _, J, tau_w = model_for(rig).pose_terms(R)
         b = -(tau + tau_w)

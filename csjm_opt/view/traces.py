@@ -52,7 +52,11 @@ def _xyz(points: np.ndarray) -> dict[str, list]:
 def _r(a: np.ndarray) -> Any:
     """Rounded to the micrometre, NaN (a gap between line pieces) as ``None`` (JSON null)."""
     arr = np.round(np.asarray(a, float), 6)
-    return np.where(np.isnan(arr), None, arr).tolist() if np.isnan(arr).any() else arr.tolist()
+    if not np.isnan(arr).any():
+        return arr.tolist()
+    out = arr.astype(object)
+    out[np.isnan(arr)] = None
+    return out.tolist()
 
 
 def _plate(points_B: np.ndarray, name: str, color: str, scene: str) -> list[dict]:
@@ -110,7 +114,7 @@ def _ellipsoid(state: RigState, scale: PanelScale, scene: str) -> list[dict]:
             "hoverinfo": "skip", "scene": scene, "name": "compliance ellipsoid", "cmin": 0, "cmax": 1}
     ends = np.concatenate([[-V_B[:, k] * semi[k], V_B[:, k] * semi[k], [np.nan] * 3] for k in range(3)])
     axes = {"type": "scatter3d", "mode": "lines+text", **_xyz(ends.reshape(-1, 3)),
-            "text": sum(([f"", f"λ{k + 1}", ""] for k in range(3)), []), "textposition": "middle right",
+            "text": sum((["", f"λ{k + 1}", ""] for k in range(3)), []), "textposition": "middle right",
             "textfont": {"color": "#8c1c13", "size": 11}, "line": {"color": "#8c1c13", "width": 3},
             "hoverinfo": "skip", "showlegend": False, "scene": scene, "name": "principal axes"}
     return [surf, axes]

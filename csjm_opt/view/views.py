@@ -121,7 +121,8 @@ def log_view(rig: Rig, log: MeasurementLog, max_cycles: int = 40, title: str = "
         r = log.cycle_rows(c)
         k = int(r[np.argmax(np.linalg.norm(log.tau_ext_A_Nm[r], axis=1))])
         rows.append(k)
-        labels.append(f"cycle {c} (sample {int(log.sample[k])}): " + _pose_label(log.rotvec_rad[k], log.tau_ext_A_Nm[k]))
+        labels.append(f"cycle {c} (sample {int(log.sample[k])}): "
+                      + _pose_label(log.rotvec_rad[k], log.tau_ext_A_Nm[k]))
     idx = np.asarray(rows, int)
     return poses_view(rig, so3.exp(log.rotvec_rad[idx]), log.tau_ext_A_Nm[idx], labels, title)
 
