@@ -40,12 +40,15 @@ class ViewPage:
     frames : list of list of RigState
         The states shown, ``frames[f][p]`` for frame ``f``, panel ``p``.
     frame_labels : list of str
+    note : str
+        The sentence under the title (what is drawn besides the rig).
     """
 
-    def __init__(self, html_text: str, frames: list[list[RigState]], frame_labels: list[str]):
+    def __init__(self, html_text: str, frames: list[list[RigState]], frame_labels: list[str], note: str = ""):
         self.html = html_text
         self.frames = frames
         self.frame_labels = frame_labels
+        self.note = note
 
     def write(self, path: str | Path) -> Path:
         """Write the page atomically (readable by others) and return its path."""
@@ -226,4 +229,4 @@ def view_page(frames: Sequence[Sequence[RigState]], title: str = "csjm view",
             f'<script type="application/json" id="csjm-data">{data_json}</script>\n'
             f'<script type="text/plain" id="csjm-plotly">{plotly_js_gzip_base64()}</script>\n'
             f"<script>{_SCRIPT}</script>\n</body></html>\n")
-    return ViewPage(text, frames_, labels)
+    return ViewPage(text, frames_, labels, note)
