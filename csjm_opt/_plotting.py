@@ -123,7 +123,7 @@ def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.nda
         a2.set_ylabel("second axis (N m/rad)", fontsize=7)
         a2.tick_params(labelsize=6)
         if col == 0:
-            a2.legend(fontsize=6, loc="lower left")
+            a2.legend(fontsize=6, loc="best")
     ae = fig.add_subplot(grid[1, -1])
     eig = np.linalg.eigvalsh(K)
     for k in range(3):

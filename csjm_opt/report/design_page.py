@@ -86,7 +86,7 @@ def document(s: dict[str, Any], geometry: bool, view: str | None = None) -> Docu
         if view:
             blocks.append(View(view, "The best designs side by side in 3-D, cables coloured by planned tension, "
                                      "compliance ellipsoid of K at O (long axis = soft direction), and each design's "
-                                     "tilt cone as a ring.", 760))
+                                     "tilt cone as a ring.", 820))
         sections.append(Section("Geometry of the best designs", "Holes of the table's designs on the platform "
                                  "(circle) and base (square) hole circles, seen from above at the home pose.", "info",
                                  blocks))

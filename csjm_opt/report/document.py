@@ -158,7 +158,7 @@ class View:
 
     path: str
     caption: str
-    height_px: int = 900
+    height_px: int = 980
     kind: str = "view"
 
 
