@@ -16,9 +16,9 @@ from numpy.typing import ArrayLike
 
 from .._validate import as_rotation, as_vector3
 from ..errors import InfeasibleLoad
+from ..model.joint_stiffness import stiffness
 from ..model.numeric import model_for
 from ..model.rig import Rig
-from ..model.stiffness import stiffness
 from ..planning.planner import plan_tensions
 
 __all__ = ["RigState", "rig_state"]

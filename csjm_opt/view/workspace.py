@@ -14,8 +14,8 @@ from numpy.typing import ArrayLike
 
 from ..design.sampling import tilt_torsion_rotations
 from ..errors import CsjmError
+from ..model.joint_stiffness import stiffness
 from ..model.rig import Rig
-from ..model.stiffness import stiffness
 from ..planning.planner import plan_tensions
 
 __all__ = ["tilt_boundary_deg", "workspace_traces"]
