@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -137,18 +135,19 @@ def test_diagnosis_view_draws_injected_offsets_and_sticking_cables(rig):
     assert page.note.endswith(": 2, 4")
 
 
-def test_cli_view(tmp_path, rig):
+def test_cli_view(tmp_path, rig, capsys):
+    from csjm_opt.cli import main
+
     out, js = tmp_path / "v.html", tmp_path / "v.json"
-    run = [sys.executable, "-m", "csjm_opt.cli", "view", "--rotvec", "0.3", "0.1", "0", "--tau", "20", "0", "0",
-           "--steps", "2", "-o", str(out), "--json", str(js)]
-    p = subprocess.run(run, capture_output=True, text=True, timeout=300)
-    assert p.returncode == 0, p.stderr                   # a pose the rig cannot hold still renders
-    assert "NOT held" in p.stdout and out.stat().st_size <= MAX_BYTES
+    args = ["view", "--rotvec", "0.3", "0.1", "0", "--tau", "20", "0", "0", "--steps", "2", "-o", str(out),
+            "--json", str(js)]
+    assert main(args) == 0                               # a pose the rig cannot hold still renders
+    assert "NOT held" in capsys.readouterr().out and out.stat().st_size <= MAX_BYTES
     assert oct(out.stat().st_mode & 0o777) == "0o644"
-    last = json.loads(js.read_text())["frames"][-1]["panels"][0]
+    frames = json.loads(js.read_text())["frames"]
+    last, first = frames[-1]["panels"][0], frames[0]["panels"][0]
     assert not last["feasible"] and last["at_bounds"]
-    first = json.loads(js.read_text())["frames"][0]["panels"][0]
     np.testing.assert_allclose(first["tensions_N"], co.plan_tensions(rig, np.eye(3)).tensions, atol=1e-9)
-    bad = subprocess.run(run[:4] + ["--rig", str(tmp_path / "missing.toml"), "-o", str(tmp_path / "x.html")],
-                         capture_output=True, text=True, timeout=300)
-    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "missing.toml" in bad.stderr
+    assert main(["view", "--rig", str(tmp_path / "missing.toml"), "-o", str(tmp_path / "x.html")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "missing.toml" in err and not (tmp_path / "x.html").exists()
