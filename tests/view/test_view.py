@@ -151,3 +151,23 @@ def test_cli_view(tmp_path, rig, capsys):
     assert main(["view", "--rig", str(tmp_path / "missing.toml"), "-o", str(tmp_path / "x.html")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "missing.toml" in err and not (tmp_path / "x.html").exists()
+
+
+def test_cli_view_of_a_logs_cycles(tmp_path, rig):
+    from csjm_opt.cli import main
+    from csjm_opt.testbed.identification import simulate_identification_experiment
+
+    log_path, js = tmp_path / "log.csv", tmp_path / "v.json"
+    simulate_identification_experiment(rig, 2, np.random.default_rng(3), loads_per_cycle=4).to_csv(log_path)
+    log = co.MeasurementLog.from_csv(log_path)
+    assert main(["view", "--log", str(log_path), "-o", str(tmp_path / "v.html"), "--json", str(js)]) == 0
+    frames = json.loads(js.read_text())["frames"]
+    assert len(frames) == len(log.cycle_ids)
+    for c, f in zip(log.cycle_ids, frames):
+        rows = log.cycle_rows(c)
+        k = rows[np.argmax(np.linalg.norm(log.tau_ext_A_Nm[rows], axis=1))]   # the cycle's most loaded row
+        panel = f["panels"][0]
+        np.testing.assert_allclose(panel["rotvec"], log.rotvec_rad[k], atol=1e-12)
+        np.testing.assert_allclose(panel["tau_ext"], log.tau_ext_A_Nm[k], atol=1e-12)
+        T = co.plan_tensions(rig, log.R[k], log.tau_ext_A_Nm[k]).tensions
+        np.testing.assert_allclose(panel["tensions_N"], T, atol=1e-9)
