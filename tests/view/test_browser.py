@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import csjm_opt as co
-from csjm_opt.view import pose_view
+from csjm_opt.view import poses_view
 from tests.chromium_cdp import Browser, find_chromium
 
 CHROMIUM = find_chromium()
@@ -26,6 +26,8 @@ READY = "document.body && document.body.dataset.ready === '1'"
 LOAD_TIMEOUT_S = 180.0     # the machine is shared; a page normally takes a few seconds
 MAX_BYTES = 3_000_000
 ROTVEC, TAU = np.array([0.25, 0.1, 0.0]), np.array([0.5, 0.2, 0.0])
+STEPS = (0.0, 0.5, 1.0)                                               # frames 0-2: along the path to ROTVEC, TAU
+BAD_ROTVEC, BAD_TAU = np.array([0.3, 0.1, 0.0]), np.array([20.0, 0.0, 0.0])   # frame 3: a load the rig cannot hold
 
 
 @pytest.fixture(scope="module")
@@ -37,8 +39,9 @@ def browser():
 
 @pytest.fixture(scope="module")
 def feasible(browser, tmp_path_factory):
-    """The path page (3 frames, the pose asked for shown first), loaded once; screenshots of two poses."""
-    page = pose_view(co.paper_rig(), ROTVEC, TAU, n_steps=3)
+    """One page (4 frames, frame 2 shown first), loaded once; screenshots of two poses."""
+    Rs = co.so3.exp(np.vstack([np.outer(STEPS, ROTVEC), BAD_ROTVEC]))
+    page = poses_view(co.paper_rig(), Rs, np.vstack([np.outer(STEPS, TAU), BAD_TAU]), initial=2)
     path = page.write(tmp_path_factory.mktemp("view") / "view.html")
     tab = browser.new_page()
     tab.goto(path.as_uri())
@@ -107,7 +110,7 @@ def _equal_to_digits(text: str, value: float) -> bool:
 
 def test_numbers_equal_the_api_frame_by_frame(feasible):
     tab, rig = feasible["tab"], co.paper_rig()
-    for k, s in enumerate((0.0, 0.5, 1.0)):
+    for k, s in enumerate(STEPS):
         tab.eval(f"csjmView.show({k})", LOAD_TIMEOUT_S)
         shown = _shown(tab)
         R = co.so3.exp(s * ROTVEC)
@@ -119,14 +122,12 @@ def test_numbers_equal_the_api_frame_by_frame(feasible):
         assert "Held" in shown["status"][0]
 
 
-def test_a_pose_the_rig_cannot_hold_renders_and_names_the_cables(browser, tmp_path):
-    rig, rotvec, tau = co.paper_rig(), np.array([0.3, 0.1, 0.0]), np.array([20.0, 0.0, 0.0])
+def test_a_pose_the_rig_cannot_hold_renders_and_names_the_cables(feasible):
+    rig = co.paper_rig()
     with pytest.raises(co.InfeasibleLoad) as info:
-        co.plan_tensions(rig, co.so3.exp(rotvec), tau)
-    path = pose_view(rig, rotvec, tau, n_steps=1).write(tmp_path / "bad.html")
-    tab = browser.new_page()
-    tab.goto(path.as_uri())
-    tab.wait_for(READY, LOAD_TIMEOUT_S)
+        co.plan_tensions(rig, co.so3.exp(BAD_ROTVEC), BAD_TAU)
+    tab = feasible["tab"]
+    tab.eval("csjmView.show(3)", LOAD_TIMEOUT_S)
     assert tab.console_errors() == []
     shown = _shown(tab)
     status = shown["status"][0]
