@@ -68,7 +68,7 @@ def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.nda
     ----------
     labels : list of str
         One label per pose.
-    tensions_N : (n, 6) array
+    tensions_N : (n, m) array
         Tensions per pose (N).
     K : (n, 3, 3) array
         Stiffness per pose (N m/rad).
@@ -90,9 +90,10 @@ def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.nda
         fig = figure().figure(figsize=(14, 9), layout="constrained")
     grid = fig.add_gridspec(2, len(show) + 1, height_ratios=(1, 1.1), width_ratios=(1,) * len(show) + (1.3,))
     ax = fig.add_subplot(grid[0, :])
-    width = 0.8 / 6
-    for i in range(6):
-        ax.bar(np.arange(n) + (i - 2.5) * width, tensions_N[:, i], width, label=f"{i + 1}")
+    m = tensions_N.shape[1]                                   # cables, from the data
+    width = 0.8 / m
+    for i in range(m):
+        ax.bar(np.arange(n) + (i - (m - 1) / 2) * width, tensions_N[:, i], width, label=f"{i + 1}")
     ax.axhline(t_min_N, color="k", ls="--", lw=0.8)
     ax.axhline(t_max_N, color="k", ls="--", lw=0.8)
     ax.set_xticks(np.arange(n), labels, rotation=25, ha="right", fontsize=8)
