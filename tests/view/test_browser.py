@@ -30,19 +30,11 @@ STEPS = (0.0, 0.5, 1.0)                                               # frames 0
 BAD_ROTVEC, BAD_TAU = np.array([0.3, 0.1, 0.0]), np.array([20.0, 0.0, 0.0])   # frame 3: a load the rig cannot hold
 
 
-@pytest.fixture(scope="module")
-def browser():
-    b = Browser(CHROMIUM)
-    yield b
-    b.close()
-
-
-@pytest.fixture(scope="module")
-def feasible(browser, tmp_path_factory):
+def load_page(browser, folder):
     """One page (4 frames, frame 2 shown first), loaded once; screenshots of two poses."""
     Rs = co.so3.exp(np.vstack([np.outer(STEPS, ROTVEC), BAD_ROTVEC]))
     page = poses_view(co.paper_rig(), Rs, np.vstack([np.outer(STEPS, TAU), BAD_TAU]), initial=2)
-    path = page.write(tmp_path_factory.mktemp("view") / "view.html")
+    path = page.write(folder / "view.html")
     tab = browser.new_page()
     tab.goto(path.as_uri())
     tab.wait_for(READY, LOAD_TIMEOUT_S)
@@ -62,14 +54,14 @@ def _plot_pixels(png: bytes, rect: list[int]) -> np.ndarray:
     return img[top:bottom, left:right]
 
 
-def test_page_is_one_small_file_with_no_web_address(feasible):
+def check_one_small_file_with_no_web_address(feasible):
     text = feasible["path"].read_text(encoding="utf-8")
     assert feasible["path"].stat().st_size <= MAX_BYTES
     assert "http://" not in text and "https://" not in text
     assert "<script src" not in text and "<link" not in text
 
 
-def test_loads_with_no_console_error_and_fetches_nothing(feasible):
+def check_no_console_error_and_no_fetch(feasible):
     tab = feasible["tab"]
     assert tab.console_errors() == []
     urls = tab.requested_urls()
@@ -77,7 +69,7 @@ def test_loads_with_no_console_error_and_fetches_nothing(feasible):
     assert tab.eval("typeof Plotly") == "object" and tab.eval("document.querySelectorAll('#plot canvas').length") > 0
 
 
-def test_screenshot_shows_the_rig(browser, feasible, tmp_path):
+def check_screenshot_shows_the_rig(browser, feasible, tmp_path):
     rect = feasible["rect"]
     empty = tmp_path / "blank.html"
     empty.write_text("<!DOCTYPE html><html><body></body></html>")
@@ -108,7 +100,7 @@ def _equal_to_digits(text: str, value: float) -> bool:
     return abs(float(text) - value) <= 0.5 * 10.0 ** -decimals + 1e-9 * max(1.0, abs(value))
 
 
-def test_numbers_equal_the_api_frame_by_frame(feasible):
+def check_numbers_equal_the_api_frame_by_frame(feasible):
     tab, rig = feasible["tab"], co.paper_rig()
     for k, s in enumerate(STEPS):
         tab.eval(f"csjmView.show({k})", LOAD_TIMEOUT_S)
@@ -122,7 +114,7 @@ def test_numbers_equal_the_api_frame_by_frame(feasible):
         assert "Held" in shown["status"][0]
 
 
-def test_a_pose_the_rig_cannot_hold_renders_and_names_the_cables(feasible):
+def check_a_pose_the_rig_cannot_hold_names_the_cables(feasible):
     rig = co.paper_rig()
     with pytest.raises(co.InfeasibleLoad) as info:
         co.plan_tensions(rig, co.so3.exp(BAD_ROTVEC), BAD_TAU)
@@ -141,3 +133,18 @@ def test_a_pose_the_rig_cannot_hold_renders_and_names_the_cables(feasible):
     at_bound = {i + 1 for i, t in enumerate(T) if t in (rig.t_min_N, rig.t_max_N)}
     assert named == at_bound and named
     assert "eig" not in shown       # no equilibrium, so no K
+
+
+def test_view_page_in_chromium(tmp_path):
+    """One browser, one page load (a few seconds on an idle machine), every check in turn (one xdist worker)."""
+    browser = Browser(CHROMIUM)
+    try:
+        feasible = load_page(browser, tmp_path)
+        check_one_small_file_with_no_web_address(feasible)
+        check_no_console_error_and_no_fetch(feasible)
+        check_screenshot_shows_the_rig(browser, feasible, tmp_path)
+        check_numbers_equal_the_api_frame_by_frame(feasible)
+        check_a_pose_the_rig_cannot_hold_names_the_cables(feasible)
+        check_no_console_error_and_no_fetch(feasible)        # still none after every frame was shown
+    finally:
+        browser.close()
