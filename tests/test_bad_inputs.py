@@ -124,7 +124,7 @@ for name, cmd in (("rig", PLAN), ("log", IDENT), ("raw", PRE), ("sweep", SWP)):
 
 # ------------------------------------------------------------------ rig contents
 _RIG_EDIT = {
-    "platform_holes": lambda v: ("[0.05773502691896258, -0.005, 0.08]", f"[{v}, -0.005, 0.08]"),
+    "platform_holes": lambda v: ("[0.057735026918962574, -0.005, 0.08]", f"[{v}, -0.005, 0.08]"),
     "base_holes": lambda v: ("[0.03983716857408418, -0.064, -0.08]", f"[{v}, -0.064, -0.08]"),
     "stiffness": lambda v: ("stiffness = [4600.0,", f"stiffness = [{v},"),
     "t_min": lambda v: ("t_min = 5.0", f"t_min = {v}"),
@@ -138,13 +138,13 @@ for key, make in _RIG_EDIT.items():
                          ("inf", "inf"), ("string", '"abc"'), ("bool", "true"), ("1e19", "1e19")):
         at = "t_m(in|ax)" if key == "t_min" else key  # t_min above t_max is named at t_max
         add(f"rig-{key}-{label}", PLAN, rf"rig\.toml: \[\w+\.{at}\]", rig=rig_with(*make(value)))
-_HOLE_A1 = "[0.05773502691896258, -0.005, 0.08]"
+_HOLE_A1 = "[0.057735026918962574, -0.005, 0.08]"
 for label, old, new in (
-        ("duplicate-platform-hole", "[0.05773502691896258, 0.005, 0.08]", _HOLE_A1),
+        ("duplicate-platform-hole", "[0.057735026918962574, 0.005, 0.08]", _HOLE_A1),
         ("duplicate-base-hole", "[0.03983716857408418, 0.064, -0.08]", "[0.03983716857408418, -0.064, -0.08]"),
         ("platform-hole-10um-from-O", _HOLE_A1, "[1e-5, 0.0, 0.0]"),
         ("base-hole-10um-from-O", "[0.03983716857408418, -0.064, -0.08]", "[0.0, 1e-5, 0.0]"),
-        ("holes-5um-apart", "[0.05773502691896258, 0.005, 0.08]", "[0.05773502691896258, -0.004995, 0.08]"),
+        ("holes-5um-apart", "[0.057735026918962574, 0.005, 0.08]", "[0.057735026918962574, -0.004995, 0.08]"),
         ("hole-at-20m", _HOLE_A1, "[20.0, 0.0, 0.08]"),
         ("hole-at-1e308", _HOLE_A1, "[1e308, 1e308, 1e308]"),
         ("stiffness-zero", "stiffness = [4600.0,", "stiffness = [0.0,"),
@@ -160,7 +160,7 @@ for label, old, new in (
         ("unknown-key", "mass = 0.4913", "mass = 0.4913\ncolour = 1"),
         ("unknown-section", "[platform]", "[extra]\nx = 1\n[platform]"),
         ("missing-section", "[cables]", "[cables_]"),
-        ("ragged-holes", _HOLE_A1, "[0.05773502691896258, -0.005]"),
+        ("ragged-holes", _HOLE_A1, "[0.057735026918962574, -0.005]"),
         ("not-toml", "[cables]", "[cables"),
 ):
     add(f"rig-{label}", PLAN, r"rig\.toml", rig=rig_with(old, new))
@@ -278,10 +278,10 @@ add("identify-json-is-rig", f"{IDENT} --rig {{rig}} --json {{rig}}", "--json")
 add("identify-json-is-dir", f"{IDENT} --json {{dir}}", "--json")
 add("identify-figures-is-file", f"{IDENT} --figures {{rig}}", "--figures")
 add("identify-figures-is-log", f"{IDENT} --figures {{log}}", "--figures")
-add("preprocess-out-is-raw", "preprocess {raw} -o {raw}", "-o/--output")
-add("preprocess-out-is-rig", "preprocess {raw} --rig {rig} -o {rig}", "-o/--output")
-add("preprocess-out-exists", "preprocess {raw} -o {log}", "-o/--output")
-add("preprocess-out-is-dir", "preprocess {raw} -o {dir}", "-o/--output")
+add("preprocess-out-is-raw", "preprocess {raw} -o {raw}", "-o/--out")
+add("preprocess-out-is-rig", "preprocess {raw} --rig {rig} -o {rig}", "-o/--out")
+add("preprocess-out-exists", "preprocess {raw} -o {log}", "-o/--out")
+add("preprocess-out-is-dir", "preprocess {raw} -o {dir}", "-o/--out")
 add("preprocess-json-is-out", f"{PRE} --json {{tmp}}/out.csv", "--json")
 add("preprocess-json-is-raw", f"{PRE} --json {{raw}}", "--json")
 add("sweep-out-is-sweep", "sweep {sweep} --out {sweep} --workers 1", "--out")
@@ -305,8 +305,8 @@ for label, opt, at in (("rotvec-1e308", "--rotvec 1e308 0 0", "--rotvec"),
                        ("tau-nan", "--tau nan 0 0", "--tau"), ("timestep-zero", "--timestep 0", "--timestep"),
                        ("timestep-nan", "--timestep nan", "--timestep")):
     add(f"export-mjcf-{label}", f"{MJCF} {opt}", at)
-add("export-mjcf-output-is-rig", "export-mjcf --rig {rig} -o {rig}", "-o/--output")
-add("export-mjcf-output-is-dir", "export-mjcf --rig {rig} -o {dir}", "-o/--output")
+add("export-mjcf-output-is-rig", "export-mjcf --rig {rig} -o {rig}", "-o/--out")
+add("export-mjcf-output-is-dir", "export-mjcf --rig {rig} -o {dir}", "-o/--out")
 add("export-mjcf-json-is-output", f"{MJCF} --json {{tmp}}/model.xml", "--json")
 add("export-mjcf-rig-fifo", "export-mjcf --rig {fifo} -o {tmp}/model.xml", "FIFO")
 add("report-results-fifo", "report {fifo} --out {tmp}/rep", "")

@@ -85,8 +85,8 @@ def main(argv: list[str] | None = None) -> int:
         _agg_backend()
         return int(args.func(args) or 0)
     except CsjmError as exc:
-        prog = getattr(exc, "prog", "csjm")
-        print(f"{prog}: error: {exc}".replace("\n", " "), file=sys.stderr)
+        command = getattr(exc, "prog", "csjm").partition(" ")[2]     # "plan-experiment", or "" for csjm itself
+        print(f"csjm: error: {command + ': ' if command else ''}{exc}".replace("\n", " "), file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("csjm: interrupted", file=sys.stderr)

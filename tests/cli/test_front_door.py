@@ -83,7 +83,7 @@ def test_shared_options_mean_the_same_everywhere(name):
 def test_a_usage_error_is_one_line_with_the_command_once(capsys):
     assert main(["plan-experiment", "--budget", "10", "-o", "x.csv", "--poses", "-0.15,0,0"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.startswith("csjm plan-experiment: error: ") and "csjm: error" not in err and "\n" not in err
+    assert err.startswith("csjm: error: plan-experiment: ") and err.count("csjm") == 1 and "\n" not in err
 
 
 def test_a_negative_pose_is_taken_like_a_rotvec():
