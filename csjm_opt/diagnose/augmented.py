@@ -114,6 +114,8 @@ class Evaluation:
     R_body: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))   # true body pose (adjust_frame)
     tau_weight_A_Nm: np.ndarray | None = None
     lengths_m: np.ndarray | None = None       # cable lengths at R_cable (set before adjust_tension)
+    rest_lengths_m: np.ndarray | None = None  # actual rest lengths (n, m): commanded + common offset (adjust_rest)
+    cable_jacobian: np.ndarray | None = None  # J (n, m, 3) at R_cable: J^T T is the cables' moment, dc = -J dzeta
     state_out: np.ndarray | None = None       # path state after this row (path-dependent effects)
 
 
@@ -273,14 +275,19 @@ class AugmentedModel:
             e.adjust_pose(ev, p)
         for e, p in zip(self.effects, params):
             e.adjust_geometry(ev, p)
+        ev.rest_lengths_m = rows.rest_lengths_m + theta[0]
+        for e, p in zip(self.effects, params):
+            e.adjust_rest(ev, p)
         lengths, J = kin.cable_terms(ev.R_cable, ev.A_m, ev.B_m)
-        ev.lengths_m = lengths
-        stretch = lengths - (rows.rest_lengths_m + theta[0])
+        ev.lengths_m, ev.cable_jacobian = lengths, J
+        stretch = lengths - ev.rest_lengths_m
         T = self._k * np.maximum(stretch, 0.0)
         for e, p in zip(self.effects, params):
             T = e.adjust_tension(ev, stretch, T, p)
         tau_load = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm
         g = np.einsum("nij,ni->nj", J, T) + np.einsum("nij,nj->ni", ev.link_rotation, tau_load)
+        for e, p in zip(self.effects, params):
+            g = e.adjust_balance(ev, g, p)
         return g, ev
 
     def predict_poses(self, rows: Rows, theta: np.ndarray, R_init: np.ndarray) -> kin.PoseSolution:
@@ -336,8 +343,8 @@ def with_entry(model: "AugmentedModel", rows: Rows, R_meas: np.ndarray, theta: n
     state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
     rest, tau, R = np.full((n, 6), np.nan), np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan)
     first = np.flatnonzero(np.r_[False, rows.cycle[1:] != rows.cycle[:-1]])
-    if ev.state_out is not None and ev.lengths_m is not None:
-        state[first] = ev.state_out[first - 1]
+    if ev.lengths_m is not None:         # a model without a state of its own (joint friction) starts at 0
+        state[first] = 0.0 if ev.state_out is None else ev.state_out[first - 1]
         lengths[first] = ev.lengths_m[first - 1]
         rest[first], tau[first] = rows.rest_lengths_m[first - 1], rows.tau_meas_A_Nm[first - 1]
         R[first] = R_meas[first - 1]
