@@ -19,6 +19,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "paper": ("identify", "reproduce the paper's Tables 3 and 4 and check them"),
     "plan-experiment": ("plan_experiment", "plan an identification experiment (loads, pretension)"),
     "diagnose": ("diagnose", "which unmodelled effect explains the model-rig gap"),
+    "validate": ("validate", "score the diagnosis on a folder of logs with known answers (answers.json)"),
     "simulate": ("simulate", "run a protocol on a simulated rig (testbed plant with effects)"),
     "sweep": ("sweep", "hole-geometry design sweep (workspace, stiffness, margins)"),
     "optimise": ("optimise", "hole-geometry optimisation (guaranteed workspace, stiffness, no collisions)"),
