@@ -1,6 +1,6 @@
 """The ``csjm validate`` command: the diagnosis checked against a folder of logs with known answers.
 
-Usage: ``csjm validate FOLDER [--json OUT] [--cases NAME ...] [--workers N] [--no-progress]``.
+Usage: ``csjm validate FOLDER [--json OUT] [--keep DIR] [--cases NAME ...] [--workers N] [--no-progress]``.
 
 Every case of ``FOLDER/answers.json`` is diagnosed with the standard command
 (``csjm diagnose TRAIN --rig RIG --test TEST``, no per-set options) and scored by its accept
@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
 from .._fileio import atomic_write_json
 from ..errors import InvalidInput
@@ -35,6 +36,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "no_effect, not_confident): the share right per folder, and every verdict.")
     p.add_argument("folder", metavar="FOLDER", help="validation folder holding answers.json and the files it names")
     p.add_argument("--json", metavar="OUT", default=None, help="write the scores and verdicts as JSON ('-' = stdout)")
+    p.add_argument("--keep", metavar="DIR", default=None,
+                   help="also write each case's full diagnosis JSON here (DIR/CASE.json)")
     p.add_argument("--cases", nargs="+", metavar="NAME", default=None, help="only these cases (names in answers.json)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="processes for each diagnosis's fits (default: $CSJM_WORKERS, else the usable cores)")
@@ -88,8 +91,8 @@ def run(args: argparse.Namespace) -> int:
         if unknown:
             raise InvalidInput(f"--cases: no case {unknown[0]!r} in {args.folder}/answers.json", "--cases")
         cases = [c for c in cases if c.name in args.cases]
-    check_outputs([str(p) for c in cases for p in (c.rig, c.train, c.test)] + [f"{args.folder}/answers.json"],
-                  {"--json": args.json})
+    inputs = [str(p) for c in cases for p in (c.rig, c.train, c.test)] + [f"{args.folder}/answers.json", args.folder]
+    check_outputs(inputs, {"--json": args.json}, {"--keep": args.keep})
     loaded = _load(cases)
     bar = None
     if not args.no_progress:
@@ -100,6 +103,8 @@ def run(args: argparse.Namespace) -> int:
     for c, rig, train, test in loaded:
         t0 = time.perf_counter()
         result = diagnose(rig, train, test, workers=args.workers).as_json()
+        if args.keep:
+            atomic_write_json(Path(args.keep) / f"{c.name}.json", result)
         right = accepted(c.accept, c.effects, result)
         scored.append({"folder": c.folder, "case": c.name, "effects": list(c.effects), "accept": c.accept,
                        "right": right, "verdict": verdict_line(result), "selected": result["selected"],
