@@ -132,6 +132,31 @@ class AugmentedModel:
         self._g = np.asarray(rig.gravity_B_m_per_s2, float)
         sizes = [len(NUISANCE_NAMES)] + [e.n_params for e in self.effects]
         self._offsets = np.cumsum([0] + sizes)
+        self._geometry: tuple | None = None     # the last cable terms: (R, A, B, lengths, J)
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state["_geometry"] = None                # a cache, not state: not pickled to the workers
+        return state
+
+    def cable_terms(self, R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Cable lengths and Jacobian (:func:`csjm_opt.model.kinematics.cable_terms`), the last ones remembered.
+
+        A fit evaluates the balance at the same poses and holes for every parameter its Jacobian
+        perturbs that leaves the geometry alone (loads, tension laws, rest lengths): the last result
+        is returned when the poses and holes are equal to the last ones, value for value (read-only
+        arrays: bit for bit what a new evaluation gives).
+        """
+        last = self._geometry
+        if (last is not None and last[0].shape == np.shape(R) and np.shape(A_m) == last[1].shape
+                and np.shape(B_m) == last[2].shape and np.array_equal(last[0], R)
+                and np.array_equal(last[1], A_m) and np.array_equal(last[2], B_m)):
+            return last[3], last[4]
+        lengths, J = kin.cable_terms(R, A_m, B_m)
+        lengths.setflags(write=False)
+        J.setflags(write=False)
+        self._geometry = (np.array(R, float), np.array(A_m, float), np.array(B_m, float), lengths, J)
+        return lengths, J
 
     @property
     def name(self) -> str:
@@ -278,7 +303,7 @@ class AugmentedModel:
         ev.rest_lengths_m = rows.rest_lengths_m + theta[0]
         for e, p in zip(self.effects, params):
             e.adjust_rest(ev, p)
-        lengths, J = kin.cable_terms(ev.R_cable, ev.A_m, ev.B_m)
+        lengths, J = self.cable_terms(ev.R_cable, ev.A_m, ev.B_m)
         ev.lengths_m, ev.cable_jacobian = lengths, J
         stretch = lengths - ev.rest_lengths_m
         T = self._k * np.maximum(stretch, 0.0)

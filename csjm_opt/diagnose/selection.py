@@ -1,56 +1,12 @@
 """The decision: which effect (or pair, or none, or unexplained) the log supports.
 
-Models: the *null* ``nominal_refit`` (nominal + common rest-length offset),
-each single effect on top of it, and pairs (each of ``PAIR_SEEDS`` seed
-singles + each other effect). Every model is scored on held-out cycles (:mod:`.scoring`). The
-noise floor combines a model-free within-cycle estimate (:mod:`.noise`) with
-the model's own whitened training residual (:func:`combine_scales`).
-
-Rule (constants below; ``m`` candidates tried):
-
-1. *Detected*: a single effect whose per-cycle held-out MSE is lower than the
-   null's in a one-sided paired t-test over cycles at ``ALPHA / m``
-   (Bonferroni: family-wise false-alarm rate at most ``ALPHA`` on an
-   effect-free log), **and** whose systematic improvement
-   ``sqrt(MSE_null - MSE_effect)`` (held-out) is at least ``IMPROVE_MULT``
-   noise floors. Only held-out errors decide, so a non-smooth model
-   (friction) cannot win on training noise the way a linearised F-test lets
-   it; the F-test is still reported.
-2. *Plausible*: its fitted parameters lie inside the effect's prior ranges
-   (:meth:`~csjm_opt.diagnose.effects.base.Effect.default_ranges`,
-   overridable per rig through ``ranges``).
-3. The first effect is the detected, plausible one with the lowest BIC among
-   those that close the gap (rule 4), else among all detected plausible ones
-   (the detected one with the lowest held-out error if none is plausible): a
-   model that explains the gap beats a simpler one that does not.
-   *Pairs*: the seeds are the first effect and the singles with the lowest
-   held-out errors (``PAIR_SEEDS`` in all, the whole vocabulary: every pair is
-   fitted, so no wrong first pick hides the right pair); each seed is paired with every other effect (a
-   variant effect's law chosen again on the pair model), and a pair is
-   detected by the same test against the best of its two singles and the
-   first effect, at ``ALPHA`` over the number of pairs fitted (two wrong
-   effects that together mimic the right one do not beat it).
-4. A model *closes the gap* when it explains at least ``CLOSE_FRACTION`` of
-   the systematic held-out gap, measured against its held-out floor (noise
-   plus its refits' estimation error). Nothing else counts: a named verdict
-   always closes at least that share.
-5. Verdict: the detected, plausible pair that closes the gap with the lowest
-   BIC (``selected`` = its seed, ``secondary`` = the other); else the first
-   effect when it is plausible and closes; ``unexplained`` when something was detected, or
-   the null's residual holds significant structure of at least
-   ``IMPROVE_MULT`` floors, but no plausible single or pair closes the gap;
-   ``none`` otherwise. Pairs whose parameter blocks are not separable on this
-   log (:mod:`.pairs`) are reported as such. A named verdict whose remaining
-   residual still fails the signature test carries a warning that it may
-   stand in for an effect outside the vocabulary; so does one whose model has
-   more effective parameters than ``SHORT_LOG_SHARE`` of the log's cycle-level
-   pose offsets (3 per cycle: such a model can follow any smooth pose error).
-6. *Masked pairs*: when no single effect is detected but the null's residual
-   holds significant structure of at least ``IMPROVE_MULT`` floors, two
-   effects may hide each other: the seeds are the singles with the lowest
-   held-out errors, and a pair is named when it beats the null model at
-   ``ALPHA`` over the number of possible pairs (Bonferroni), is plausible and
-   closes the gap.
+Models: the *null* ``nominal_refit`` (nominal + common rest-length offset), each single effect on
+top of it, and pairs; each is scored on held-out cycles (:mod:`.scoring`) and priced by its
+evidence (:mod:`.evidence`). The rule (detection, plausibility, closing the gap, parsimony, pairs,
+masked pairs, the warnings) is stated in the guide, ``docs/guide/diagnosis.md``, section "The
+decision rule"; its constants are in :mod:`._decision`. :func:`diagnose` builds the verdict
+(:class:`~csjm_opt.diagnose.verdict.Verdict`) in small steps: the singles fitted and tested, the
+first effect, the pairs, the verdict, then the warnings about what the log does not rule out.
 """
 
 from __future__ import annotations
