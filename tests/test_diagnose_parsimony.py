@@ -68,3 +68,25 @@ def test_time_trend_needs_material_size_and_cycles():
     assert not time_trend(tiny, cyc, floor_rad=5e-4)["trends"]
     assert time_trend(np.zeros((33, 3)), _cycles(3), 5e-4)["cycles"] == 3
     assert not time_trend(np.zeros((33, 3)), _cycles(3), 5e-4)["trends"]
+
+
+def test_drive_offsets_are_named_not_hole_offsets():
+    """The issue's failure shape: drive zero offsets (0.6 mm homing errors) came out ``hole_offsets``."""
+    import dataclasses
+
+    import csjm_opt as co
+    from csjm_opt.diagnose import diagnose
+    from csjm_opt.testbed import Plant
+    from csjm_opt.testbed.simulate import simulate_experiment
+
+    rig = co.paper_rig()
+    rng = np.random.default_rng(11)
+    plant = dataclasses.replace(Plant.nominal(rig), drive_offsets_m=rng.choice([-1.0, 1.0], 6) * 6e-4)
+    train = simulate_experiment(rig, 10, rng, plant)
+    test = simulate_experiment(rig, 6, rng, plant, first_cycle=20)
+    d = diagnose(rig, train, test, effects=["hole_offsets", "drive_offsets", "sensor_bias"], secondary=False,
+                 workers=1)
+    assert d.selected == "drive_offsets"
+    assert not any("hole_offsets has" in w for w in d.verdict.warnings)
+    j = d.as_json()
+    assert j["verdict"]["selected"] == "drive_offsets" and j["secondary"] == {"effect": "none"}
