@@ -4,7 +4,7 @@ Usage: ``csjm validate FOLDER [--json OUT] [--keep DIR] [--cases NAME ...] [--wo
 
 Every case of ``FOLDER/answers.json`` is diagnosed with the standard command
 (``csjm diagnose TRAIN --rig RIG --test TEST``, no per-set options) and scored by its accept
-rule (:mod:`csjm_opt.diagnose.validation`). All inputs are read and checked before the first
+rule (:mod:`csjm_opt.diagnose.selection.validation`). All inputs are read and checked before the first
 diagnosis: a folder without ``answers.json``, a missing file, or a log that does not belong to
 its case's rig stops the command with one line (exit 2) and nothing written.
 """
@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
         Unreadable rig or log files, raised by their loaders.
     """
     from ..diagnose import VOCABULARY, diagnose
-    from ..diagnose.validation import accepted, load_cases, summarise, verdict_line
+    from ..diagnose.selection.validation import accepted, load_cases, summarise, verdict_line
 
     cases = load_cases(args.folder, VOCABULARY)
     if args.cases:

@@ -123,7 +123,7 @@ class JointFriction(Effect):
         Parameters
         ----------
         ev : Evaluation
-            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`).
+            The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`).
         g_Nm : numpy.ndarray
             The balance so far (n, 3).
         p : numpy.ndarray

@@ -2,7 +2,7 @@
 
 A calibration (or units, or lever-arm) error of the F/T sensor scales what it reports:
 ``tau_meas = G tau_ext`` with ``G = diag(g)`` in the sensor's axes ({A}, the reading being
-transformed per (55)). Two variants, chosen by the data (:data:`~csjm_opt.diagnose.model_fits.VARIANTS`):
+transformed per (55)). Two variants, chosen by the data (:data:`~csjm_opt.diagnose.fitting.model_fits.VARIANTS`):
 
 * ``axes="common"``: one gain ``g = exp(log_gain)`` on every axis (1 parameter);
 * ``axes="per_axis"``: a gain per axis ``g_j = exp(log_gain_j)`` (3 parameters).
@@ -107,7 +107,7 @@ class SensorGain(Effect):
         Parameters
         ----------
         ev : Evaluation
-            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`), changed in place.
+            The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`), changed in place.
         p : numpy.ndarray
             The log gains.
         """
