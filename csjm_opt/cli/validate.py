@@ -47,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _load(cases):
     """Rig and logs of every case, read and checked before any diagnosis (one error stops the command)."""
-    from ..diagnose.extra import check_rows_belong
+    from ..diagnose.data.extra import check_rows_belong
     from ..measurement.logfile import MeasurementLog
     from ..model.rig import load_rig
 

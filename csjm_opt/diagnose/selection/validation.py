@@ -23,7 +23,7 @@ import json
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..errors import InvalidInput
+from ...errors import InvalidInput
 
 #: The accept rules an ``answers.json`` may name.
 ACCEPT_RULES = ("exact", "no_effect", "not_confident")

@@ -18,7 +18,7 @@ from csjm_opt.diagnose.effects import DriveOffsets, JointFriction, SensorGain, m
 from csjm_opt.diagnose.effects.joint_friction import SLIP_TRAVEL_RAD, rotation_steps
 from csjm_opt.diagnose.fitting.augmented import AugmentedModel, Rows
 from csjm_opt.diagnose.fitting.gauss_newton import fit_model
-from csjm_opt.testbed import Plant
+from csjm_opt.testbed import TestbedPlant
 from csjm_opt.testbed.simulate import simulate_experiment
 
 
@@ -139,14 +139,14 @@ def test_joint_friction_lags_the_load_by_the_compliance_times_the_bound(rig):
 
 def test_testbed_plant_realises_drive_offsets_and_gains(rig):
     d = np.array([4e-4, -3e-4, 0.0, 1e-4, -2e-4, 0.0])
-    shifted = Plant.nominal(rig)
-    offset = dataclasses.replace(Plant.nominal(rig), drive_offsets_m=d)
+    shifted = TestbedPlant.nominal(rig)
+    offset = dataclasses.replace(TestbedPlant.nominal(rig), drive_offsets_m=d)
     l = co.plan_tensions(rig, np.eye(3), np.zeros(3)).rest_lengths_m[None]
     tau = np.array([[0.3, -0.2, 0.1]])
     R1 = offset.respond(l, tau, np.zeros(1, int), np.eye(3)[None])
     R2 = shifted.respond(l + d, tau, np.zeros(1, int), np.eye(3)[None])
     np.testing.assert_allclose(R1, R2, atol=1e-12)
-    gained = dataclasses.replace(Plant.nominal(rig), sensor_gain_A=np.array([0.8, 1.0, 1.2]))
+    gained = dataclasses.replace(TestbedPlant.nominal(rig), sensor_gain_A=np.array([0.8, 1.0, 1.2]))
     np.testing.assert_allclose(gained.measured_moment(tau), tau * [0.8, 1.0, 1.2])
 
 
@@ -154,7 +154,7 @@ def test_testbed_plant_realises_drive_offsets_and_gains(rig):
 def test_drive_offsets_recovered_from_a_testbed_log(rig, seed):
     rng = np.random.default_rng(seed)
     d = np.array([6e-4, -4e-4, 2e-4, -5e-4, 3e-4, -2e-4])
-    plant = dataclasses.replace(Plant.nominal(rig), drive_offsets_m=d)
+    plant = dataclasses.replace(TestbedPlant.nominal(rig), drive_offsets_m=d)
     log = simulate_experiment(rig, 10, rng, plant)
     fit = fit_model(AugmentedModel(rig, [make_effect("drive_offsets", rig)]), compute_residuals(rig, log))
     got = fit.theta[1:] + fit.theta[0]            # the common part sits in the nuisance
@@ -167,13 +167,13 @@ def test_sensor_gain_variant_chosen_by_the_data(rig):
     from csjm_opt.diagnose.fitting.model_fits import variant_fit
 
     rng = np.random.default_rng(5)
-    per_axis = dataclasses.replace(Plant.nominal(rig), sensor_gain_A=np.array([0.75, 1.0, 1.25]))
+    per_axis = dataclasses.replace(TestbedPlant.nominal(rig), sensor_gain_A=np.array([0.75, 1.0, 1.25]))
     log = simulate_experiment(rig, 8, rng, per_axis)
     ctx = _Context(rig, compute_residuals(rig, log), None)
     opt, fit = variant_fit(ctx, rig, "sensor_gain", None)
     assert opt == {"axes": "per_axis"}
     np.testing.assert_allclose(np.exp(fit.theta[1:]), [0.75, 1.0, 1.25], atol=0.05)
-    common = dataclasses.replace(Plant.nominal(rig), sensor_gain_A=np.full(3, 0.85))
+    common = dataclasses.replace(TestbedPlant.nominal(rig), sensor_gain_A=np.full(3, 0.85))
     log = simulate_experiment(rig, 8, rng, common)
     ctx = _Context(rig, compute_residuals(rig, log), None)
     opt, fit = variant_fit(ctx, rig, "sensor_gain", None)

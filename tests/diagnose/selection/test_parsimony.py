@@ -76,12 +76,12 @@ def test_drive_offsets_are_named_not_hole_offsets():
 
     import csjm_opt as co
     from csjm_opt.diagnose import diagnose
-    from csjm_opt.testbed import Plant
+    from csjm_opt.testbed import TestbedPlant
     from csjm_opt.testbed.simulate import simulate_experiment
 
     rig = co.paper_rig()
     rng = np.random.default_rng(11)
-    plant = dataclasses.replace(Plant.nominal(rig), drive_offsets_m=rng.choice([-1.0, 1.0], 6) * 6e-4)
+    plant = dataclasses.replace(TestbedPlant.nominal(rig), drive_offsets_m=rng.choice([-1.0, 1.0], 6) * 6e-4)
     train = simulate_experiment(rig, 10, rng, plant)
     test = simulate_experiment(rig, 6, rng, plant, first_cycle=20)
     d = diagnose(rig, train, test, effects=["hole_offsets", "drive_offsets", "sensor_bias"], secondary=False,
