@@ -77,7 +77,8 @@ effect = json.loads(sys.argv[1])
 log = simulate_experiment(co.paper_rig(), int(sys.argv[2]), np.random.default_rng(0), effect=effect)
 t0, c0 = time.perf_counter(), time.process_time()
 d = diagnose(co.paper_rig(), log)
-print(json.dumps([time.perf_counter() - t0, time.process_time() - c0, d.selected, d.secondary.effect]))
+j = d.as_json()   # the JSON keys hold across versions (the objects behind them may not)
+print(json.dumps([time.perf_counter() - t0, time.process_time() - c0, j["selected"], j["secondary"]["effect"]]))
 """
 
 
