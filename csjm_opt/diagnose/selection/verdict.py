@@ -3,7 +3,7 @@
 :class:`Verdict` is built by :func:`csjm_opt.diagnose.selection.decision.diagnose` in small steps (the
 rule is stated in the guide, ``docs/guide/diagnosis.md``, section "The decision rule"); its
 :meth:`Verdict.as_json` gives the ``verdict`` object of ``csjm diagnose --json`` and
-:meth:`Secondary.as_json` the ``secondary`` one (keys in ``../shared/SPEC.md`` and
+:meth:`Secondary.as_json` the ``secondary`` one (keys in docs/conventions.md and
 :mod:`csjm_opt.diagnose.selection.result`).
 """
 
