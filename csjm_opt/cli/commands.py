@@ -19,6 +19,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "paper": ("identify", "reproduce the paper's Tables 3 and 4 and check them"),
     "plan-experiment": ("plan_experiment", "plan an identification experiment (loads, pretension)"),
     "diagnose": ("diagnose", "which unmodelled effect explains the model-rig gap"),
+    "validate": ("validate", "score the diagnosis on a folder of logs with known answers (answers.json)"),
     "simulate": ("simulate", "run a protocol on a simulated rig (testbed plant with effects)"),
     "sweep": ("sweep", "hole-geometry design sweep (workspace, stiffness, margins)"),
     "optimise": ("optimise", "hole-geometry optimisation (guaranteed workspace, stiffness, no collisions)"),
@@ -39,12 +40,13 @@ MJCF_ACTUATIONS = ("spring", "winch", "tension")
 TESTBED_PLANTS = ("quasi-static", "mujoco")
 #: The diagnosis vocabulary, :data:`csjm_opt.diagnose.effects.EFFECTS` (in its order).
 DIAGNOSIS_EFFECTS = ("hole_offsets", "friction", "cable_hardening", "link_compliance", "sensor_bias", "mass_com",
-                     "tracker_registration", "stiffness_scale", "guide_radius")
+                     "tracker_registration", "stiffness_scale", "guide_radius", "drive_offsets", "sensor_gain",
+                     "joint_friction")
 #: The effects ``csjm simulate`` injects: :data:`csjm_opt.testbed.plant.EFFECT_NAMES`, the variants
 #: (:data:`~csjm_opt.testbed.plant.VARIANT_NAMES`) and :data:`~csjm_opt.testbed.plant.OUTSIDE_NAMES`.
 TESTBED_EFFECTS = ("hole_offsets", "friction", "cable_hardening", "link_compliance", "sensor_bias", "mass_com",
-                   "tracker_registration", "stiffness_scale", "coulomb_friction", "guide_radius", "sensor_drift",
-                   "drum_slip", "joint_friction")
+                   "tracker_registration", "stiffness_scale", "drive_offsets", "sensor_gain", "joint_friction",
+                   "coulomb_friction", "guide_radius", "sensor_drift", "drum_slip")
 #: Old effect names ``csjm simulate`` still takes: :data:`csjm_opt.testbed.plant.DEPRECATED_NAMES`.
 TESTBED_DEPRECATED = {"eyelet_radius": "guide_radius"}
 #: :data:`csjm_opt.design._value_checks.MAX_DESIGNS`.

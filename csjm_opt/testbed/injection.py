@@ -13,6 +13,11 @@ mass_com          mass * (1 + 0.2 severity)^(+-1), com + 15 mm * severity random
 tracker_          tracker frame rotated by 2.5 mrad * severity about a random
 registration      axis (``marker=True`` in :func:`inject`: also the markers)
 stiffness_scale   every stiffness times exp(+-0.03 severity)
+drive_offsets     each drive's rest length off by N(0, (0.3 mm * severity)^2)
+sensor_gain       the F/T moment reading times exp(+-0.05 severity) (common),
+                  each axis's factor times exp(N(0, (0.01 severity)^2))
+joint_friction    Coulomb friction at the ball joint, 0.03 N m * severity per
+                  axis of {A} (MuJoCo's ball-joint ``frictionloss``)
 ================  ===========================================================
 
 A further law of a vocabulary effect (:data:`~csjm_opt.testbed.plant.VARIANT_NAMES`
@@ -30,7 +35,9 @@ magnitudes stay inside the diagnosis's default prior ranges
 coordinates within 4 mm (3.3 sd at 1.2), capstan factors within 0.3,
 hardening within 300 /m, compliance entries within 0.05 rad/(N m), a bias
 within 0.5 N m, ``|d(m r)|`` within 0.1 x mass per axis (com z up to
-120 mm), registration within 0.05 rad, a stiffness factor within [0.5, 2].
+120 mm), registration within 0.05 rad, a stiffness factor within [0.5, 2], drive
+offsets within 2 mm (3.3 sd at 2), a sensor gain within [0.6, 1.4], a joint
+friction moment within 0.3 N m.
 A study that wants an effect larger than that against the noise floor lowers
 the noise instead (a better instrument), not the plausibility of the effect.
 
@@ -44,8 +51,6 @@ sensor_drift      F/T offset drifting by 0.5 mN m per row * severity, random
                   direction (0.1 N m over a 200-row log)
 drum_slip         cables slip on their drums above 55 % of the tension range,
                   by 20 um per N over the threshold * severity
-joint_friction    Coulomb friction at the ball joint, 0.03 N m * severity per
-                  axis of {A} (MuJoCo's ball-joint ``frictionloss``)
 ================  ===========================================================
 """
 
@@ -66,7 +71,8 @@ from .plant import DEPRECATED_NAMES, EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES,
 #: Largest severity whose injected magnitudes stay within the diagnosis's default priors (see above).
 PLAUSIBLE_SEVERITY = {"hole_offsets": 1.2, "friction": 7.0, "cable_hardening": 15.0, "link_compliance": 8.0,
                       "sensor_bias": 4.0, "mass_com": 2.5, "tracker_registration": 15.0,
-                      "stiffness_scale": 15.0, "coulomb_friction": 15.0}
+                      "stiffness_scale": 15.0, "coulomb_friction": 15.0, "drive_offsets": 2.0,
+                      "sensor_gain": 4.0, "joint_friction": 10.0}
 
 
 def _unit(rng: np.random.Generator) -> np.ndarray:
@@ -128,6 +134,12 @@ def inject(plant, effect: str, severity: float, rng: np.random.Generator):
     elif effect == "stiffness_scale":
         factor = np.exp(0.03 * s * rng.choice([-1.0, 1.0]))
         changes = {"rig": rig.replace(cable_stiffness_N_per_m=factor * np.asarray(rig.cable_stiffness_N_per_m))}
+    elif effect == "drive_offsets":
+        m = len(np.asarray(rig.cable_stiffness_N_per_m))
+        changes = {"drive_offsets_m": rng.normal(0.0, 3e-4 * s, m)}
+    elif effect == "sensor_gain":
+        common = np.exp(0.05 * s * rng.choice([-1.0, 1.0]))
+        changes = {"sensor_gain_A": common * np.exp(rng.normal(0.0, 0.01 * s, 3))}
     elif effect == "joint_friction":
         changes = {"joint_friction_Nm": 0.03 * s}
     elif effect == "guide_radius":

@@ -23,6 +23,10 @@ Physics (independent of the diagnosis's fitting models where it can be):
 * link compliance: the loaded, tracked body is joined to the cable platform
   by a symmetric compliance ``C``, ``R_meas = R_cable exp(hat(C tau_m))``;
 * sensor bias: the F/T reading is offset by a constant ``b`` in {A};
+* sensor gain: the F/T reading is the true moment times a gain per axis of {A}
+  (``tau_meas = diag(g) tau + b``);
+* drive offsets: each drive realises its commanded rest length plus a constant
+  ``d_i`` (a homing error), ``l_true = l + d``;
 * tracker registration: the tracker reports ``Q_B R Q_A`` (its frame rotated
   against {B}, the markers against {A});
 * a common stiffness error: a :class:`Rig` with scaled stiffnesses;
@@ -85,11 +89,11 @@ def _smooth_clip(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, w: float) -> np.
 
 
 EFFECT_NAMES = ("hole_offsets", "friction", "cable_hardening", "link_compliance", "sensor_bias", "mass_com",
-                "tracker_registration", "stiffness_scale")
+                "tracker_registration", "stiffness_scale", "drive_offsets", "sensor_gain", "joint_friction")
 #: Further laws of a vocabulary effect the testbed can inject, and the vocabulary name a diagnosis should give.
 VARIANT_NAMES = {"coulomb_friction": "friction"}
 #: Effects the testbed simulates that the diagnosis has no model for.
-OUTSIDE_NAMES = ("guide_radius", "sensor_drift", "drum_slip", "joint_friction")
+OUTSIDE_NAMES = ("guide_radius", "sensor_drift", "drum_slip")
 #: Old effect names still accepted (with a DeprecationWarning) -> their name now.
 DEPRECATED_NAMES = {"eyelet_radius": "guide_radius"}
 
@@ -109,6 +113,8 @@ class TestbedPlant:
     joint_friction_Nm: float = 0.0             # Coulomb friction moment of the ball joint, per axis of {A}
     link_compliance_rad_per_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((3, 3)))
     sensor_bias_A_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+    sensor_gain_A: np.ndarray = dataclasses.field(default_factory=lambda: np.ones(3))   # reading / true, per axis
+    drive_offsets_m: np.ndarray | None = None  # (m,) actual minus commanded rest length per drive (None: 0)
     tracker_rotation_B: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))   # Q_B
     marker_rotation_A: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))    # Q_A
     guide_radius_m: float = 0.0
@@ -177,6 +183,8 @@ class TestbedPlant:
             The plant has no equilibrium for some row.
         """
         rest_lengths_m = np.asarray(rest_lengths_m, float)
+        if self.drive_offsets_m is not None:      # what the drives realise for what was commanded
+            rest_lengths_m = rest_lengths_m + np.asarray(self.drive_offsets_m, float)
         tau_ext_A_Nm = np.asarray(tau_ext_A_Nm, float)
         cycle = np.asarray(cycle)
         n = len(cycle)
@@ -250,10 +258,11 @@ class TestbedPlant:
         return bool(np.isfinite(self.drum_slip_threshold_N) and self.drum_slip_compliance_m_per_N > 0)
 
     def measured_moment(self, tau_ext_A_Nm: np.ndarray) -> np.ndarray:
-        """What the F/T sensor reads without noise (N m): bias plus drift over the rows (time order)."""
+        """What the F/T sensor reads without noise (N m): gain, bias, and drift over the rows (time order)."""
         tau = np.asarray(tau_ext_A_Nm, float)
         t = np.arange(len(tau))[:, None] if tau.ndim == 2 else 0.0       # rows in time order
-        return tau + self.sensor_bias_A_Nm + t * np.asarray(self.sensor_drift_A_Nm_per_row)
+        drift = t * np.asarray(self.sensor_drift_A_Nm_per_row)
+        return tau * np.asarray(self.sensor_gain_A, float) + self.sensor_bias_A_Nm + drift
 
     def measured_pose(self, R_true: np.ndarray) -> np.ndarray:
         """What the tracker reports without noise: ``Q_B R Q_A``."""

@@ -61,15 +61,15 @@ def run_one(job: dict) -> dict:
         dec._Context.__init__, dg.diagnose = init, diag
     d, ctx = diags[-1], ctxs[-1]
     v = d.verdict
-    new = v.get("unsettled_rivals", [])
+    new = v.unsettled_rivals
     models = scored_models(ctx.evidence, d.candidates, d.tests, d.pairs, d.pair_scores)
     old = []
     if d.selected not in ("none", "unexplained"):
-        skip = [*v.get("more_probable_rivals", []), *v.get("alternatives", []),
-                *(f"{d.selected}+{c}" for c in v.get("secondary_alternatives", []))]
+        skip = [*v.more_probable_rivals, *v.alternatives,
+                *(f"{d.selected}+{c}" for c in v.secondary_alternatives)]
         plain = {k: {kk: vv for kk, vv in m.items() if kk != "log_evidence_at_fit"} for k, m in models.items()}
         old = unsettled_rivals(plain, d.final.name, skip)
-    warnings = v.get("warnings", [])
+    warnings = v.warnings
     rec.update({"rivals_at_fit": [_brief(r) for r in new], "rivals_linearised": [_brief(r) for r in old],
                 "other_warnings": warnings[:len(warnings) - len(new)],
                 "evidence": {k: {"linearised": m["log_evidence"], "at_fit": m.get("log_evidence_at_fit")}

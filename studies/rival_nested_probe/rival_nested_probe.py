@@ -111,8 +111,8 @@ def probe(job: dict) -> dict:
     s = ctxs[-1].sigma
     v = d.verdict
     final = d.final
-    out = {"id": job["id"], "selected": d.selected, "secondary": d.secondary.get("effect", "none"),
-           "sigma": float(s), "warnings": v["warnings"], "rivals": []}
+    out = {"id": job["id"], "selected": d.selected, "secondary": d.secondary.effect,
+           "sigma": float(s), "warnings": v.warnings, "rivals": []}
     tv = evidence_terms(final.fit, s)
     clean = None
     # every pair that adds one effect to the verdict and leads it by the linearised evidence (the rule before)

@@ -7,12 +7,15 @@ from typing import Mapping
 from ...errors import InvalidInput
 from .base import Effect
 from .cable_hardening import CableHardening
+from .drive_offsets import DriveOffsets
 from .friction import Friction
 from .guide_radius import GuideRadius, guide_axis
 from .hole_offsets import HoleOffsets
+from .joint_friction import JointFriction
 from .link_compliance import LinkCompliance
 from .mass_com import MassCom
 from .sensor_bias import SensorBias
+from .sensor_gain import SensorGain
 from .stiffness_scale import StiffnessScale
 from .tracker_registration import TrackerRegistration
 
@@ -27,7 +30,16 @@ EFFECTS: dict[str, type[Effect]] = {
     "tracker_registration": TrackerRegistration,
     "stiffness_scale": StiffnessScale,
     "guide_radius": GuideRadius,
+    "drive_offsets": DriveOffsets,
+    "sensor_gain": SensorGain,
+    "joint_friction": JointFriction,
 }
+
+
+def n_cables_of(rig) -> int:
+    """The rig's cable count ``m`` (``rig.n_cables``, else the length of its stiffness list)."""
+    m = getattr(rig, "n_cables", None)
+    return int(m) if m is not None else len(rig.cable_stiffness_N_per_m)
 
 
 def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] | None = None,
@@ -44,7 +56,7 @@ def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] |
     ranges : mapping, optional
         Prior-range overrides, parameter name or fnmatch pattern -> ``(lo, hi)``.
     **options
-        Variant of the effect (``friction``: ``law``, ``memory``).
+        Variant of the effect (``friction``: ``law``, ``memory``; ``sensor_gain``: ``axes``).
 
     Returns
     -------
@@ -67,10 +79,15 @@ def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] |
         effect = GuideRadius(guide_axis(rig.base_holes_B_m))
     elif cls is Friction:
         effect = Friction(t_max_N=rig.t_max_N if rig is not None else 100.0, **options)
+    elif cls is DriveOffsets:
+        effect = DriveOffsets(n_cables=n_cables_of(rig) if rig is not None else 6)
+    elif cls is SensorGain:
+        effect = SensorGain(**options)
     else:
         effect = cls()
     return effect.with_ranges(ranges)
 
 
-__all__ = ["EFFECTS", "CableHardening", "Effect", "Friction", "GuideRadius", "HoleOffsets", "LinkCompliance",
-           "MassCom", "SensorBias", "StiffnessScale", "TrackerRegistration", "make_effect"]
+__all__ = ["EFFECTS", "CableHardening", "DriveOffsets", "Effect", "Friction", "GuideRadius", "HoleOffsets",
+           "JointFriction", "LinkCompliance", "MassCom", "SensorBias", "SensorGain", "StiffnessScale",
+           "TrackerRegistration", "make_effect", "n_cables_of"]

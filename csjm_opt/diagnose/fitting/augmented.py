@@ -114,6 +114,8 @@ class Evaluation:
     R_body: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))   # true body pose (adjust_frame)
     tau_weight_A_Nm: np.ndarray | None = None
     lengths_m: np.ndarray | None = None       # cable lengths at R_cable (set before adjust_tension)
+    rest_lengths_m: np.ndarray | None = None  # actual rest lengths (n, m): commanded + common offset (adjust_rest)
+    cable_jacobian: np.ndarray | None = None  # J (n, m, 3) at R_cable: J^T T is the cables' moment, dc = -J dzeta
     state_out: np.ndarray | None = None       # path state after this row (path-dependent effects)
 
 
@@ -130,6 +132,31 @@ class AugmentedModel:
         self._g = np.asarray(rig.gravity_B_m_per_s2, float)
         sizes = [len(NUISANCE_NAMES)] + [e.n_params for e in self.effects]
         self._offsets = np.cumsum([0] + sizes)
+        self._geometry: tuple | None = None     # the last cable terms: (R, A, B, lengths, J)
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state["_geometry"] = None                # a cache, not state: not pickled to the workers
+        return state
+
+    def cable_terms(self, R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Cable lengths and Jacobian (:func:`csjm_opt.model.kinematics.cable_terms`), the last ones remembered.
+
+        A fit evaluates the balance at the same poses and holes for every parameter its Jacobian
+        perturbs that leaves the geometry alone (loads, tension laws, rest lengths): the last result
+        is returned when the poses and holes are equal to the last ones, value for value (read-only
+        arrays: bit for bit what a new evaluation gives).
+        """
+        last = self._geometry
+        if (last is not None and last[0].shape == np.shape(R) and np.shape(A_m) == last[1].shape
+                and np.shape(B_m) == last[2].shape and np.array_equal(last[0], R)
+                and np.array_equal(last[1], A_m) and np.array_equal(last[2], B_m)):
+            return last[3], last[4]
+        lengths, J = kin.cable_terms(R, A_m, B_m)
+        lengths.setflags(write=False)
+        J.setflags(write=False)
+        self._geometry = (np.array(R, float), np.array(A_m, float), np.array(B_m, float), lengths, J)
+        return lengths, J
 
     @property
     def name(self) -> str:
@@ -273,14 +300,19 @@ class AugmentedModel:
             e.adjust_pose(ev, p)
         for e, p in zip(self.effects, params):
             e.adjust_geometry(ev, p)
-        lengths, J = kin.cable_terms(ev.R_cable, ev.A_m, ev.B_m)
-        ev.lengths_m = lengths
-        stretch = lengths - (rows.rest_lengths_m + theta[0])
+        ev.rest_lengths_m = rows.rest_lengths_m + theta[0]
+        for e, p in zip(self.effects, params):
+            e.adjust_rest(ev, p)
+        lengths, J = self.cable_terms(ev.R_cable, ev.A_m, ev.B_m)
+        ev.lengths_m, ev.cable_jacobian = lengths, J
+        stretch = lengths - ev.rest_lengths_m
         T = self._k * np.maximum(stretch, 0.0)
         for e, p in zip(self.effects, params):
             T = e.adjust_tension(ev, stretch, T, p)
         tau_load = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm
         g = np.einsum("nij,ni->nj", J, T) + np.einsum("nij,nj->ni", ev.link_rotation, tau_load)
+        for e, p in zip(self.effects, params):
+            g = e.adjust_balance(ev, g, p)
         return g, ev
 
     def predict_poses(self, rows: Rows, theta: np.ndarray, R_init: np.ndarray) -> kin.PoseSolution:
@@ -336,8 +368,8 @@ def with_entry(model: "AugmentedModel", rows: Rows, R_meas: np.ndarray, theta: n
     state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
     rest, tau, R = np.full((n, 6), np.nan), np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan)
     first = np.flatnonzero(np.r_[False, rows.cycle[1:] != rows.cycle[:-1]])
-    if ev.state_out is not None and ev.lengths_m is not None:
-        state[first] = ev.state_out[first - 1]
+    if ev.lengths_m is not None:         # a model without a state of its own (joint friction) starts at 0
+        state[first] = 0.0 if ev.state_out is None else ev.state_out[first - 1]
         lengths[first] = ev.lengths_m[first - 1]
         rest[first], tau[first] = rows.rest_lengths_m[first - 1], rows.tau_meas_A_Nm[first - 1]
         R[first] = R_meas[first - 1]

@@ -244,6 +244,8 @@ class MujocoTestbedPlant:
         from .engine import Engine
 
         l_all = np.asarray(rest_lengths_m, float)
+        if self.plant.drive_offsets_m is not None:   # what the drives realise for what was commanded
+            l_all = l_all + np.asarray(self.plant.drive_offsets_m, float)
         tau_all = np.asarray(tau_ext_A_Nm, float)
         cycle = np.asarray(cycle)
         mr_all = (np.zeros((len(cycle), 3)) if load_first_moment_A_kgm is None
