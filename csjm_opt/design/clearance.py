@@ -30,8 +30,14 @@ import numpy as np
 from ..model.link import Link
 from ..model.rig import Rig
 
-#: The 15 cable pairs (0-based), in the order of the ``pair`` axis.
-PAIRS = np.array(list(itertools.combinations(range(6), 2)))
+
+def cable_pairs(n_cables: int) -> np.ndarray:
+    """The m (m - 1) / 2 cable pairs (0-based, i < j), in the order of the ``pair`` axis."""
+    return np.array(list(itertools.combinations(range(n_cables), 2)), dtype=np.int64).reshape(-1, 2)
+
+
+#: The 15 cable pairs of a six-cable rig.
+PAIRS = cable_pairs(6)
 
 
 def segment_distance(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray,

@@ -102,8 +102,6 @@ def holes_sym(p: dict[str, Any]) -> tuple[Any, Any]:
     -------
     A, B : casadi.SX, shape (3, m)
     """
-    from ..geometry import pair_circle_from_chords
-
     n_cab = n_cables_sym(p)
     out = []
     for body, letter, height in (("platform", "A", "oo_a_m"), ("base", "B", "oo_b_m")):
@@ -123,6 +121,8 @@ def holes_sym(p: dict[str, Any]) -> tuple[Any, Any]:
                 if n_cab == 6:
                     r, gamma = hexagon.circle_from_chords(float(d12), float(d23))
                 else:
+                    from ..geometry import pair_circle_from_chords
+
                     r, gamma = pair_circle_from_chords(float(d12), float(d23), n_cab)
             theta0 = p[f"{body}_theta0_deg"] * math.pi / 180
             z = p[height] if body == "platform" else -p[height]
