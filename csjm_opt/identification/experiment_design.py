@@ -201,7 +201,7 @@ def _cycle_protocol(c: int, cyc: Cycle, picked: list[int]) -> Protocol:
 
 def _concat(parts: list[Protocol]) -> Protocol:
     return Protocol(*(np.concatenate([getattr(p, f.name) for p in parts])
-                      for f in dataclasses.fields(Protocol)))
+                      for f in dataclasses.fields(Protocol) if f.name != "source"))
 
 
 __all__ = ["CRITERIA", "ExperimentPlan", "paper_protocol", "plan_experiment", "predict_bound"]
