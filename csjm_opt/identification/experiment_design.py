@@ -200,8 +200,9 @@ def _cycle_protocol(c: int, cyc: Cycle, picked: list[int]) -> Protocol:
 
 
 def _concat(parts: list[Protocol]) -> Protocol:
-    return Protocol(*(np.concatenate([getattr(p, f.name) for p in parts])
-                      for f in dataclasses.fields(Protocol) if f.name != "source"))
+    cat = {f.name: np.concatenate([getattr(p, f.name) for p in parts])
+           for f in dataclasses.fields(Protocol) if f.name != "source"}
+    return Protocol(**cat)
 
 
 __all__ = ["CRITERIA", "ExperimentPlan", "paper_protocol", "plan_experiment", "predict_bound"]
