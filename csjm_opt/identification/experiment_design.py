@@ -200,9 +200,10 @@ def _cycle_protocol(c: int, cyc: Cycle, picked: list[int]) -> Protocol:
 
 
 def _concat(parts: list[Protocol]) -> Protocol:
-    cat = {f.name: np.concatenate([getattr(p, f.name) for p in parts])
-           for f in dataclasses.fields(Protocol) if f.name != "source"}
-    return Protocol(**cat)
+    def cat(name: str) -> np.ndarray:
+        return np.concatenate([getattr(p, name) for p in parts])
+
+    return Protocol(cat("cycle"), cat("rest_lengths_m"), cat("load_N"), cat("direction_B"), cat("point_A_m"))
 
 
 __all__ = ["CRITERIA", "ExperimentPlan", "paper_protocol", "plan_experiment", "predict_bound"]
