@@ -22,8 +22,6 @@ The paper's protocol and the bound of a given protocol are in
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from .. import so3
