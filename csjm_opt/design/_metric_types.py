@@ -54,7 +54,7 @@ class PoseMetrics:
     tilt_rad: np.ndarray            # (n,)
     feasible: np.ndarray            # (n,) bool, all loads held
     wrench_margin_Nm: np.ndarray    # (n, m) per load
-    tensions_N: np.ndarray          # (n, 6) planned for the stiffness load (valid where feasible)
+    tensions_N: np.ndarray          # (n, m) planned for the stiffness load (valid where feasible)
     K: np.ndarray                   # (n, 3, 3) at those tensions
     eig_Nm_per_rad: np.ndarray      # (n, 3) ascending
     fallbacks: int                  # feasible rows the active-set method did not settle

@@ -97,7 +97,7 @@ def evaluate_poses(rig: Rig, Rs: np.ndarray, loads: LoadSet = LoadSet(),
     ok = np.all(margin >= -options.feasibility_tol_Nm, axis=1)
     # Tensions only where the load set can be held (infeasible rows never settle).
     rows = np.flatnonzero(ok)
-    t_ref = np.broadcast_to(rig.t_mid_N, (rows.size, 6))
+    t_ref = np.broadcast_to(rig.t_mid_N, (rows.size, rig.n_cables))
     res = active_set.solve(np.swapaxes(J[rows], 1, 2), -tau_load[rows, 0], np.ascontiguousarray(t_ref),
                            rig.t_min_N, rig.t_max_N)
     T = np.tile(rig.t_mid_N, (Rs.shape[0], 1))
