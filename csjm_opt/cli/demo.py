@@ -56,7 +56,6 @@ def run(args: argparse.Namespace) -> int:
         report's own files.
     """
     from ..demo import pipeline as demo
-
     from ..model.rig import load_rig
 
     check_outputs([args.rig], {"--json": args.json}, {"--out": args.out})  # before the work, not after it
