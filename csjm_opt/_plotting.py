@@ -114,7 +114,7 @@ def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.nda
     ----------
     labels : list of str
         One label per pose.
-    tensions_N : (n, 6) array
+    tensions_N : (n, m) array
         Tensions per pose (N).
     K : (n, 3, 3) array
         Stiffness per pose (N m/rad).
@@ -137,9 +137,10 @@ def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.nda
     fig.get_layout_engine().set(wspace=0.1)                  # room for the 3-D z labels, which the layout ignores
     grid = fig.add_gridspec(2, len(show) + 1, height_ratios=(1, 1.1), width_ratios=(1,) * len(show) + (1.3,))
     ax = fig.add_subplot(grid[0, :])
-    width = 0.8 / 6
-    for i in range(6):
-        ax.bar(np.arange(n) + (i - 2.5) * width, tensions_N[:, i], width, label=f"{i + 1}")
+    m = tensions_N.shape[1]
+    width = 0.8 / m
+    for i in range(m):
+        ax.bar(np.arange(n) + (i - (m - 1) / 2) * width, tensions_N[:, i], width, label=f"{i + 1}")
     ax.axhline(t_min_N, color="k", ls="--", lw=0.8)
     ax.axhline(t_max_N, color="k", ls="--", lw=0.8)
     ax.set_xticks(np.arange(n), labels, rotation=25, ha="right", fontsize=8)
