@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ._atomic_write import _file_mode
+
 
 def figure():
     """``matplotlib.pyplot`` (imported on first use; the backend is the caller's choice)."""
@@ -47,12 +49,58 @@ def save(fig, path: str | Path) -> Path:
     try:
         constrained = isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine)
         fig.savefig(tmp, dpi=120, bbox_inches=None if constrained else "tight")
+        os.chmod(tmp, _file_mode())      # mkstemp makes 0600; a figure is for others to read
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
         figure().close(fig)
     return path
+
+
+def rig_drawing(platform_holes_A_m: np.ndarray, base_holes_B_m: np.ndarray, title: str = "", fig=None):
+    """The rig at its zero pose: holes, cables and the joint centre, in 3D and seen from above.
+
+    Parameters
+    ----------
+    platform_holes_A_m, base_holes_B_m : ndarray, shape (m, 3)
+        Hole positions (m); at the zero pose {A} and {B} coincide.
+    title : str, optional
+        Figure title.
+    fig : matplotlib.figure.Figure, optional
+        Figure to draw into (a new one when ``None``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    plt = figure()
+    fig = plt.figure(figsize=(10, 4.8), layout="constrained") if fig is None else fig
+    A, B = np.asarray(platform_holes_A_m, float) * 1e3, np.asarray(base_holes_B_m, float) * 1e3
+    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
+    ax2 = fig.add_subplot(1, 2, 2)
+    for ax, dims in ((ax3, 3), (ax2, 2)):
+        for i in range(A.shape[0]):
+            seg = np.array([A[i], B[i]])
+            ax.plot(*seg[:, :dims].T, color=f"C{i % 10}", lw=1.5)
+        ax.scatter(*A[:, :dims].T, color="k", marker="o", s=18, label="platform holes A_i")
+        ax.scatter(*B[:, :dims].T, color="k", marker="s", s=18, label="base holes B_i")
+        ax.scatter(*np.zeros(dims), color="r", marker="+", s=60, label="joint centre O")
+    for i in range(A.shape[0]):
+        ax2.annotate(f"A{i + 1}", A[i, :2], textcoords="offset points", xytext=(3, 3), fontsize=8)
+        ax2.annotate(f"B{i + 1}", B[i, :2], textcoords="offset points", xytext=(3, -9), fontsize=8, color="0.4")
+        ax3.text(*A[i], f"{i + 1}", fontsize=7)
+    ax3.set_xlabel("x (mm)")
+    ax3.set_ylabel("y (mm)")
+    ax3.set_zlabel("z (mm)")
+    ax2.set_xlabel("x (mm)")
+    ax2.set_ylabel("y (mm)")
+    ax2.set_aspect("equal")
+    ax2.set_title("seen from above (+z), cable i joins A_i and B_i")
+    ax2.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
+    if title:
+        fig.suptitle(title)
+    return fig
 
 
 def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.ndarray,
@@ -66,7 +114,7 @@ def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.nda
     ----------
     labels : list of str
         One label per pose.
-    tensions_N : (n, 6) array
+    tensions_N : (n, m) array
         Tensions per pose (N).
     K : (n, 3, 3) array
         Stiffness per pose (N m/rad).
@@ -89,9 +137,10 @@ def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.nda
     fig.get_layout_engine().set(wspace=0.1)                  # room for the 3-D z labels, which the layout ignores
     grid = fig.add_gridspec(2, len(show) + 1, height_ratios=(1, 1.1), width_ratios=(1,) * len(show) + (1.3,))
     ax = fig.add_subplot(grid[0, :])
-    width = 0.8 / 6
-    for i in range(6):
-        ax.bar(np.arange(n) + (i - 2.5) * width, tensions_N[:, i], width, label=f"{i + 1}")
+    m = tensions_N.shape[1]
+    width = 0.8 / m
+    for i in range(m):
+        ax.bar(np.arange(n) + (i - (m - 1) / 2) * width, tensions_N[:, i], width, label=f"{i + 1}")
     ax.axhline(t_min_N, color="k", ls="--", lw=0.8)
     ax.axhline(t_max_N, color="k", ls="--", lw=0.8)
     ax.set_xticks(np.arange(n), labels, rotation=25, ha="right", fontsize=8)

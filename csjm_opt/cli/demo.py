@@ -1,4 +1,4 @@
-"""``csjm demo``: the main job on the built-in paper rig."""
+"""``csjm demo``: the main job on the built-in paper rig, or on any valid rig file (``--rig``)."""
 
 from __future__ import annotations
 
@@ -26,6 +26,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "experiment, identify K, verify, diagnose; writes a report folder: index.html (open it "
                        "in a browser), README.md (the same in Markdown), figures, summary.json, and the "
                        "sub-reports experiment/index.html and diagnosis/index.html.")
+    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig); any valid rig, "
+                   "any number of cables")
     p.add_argument("--out", default="csjm_report", help="report folder (default: ./csjm_report)")
     p.add_argument("--seed", type=int_in(0, 2 ** 63 - 1), default=0, help="random seed of the simulated experiment")
     p.add_argument("--quick", action="store_true",
@@ -54,12 +56,14 @@ def run(args: argparse.Namespace) -> int:
         report's own files.
     """
     from ..demo import pipeline as demo
+    from ..model.rig import load_rig
 
-    check_outputs([], {"--json": args.json}, {"--out": args.out})  # before the work, not after it
+    check_outputs([args.rig], {"--json": args.json}, {"--out": args.out})  # before the work, not after it
+    rig = load_rig(args.rig) if args.rig else None
     if args.json and args.json != "-" and Path(args.json).resolve().parent == Path(args.out).resolve() \
             and Path(args.json).name in ("summary.json", "README.md", "index.html"):
         raise InvalidInput(f"--json {args.json} is a file the report writes; choose another name", "--json")
-    summary = demo.run(args.out, seed=args.seed, quick=args.quick, progress=sys.stderr.isatty())
+    summary = demo.run(args.out, seed=args.seed, quick=args.quick, rig=rig, progress=sys.stderr.isatty())
     if args.json:
         atomic_write_json(args.json, summary)
     if args.json != "-":

@@ -179,7 +179,7 @@ def run_identify(args: argparse.Namespace) -> int:
 
     check_outputs([args.data, args.rig], {"--json": args.json}, {"--figures": args.figures})
     rig = load_rig(args.rig)
-    log = MeasurementLog.from_csv(args.data)
+    log = MeasurementLog.from_csv(args.data).check_cables(rig.n_cables, args.rig or "paper")
     model = Model(rig)
     noise = InstrumentNoise.paper() if args.noise == "paper" else None
     if args.tau_sigma is not None and args.angle_sigma is None:

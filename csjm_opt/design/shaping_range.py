@@ -21,14 +21,23 @@ needs, and tests/design/test_metrics.py checks the two agree.
 
 from __future__ import annotations
 
+import functools
 import itertools
 
 import numpy as np
 from numba import njit
 
-_BASES = np.array(list(itertools.combinations(range(6), 3)))          # (20, 3)
-_NONBASIC = np.array([[i for i in range(6) if i not in b] for b in _BASES])  # (20, 3)
-_PATTERNS = np.array(list(itertools.product((0, 1), repeat=3)), float)  # (8, 3)
+
+@functools.cache
+def _tables(m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Bases (3 basic cables), their non-basic cables and the 2^(m - 3) bound patterns of m cables.
+
+    Shapes (C(m, 3), 3), (C(m, 3), m - 3), (2^(m - 3), m - 3): (20, 3), (20, 3), (8, 3) for m = 6.
+    """
+    bases = np.array(list(itertools.combinations(range(m), 3)), dtype=np.int64)
+    nonbasic = np.array([[i for i in range(m) if i not in b] for b in bases], dtype=np.int64).reshape(len(bases), m - 3)
+    patterns = np.array(list(itertools.product((0, 1), repeat=m - 3)), float).reshape(-1, m - 3)
+    return bases, nonbasic, patterns
 
 #: Unit directions in {A}: bending about x, bending about y, torsion about z (platform axis).
 AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
@@ -36,13 +45,15 @@ AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
 def vertices(J: np.ndarray, tau_load_A_Nm: np.ndarray, t_min_N: float, t_max_N: float,
              tol_N: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
-    """All basic solutions of P: tensions (n, 160, 6) and validity mask (n, 160)."""
+    """All basic solutions of P: tensions (n, V, m) and validity mask (n, V); V = 160 for m = 6."""
     J = np.asarray(J, float)
-    n = J.shape[0]
+    n, m = J.shape[0], J.shape[1]
+    bases, nonbasic, patterns = _tables(m)
+    nb, npat = len(bases), len(patterns)
     w = -np.asarray(tau_load_A_Nm, float)                                   # (n, 3)
-    t_nb = t_min_N + _PATTERNS * (t_max_N - t_min_N)                        # (8, 3)
-    A_b = np.swapaxes(J[:, _BASES, :], -1, -2)                              # (n, 20, 3, 3)
-    A_nb = np.swapaxes(J[:, _NONBASIC, :], -1, -2)                          # (n, 20, 3, 3)
+    t_nb = t_min_N + patterns * (t_max_N - t_min_N)                         # (8, 3) for m = 6
+    A_b = np.swapaxes(J[:, bases, :], -1, -2)                               # (n, 20, 3, 3)
+    A_nb = np.swapaxes(J[:, nonbasic, :], -1, -2)                           # (n, 20, 3, m - 3)
     rhs = w[:, None, None, :] - np.einsum("nbij,pj->nbpi", A_nb, t_nb)      # (n, 20, 8, 3)
     with np.errstate(divide="ignore", invalid="ignore"):   # singular bases are masked just below
         det = np.linalg.det(A_b)
@@ -51,11 +62,12 @@ def vertices(J: np.ndarray, tau_load_A_Nm: np.ndarray, t_min_N: float, t_max_N: 
     A_safe = np.where(regular[..., None, None], A_b, np.eye(3))
     t_b = np.linalg.solve(A_safe[:, :, None], rhs[..., None])[..., 0]      # (n, 20, 8, 3)
     ok = regular[:, :, None] & np.all((t_b >= t_min_N - tol_N) & (t_b <= t_max_N + tol_N), axis=-1)
-    T = np.empty((n, 20, 8, 6))
+    T = np.empty((n, nb, npat, m))
     for k in range(3):  # advanced indices (base, cable) split by a slice put their axis first
-        T[:, np.arange(20), :, _BASES[:, k]] = t_b[..., k].transpose(1, 0, 2)
-        T[:, np.arange(20), :, _NONBASIC[:, k]] = np.broadcast_to(t_nb[:, k], (20, n, 8))
-    return T.reshape(n, 160, 6), ok.reshape(n, 160)
+        T[:, np.arange(nb), :, bases[:, k]] = t_b[..., k].transpose(1, 0, 2)
+    for k in range(m - 3):
+        T[:, np.arange(nb), :, nonbasic[:, k]] = np.broadcast_to(t_nb[:, k], (nb, n, npat))
+    return T.reshape(n, nb * npat, m), ok.reshape(n, nb * npat)
 
 
 def directional_stiffness_range(J: np.ndarray, tau_load_A_Nm: np.ndarray, K0: np.ndarray,
@@ -63,7 +75,7 @@ def directional_stiffness_range(J: np.ndarray, tau_load_A_Nm: np.ndarray, K0: np
                                 directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Min and max of ``u^T K(T) u`` over feasible tensions, per pose and direction.
 
-    ``K0`` (n, 3, 3) is K at zero tension, ``K_per_N`` (n, 6, 3, 3) the change
+    ``K0`` (n, 3, 3) is K at zero tension, ``K_per_N`` (n, m, 3, 3) the change
     of K per newton of cable i, ``directions`` (d, 3) unit vectors in {A}.
     Returns ``(lo, hi)``, each (n, d), N m/rad; NaN where P is empty.
     """
@@ -73,7 +85,7 @@ def directional_stiffness_range(J: np.ndarray, tau_load_A_Nm: np.ndarray, K0: np
     lo = np.empty(c0.shape)
     hi = np.empty(c0.shape)
     _range_kernel(np.ascontiguousarray(J, dtype=np.float64), -np.ascontiguousarray(tau_load_A_Nm, dtype=np.float64),
-                  float(t_min_N), float(t_max_N), 1e-9, _BASES, _NONBASIC, _PATTERNS, c0, ci, lo, hi)
+                  float(t_min_N), float(t_max_N), 1e-9, *_tables(np.shape(J)[1]), c0, ci, lo, hi)
     return lo, hi
 
 
@@ -85,7 +97,7 @@ def directional_stiffness_range_reference(J: np.ndarray, tau_load_A_Nm: np.ndarr
     T, ok = vertices(J, tau_load_A_Nm, t_min_N, t_max_N)
     c0 = np.einsum("dj,njk,dk->nd", U, K0, U)
     ci = np.einsum("dj,nijk,dk->nid", U, K_per_N, U)
-    values = c0[:, None, :] + np.einsum("nvi,nid->nvd", T, ci)              # (n, 160, d)
+    values = c0[:, None, :] + np.einsum("nvi,nid->nvd", T, ci)              # (n, V, d)
     lo = np.where(ok[..., None], values, np.inf).min(axis=1)
     hi = np.where(ok[..., None], values, -np.inf).max(axis=1)
     empty = ~ok.any(axis=1)
@@ -100,7 +112,9 @@ def _range_kernel(J, w, t_min, t_max, tol, bases, nonbasic, patterns, c0, ci, lo
     n_dir = c0.shape[1]
     M = np.empty((3, 3))
     r = np.empty(3)
-    T = np.empty(6)
+    n_cab = J.shape[1]
+    n_nb = nonbasic.shape[1]
+    T = np.empty(n_cab)
     for n in range(J.shape[0]):
         for d in range(n_dir):
             lo[n, d] = np.inf
@@ -122,7 +136,7 @@ def _range_kernel(J, w, t_min, t_max, tol, bases, nonbasic, patterns, c0, ci, lo
             for q in range(patterns.shape[0]):
                 for p in range(3):
                     s = w[n, p]
-                    for k in range(3):
+                    for k in range(n_nb):
                         t_nb = t_min + patterns[q, k] * (t_max - t_min)
                         T[nonbasic[b, k]] = t_nb
                         s -= J[n, nonbasic[b, k], p] * t_nb
@@ -158,7 +172,7 @@ def _range_kernel(J, w, t_min, t_max, tol, bases, nonbasic, patterns, c0, ci, lo
                 found = True
                 for d in range(n_dir):
                     v = c0[n, d]
-                    for i in range(6):
+                    for i in range(n_cab):
                         v += T[i] * ci[n, i, d]
                     lo[n, d] = min(lo[n, d], v)
                     hi[n, d] = max(hi[n, d], v)

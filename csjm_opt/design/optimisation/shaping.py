@@ -46,7 +46,6 @@ from .symbols import (
 )
 
 
-
 def n_tensions(n_cables: int) -> int:
     """Tension variables per orientation: (T_hi, T_lo) for each axis, m cables each (36 for m = 6).
 
@@ -367,6 +366,6 @@ def objective_shortfall_only(settings: Any, check: Check) -> bool:
     return settings.objective == "shaping" and failing == ["shaping"] and math.isfinite(check.worst["shaping"][0])
 
 
-__all__ = ["dense_angles", "initial_tensions", "lp_shaping_range",
-           "n_tensions", "objective_shortfall_only", "shaping_block", "shaping_bounds", "shaping_rows", "shaping_check", "shaping_pose_constraints",
+__all__ = ["dense_angles", "initial_tensions", "lp_shaping_range", "n_tensions", "objective_shortfall_only",
+           "shaping_block", "shaping_bounds", "shaping_rows", "shaping_check", "shaping_pose_constraints",
            "with_shaping"]
