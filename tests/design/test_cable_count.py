@@ -98,10 +98,11 @@ def test_a_sweep_over_the_cable_count_scores_the_rig_files_of_each_count():
     s = spec.settings
     rig8 = Rig.from_toml(ROOT / "rigs" / "eight_cable.toml")
     ref = evaluate(rig8, s.sampling, s.loads, s.options).as_dict()
-    for key in ("workspace_fraction", "min_stiffness_Nm_per_rad", "max_tilt_deg"):
+    for key in ("workspace_fraction", "min_stiffness_Nm_per_rad", "tilt_cone_deg", "min_cable_distance_m"):
         assert recs[8]["metrics"][key] == pytest.approx(ref[key], rel=1e-12, abs=1e-12), key
     six = evaluate_design({}, spec.settings)                        # no n_cables: the paper's hexagon layout
-    assert six["metrics"] == recs[6]["metrics"]
+    untimed = lambda rec: {k: v for k, v in rec["metrics"].items() if k != "seconds"}  # noqa: E731
+    assert untimed(six) == untimed(recs[6])
     # more cables through the same circles widen the moment zonotope: the workspace does not shrink
     assert recs[4]["workspace_fraction"] <= recs[8]["workspace_fraction"]
 
@@ -151,14 +152,20 @@ def test_shaping_range_of_m_cables_solves_the_lps(m):
     tau = np.array([0.5, 0.0, 0.0]) + model.weight_moment(Rs)
     U = np.eye(3)
     lo, hi = directional_stiffness_range(J, tau, K0, Ki, rig.t_min_N, rig.t_max_N, U)
+    held = 0
     for p in range(len(Rs)):
         for d, u in enumerate(U):
             c = np.einsum("j,ijk,k->i", u, Ki[p], u)
             kw = dict(A_eq=J[p].T, b_eq=-tau[p], bounds=[(rig.t_min_N, rig.t_max_N)] * m, method="highs")
             lp_lo, lp_hi = linprog(c, **kw), linprog(-c, **kw)
+            if lp_lo.status == 2:                          # no tensions in the box hold the load: NaN
+                assert lp_hi.status == 2 and np.isnan(lo[p, d]) and np.isnan(hi[p, d])
+                continue
+            held += 1
             assert lp_lo.status == 0 and lp_hi.status == 0
             assert lo[p, d] == pytest.approx(u @ K0[p] @ u + lp_lo.fun, abs=1e-7)
             assert hi[p, d] == pytest.approx(u @ K0[p] @ u - lp_hi.fun, abs=1e-7)
+    assert held >= 6
 
 
 @pytest.mark.parametrize("m", [4, 8, 12])

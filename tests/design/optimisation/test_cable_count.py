@@ -38,7 +38,11 @@ orientations = 4
 certify_orientations = 300
 starts = 1
 """)
-    return text.replace("[base]\n", f"[base]\nn_cables = {m}\n")
+    text = text.replace("[base]\n", f"[base]\nn_cables = {m}\n")
+    if m == 4:   # the pair angles of rigs/four_cable.toml (60 and 20 deg leave four cables no torsion stiffness)
+        text = text.replace("platform_gamma_deg = 60.0", "platform_gamma_deg = 40.0").replace(
+            "base_gamma_deg = 20.0", "base_gamma_deg = 140.0")
+    return text
 
 
 @pytest.mark.parametrize("m", [4, 8, 12])
@@ -134,7 +138,7 @@ def test_known_optimum_of_m_cables_certified_and_held_by_the_planner(tmp_path, m
     Rs = tilt_torsion_rotations(np.radians([0.0, 10.0, 7.0]), np.array([0.0, 1.0, 4.0]), np.radians([0.0, 5.0, -5.0]))
     for R in Rs:
         plan = co.plan_tensions(rig, R, np.zeros(3))
-        assert plan.feasible
+        assert plan.is_valid()
         assert np.linalg.eigvalsh(co.stiffness(rig, R, plan.tensions_N))[0] >= d["objectives"]["stiffness"] - 1e-6
     assert evaluate_design({"platform_radius_m": 0.06, "n_cables": m}, read_optimise_file(path)[0].settings)[
         "status"] == "ok"
