@@ -187,3 +187,27 @@ def test_cable_interference_of_m_cables_matches_brute_force(m):
             spacing = (np.linalg.norm((bot - top)[i]) + np.linalg.norm((bot - top)[j])) / 400
             assert p.cable_distance_m[n, k] <= brute + 1e-12
             assert brute - p.cable_distance_m[n, k] < spacing
+
+
+def test_an_odd_count_sweeps_by_free_coordinates():
+    # five cables (no pairs): holes as free coordinates from a rig file pattern (platform evenly spaced, base
+    # holes turned +-35 deg alternately); each record of the stiffness axis is the rig file's
+    platform = np.arange(5) * 72.0
+    A, B = expand_pattern({"count": 5, "platform_radius": 0.06, "base_radius": 0.08, "platform_height": 0.08,
+                           "base_height": -0.08, "platform_angles_deg": platform.tolist(),
+                           "base_angles_deg": (platform + 35.0 * np.array([1, -1, 1, -1, 1])).tolist()})
+    text = SWEEP.replace("[parameters.n_cables]\nvalues = [4, 6, 8]",
+                         "[parameters.cable_stiffness_N_per_m]\nvalues = [3000.0, 4600.0]").replace(
+        "platform_radius_m = 0.06\nbase_radius_m = 0.075\nplatform_gamma_deg = 10.0\nbase_gamma_deg = 80.0\n",
+        f"platform_holes = {A.tolist()}\nbase_holes = {B.tolist()}\n")
+    spec = _sweep(text)
+    s = spec.settings
+    for d in spec.designs():
+        rec = evaluate_design(d, s)
+        assert rec["status"] == "ok"
+        rig = Rig.from_dict({"geometry": {"platform_holes": A.tolist(), "base_holes": B.tolist()},
+                             "cables": {"stiffness": [d["cable_stiffness_N_per_m"]] * 5, "t_min": 5.0, "t_max": 150.0},
+                             "platform": {"mass": 0.55, "com": [0.0, 0.0, 0.081], "gravity": [0.0, 0.0, -9.81]}})
+        ref = evaluate(rig, s.sampling, s.loads, s.options).as_dict()
+        assert rec["metrics"]["workspace_fraction"] == ref["workspace_fraction"] > 0
+        assert rec["metrics"]["min_stiffness_Nm_per_rad"] == pytest.approx(ref["min_stiffness_Nm_per_rad"], rel=1e-12)
