@@ -84,9 +84,20 @@ def directional_stiffness_range(J: np.ndarray, tau_load_A_Nm: np.ndarray, K0: np
     ci = np.ascontiguousarray(np.einsum("dj,nijk,dk->nid", U, K_per_N, U))
     lo = np.empty(c0.shape)
     hi = np.empty(c0.shape)
-    _range_kernel(np.ascontiguousarray(J, dtype=np.float64), -np.ascontiguousarray(tau_load_A_Nm, dtype=np.float64),
-                  float(t_min_N), float(t_max_N), 1e-9, *_tables(np.shape(J)[1]), c0, ci, lo, hi)
+    J = np.ascontiguousarray(J, dtype=np.float64)
+    w = -np.ascontiguousarray(tau_load_A_Nm, dtype=np.float64)
+    m = np.shape(J)[1]
+    if m <= EXHAUSTIVE_MAX_CABLES:
+        _range_kernel(J, w, float(t_min_N), float(t_max_N), 1e-9, *_tables(m), c0, ci, lo, hi)
+    else:
+        _range_kernel_dual(J, w, float(t_min_N), float(t_max_N), 1e-9, _tables(m)[0], c0, ci, lo, hi)
     return lo, hi
+
+
+#: Largest cable count whose range enumerates every basic solution (C(m, 3) 2^(m - 3) per pose); above it
+#: each basis gives one candidate per direction and sense, its non-basic tensions on the bounds its reduced
+#: costs choose (dual feasible), so a primal-feasible candidate is optimal: C(m, 3) per direction and sense.
+EXHAUSTIVE_MAX_CABLES = 6
 
 
 def directional_stiffness_range_reference(J: np.ndarray, tau_load_A_Nm: np.ndarray, K0: np.ndarray,
@@ -104,6 +115,109 @@ def directional_stiffness_range_reference(J: np.ndarray, tau_load_A_Nm: np.ndarr
     lo[empty] = np.nan
     hi[empty] = np.nan
     return lo, hi
+
+
+@njit(cache=True)
+def _solve3(M, rhs, transpose):
+    """``M x = rhs`` (or ``M^T x = rhs``) for a 3 x 3 matrix, LU with partial pivoting."""
+    A = np.empty((3, 3))
+    for p in range(3):
+        for k in range(3):
+            A[p, k] = M[k, p] if transpose else M[p, k]
+    x = rhs.copy()
+    for col in range(3):
+        piv = col
+        for row in range(col + 1, 3):
+            if abs(A[row, col]) > abs(A[piv, col]):
+                piv = row
+        if piv != col:
+            for k in range(3):
+                A[col, k], A[piv, k] = A[piv, k], A[col, k]
+            x[col], x[piv] = x[piv], x[col]
+        for row in range(col + 1, 3):
+            f = A[row, col] / A[col, col]
+            for k in range(col, 3):
+                A[row, k] -= f * A[col, k]
+            x[row] -= f * x[col]
+    for col in range(2, -1, -1):
+        s = x[col]
+        for k in range(col + 1, 3):
+            s -= A[col, k] * x[k]
+        x[col] = s / A[col, col]
+    return x
+
+
+@njit(cache=True)
+def _range_kernel_dual(J, w, t_min, t_max, tol, bases, c0, ci, lo, hi):
+    """Per pose, basis, direction and sense: the dual-feasible basic solution; min/max over the primal-feasible ones.
+
+    For the basis B (3 cables) the multipliers y solve ``J_B y = c_B`` (c: the direction's K per newton); a
+    non-basic cable's reduced cost ``c_i - J_i . y`` puts it on t_min (minimum: positive cost) or t_max, and
+    the basic tensions close the equilibrium. Such a solution within the box is optimal (LP duality); every
+    other candidate is a feasible point, so it never undercuts the minimum (overshoots the maximum).
+    """
+    n_dir = c0.shape[1]
+    n_cab = J.shape[1]
+    M = np.empty((3, 3))
+    cb = np.empty(3)
+    r = np.empty(3)
+    T = np.empty(n_cab)
+    in_basis = np.zeros(n_cab, np.bool_)
+    for n in range(J.shape[0]):
+        for d in range(n_dir):
+            lo[n, d] = np.inf
+            hi[n, d] = -np.inf
+        for b in range(bases.shape[0]):
+            scale = 1.0
+            for k in range(3):
+                i = bases[b, k]
+                scale *= np.sqrt(J[n, i, 0] ** 2 + J[n, i, 1] ** 2 + J[n, i, 2] ** 2)
+            for p in range(3):
+                for k in range(3):
+                    M[p, k] = J[n, bases[b, k], p]
+            det = (M[0, 0] * (M[1, 1] * M[2, 2] - M[1, 2] * M[2, 1])
+                   - M[0, 1] * (M[1, 0] * M[2, 2] - M[1, 2] * M[2, 0])
+                   + M[0, 2] * (M[1, 0] * M[2, 1] - M[1, 1] * M[2, 0]))
+            if not abs(det) > 1e-10 * max(scale, 1e-300):
+                continue
+            for k in range(3):
+                in_basis[bases[b, k]] = True
+            for d in range(n_dir):
+                for k in range(3):
+                    cb[k] = ci[n, bases[b, k], d]
+                y = _solve3(M, cb, True)                      # J_B y = c_B, J_B = M^T
+                for sense in range(2):                         # 0: minimum, 1: maximum
+                    for p in range(3):
+                        r[p] = w[n, p]
+                    for i in range(n_cab):
+                        if in_basis[i]:
+                            continue
+                        red = ci[n, i, d] - (J[n, i, 0] * y[0] + J[n, i, 1] * y[1] + J[n, i, 2] * y[2])
+                        t_i = t_min if (red > 0) == (sense == 0) else t_max
+                        T[i] = t_i
+                        for p in range(3):
+                            r[p] -= J[n, i, p] * t_i
+                    x = _solve3(M, r, False)
+                    ok = True
+                    for k in range(3):
+                        if not (x[k] >= t_min - tol and x[k] <= t_max + tol):
+                            ok = False
+                        T[bases[b, k]] = x[k]
+                    if not ok:
+                        continue
+                    v = c0[n, d]
+                    for i in range(n_cab):
+                        v += T[i] * ci[n, i, d]
+                    if sense == 0:
+                        lo[n, d] = min(lo[n, d], v)
+                    else:
+                        hi[n, d] = max(hi[n, d], v)
+            for k in range(3):
+                in_basis[bases[b, k]] = False
+        for d in range(n_dir):
+            if lo[n, d] == np.inf or hi[n, d] == -np.inf:
+                lo[n, d] = np.nan
+                hi[n, d] = np.nan
 
 
 @njit(cache=True)
