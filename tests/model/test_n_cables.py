@@ -86,7 +86,7 @@ def test_rig_files_of_any_m_read_and_round_trip(rig, tmp_path):
 def test_shipped_rigs(name):
     from pathlib import Path
 
-    rig = Rig.from_toml(Path(__file__).resolve().parents[1] / "rigs" / name)
+    rig = Rig.from_toml(Path(__file__).resolve().parents[2] / "rigs" / name)
     assert rig.n_cables == {"eight_cable.toml": 8, "four_cable.toml": 4, "paper.toml": 6}[name]
 
 
