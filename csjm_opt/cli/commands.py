@@ -10,6 +10,7 @@ from __future__ import annotations
 
 #: Every command, in help order: name -> (module under ``csjm_opt.cli``, one-line help).
 COMMANDS: dict[str, tuple[str, str]] = {
+    "rig": ("rig", "inspect a rig file: `csjm rig show RIG` prints the holes and draws the rig"),
     "plan": ("core", "cable tensions that hold a pose under a load"),
     "stiffness": ("core", "stiffness K at a pose (tensions as planned)"),
     "demo": ("demo", "run the main job on the paper rig and write a report folder"),

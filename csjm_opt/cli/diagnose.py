@@ -111,9 +111,10 @@ def run(args: argparse.Namespace) -> int:
         if report.exists() and not report.is_dir():
             raise InvalidInput(f"--report {report} exists and is not a folder", "--report")
     rig = load_rig(args.rig)
-    log = MeasurementLog.from_csv(args.data)
-    test = MeasurementLog.from_csv(args.test) if args.test else None
-    extra = MeasurementLog.from_csv(args.extra) if args.extra else None
+    rig_name = args.rig or "paper"
+    log = MeasurementLog.from_csv(args.data).check_cables(rig.n_cables, rig_name)
+    test = MeasurementLog.from_csv(args.test).check_cables(rig.n_cables, rig_name) if args.test else None
+    extra = MeasurementLog.from_csv(args.extra).check_cables(rig.n_cables, rig_name) if args.extra else None
     loads = None
     if args.suggest is not None:
         from ..diagnose.suggest.dead_weights import load_load_set

@@ -178,7 +178,7 @@ def run_identify(args: argparse.Namespace) -> int:
 
     check_outputs([args.data, args.rig], {"--json": args.json}, {"--figures": args.figures})
     rig = load_rig(args.rig)
-    log = MeasurementLog.from_csv(args.data)
+    log = MeasurementLog.from_csv(args.data).check_cables(rig.n_cables, args.rig or "paper")
     if not args.no_rig_check:
         check_log_rig(rig, log)
     model = Model(rig)

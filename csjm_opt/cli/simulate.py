@@ -187,7 +187,8 @@ def run(args: argparse.Namespace) -> int:
         plant = inject(plant, name, severity, rng)
     noise = InstrumentNoise.paper() if args.noise == "paper" else InstrumentNoise.none()
     t0 = time.perf_counter()
-    after = MeasurementLog.from_csv(args.after) if args.after else None
+    after = MeasurementLog.from_csv(args.after).check_cables(rig.n_cables, args.rig or "paper") if args.after \
+        else None
     # an identification protocol settles its dead weights in a few passes over the rows: no known total
     total = len(proto) + (len(after) if after is not None else 0) if isinstance(proto, LogProtocol) else None
     bar = _LazyBar(total=total, file=sys.stderr, unit="row", desc=f"simulate ({args.plant})",

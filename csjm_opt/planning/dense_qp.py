@@ -6,7 +6,7 @@ Solves::
     subject to  A x = b                       (A: m x n, full row rank)
                 lo <= x <= hi
 
-for the handful of variables of a stiffness-shaping problem (n = 6), fast
+for the handful of variables of a stiffness-shaping problem (n = m, the cable count), fast
 enough for a 1 kHz loop and exact to round-off (it also polishes the answer
 of an iterative solver such as OSQP). Two methods:
 
@@ -110,7 +110,7 @@ def _kkt(P, q, A, b, lo, hi, lower, upper):
 
 def _feasible_point(A, b, lo, hi) -> np.ndarray | None:
     """A point of ``{A x = b, lo <= x <= hi}``: projection of the box centre, else an LP."""
-    if A.shape[1] == 6 and np.ptp(lo) == 0 and np.ptp(hi) == 0:
+    if A.shape[0] == 3 and A.shape[1] >= 4 and np.ptp(lo) == 0 and np.ptp(hi) == 0:
         proj = _project_box_eq(A[None], b[None], (0.5 * (lo + hi))[None], lo[0], hi[0])
         if proj.converged[0]:
             return proj.t[0].copy()

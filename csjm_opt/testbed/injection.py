@@ -110,14 +110,15 @@ def inject(plant, effect: str, severity: float, rng: np.random.Generator):
         return dataclasses.replace(plant, plant=inject(plant.plant, effect, severity, rng))
     s = float(severity)
     rig = plant.rig
+    m = rig.n_cables                            # per-cable effects get one draw per cable
     if effect == "hole_offsets":
-        rig = rig.replace(platform_holes_A_m=rig.platform_holes_A_m + rng.normal(0, 1e-3 * s, (6, 3)),
-                          base_holes_B_m=rig.base_holes_B_m + rng.normal(0, 1e-3 * s, (6, 3)))
+        rig = rig.replace(platform_holes_A_m=rig.platform_holes_A_m + rng.normal(0, 1e-3 * s, (m, 3)),
+                          base_holes_B_m=rig.base_holes_B_m + rng.normal(0, 1e-3 * s, (m, 3)))
         changes: dict[str, Any] = {"rig": rig}
     elif effect == "friction":
-        changes = {"friction_mu_beta": 0.03 * s * rng.uniform(0.7, 1.3, 6)}
+        changes = {"friction_mu_beta": 0.03 * s * rng.uniform(0.7, 1.3, m)}
     elif effect == "coulomb_friction":
-        changes = {"friction_coulomb_N": 0.5 * s * rng.uniform(0.7, 1.3, 6)}
+        changes = {"friction_coulomb_N": 0.5 * s * rng.uniform(0.7, 1.3, m)}
     elif effect == "cable_hardening":
         changes = {"hardening_per_m": 15.0 * s}
     elif effect == "link_compliance":

@@ -58,7 +58,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .. import so3
-from ..errors import NoEquilibrium
+from ..errors import InvalidInput, NoEquilibrium
 from ..model import kinematics as kin
 from ..model.rig import Rig
 
@@ -124,6 +124,18 @@ class TestbedPlant:
     effects: tuple[str, ...] = ()
     persistent: bool = True                    # cycles start where the previous one settled
 
+    def __post_init__(self) -> None:
+        m = self.rig.n_cables                   # per-cable effects are sized by the rig
+        for name in ("friction_mu_beta", "friction_coulomb_N"):
+            value = np.asarray(getattr(self, name), float)
+            if value.shape != (m,):
+                if value.shape == (6,) and not value.any():     # the all-zero default
+                    value = np.zeros(m)
+                else:
+                    raise InvalidInput(f"{name}: expected {m} values (one per cable), got shape {value.shape}",
+                                       name)
+                object.__setattr__(self, name, value)
+
     @classmethod
     def nominal(cls, rig: Rig) -> TestbedPlant:
         """The rig without effects.
@@ -160,7 +172,7 @@ class TestbedPlant:
 
         Parameters
         ----------
-        rest_lengths_m : (n, 6) array
+        rest_lengths_m : (n, m) array
         tau_ext_A_Nm : (n, 3) array
             True external moments in {A}.
         cycle : (n,) int array
@@ -197,11 +209,11 @@ class TestbedPlant:
         ends = np.r_[starts[1:], n]
         R_out = np.empty((n, 3, 3))
         R_prev = np.array(R_init[starts], float)
-        u_state = np.full((len(starts), 9), np.nan)    # stuck platform-side lengths, joint anchor (rotvec)
+        u_state = np.full((len(starts), self.rig.n_cables + 3), np.nan)   # stuck platform-side lengths, joint anchor
         tau_prev = np.array(tau_ext_A_Nm[starts], float)
         mr_prev = np.array(mr_load[starts], float)
         l_prev = np.array(rest_lengths_m[starts], float)
-        slip = np.zeros((len(starts), 6))           # drum slip so far in each cycle
+        slip = np.zeros((len(starts), self.rig.n_cables))   # drum slip so far in each cycle
         for j in range(int((ends - starts).max())):
             live = np.flatnonzero(starts + j < ends)
             idx = starts[live] + j
@@ -269,7 +281,7 @@ class TestbedPlant:
         return self.tracker_rotation_B @ R_true @ self.marker_rotation_A
 
     def _base_holes(self, R_c: np.ndarray) -> np.ndarray:
-        """Effective base holes (n, 6, 3) or (6, 3): on the eyelet's rim, towards the platform hole."""
+        """Effective base holes (n, m, 3) or (m, 3): on the eyelet's rim, towards the platform hole."""
         B = np.asarray(self.rig.base_holes_B_m)
         if self.guide_radius_m <= 0:
             return B
@@ -295,22 +307,23 @@ class TestbedPlant:
         c, J = kin.cable_terms(R_c, np.asarray(rig.platform_holes_A_m), self._base_holes(R_c))
         k = np.asarray(rig.cable_stiffness_N_per_m)
         e = c - l
-        T_p = np.maximum(self._friction(c, l, e, k, u[:, :6], smooth_N), 0.0)
+        m = rig.n_cables
+        T_p = np.maximum(self._friction(c, l, e, k, u[:, :m], smooth_N), 0.0)
         u_new = np.empty_like(u)
-        u_new[:, :6] = c - self.friction_platform_fraction * T_p / k
+        u_new[:, :m] = c - self.friction_platform_fraction * T_p / k
         T = T_p * (1.0 + self.hardening_per_m * np.maximum(e, 0.0))
         g = np.einsum("nij,ni->nj", J, T) + (tau_m if E is None else np.einsum("nij,nj->ni", E, tau_m))
         if self.joint_friction_Nm > 0:     # per axis of {A}: stuck to an anchor pose, slips at the bound
-            a = u[:, 6:]
+            a = u[:, m:]
             z = so3.log(np.swapaxes(so3.exp(np.nan_to_num(a)), 1, 2) @ R_c)
             stick = np.where(np.isnan(a), 0.0, -JOINT_STICK_NM_PER_RAD * z)
             M = np.full_like(stick, self.joint_friction_Nm)
             w = smooth_N * JOINT_SMOOTH_M
             tau_f = _smooth_clip(stick, -M, M, w) if w > 0 else np.clip(stick, -M, M)
             g = g + tau_f
-            u_new[:, 6:] = so3.log(R_c @ so3.exp(tau_f / JOINT_STICK_NM_PER_RAD))
+            u_new[:, m:] = so3.log(R_c @ so3.exp(tau_f / JOINT_STICK_NM_PER_RAD))
         else:
-            u_new[:, 6:] = np.nan
+            u_new[:, m:] = np.nan
         return g, u_new
 
     def _friction(self, c, l, e, k, u, smooth_N):

@@ -71,7 +71,7 @@ class MujocoRow:
         Pose of the measured body (the tool; the platform without a link).
     R_platform : (3, 3) array
         Pose of the cable platform.
-    tensions_N : (6,) array
+    tensions_N : (m,) array
         Spring tensions (hardening included, friction excluded).
     certificate : FrictionCertificate or None
         The friction LP (``None`` without friction: polished to round-off).
@@ -200,7 +200,7 @@ class MujocoTestbedPlant:
 
         Parameters
         ----------
-        rest_lengths_m : (n, 6) array
+        rest_lengths_m : (n, m) array
         tau_ext_A_Nm : (n, 3) array
         cycle : (n,) int array
         R_init : (n, 3, 3) array
@@ -252,7 +252,7 @@ class MujocoTestbedPlant:
                   else np.asarray(load_first_moment_A_kgm, float).reshape(len(cycle), 3))
         engine = Engine(self, l_all[0])
         rows: list[MujocoRow] = []
-        slip = np.zeros(6)
+        slip = np.zeros(self.rig.n_cables)
         for i in range(len(cycle)):
             first = i == 0 or cycle[i] != cycle[i - 1]
             if first:
