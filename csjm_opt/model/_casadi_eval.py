@@ -17,15 +17,15 @@ if TYPE_CHECKING:
     import casadi as ca
 
 
-def build_functions() -> dict[str, Any]:
-    """The named CasADi functions (:func:`csjm_opt.model.casadi_model.build_functions`).
+def build_functions(n_cables: int = 6) -> dict[str, Any]:
+    """The named CasADi functions for ``n_cables`` cables (:func:`csjm_opt.model.casadi_model.build_functions`).
 
     CasADi is imported on first use: a :class:`~csjm_opt.model.numeric.Model` that only runs its
     compiled kernels never loads it.
     """
     from .casadi_model import build_functions as build
 
-    return build()
+    return build(n_cables)
 
 
 def _stack_h(X: np.ndarray) -> np.ndarray:
