@@ -67,8 +67,6 @@ def test_identify_recovers_the_model_stiffness(chain, capsys):
         assert np.linalg.norm(K - K_model) < 0.05 * np.linalg.norm(K_model)
 
 
-@pytest.mark.xfail(reason="diagnosis effects sized by the rig's cable count are the diagnosis helpers' work "
-                   "(notes/shapes.md); until they land, effects assume six cables", strict=False)
 def test_diagnose_runs(chain, capsys):
     rig_path, d = chain
     assert cli.main(["diagnose", str(d / "quasi-static.csv"), "--rig", rig_path, "--json", str(d / "diag.json"),

@@ -51,8 +51,9 @@ def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] |
     name : str
         One of :data:`EFFECTS`.
     rig : Rig, optional
-        Supplies the nominal mass (``mass_com``), gravity (``tracker_registration``) and base plane
-        (``guide_radius``).
+        Supplies the cable count ``m`` that sizes the per-cable parameters (``hole_offsets``,
+        ``friction``, ``drive_offsets``; 6 without a rig), the nominal mass (``mass_com``), gravity
+        (``tracker_registration``) and base plane (``guide_radius``).
     ranges : mapping, optional
         Prior-range overrides, parameter name or fnmatch pattern -> ``(lo, hi)``.
     **options
@@ -70,21 +71,20 @@ def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] |
     if name not in EFFECTS:
         raise InvalidInput(f"unknown effect {name!r}; expected one of {', '.join(EFFECTS)}", "effect")
     cls = EFFECTS[name]
+    m = n_cables_of(rig) if rig is not None else 6
     effect: Effect
     if cls is MassCom and rig is not None:
-        effect = MassCom(rig.platform_mass_kg)
+        effect = MassCom(rig.platform_mass_kg, n_cables=m)
     elif cls is TrackerRegistration and rig is not None:
-        effect = TrackerRegistration(rig.gravity_B_m_per_s2)
+        effect = TrackerRegistration(rig.gravity_B_m_per_s2, n_cables=m)
     elif cls is GuideRadius and rig is not None:
-        effect = GuideRadius(guide_axis(rig.base_holes_B_m))
+        effect = GuideRadius(guide_axis(rig.base_holes_B_m), n_cables=m)
     elif cls is Friction:
-        effect = Friction(t_max_N=rig.t_max_N if rig is not None else 100.0, **options)
-    elif cls is DriveOffsets:
-        effect = DriveOffsets(n_cables=n_cables_of(rig) if rig is not None else 6)
+        effect = Friction(t_max_N=rig.t_max_N if rig is not None else 100.0, n_cables=m, **options)
     elif cls is SensorGain:
-        effect = SensorGain(**options)
+        effect = SensorGain(n_cables=m, **options)
     else:
-        effect = cls()
+        effect = cls(n_cables=m)
     return effect.with_ranges(ranges)
 
 

@@ -46,6 +46,11 @@ class Effect(abc.ABC):
     path_dependent: ClassVar[bool] = False
     #: per-rig overrides of the prior ranges (name or fnmatch pattern -> (lo, hi))
     range_overrides: Mapping[str, tuple[float, float]] = {}
+    #: the rig's cable count m (per-cable parameters are sized by it)
+    n_cables: int = 6
+
+    def __init__(self, n_cables: int = 6):
+        self.n_cables = int(n_cables)
 
     def with_ranges(self, overrides: Mapping[str, tuple[float, float]] | None) -> "Effect":
         """Override the prior ranges of this effect in place.
@@ -158,13 +163,13 @@ class Effect(abc.ABC):
         """Change ``ev.R_cable`` (n, 3, 3) and ``ev.link_rotation`` (n, 3, 3)."""
 
     def adjust_geometry(self, ev, p: np.ndarray) -> None:
-        """Change ``ev.A_m``, ``ev.B_m`` (6, 3)."""
+        """Change ``ev.A_m``, ``ev.B_m`` (m, 3)."""
 
     def adjust_rest(self, ev, p: np.ndarray) -> None:
         """Change ``ev.rest_lengths_m`` (n, m): the actual rest lengths from the commanded ones."""
 
     def adjust_tension(self, ev, stretch_m: np.ndarray, T_N: np.ndarray, p: np.ndarray) -> np.ndarray:
-        """Return the tensions (n, 6) given stretch and the tensions so far."""
+        """Return the tensions (n, m) given stretch and the tensions so far."""
         return T_N
 
     def adjust_balance(self, ev, g_Nm: np.ndarray, p: np.ndarray) -> np.ndarray:

@@ -9,8 +9,8 @@ cables do *differently*. The tension law becomes ``T_i = k_i (c_i - l_i - d_i)``
 Prior: a zero-mean Gaussian of sd ``RANGE_M / 2`` per drive (the plausible range +-``RANGE_M``
 is +-2 sd), carried by the fit as a ridge (``prior_sd``), so the direction shared with the
 nuisance stays well posed. A base hole moved along its cable changes that cable's length by
-about the same amount at every pose: drive offsets are, to first order, six of the 36
-hole-offset directions, and the evidence (:mod:`csjm_opt.diagnose.evidence`) prefers the six
+about the same amount at every pose: drive offsets are, to first order, m of the 6 m
+hole-offset directions, and the evidence (:mod:`csjm_opt.diagnose.evidence`) prefers the m
 numbers when they explain the log as well.
 """
 

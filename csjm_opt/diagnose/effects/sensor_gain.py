@@ -33,7 +33,8 @@ class SensorGain(Effect):
     name = "sensor_gain"
     description = "F/T moment reading scaled by a gain g (common or per axis of {A}): tau_meas = g tau_ext"
 
-    def __init__(self, axes: str = "common"):
+    def __init__(self, axes: str = "common", n_cables: int = 6):
+        self.n_cables = int(n_cables)
         if axes not in AXES:
             raise ValueError(f"axes must be one of {AXES}, got {axes!r}")
         self.axes = axes

@@ -38,10 +38,10 @@ N_NUISANCE = len(NUISANCE_NAMES)
 class Rows:
     """Per-row inputs of the balance (the part of a log the model needs)."""
 
-    rest_lengths_m: np.ndarray     # (n, 6)
+    rest_lengths_m: np.ndarray     # (n, m)
     tau_meas_A_Nm: np.ndarray      # (n, 3)
     cycle: np.ndarray              # (n,) rows of a cycle consecutive, in time order
-    cable_steps_m: np.ndarray      # (n, 6) change of each cable length since the previous row
+    cable_steps_m: np.ndarray      # (n, m) change of each cable length since the previous row
                                    # of the cycle (from measured poses; 0 on a cycle's first row)
     # Sequential mode (forward prediction row after row): the previous row's
     # path state and cable lengths (NaN on a cycle's first row), else None.
@@ -55,7 +55,7 @@ class Rows:
     # cycle's first row (NaN where there is none): where a predicted cycle starts.
     entry_state: np.ndarray | None = None
     entry_lengths_m: np.ndarray | None = None
-    # Shape (n, S, 6) of each cable's motion along the quasi-static ramp of the inputs into each row,
+    # Shape (n, S, m) of each cable's motion along the quasi-static ramp of the inputs into each row,
     # as a deviation from even steps (:mod:`csjm_opt.diagnose.fitting.friction_ramp`); None: one step.
     ramp_shape_m: np.ndarray | None = None
     # Inputs and pose of the log's row before each cycle's first row (NaN elsewhere): where the
@@ -80,7 +80,7 @@ class Rows:
 
     @property
     def steps_since_previous(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(cable, rest)`` length changes (n, 6) since the previous row of the log (m)."""
+        """``(cable, rest)`` length changes (n, m) since the previous row of the log (m)."""
         c = self.cable_steps_m if self.log_steps_m is None else self.log_steps_m
         r = np.zeros_like(c) if self.rest_steps_m is None else self.rest_steps_m
         return c, r
@@ -329,9 +329,9 @@ class AugmentedModel:
         if rows.ramp_shape_m is not None:
             from .friction_ramp import predict_ramp
             return predict_ramp(self, rows, theta, R_init)[0]
-        n = len(rows)
+        n, m = np.shape(rows.rest_lengths_m)
         R_out, res = np.array(R_init, float), np.zeros(n)
-        state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
+        state, lengths = np.full((n, m), np.nan), np.full((n, m), np.nan)
         pos = rows.positions
         it = 0
         for j in range(int(pos.max(initial=0)) + 1):
@@ -339,8 +339,8 @@ class AugmentedModel:
             prev = idx - 1 if j > 0 else None
             if prev is None:          # a cycle's first row: where the measured history left the path state
                 has = rows.entry_state is not None and rows.entry_lengths_m is not None
-                s_prev = rows.entry_state[idx] if has else np.zeros((len(idx), 6))          # type: ignore[index]
-                c_prev = rows.entry_lengths_m[idx] if has else np.full((len(idx), 6), np.nan)  # type: ignore[index]
+                s_prev = rows.entry_state[idx] if has else np.zeros((len(idx), m))          # type: ignore[index]
+                c_prev = rows.entry_lengths_m[idx] if has else np.full((len(idx), m), np.nan)  # type: ignore[index]
             else:
                 s_prev, c_prev = state[prev], lengths[prev]
             sub = dataclasses.replace(rows.take(idx), state_prev=np.nan_to_num(s_prev), lengths_prev_m=c_prev)
@@ -364,9 +364,9 @@ def with_entry(model: "AugmentedModel", rows: Rows, R_meas: np.ndarray, theta: n
     if not model.path_dependent or any(getattr(e, "memory", "carried") != "carried" for e in model.effects):
         return rows
     _, ev = model.evaluate(R_meas, rows, theta)
-    n = len(rows)
-    state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
-    rest, tau, R = np.full((n, 6), np.nan), np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan)
+    n, m = np.shape(rows.rest_lengths_m)
+    state, lengths = np.full((n, m), np.nan), np.full((n, m), np.nan)
+    rest, tau, R = np.full((n, m), np.nan), np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan)
     first = np.flatnonzero(np.r_[False, rows.cycle[1:] != rows.cycle[:-1]])
     if ev.lengths_m is not None:         # a model without a state of its own (joint friction) starts at 0
         state[first] = 0.0 if ev.state_out is None else ev.state_out[first - 1]

@@ -33,7 +33,7 @@ rows within the rig's limits:
   to the others), until ``N`` rows are used; ``sqrt`` of it (noise sd) is reported per
   pair. Pairs no feasible rows of this size separate by ``EQUIVALENT_SD`` are reported
   as equivalent and not targeted. A plain distance
-  between the fitted predictions would be optimistic: 36 hole offsets refitted
+  between the fitted predictions would be optimistic: 6 m hole offsets refitted
   to the new rows mimic much of what they did not predict.
 
 The candidate cycles are in :mod:`.candidates`; the protocol (:mod:`.protocol`) is the log
@@ -165,11 +165,12 @@ def _predict(sc: CandidateScore, d: Diagnosis, cands: list[dict], rig: Rig) -> t
     cyc = np.concatenate([np.full(len(c["loads"]), i) for i, c in enumerate(cands)])
     n = len(cyc)
     lengths, _ = kin.cable_terms(R0, np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m))
-    rest = np.zeros((n, 6))
+    m = l.shape[1]
+    rest = np.zeros((n, m))
     first = np.r_[True, cyc[1:] != cyc[:-1]]
     rest[first] = l[first] - train.rows.rest_lengths_m[-1]
-    entry_s = np.full((n, 6), np.nan)
-    entry_l = np.full((n, 6), np.nan)
+    entry_s = np.full((n, m), np.nan)
+    entry_l = np.full((n, m), np.nan)
     if last_state is not None:
         entry_s[first], entry_l[first] = last_state, last_len
 
