@@ -73,6 +73,40 @@ def test_diagnose_runs(chain, capsys):
                      "--no-progress"]) == 0
 
 
+@pytest.mark.parametrize("rig_file", ["eight_cable.toml", "four_cable.toml"])
+def test_diagnose_names_an_injected_per_cable_effect_at_three_times_the_floor(rig_file):
+    """Drive offsets (one per cable) injected at 3x the noise floor are named on the m-cable rig.
+
+    Calibrated as in the project's confusion study (studies/diagnose_confusion): the gap the effect
+    leaves after the nominal refit at severity 1 sets the severity for 3x the instrument floor; an
+    effect beyond its plausible severity is held there and the instrument made better instead.
+    """
+    from csjm_opt.diagnose import diagnose
+    from csjm_opt.diagnose.data.residuals import compute_residuals, pose_residuals, rms
+    from csjm_opt.diagnose.fitting.augmented import AugmentedModel
+    from csjm_opt.diagnose.fitting.gauss_newton import fit_model
+    from csjm_opt.measurement.instruments import InstrumentNoise
+    from csjm_opt.testbed import inject, make_plant, simulate_experiment
+    from csjm_opt.testbed.injection import PLAUSIBLE_SEVERITY
+
+    effect = "drive_offsets"
+    rig = co.Rig.from_toml(RIGS / rig_file)
+    noise = InstrumentNoise.paper()
+    clean = simulate_experiment(rig, 4, np.random.default_rng(2), effect=make_plant(rig, effect, 1.0,
+                                np.random.default_rng(1)), noise=InstrumentNoise.none())
+    t = compute_residuals(rig, clean, noise)
+    null = AugmentedModel(rig)
+    gap1 = rms(pose_residuals(null.predict_poses(t.rows, fit_model(null, t).theta, t.R_meas).R, t.R_meas))
+    severity = 3.0 * t.instrument_floor_rad / gap1
+    factor = min(1.0, PLAUSIBLE_SEVERITY[effect] / severity)
+    severity *= factor
+    noise = InstrumentNoise(tuple(factor * v for v in noise.tau_sigma_Nm), factor * noise.angle_sigma_rad)
+    plant = inject(make_plant(rig, None, 1.0, np.random.default_rng(0)), effect, severity, np.random.default_rng(1))
+    log = simulate_experiment(rig, 6, np.random.default_rng(3), effect=plant, noise=noise)
+    d = diagnose(rig, log, noise=noise)
+    assert d.selected == effect
+
+
 def test_codegen_plans_like_python(chain, tmp_path):
     from csjm_opt.codegen import load
 
