@@ -124,7 +124,7 @@ for name, cmd in (("rig", PLAN), ("log", IDENT), ("raw", PRE), ("sweep", SWP)):
 
 # ------------------------------------------------------------------ rig contents
 _RIG_EDIT = {
-    "platform_holes": lambda v: ("[0.057735026918962574, -0.005, 0.08]", f"[{v}, -0.005, 0.08]"),
+    "platform_holes": lambda v: ("[0.05773502691896258, -0.005, 0.08]", f"[{v}, -0.005, 0.08]"),
     "base_holes": lambda v: ("[0.03983716857408418, -0.064, -0.08]", f"[{v}, -0.064, -0.08]"),
     "stiffness": lambda v: ("stiffness = [4600.0,", f"stiffness = [{v},"),
     "t_min": lambda v: ("t_min = 5.0", f"t_min = {v}"),
@@ -138,13 +138,13 @@ for key, make in _RIG_EDIT.items():
                          ("inf", "inf"), ("string", '"abc"'), ("bool", "true"), ("1e19", "1e19")):
         at = "t_m(in|ax)" if key == "t_min" else key  # t_min above t_max is named at t_max
         add(f"rig-{key}-{label}", PLAN, rf"rig\.toml: \[\w+\.{at}\]", rig=rig_with(*make(value)))
-_HOLE_A1 = "[0.057735026918962574, -0.005, 0.08]"
+_HOLE_A1 = "[0.05773502691896258, -0.005, 0.08]"
 for label, old, new in (
-        ("duplicate-platform-hole", "[0.057735026918962574, 0.005, 0.08]", _HOLE_A1),
+        ("duplicate-platform-hole", "[0.05773502691896258, 0.005, 0.08]", _HOLE_A1),
         ("duplicate-base-hole", "[0.03983716857408418, 0.064, -0.08]", "[0.03983716857408418, -0.064, -0.08]"),
         ("platform-hole-10um-from-O", _HOLE_A1, "[1e-5, 0.0, 0.0]"),
         ("base-hole-10um-from-O", "[0.03983716857408418, -0.064, -0.08]", "[0.0, 1e-5, 0.0]"),
-        ("holes-5um-apart", "[0.057735026918962574, 0.005, 0.08]", "[0.057735026918962574, -0.004995, 0.08]"),
+        ("holes-5um-apart", "[0.05773502691896258, 0.005, 0.08]", "[0.05773502691896258, -0.004995, 0.08]"),
         ("hole-at-20m", _HOLE_A1, "[20.0, 0.0, 0.08]"),
         ("hole-at-1e308", _HOLE_A1, "[1e308, 1e308, 1e308]"),
         ("stiffness-zero", "stiffness = [4600.0,", "stiffness = [0.0,"),
@@ -160,7 +160,7 @@ for label, old, new in (
         ("unknown-key", "mass = 0.4913", "mass = 0.4913\ncolour = 1"),
         ("unknown-section", "[platform]", "[extra]\nx = 1\n[platform]"),
         ("missing-section", "[cables]", "[cables_]"),
-        ("ragged-holes", _HOLE_A1, "[0.057735026918962574, -0.005]"),
+        ("ragged-holes", _HOLE_A1, "[0.05773502691896258, -0.005]"),
         ("not-toml", "[cables]", "[cables"),
 ):
     add(f"rig-{label}", PLAN, r"rig\.toml", rig=rig_with(old, new))
