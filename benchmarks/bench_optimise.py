@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -30,10 +29,9 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 #: A tenth of the sweep's 225 designs.
 BUDGET = 22
-sys.path.insert(0, str(HERE.parent))        # the repository root, for studies.optimise_paper
 
 from csjm_opt.design.optimisation import problem as optimise_problem  # noqa: E402
-from csjm_opt.design.optimisation.front import sweep_front  # noqa: E402
+from csjm_opt.design.optimisation.front import hypervolume, sweep_front  # noqa: E402
 from csjm_opt.design.optimisation.runner import optimise  # noqa: E402
 from csjm_opt.design.optimisation.settings import read_optimise_file  # noqa: E402
 from csjm_opt.design.sweep.runner import run_sweep  # noqa: E402
@@ -50,7 +48,6 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=1, help="processes of the sweep")
     parser.add_argument("--range-front", action="store_true", help="also time optimise() (range x stiffness)")
     args = parser.parse_args()
-    from studies.optimise_paper.optimise_paper import hypervolume
 
     spec, settings = read_optimise_file(HERE.parent / "studies" / "paper_sweep" / "paper_sweep.toml")
     t_front, t_sweep, t_range, evals, hv_f, hv_s, runs = [], [], [], [], [], [], []

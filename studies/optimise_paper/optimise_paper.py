@@ -48,7 +48,7 @@ from csjm_opt.design.clearance import interference
 from csjm_opt.design.design_evaluation import evaluate_design
 from csjm_opt.design.geometry import GeometryLimits, design_rig
 from csjm_opt.design.optimisation.dense_check import certify, slacks
-from csjm_opt.design.optimisation.front import sweep_front
+from csjm_opt.design.optimisation.front import hypervolume, sweep_front
 from csjm_opt.design.optimisation.runner import design_rig_of, optimise
 from csjm_opt.design.optimisation.settings import read_optimise_file
 from csjm_opt.design.sampling import OrientationSampling, tilt_torsion_rotations
@@ -61,20 +61,6 @@ BISECTIONS = 10
 MAP_ORIENTATIONS = 1000
 #: A tenth of the sweep's 225 designs.
 BUDGET = 22
-
-
-def hypervolume(points: np.ndarray) -> float:
-    """Area dominated by ``points`` (both maximised) above the reference point (0, 0)."""
-    pts = np.asarray([p for p in points if p[0] > 0 and p[1] > 0])
-    if not len(pts):
-        return 0.0
-    pts = pts[np.argsort(-pts[:, 0])]
-    area, best_y = 0.0, 0.0
-    for x, y in pts:   # widest first: each point adds the strip above everything wider
-        if y > best_y:
-            area += x * (y - best_y)
-            best_y = y
-    return float(area)
 
 
 def guaranteed(settings, rig, lam_req: float) -> tuple[float, float]:

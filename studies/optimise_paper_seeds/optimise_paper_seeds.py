@@ -24,10 +24,10 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 
-from csjm_opt.design.optimisation.front import sweep_front  # noqa: E402
+from csjm_opt.design.optimisation.front import hypervolume, sweep_front  # noqa: E402
 from csjm_opt.design.optimisation.settings import read_optimise_file  # noqa: E402
 from csjm_opt.design.sweep.runner import run_sweep  # noqa: E402
-from studies.optimise_paper.optimise_paper import BUDGET, hypervolume  # noqa: E402
+from studies.optimise_paper.optimise_paper import BUDGET  # noqa: E402
 
 
 def _pts(records: list[dict]) -> np.ndarray:
