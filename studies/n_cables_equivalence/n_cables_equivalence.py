@@ -1,6 +1,6 @@
 """The planner for m = 4, 5, 6, 8, 12 cables against an independent QP solver, and the C against Python.
 
-Run: python studies/n_cables_equivalence.py [--cases 5000] [--c-cases 100000] [--out studies/n_cables_equivalence.json]
+Run: python -m studies.n_cables_equivalence.n_cables_equivalence [--cases 5000] [--c-cases 100000] [--out studies/n_cables_equivalence/n_cables_equivalence.json]
 
 1. Per m, ``--cases`` random poses (rotation vectors of norm up to ~0.45 rad) and loads (normal,
    scale 0.3 or 10 N m, so a share is infeasible) on a pattern rig (tests/test_n_cables.py's
@@ -36,7 +36,7 @@ from tqdm import tqdm
 import csjm_opt as co
 from csjm_opt.codegen import INFEASIBLE, SOLVED, generate_c, load
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def pattern_rig(m: int) -> co.Rig:
@@ -122,7 +122,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--cases", type=int, default=5000)
     ap.add_argument("--c-cases", type=int, default=100_000)
-    ap.add_argument("--out", default=str(ROOT / "studies" / "n_cables_equivalence.json"))
+    ap.add_argument("--out", default=str(ROOT / "studies" / "n_cables_equivalence" / "n_cables_equivalence.json"))
     args = ap.parse_args()
     rng = np.random.default_rng(2026)
     qp = [against_clarabel(m, args.cases, rng) for m in (4, 5, 6, 8, 12)]
