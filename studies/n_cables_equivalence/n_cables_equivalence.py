@@ -1,6 +1,6 @@
 """The planner for m = 4, 5, 6, 8, 12 cables against an independent QP solver, and the C against Python.
 
-Run: python -m studies.n_cables_equivalence.n_cables_equivalence [--cases 5000] [--c-cases 100000] [--out studies/n_cables_equivalence/n_cables_equivalence.json]
+Run: python -m studies.n_cables_equivalence.n_cables_equivalence [--cases 5000] [--c-cases 100000] [--out PATH]
 
 1. Per m, ``--cases`` random poses (rotation vectors of norm up to ~0.45 rad) and loads (normal,
    scale 0.3 or 10 N m, so a share is infeasible) on a pattern rig (tests/test_n_cables.py's
