@@ -255,27 +255,7 @@ def _range_kernel(J, w, t_min, t_max, tol, bases, nonbasic, patterns, c0, ci, lo
                         T[nonbasic[b, k]] = t_nb
                         s -= J[n, nonbasic[b, k], p] * t_nb
                     r[p] = s
-                A = M.copy()
-                x = r.copy()
-                for col in range(3):                      # LU with partial pivoting
-                    piv = col
-                    for row in range(col + 1, 3):
-                        if abs(A[row, col]) > abs(A[piv, col]):
-                            piv = row
-                    if piv != col:
-                        for k in range(3):
-                            A[col, k], A[piv, k] = A[piv, k], A[col, k]
-                        x[col], x[piv] = x[piv], x[col]
-                    for row in range(col + 1, 3):
-                        f = A[row, col] / A[col, col]
-                        for k in range(col, 3):
-                            A[row, k] -= f * A[col, k]
-                        x[row] -= f * x[col]
-                for col in range(2, -1, -1):
-                    s = x[col]
-                    for k in range(col + 1, 3):
-                        s -= A[col, k] * x[k]
-                    x[col] = s / A[col, col]
+                x = _solve3(M, r, False)                  # the same LU with partial pivoting
                 ok = True
                 for k in range(3):
                     if not (x[k] >= t_min - tol and x[k] <= t_max + tol):
