@@ -105,6 +105,8 @@ def pattern_holes(m: int, platform: np.ndarray, base: np.ndarray) -> tuple[np.nd
     (r_p, z_p, c_p, f_p), (r_b, z_b, c_b, f_b) = circle(platform), circle(base)
     i = np.arange(m)
     sign = np.where(i % 2 == 0, -1.0, 1.0)
+    a_p: np.ndarray
+    a_b: np.ndarray
     if m % 2 == 0:
         centre = 2 * np.pi / m * 2 * (i // 2)
         a_p = c_p + centre + sign * f_p * np.pi * 2 / m
