@@ -18,7 +18,8 @@ from ..model.rig import Rig
 from ._decision import _Context
 from .augmented import AugmentedModel
 from .effects import make_effect
-from .evidence import log_evidence
+from .evidence import NUISANCE_SD_M, log_evidence
+from .friction_stick import settled_score
 from .fit import FitResult, fit_model
 from .scoring import CandidateScore, score
 
@@ -78,6 +79,23 @@ def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (
     return options[best], fits[best]
 
 
+#: The variant of friction that needs no loading path (:mod:`csjm_opt.diagnose.friction_stick`).
+SETTLED = {"law": "coulomb", "memory": "settled"}
+#: Noise scales tried for the stick model, as shares of the within-cycle estimate (which friction inflates).
+SETTLED_SCALES = (0.25, 0.5, 1.0)
+
+
+def _settled(ctx: _Context, rig: Rig, ranges: Mapping | None) -> CandidateScore | None:
+    """Friction as a stick condition per row, scored on the diagnosis's rows (None without a noise scale)."""
+    effect = make_effect("friction", rig, ranges, **SETTLED)
+    scale = ctx.local / ctx.instrument if np.isfinite(ctx.local) and ctx.instrument > 0 else float("nan")
+    if not np.isfinite(scale) or scale <= 0:
+        return None
+    top = max(hi for lo, hi in effect.ranges().values())
+    return settled_score(AugmentedModel(rig, [effect]), ctx.train, ctx.test, ctx.folds,
+                         [scale * f for f in SETTLED_SCALES], top, NUISANCE_SD_M)
+
+
 def score_with(ctx: _Context, model: AugmentedModel, fit: FitResult | None = None) -> CandidateScore:
     """``model`` scored on the diagnosis's rows and folds (``fit``: its plain training fit, if known)."""
     return score(model, ctx.train, ctx.test, ctx.folds, fit)
@@ -100,7 +118,12 @@ def fit_single(ctx: _Context, rig: Rig, ranges: Mapping | None,
     """
     try:
         opt, fit = variant_fit(ctx, rig, name, ranges)
-        return opt, score_with(ctx, AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), fit), None
+        sc = score_with(ctx, AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), fit)
+        if name == "friction":           # the stick condition beside the path: the better held-out score
+            settled = _settled(ctx, rig, ranges)
+            if settled is not None and settled.heldout_mse < sc.heldout_mse:
+                return SETTLED, settled, None
+        return opt, sc, None
     except FIT_ERRORS as exc:
         return {}, None, f"fit failed: {exc}"
 

@@ -65,7 +65,7 @@ CORNER = 0.02
 SOFTPLUS_LINEAR = 40.0
 #: Friction laws and memory modes.
 LAWS = ("capstan", "coulomb")
-MEMORIES = ("carried", "reset")
+MEMORIES = ("carried", "reset", "settled")
 #: Band positions kept per effect (a fit's Jacobian and pose tangent re-evaluate the log at the same stick
 #: travels: every column of a parameter the travel does not depend on, every pose step under the Coulomb law).
 BAND_MEMO = 16
@@ -191,7 +191,11 @@ class Friction(Effect):
     def __init__(self, law: str = "capstan", memory: str = "carried", t_max_N: float = 100.0):
         if law not in LAWS or memory not in MEMORIES:
             raise ValueError(f"law must be one of {LAWS} and memory one of {MEMORIES}")
+        if memory == "settled" and law != "coulomb":
+            raise ValueError("settled friction is a Coulomb band (law='coulomb')")
         self.law, self.memory, self.t_max_N = law, memory, float(t_max_N)
+        # settled: the rest pose is any static Coulomb equilibrium (:mod:`..friction_stick`), no path
+        self.path_dependent = memory != "settled"
         self._memo: dict = {}
 
     def __getstate__(self) -> dict:
@@ -233,8 +237,8 @@ class Friction(Effect):
             then ``stick_travel_factor`` and ``first_row_state``.
         """
         unit = "" if self.law == "capstan" else "_N"
-        return (tuple(f"{self._band}_{i + 1}{unit}" for i in range(6))
-                + ("stick_travel_factor", "first_row_state"))
+        bands = tuple(f"{self._band}_{i + 1}{unit}" for i in range(6))
+        return bands if self.memory == "settled" else bands + ("stick_travel_factor", "first_row_state")
 
     @property
     def scales(self):
@@ -246,7 +250,7 @@ class Friction(Effect):
             Band scale (0.03, or 2 % of ``t_max_N`` in N) for the six bands, 0.5 for the other two.
         """
         band = 0.03 if self.law == "capstan" else 0.02 * self.t_max_N
-        return np.r_[np.full(6, band), 0.5, 0.5]
+        return np.r_[np.full(6, band), 0.5, 0.5][:self.n_params]
 
     @property
     def lower_bounds(self):
@@ -257,7 +261,7 @@ class Friction(Effect):
         numpy.ndarray
             Zero for the bands and the stick factor; -1 for the first state.
         """
-        return np.r_[np.zeros(7), -1.0]
+        return np.r_[np.zeros(7), -1.0][:self.n_params]
 
     @property
     def upper_bounds(self):
@@ -268,7 +272,7 @@ class Friction(Effect):
         numpy.ndarray
             Unbounded for the bands and the stick factor; 1 for the first state.
         """
-        return np.r_[np.full(7, np.inf), 1.0]
+        return np.r_[np.full(7, np.inf), 1.0][:self.n_params]
 
     def default_ranges(self):
         """Plausible ranges of the friction parameters.
@@ -282,8 +286,10 @@ class Friction(Effect):
             Parameter name -> ``(lo, hi)``.
         """
         top = 0.3 if self.law == "capstan" else 0.1 * self.t_max_N
-        return {**{n: (0.0, top) for n in self.param_names[:6]},
-                "stick_travel_factor": (0.0, 2.0), "first_row_state": (-1.0, 1.0)}
+        out = {n: (0.0, top) for n in self.param_names[:6]}
+        if self.memory != "settled":
+            out.update({"stick_travel_factor": (0.0, 2.0), "first_row_state": (-1.0, 1.0)})
+        return out
 
     def x0(self) -> np.ndarray:
         """Starting values: no friction, stick factor 0.5, first state 0.
@@ -293,7 +299,7 @@ class Friction(Effect):
         numpy.ndarray
             The eight starting values.
         """
-        return np.r_[np.zeros(6), 0.5, 0.0]
+        return np.r_[np.zeros(6), 0.5, 0.0][:self.n_params]
 
     def adjust_tension(self, ev, stretch_m, T_N, p):
         """Platform-side tensions with dry friction, ``T exp(mu_beta_i s_i)`` or ``max(T + F_i s_i, 0)``.
@@ -317,6 +323,8 @@ class Friction(Effect):
         numpy.ndarray
             The changed tensions (N), shape (n, 6).
         """
+        if self.memory == "settled":              # friction forces are latent per row: no mean tension change
+            return T_N
         band, factor, s0 = p[:6], p[6], p[7]
         w = factor                                   # one compliance split weighs both sides
         k = ev.cable_stiffness_N_per_m
