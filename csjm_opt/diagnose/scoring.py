@@ -44,6 +44,13 @@ class CandidateScore:
     heldout_floor_rad: float = float("nan")   # RMS held-out error of this model if it were right: noise
                                     # plus its parameters' estimation error (per unit noise scale)
     heldout_blocks: tuple = ()      # ((held-out row indices, whitened prediction covariance), ...) per fold
+    # a set-valued model's price per held-out row (rad^2), added to its squared distance (settled friction,
+    # :mod:`.friction_stick`: held-out errors then compare -2 s^2 log p across models); None: 0
+    heldout_penalty_rad2: np.ndarray | None = None
+
+    def _sq(self) -> np.ndarray:
+        sq = np.sum(self.heldout_zeta_rad ** 2, axis=1)
+        return sq if self.heldout_penalty_rad2 is None else sq + self.heldout_penalty_rad2
 
     @property
     def heldout_rms_rad(self) -> float:
@@ -54,7 +61,7 @@ class CandidateScore:
         float
             ``sqrt(mean ||zeta_i||^2)`` (rad).
         """
-        return rms(self.heldout_zeta_rad)
+        return float(np.sqrt(np.mean(self._sq())))
 
     @property
     def heldout_mse(self) -> float:
@@ -65,7 +72,7 @@ class CandidateScore:
         float
             ``mean ||zeta_i||^2`` (rad^2).
         """
-        return float(np.mean(np.sum(self.heldout_zeta_rad ** 2, axis=1)))
+        return float(np.mean(self._sq()))
 
     @property
     def train_rms_rad(self) -> float:
@@ -80,7 +87,7 @@ class CandidateScore:
 
     def cycle_mse(self) -> dict[int, float]:
         """Held-out mean ``||zeta||^2`` of each cycle."""
-        sq = np.sum(self.heldout_zeta_rad ** 2, axis=1)
+        sq = self._sq()
         return {int(c): float(sq[self.heldout_cycle == c].mean()) for c in np.unique(self.heldout_cycle)}
 
     def implausible(self) -> list[str]:
