@@ -34,9 +34,13 @@ noise scale are both estimated by maximum likelihood (:func:`fit_stick`), and th
 is not inflated by friction (the within-cycle regression of :mod:`csjm_opt.diagnose.noise`
 takes the scatter of stick positions for noise).
 
-Comparisons with other models go through ``-2 s^2 log p`` per row: the squared distance plus
-the band's price ``2 s^2 log(Z_i / Z0_i)`` (``Z0_i`` the Gaussian's), the held-out score every
-model gets (:func:`settled_score`).
+The noise scale, though, is not identified where the band is much wider than the noise (noise
+inside the band looks like a stick position): the likelihood is flat below the true scale, and a
+joint fit drifts to a band that holds every row and no noise. The diagnosis therefore fits the band
+at a few noise scales and keeps the largest one the *held-out* rows do not reject
+(:func:`settled_score`). Models are compared on held-out rows by their densities, each at its own
+noise scale, as an equivalent mean squared error (:func:`csjm_opt.diagnose.scoring.equivalent_mse`:
+the variance of the Gaussian with the same mean log density; a point model's own MSE).
 """
 
 from __future__ import annotations
@@ -51,9 +55,9 @@ from scipy.optimize import minimize
 from ..model import kinematics as kin
 
 #: Iterations of the accelerated projected gradient per row (bounded least squares, 3 x m).
-MAX_ITER = 800
+MAX_ITER = 400
 #: Stop when the squared step (in N^2, relative to the band) falls below this.
-STEP_TOL = 1e-16
+STEP_TOL = 1e-12
 SQRT_HALF_PI = float(np.sqrt(np.pi / 2.0))
 GAUSS3 = float((2.0 * np.pi) ** 1.5)
 
@@ -209,24 +213,32 @@ class StickFit:
             Fp, Fm = F.copy(), F.copy()
             Fp[j] += h
             Fm[j] = max(F[j] - h, 0.0)
-            grad[1 + j] += float(np.sum(log_normaliser(self.meas, Fp, s) - log_normaliser(self.meas, Fm, s))) / (Fp[j] - Fm[j])
-        grad[-1] = -float(np.sum(d2)) / s ** 2 + float(np.sum(
-            log_normaliser(self.meas, F, s * np.exp(h)) - log_normaliser(self.meas, F, s * np.exp(-h)))) / (2 * h) \
-            + 0.0
+            dz = log_normaliser(self.meas, Fp, s) - log_normaliser(self.meas, Fm, s)
+            grad[1 + j] += float(np.sum(dz)) / (Fp[j] - Fm[j])
+        dz = log_normaliser(self.meas, F, s * np.exp(h)) - log_normaliser(self.meas, F, s * np.exp(-h))
+        grad[-1] = -float(np.sum(d2)) / s ** 2 + float(np.sum(dz)) / (2 * h)
         # d(log Z0)/d(log s) = 3 per row is in the Gaussian constant of every model: counted here explicitly
         val += 3.0 * len(d2) * float(np.log(s))
         grad[-1] += 3.0 * len(d2)
         return val, grad
 
-    def fit(self, F_max: float, starts: tuple = (0.0, 0.3, 1.0)) -> tuple[np.ndarray, float]:
-        """``(x, -log L)`` of the best start; ``F_max`` bounds each band (N)."""
+    def fit(self, F_max: float, starts: tuple = (0.0, 0.3, 1.0), s: float | None = None) -> tuple[np.ndarray, float]:
+        """``(x, -log L)`` of the best start; ``F_max`` bounds each band (N); ``s``: a fixed noise scale.
+
+        With the noise scale free, the likelihood of a few hundred rows tends to a band that holds
+        every row and a scale near zero (a set-valued model's degeneracy); the diagnosis fixes the
+        scale and chooses it on held-out rows (:func:`settled_score`).
+        """
         m = self.B.shape[2]
         s0 = float(np.sqrt(np.mean(np.sum(self.a0 ** 2, axis=1)) / 3.0))
         best = None
         for share in starts:
             self.f = np.zeros_like(self.f)
             x0 = np.r_[0.0, np.full(m, share * F_max * 0.1), np.log(max(s0 * (1 - share) + 0.3 * share, 1e-3))]
-            bounds = [(None, None)] + [(0.0, F_max)] * m + [(np.log(1e-3), np.log(1e3))]
+            bounds = [(None, None)] + [(0.0, F_max)] * m + [(np.log(1e-3), np.log(1e3)) if s is None
+                                                              else (np.log(s), np.log(s))]
+            if s is not None:
+                x0[-1] = np.log(s)
             res = minimize(self.neg_log_lik, x0, jac=True, method="L-BFGS-B", bounds=bounds,
                            options={"maxiter": 400, "ftol": 1e-12, "gtol": 1e-8})
             if best is None or res.fun < best.fun:
@@ -235,6 +247,8 @@ class StickFit:
         return best.x, float(best.fun)
 
 
+#: 95 % quantile of chi^2 with one degree of freedom (held-out likelihood ratio of the noise scale).
+CHI2_1_95 = 3.84
 #: Half-normal prior sd of a band as a share of the plausible range (evidence, as :mod:`.evidence` does).
 PRIOR_SD_SHARE = 0.5
 
@@ -255,7 +269,7 @@ class SettledModel:
         Upper bound of each band.
     """
 
-    def __init__(self, model, table, s: float, F_max_N: float, fit: bool = True):
+    def __init__(self, model, table, s: float, F_max_N: float, fit: bool = True, start=None):
         self.model, self.s, self.F_max = model, float(s), float(F_max_N)
         th = model.x0()
         a0, B = stick_design(model, table, th)
@@ -265,8 +279,10 @@ class SettledModel:
         self.m = B.shape[2]
         self._f = np.zeros((len(a0), self.m))
         self.x = np.zeros(1 + self.m)
+        if start is not None:                      # a fit at another noise scale: its band and forces
+            self.x, self._f = start.x.copy(), start._f.copy()
         if fit:
-            self.fit_on(np.arange(len(a0)))
+            self.fit_on(np.arange(len(a0)), warm=start is not None)
 
     def _nll(self, idx: np.ndarray, x: np.ndarray, s: float) -> tuple[float, np.ndarray]:
         sf = StickFit(self.a0[idx], self.da[idx], self.B[idx])
@@ -276,13 +292,16 @@ class SettledModel:
         n = len(idx)
         return val - 3.0 * n * np.log(s), grad[:-1]
 
-    def fit_on(self, idx: np.ndarray) -> np.ndarray:
-        """Fit ``(offset, F)`` by maximum likelihood at the fixed noise scale on rows ``idx``."""
-        self._f = np.zeros((len(self.a0), self.m))
+    def fit_on(self, idx: np.ndarray, warm: bool = True) -> np.ndarray:
+        """Fit ``(offset, F)`` by maximum likelihood at the fixed noise scale on rows ``idx``.
+
+        ``warm``: start from the current band and forces (else from a small band).
+        """
         best = None
         for share in (0.05,):
-            self._f[:] = 0.0
-            x0 = np.r_[0.0, np.full(self.m, share * self.F_max)]
+            x0 = self.x.copy() if warm else np.r_[0.0, np.full(self.m, share * self.F_max)]
+            if not warm:
+                self._f = np.zeros((len(self.a0), self.m))
             res = minimize(lambda x: self._nll(idx, x, self.s), x0, jac=True, method="L-BFGS-B",
                            bounds=[(None, None)] + [(0.0, self.F_max)] * self.m,
                            options={"maxiter": 150, "ftol": 1e-9, "gtol": 1e-6})
@@ -303,7 +322,7 @@ class SettledModel:
         return r, 2.0 * s ** 2 * log_normaliser(meas, F, s), expected_sq_distance(meas, F, s)
 
     def log_evidence(self, noise_scale: float, prior_sd_F: float, prior_sd_dl: float) -> float:
-        """Laplace log evidence at ``noise_scale`` (same convention as :func:`csjm_opt.diagnose.evidence.log_evidence`)."""
+        """Laplace log evidence at ``noise_scale`` (convention of :func:`csjm_opt.diagnose.evidence.log_evidence`)."""
         idx = np.arange(len(self.a0))
         s = float(noise_scale)
         x = self.x
@@ -320,6 +339,20 @@ class SettledModel:
         quad = float(np.sum((x / sd) ** 2))
         _, logdet = np.linalg.slogdet(np.eye(len(x)) + sd[:, None] * H * sd[None, :])
         return float(-val - 0.5 * quad - 0.5 * logdet + self.m * np.log(2.0))
+
+
+class _Evidence:
+    """``noise_scale -> log evidence`` of a fitted stick model (picklable: fits travel back from workers)."""
+
+    def __init__(self, sm: SettledModel, prior_sd_F: float, prior_sd_dl: float):
+        self.sm, self.prior_sd_F, self.prior_sd_dl = sm, prior_sd_F, prior_sd_dl
+        self._memo: dict[float, float] = {}
+
+    def __call__(self, noise_scale: float) -> float:
+        key = float(noise_scale)
+        if key not in self._memo:
+            self._memo[key] = self.sm.log_evidence(key, self.prior_sd_F, self.prior_sd_dl)
+        return self._memo[key]
 
 
 def settled_score(model, train, test, folds, scales: Sequence[float], F_max_N: float, prior_sd_dl: float):
@@ -354,42 +387,45 @@ def settled_score(model, train, test, folds, scales: Sequence[float], F_max_N: f
     CandidateScore
     """
     from .fit import FitResult
-    from .scoring import CandidateScore
+    from .scoring import CandidateScore, equivalent_mse
 
     def to_rad(table, idx, r, pen, e_d2):
+        """Distance vectors (rad), ``q = d^2 / s^2 + 2 log(Z / Z0)``, ``E[q]``, mean noise variance (rad^2)."""
         L = np.linalg.inv(table.whiten[idx])
-        var = np.sum(L ** 2, axis=(1, 2)) / 3.0                 # mean noise variance per axis (rad^2)
-        return np.einsum("nij,nj->ni", L, r), pen * var, (e_d2 + pen) * var
+        var = np.sum(L ** 2, axis=(1, 2)) / 3.0
+        q = (np.sum(r ** 2, axis=1) + pen) / s ** 2
+        return np.einsum("nij,nj->ni", L, r), q, (e_d2 + pen) / s ** 2, var
 
     all_rows = np.arange(len(train))
     sm_t = None if test is None else SettledModel(model, test, 1.0, F_max_N, fit=False)
-    best = None
-    for s in scales:
-        sm = SettledModel(model, train, s, F_max_N)
+    prev = None
+    tried: list[tuple] = []
+    for s in sorted(scales):
+        sm = SettledModel(model, train, s, F_max_N, start=prev)
+        prev = sm
         if test is not None:
             assert sm_t is not None
             idx = np.arange(len(test))
             r, pen, e = sm_t.row_terms(idx, sm.x, s)
-            zeta, pen_rad, exp_rad = to_rad(test, idx, r, pen, e)
-            nll = float(np.sum(r ** 2) / s ** 2 + np.sum(pen) / s ** 2 + 6 * len(idx) * np.log(s))
-            cyc, held = test.cycle, test
+            zeta, q, eq, var = to_rad(test, idx, r, pen, e)
+            cyc = test.cycle
         else:
-            zeta, pen_rad, exp_rad = np.empty((len(train), 3)), np.empty(len(train)), np.empty(len(train))
-            nll = 0.0
+            zeta, q, eq, var = np.empty((len(train), 3)), *np.empty((3, len(train)))
             for h in folds or []:
                 x = sm.fit_on(np.setdiff1d(all_rows, h))
                 r, pen, e = sm.row_terms(h, x)
-                zeta[h], pen_rad[h], exp_rad[h] = to_rad(train, h, r, pen, e)
-                nll += float(np.sum(r ** 2) / s ** 2 + np.sum(pen) / s ** 2 + 6 * len(h) * np.log(s))
+                zeta[h], q[h], eq[h], var[h] = to_rad(train, h, r, pen, e)
             sm.fit_on(all_rows)
-            cyc, held = train.cycle, train
-        if best is None or nll < best[0]:
-            best = (nll, sm, zeta, pen_rad, exp_rad, cyc, held)
-    assert best is not None
-    _, sm, zeta, pen_rad, exp_rad, cyc, held = best
+            cyc = train.cycle
+        nll = float(np.sum(q) + 6 * len(q) * np.log(s))        # held-out -2 log p (whitened, less a constant)
+        tried.append((nll, sm, zeta, q, eq, var, cyc))
+    # the largest scale the held-out rows do not reject (likelihood ratio, one parameter, 95 %): below the
+    # scale of the noise the likelihood is flat (noise inside the band looks like a stick position)
+    top = min(t[0] for t in tried)
+    _, sm, zeta, q, eq, var, cyc = max((t for t in tried if t[0] <= top + CHI2_1_95), key=lambda t: t[1].s)
     s = sm.s
     r_tr, pen_tr, _ = sm.row_terms(all_rows)
-    zeta_tr, _, _ = to_rad(train, all_rows, r_tr, pen_tr, pen_tr)
+    zeta_tr = to_rad(train, all_rows, r_tr, pen_tr, pen_tr)[0]
     theta = model.x0()
     theta[0] = sm.x[0]
     theta[1:1 + sm.m] = sm.x[1:]
@@ -401,7 +437,7 @@ def settled_score(model, train, test, folds, scales: Sequence[float], F_max_N: f
     free[1:1 + sm.m] = sm.x[1:] > 1e-9
     fit = FitResult(model, theta, np.zeros((model.n_params, model.n_params)), rss, 3 * n, float(free.sum()),
                     int(free.sum()), 1.0, zeta_tr, None, None, free, train.rows,
-                    evidence_fn=lambda sigma: sm.log_evidence(sigma, prior_sd_F, prior_sd_dl))
-    floor = float(np.sqrt(np.mean(exp_rad))) / s             # per unit noise scale, as the other models'
+                    evidence_fn=_Evidence(sm, prior_sd_F, prior_sd_dl))
+    floor = float(np.sqrt(equivalent_mse(eq, var, s))) / s    # per unit noise scale, as the other models'
     return CandidateScore(model.name, fit, zeta, cyc, zeta_tr, 0, train.instrument_floor_rad,
-                          float(s ** 2), floor, (), heldout_penalty_rad2=pen_rad)
+                          float(s ** 2), floor, (), heldout_density=(q, var, s))

@@ -19,8 +19,8 @@ from ._decision import _Context
 from .augmented import AugmentedModel
 from .effects import make_effect
 from .evidence import NUISANCE_SD_M, log_evidence
-from .friction_stick import settled_score
 from .fit import FitResult, fit_model
+from .friction_stick import settled_score
 from .scoring import CandidateScore, score
 
 #: Variants of an effect the data choose between (same number of parameters: the highest Laplace evidence
@@ -82,7 +82,7 @@ def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (
 #: The variant of friction that needs no loading path (:mod:`csjm_opt.diagnose.friction_stick`).
 SETTLED = {"law": "coulomb", "memory": "settled"}
 #: Noise scales tried for the stick model, as shares of the within-cycle estimate (which friction inflates).
-SETTLED_SCALES = (0.25, 0.5, 1.0)
+SETTLED_SCALES = (0.25, 0.35, 0.5, 0.7, 1.0)
 
 
 def _settled(ctx: _Context, rig: Rig, ranges: Mapping | None) -> CandidateScore | None:
@@ -94,6 +94,18 @@ def _settled(ctx: _Context, rig: Rig, ranges: Mapping | None) -> CandidateScore 
     top = max(hi for lo, hi in effect.ranges().values())
     return settled_score(AugmentedModel(rig, [effect]), ctx.train, ctx.test, ctx.folds,
                          [scale * f for f in SETTLED_SCALES], top, NUISANCE_SD_M)
+
+
+def _prefer_settled(ctx: _Context, settled: CandidateScore, path: CandidateScore) -> bool:
+    """Whether the stick condition explains the log better than the path model.
+
+    A model that closes the held-out gap (its held-out errors at its own floor) beats one that does not
+    (selection rule 3): a path model is the more informative where the rig followed it (a slow ramp: it
+    predicts a point, the stick condition only a set), and leaves a gap where the rig came to rest by its
+    own dynamics. Between two models that both close or both fail, the lower held-out error wins.
+    """
+    a, b = ctx.closes(settled), ctx.closes(path)
+    return a and not b if a != b else settled.heldout_mse < path.heldout_mse
 
 
 def score_with(ctx: _Context, model: AugmentedModel, fit: FitResult | None = None) -> CandidateScore:
@@ -121,7 +133,7 @@ def fit_single(ctx: _Context, rig: Rig, ranges: Mapping | None,
         sc = score_with(ctx, AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), fit)
         if name == "friction":           # the stick condition beside the path: the better held-out score
             settled = _settled(ctx, rig, ranges)
-            if settled is not None and settled.heldout_mse < sc.heldout_mse:
+            if settled is not None and _prefer_settled(ctx, settled, sc):
                 return SETTLED, settled, None
         return opt, sc, None
     except FIT_ERRORS as exc:

@@ -174,8 +174,9 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
             options[name], singles[name] = opt, sc
     m = max(len(singles), 1)
     # the noise: the smallest of the estimates (a misfit, e.g. friction hysteresis, only inflates one)
+    # (not a set-valued model's: its scale is the largest the held-out rows allow, for its own score only)
     floor0 = min([ctx.noise_floor(baseline)] + [ctx.scale(sc) * baseline.instrument_floor_rad
-                                                for sc in singles.values()])
+                                                for sc in singles.values() if sc.heldout_density is None])
     tests = {n: ctx.compare(baseline, sc, ALPHA / m, floor0) for n, sc in singles.items()}
     ctx.sigma = floor0 / baseline.instrument_floor_rad       # one noise scale for every model's evidence
     for n, sc in singles.items():

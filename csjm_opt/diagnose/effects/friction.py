@@ -184,7 +184,6 @@ class Friction(Effect):
     """Dry cable friction: six band sizes, the stick travel factor, the first state."""
 
     name = "friction"
-    path_dependent = True
     description = ("dry cable friction with memory: T_platform = T exp(mu_beta_i s_i) (capstan) or "
                    "T + F_i s_i (Coulomb), s_i a play operator of the cable's motion carried over the log")
 
@@ -195,8 +194,13 @@ class Friction(Effect):
             raise ValueError("settled friction is a Coulomb band (law='coulomb')")
         self.law, self.memory, self.t_max_N = law, memory, float(t_max_N)
         # settled: the rest pose is any static Coulomb equilibrium (:mod:`..friction_stick`), no path
-        self.path_dependent = memory != "settled"
+        self.settled = memory == "settled"
         self._memo: dict = {}
+
+    @property
+    def path_dependent(self) -> bool:  # type: ignore[override]
+        """Whether the state follows the loading path (not for settled friction: any static equilibrium)."""
+        return not self.settled
 
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
