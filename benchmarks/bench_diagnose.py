@@ -33,11 +33,11 @@ from tqdm import tqdm
 
 import csjm_opt as co
 from csjm_opt.diagnose import diagnose
-from csjm_opt.diagnose.augmented import AugmentedModel
+from csjm_opt.diagnose.data.residuals import compute_residuals, pose_residuals
 from csjm_opt.diagnose.effects import make_effect
-from csjm_opt.diagnose.fit import fit_model
-from csjm_opt.diagnose.residuals import compute_residuals, pose_residuals
-from csjm_opt.diagnose.suggest import suggest_experiment
+from csjm_opt.diagnose.fitting.augmented import AugmentedModel
+from csjm_opt.diagnose.fitting.gauss_newton import fit_model
+from csjm_opt.diagnose.suggest.experiment import suggest_experiment
 from csjm_opt.testbed import simulate_experiment
 
 

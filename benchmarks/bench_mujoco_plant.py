@@ -9,7 +9,7 @@ the rigs of the diagnosis studies), one effect set at severity 3, then one more 
 same rows with dead weights (the rows a suggested experiment adds: their moment follows the
 pose, so the engine updates forces every step). Per row: wall time, simulated time, and
 whether the wait for rest reached ``max_settle_s`` (recorded as an unsettled row, see
-:class:`~csjm_opt.testbed.mujoco_plant.MujocoRow`). Reported per effect set: median and 90th
+:class:`~csjm_opt.testbed.mujoco.plant.MujocoRow`). Reported per effect set: median and 90th
 percentile of the wall time per row, median simulated seconds per row, rows that reached the
 bound, and rows the plant refused (:class:`~csjm_opt.errors.NoEquilibrium`). ``--noslip``
 and ``--travel-tol`` run each case with each number of noslip iterations and each
@@ -32,7 +32,7 @@ import numpy as np
 from csjm_opt import so3
 from csjm_opt.errors import NoEquilibrium
 from csjm_opt.testbed import design_cycles, make_plant, random_rig
-from csjm_opt.testbed.mujoco_plant import as_mujoco
+from csjm_opt.testbed.mujoco.plant import as_mujoco
 
 DEFAULT_EFFECTS = ("none", "coulomb_friction", "friction", "joint_friction",
                    "cable_hardening+link_compliance", "link_compliance+coulomb_friction")

@@ -32,11 +32,11 @@ HERE = Path(__file__).resolve().parent
 BUDGET = 22
 sys.path.insert(0, str(HERE.parent / "studies"))
 
-from csjm_opt.design import optimise_problem  # noqa: E402
-from csjm_opt.design.optimisation import optimise  # noqa: E402
-from csjm_opt.design.optimise_settings import read_optimise_file  # noqa: E402
-from csjm_opt.design.optimise_sweep_front import sweep_front  # noqa: E402
-from csjm_opt.design.sweep import run_sweep  # noqa: E402
+from csjm_opt.design.optimisation import problem as optimise_problem  # noqa: E402
+from csjm_opt.design.optimisation.front import sweep_front  # noqa: E402
+from csjm_opt.design.optimisation.runner import optimise  # noqa: E402
+from csjm_opt.design.optimisation.settings import read_optimise_file  # noqa: E402
+from csjm_opt.design.sweep.runner import run_sweep  # noqa: E402
 
 
 def _points(records: list[dict]) -> np.ndarray:

@@ -32,8 +32,8 @@ import numpy as np
 from _common import median_time, slsqp_plan  # noqa: E402
 
 import csjm_opt as co  # noqa: E402
-from csjm_opt.design.sweep import run_sweep  # noqa: E402
-from csjm_opt.design.sweep_file import SweepSpec  # noqa: E402
+from csjm_opt.design.sweep.runner import run_sweep  # noqa: E402
+from csjm_opt.design.sweep.spec import SweepSpec  # noqa: E402
 
 LOADS = [[0, 0, 0], [3, 0, 0], [-3, 0, 0], [0, 3, 0], [0, -3, 0], [0, 0, 1], [0, 0, -1]]
 

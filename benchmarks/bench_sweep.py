@@ -29,8 +29,8 @@ from scipy.optimize import minimize
 
 import csjm_opt as co
 from csjm_opt.design import OrientationSampling, design_rig
-from csjm_opt.design.sweep import run_sweep
-from csjm_opt.design.sweep_file import SweepSpec
+from csjm_opt.design.sweep.runner import run_sweep
+from csjm_opt.design.sweep.spec import SweepSpec
 
 LOADS = [[0, 0, 0], [3, 0, 0], [-3, 0, 0], [0, 3, 0], [0, -3, 0], [0, 0, 1], [0, 0, -1]]
 

@@ -39,10 +39,10 @@ if TYPE_CHECKING:
     from .diagnose import diagnose as diagnose_log
     from .identification.identify import StiffnessEstimate, identify_log, identify_stiffness
     from .measurement.logfile import MeasurementLog
+    from .model.joint_stiffness import stiffness, stiffness_batch
     from .model.numeric import Model
     from .model.rig import Rig, load_rig, paper_rig
     from .model.statics import Equilibrium, rest_lengths_for, solve_equilibrium
-    from .model.stiffness import stiffness, stiffness_batch
     from .planning.planner import TensionPlan, TensionPlanBatch, plan_tensions, plan_tensions_batch
     from .shaping.shaper import ShapingResult, shape_stiffness
 
@@ -64,8 +64,8 @@ _LAZY: dict[str, tuple[str, str]] = {
     "Equilibrium": (".model.statics", "Equilibrium"),
     "rest_lengths_for": (".model.statics", "rest_lengths_for"),
     "solve_equilibrium": (".model.statics", "solve_equilibrium"),
-    "stiffness": (".model.stiffness", "stiffness"),
-    "stiffness_batch": (".model.stiffness", "stiffness_batch"),
+    "stiffness": (".model.joint_stiffness", "stiffness"),
+    "stiffness_batch": (".model.joint_stiffness", "stiffness_batch"),
     "TensionPlan": (".planning.planner", "TensionPlan"),
     "TensionPlanBatch": (".planning.planner", "TensionPlanBatch"),
     "plan_tensions": (".planning.planner", "plan_tensions"),

@@ -25,7 +25,7 @@ import csjm_opt as co
 from csjm_opt import so3
 from csjm_opt.codegen import INFEASIBLE, SOLVED, generate_c, load
 from csjm_opt.errors import InfeasibleLoad
-from csjm_opt.model.stiffness import stiffness_batch
+from csjm_opt.model.joint_stiffness import stiffness_batch
 from csjm_opt.planning import plan_tensions_batch
 from csjm_opt.testbed.rigs import draw_rig
 

@@ -115,16 +115,16 @@ def study_plant(job: dict, plant):
     """The job's plant: the testbed's quasi-static ``plant``, or the MuJoCo plant with the same effects."""
     if job.get("plant", "quasistatic") != "mujoco":
         return plant
-    from csjm_opt.testbed.mujoco_plant import as_mujoco
+    from csjm_opt.testbed.mujoco.plant import as_mujoco
 
     return as_mujoco(plant)
 
 
 def build_plant(job: dict):
     """``(rig, noise, plant, severities, noise_factor)`` of one study log (deterministic in ``job``)."""
-    from csjm_opt.diagnose.augmented import AugmentedModel
-    from csjm_opt.diagnose.fit import fit_model
-    from csjm_opt.diagnose.residuals import compute_residuals, pose_residuals, rms
+    from csjm_opt.diagnose.data.residuals import compute_residuals, pose_residuals, rms
+    from csjm_opt.diagnose.fitting.augmented import AugmentedModel
+    from csjm_opt.diagnose.fitting.gauss_newton import fit_model
     from csjm_opt.measurement.instruments import InstrumentNoise
     from csjm_opt.testbed import inject, make_plant, random_rig
     from csjm_opt.testbed.injection import PLAUSIBLE_SEVERITY

@@ -1,4 +1,4 @@
-"""Warnings naming rivals the log does not rule out (csjm_opt.diagnose.rivals), on confusion-study records.
+"""Warnings naming rivals the log does not rule out (csjm_opt.diagnose.selection.rivals), on confusion-study records.
 
 Each record of ``diagnose_confusion.py`` keeps a per-model summary (``models``: log evidence,
 plausibility, gap closure, per-cycle held-out MSE), so the rival rule can be evaluated on stored
@@ -24,7 +24,7 @@ from pathlib import Path
 
 def rivals_of(r: dict) -> list[dict]:
     """Unsettled rivals of the record's verdict (none for ``none``/``unexplained`` or a record without models)."""
-    from csjm_opt.diagnose.rivals import unsettled_rivals
+    from csjm_opt.diagnose.selection.rivals import unsettled_rivals
 
     models = r.get("models")
     verdict = (r.get("gap") or {}).get("model")

@@ -12,12 +12,12 @@ against the whole vocabulary, which this oracle measures for each study log:
    memory chosen per model by the evidence of its fit, as the diagnosis does) fitted to it, whitened with the log's TRUE
    instrument noise (so the noise scale is 1);
 3. each model's *expected* log evidence over the noise, ``log Z(noise-free) + p_eff / 2``
-   (:func:`csjm_opt.diagnose.evidence.effective_parameters`; the ``-n/2`` shared by all models
+   (:func:`csjm_opt.diagnose.fitting.evidence.effective_parameters`; the ``-n/2`` shared by all models
    dropped): the noise-free misfit, the Laplace Occam terms, and the noise a model can follow;
 4. the truth's expected margin over its best rival (every other model of the vocabulary).
 
 A log whose expected margin is below ``LEAD_NATS`` (the decision's lead,
-:mod:`csjm_opt.diagnose._decision`) does not identify its truth decisively: no method can
+:mod:`csjm_opt.diagnose.decision_rule`) does not identify its truth decisively: no method can
 be expected to name it right from that log, the rule or the priors notwithstanding. The oracle
 is the study's, not the tool's: it knows the noise and the plant, the diagnosis never does.
 
@@ -49,7 +49,7 @@ from _runner import finished, read_records, run_and_append  # noqa: E402
 
 def expected_log_evidence(fit) -> float:
     """Expected log evidence over the noise (noise scale 1, ``-n/2`` dropped)."""
-    from csjm_opt.diagnose.evidence import effective_parameters, log_evidence
+    from csjm_opt.diagnose.fitting.evidence import effective_parameters, log_evidence
 
     return float(log_evidence(fit, 1.0) + 0.5 * effective_parameters(fit, 1.0))
 
@@ -68,12 +68,12 @@ def _oracle(job: dict) -> dict:
     from diagnose_confusion import _simulate, build_plant, job_seed, truth
 
     from csjm_opt.diagnose import EFFECTS, make_effect
-    from csjm_opt.diagnose.augmented import AugmentedModel
-    from csjm_opt.diagnose.evidence import effective_parameters
-    from csjm_opt.diagnose.fit import fit_model
-    from csjm_opt.diagnose.residuals import compute_residuals
-    from csjm_opt.diagnose.scoring import fit_on_path
-    from csjm_opt.diagnose.selection import VARIANTS
+    from csjm_opt.diagnose.data.residuals import compute_residuals
+    from csjm_opt.diagnose.fitting.augmented import AugmentedModel
+    from csjm_opt.diagnose.fitting.evidence import effective_parameters
+    from csjm_opt.diagnose.fitting.gauss_newton import fit_model
+    from csjm_opt.diagnose.selection.decision import VARIANTS
+    from csjm_opt.diagnose.selection.scoring import fit_on_path
     from csjm_opt.measurement.instruments import InstrumentNoise
 
     t0 = time.perf_counter()
@@ -197,7 +197,7 @@ def _chi2_power(chi2: float, dof: int, alpha: float = 0.01) -> float:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from csjm_opt.diagnose.selection import LEAD_NATS
+    from csjm_opt.diagnose.selection.decision import LEAD_NATS
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--records", nargs="+", default=[], help="confusion-study JSONL files whose logs to judge")

@@ -137,7 +137,7 @@ def _run_one(job: dict) -> dict:
     from diagnose_confusion import build_plant, job_seed, truth
 
     from csjm_opt.diagnose import diagnose
-    from csjm_opt.diagnose.suggest import suggest_experiment
+    from csjm_opt.diagnose.suggest.experiment import suggest_experiment
 
     t0, plant0 = time.perf_counter(), PLANT_SECONDS[0]
     rig, noise, plant, severities, factor = build_plant(job)

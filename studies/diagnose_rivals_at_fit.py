@@ -1,6 +1,6 @@
 """The rival rule's warnings before and after taking evidence at the fitted parameters, on the same logs.
 
-``csjm_opt.diagnose.rivals`` compares the Laplace evidence of the verdict and each rival at their
+``csjm_opt.diagnose.selection.rivals`` compares the Laplace evidence of the verdict and each rival at their
 *fitted* parameters (``log_evidence(..., at_fit=True)``); before, it compared them at the modes of
 their linearisations. Each log here is made as in ``diagnose_confusion.py`` (same jobs, seeds and
 plants) and diagnosed once with the current code; the record is a confusion-study record (so
@@ -36,8 +36,8 @@ def run_one(job: dict) -> dict:
     import diagnose_confusion as dc
 
     import csjm_opt.diagnose as dg
-    import csjm_opt.diagnose._decision as dec
-    from csjm_opt.diagnose.rivals import scored_models, unsettled_rivals
+    import csjm_opt.diagnose.decision_rule as dec
+    from csjm_opt.diagnose.selection.rivals import scored_models, unsettled_rivals
     from csjm_opt.errors import CsjmError
 
     ctxs: list = []

@@ -13,7 +13,7 @@ read on pairs):
   the settled pose within their bounds (MuJoCo's at-rest distribution has no memory of its own);
 * ``law (carried)``: the diagnosis's friction model at the TRUE parameters (bands F, stick travel
   factor 0, first state 0), each cycle predicted from the state the noise-free history leaves
-  (:func:`csjm_opt.diagnose.friction_ramp.predict_ramp`): rms pose error against MuJoCo (mrad);
+  (:func:`csjm_opt.diagnose.fitting.friction_ramp.predict_ramp`): rms pose error against MuJoCo (mrad);
 * ``law (one row)``: each row predicted from MuJoCo's own state and pose at the previous row;
 * ``vs slowest``: rms pose difference from the last (slowest) setting (mrad).
 
@@ -41,9 +41,9 @@ def record(job: dict, ramp_s: float, cycle_ramp_s: float) -> dict:
     import mujoco
 
     from csjm_opt.measurement.instruments import InstrumentNoise
-    from csjm_opt.testbed import mujoco_engine as me
-    from csjm_opt.testbed.mujoco_plant import as_mujoco
-    from csjm_opt.testbed.mujoco_statics import tendon_jacobian
+    from csjm_opt.testbed.mujoco import engine as me
+    from csjm_opt.testbed.mujoco.plant import as_mujoco
+    from csjm_opt.testbed.mujoco.statics import tendon_jacobian
 
     rows: list[dict] = []
     last: dict = {}
@@ -96,10 +96,10 @@ def least_norm_band(J: np.ndarray, net: np.ndarray, bound: np.ndarray) -> np.nda
 
 def analyse(rec: dict) -> dict:
     """The columns of the module doc for one recorded log."""
-    from csjm_opt.diagnose.augmented import AugmentedModel, with_entry
+    from csjm_opt.diagnose.data.residuals import compute_residuals, pose_residuals
     from csjm_opt.diagnose.effects.friction import Friction
-    from csjm_opt.diagnose.friction_ramp import predict_ramp
-    from csjm_opt.diagnose.residuals import compute_residuals, pose_residuals
+    from csjm_opt.diagnose.fitting.augmented import AugmentedModel, with_entry
+    from csjm_opt.diagnose.fitting.friction_ramp import predict_ramp
     from csjm_opt.measurement.logfile import MeasurementLog
     from csjm_opt.model import kinematics as kin
 
@@ -138,7 +138,7 @@ def analyse(rec: dict) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from csjm_opt.diagnose.residuals import pose_residuals
+    from csjm_opt.diagnose.data.residuals import pose_residuals
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--id", required=True)

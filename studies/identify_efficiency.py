@@ -32,13 +32,13 @@ import numpy as np
 from tqdm import tqdm
 
 from csjm_opt import so3
-from csjm_opt.identification.crlb import sym_entries
+from csjm_opt.identification.cramer_rao import sym_entries
 from csjm_opt.identification.experiment_design import paper_protocol, plan_experiment
 from csjm_opt.identification.identify import identify_log
 from csjm_opt.measurement.logfile import MeasurementLog
 from csjm_opt.model.statics import solve_equilibrium
-from csjm_opt.testbed.plant import Plant
-from csjm_opt.testbed.protocol_run import dead_weight_moments, run_protocol, settle_protocol
+from csjm_opt.testbed.plant import TestbedPlant
+from csjm_opt.testbed.protocol_runner import dead_weight_moments, run_protocol, settle_protocol
 from csjm_opt.testbed.rigs import random_rig
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -49,7 +49,7 @@ def mujoco_settle(rig, protocol):
     """True poses and dead-weight moments of every protocol row, settled in MuJoCo."""
     import mujoco
 
-    from csjm_opt.testbed.mujoco_reference import build, rotation, settle
+    from csjm_opt.testbed.mujoco.reference import build, rotation, settle
 
     l = protocol.rest_lengths_m[0]
     R_ref, _, ok = settle(rig, l, np.eye(3), np.zeros(3))
@@ -236,7 +236,7 @@ def run_mujoco(rig_noise, args, rng):
     for name, des in {"paper": paper_protocol(rig, args.budget, rng, noise=noise),
                       "planned": plan_experiment(rig, args.budget, noise=noise)}.items():
         R_true, tau = mujoco_settle(rig, des.protocol)
-        R_tb, _ = settle_protocol(Plant(rig), des.protocol)
+        R_tb, _ = settle_protocol(TestbedPlant(rig), des.protocol)
         out[f"{name}_mujoco_vs_testbed_max_rad"] = float(np.max(np.linalg.norm(
             so3.log(np.swapaxes(R_tb, 1, 2) @ R_true), axis=1)))
         K_true = sym_entries(solve_equilibrium(rig, des.protocol.rest_lengths_m[0], R_init=np.eye(3)).K)

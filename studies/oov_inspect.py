@@ -53,7 +53,7 @@ def remake(rec: dict, out: Path, run_diagnosis: bool) -> dict:
 
 def _record_mujoco_rows() -> list:
     """Every MuJoCo row settled from now on is appended to the returned list (respond wrapped)."""
-    from csjm_opt.testbed.mujoco_plant import MujocoTestbedPlant
+    from csjm_opt.testbed.mujoco.plant import MujocoTestbedPlant
 
     rows: list = []
     inner = getattr(MujocoTestbedPlant.respond_rows, "__wrapped__", MujocoTestbedPlant.respond_rows)

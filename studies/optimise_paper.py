@@ -44,17 +44,17 @@ from pathlib import Path
 import numpy as np
 
 from csjm_opt._fileio import atomic_write_json, atomic_write_text
-from csjm_opt.design.certify import certify, slacks
+from csjm_opt.design.clearance import interference
 from csjm_opt.design.design_evaluation import evaluate_design
 from csjm_opt.design.geometry import GeometryLimits, design_rig
-from csjm_opt.design.interference import interference
-from csjm_opt.design.optimisation import design_rig_of, optimise
-from csjm_opt.design.optimise_settings import read_optimise_file
-from csjm_opt.design.optimise_sweep_front import sweep_front
+from csjm_opt.design.optimisation.dense_check import certify, slacks
+from csjm_opt.design.optimisation.front import sweep_front
+from csjm_opt.design.optimisation.runner import design_rig_of, optimise
+from csjm_opt.design.optimisation.settings import read_optimise_file
 from csjm_opt.design.sampling import OrientationSampling, tilt_torsion_rotations
-from csjm_opt.design.sweep import run_sweep
+from csjm_opt.design.sweep.runner import run_sweep
 from csjm_opt.errors import CsjmError
-from csjm_opt.report.optimisation_page import front_figure, geometry_3d_figure
+from csjm_opt.report.design.optimisation import front_figure, geometry_3d_figure
 
 HERE = Path(__file__).resolve().parent
 BISECTIONS = 10

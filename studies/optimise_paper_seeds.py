@@ -27,9 +27,9 @@ sys.path.insert(0, str(HERE))
 
 from optimise_paper import BUDGET, hypervolume  # noqa: E402
 
-from csjm_opt.design.optimise_settings import read_optimise_file  # noqa: E402
-from csjm_opt.design.optimise_sweep_front import sweep_front  # noqa: E402
-from csjm_opt.design.sweep import run_sweep  # noqa: E402
+from csjm_opt.design.optimisation.front import sweep_front  # noqa: E402
+from csjm_opt.design.optimisation.settings import read_optimise_file  # noqa: E402
+from csjm_opt.design.sweep.runner import run_sweep  # noqa: E402
 
 
 def _pts(records: list[dict]) -> np.ndarray:

@@ -15,8 +15,8 @@ sweep's seven loads, the ``[optimise]`` defaults otherwise), this
    dense certification set (10,000 Halton orientations and R = I, plus a pattern
    search from the worst) and the axes x, y, z, of the exact LP range
    ``max - min u^T K(T) u`` over the tensions that hold the stiffness load
-   (:func:`csjm_opt.design.optimise_shaping.shaping_check`); and certifies each grid
-   design against the same requirements (:func:`csjm_opt.design.certify.certify`),
+   (:func:`csjm_opt.design.optimisation.shaping.shaping_check`); and certifies each grid
+   design against the same requirements (:func:`csjm_opt.design.optimisation.dense_check.certify`),
    so "the sweep's best" is the best grid design that also meets them;
 3. reports the sweep's own shaping metric (median over 16 held poses of the LP's
    smallest and largest values per axis) for the optimum and the paper's design,
@@ -39,12 +39,12 @@ from pathlib import Path
 import numpy as np
 
 from csjm_opt._fileio import atomic_write_json
-from csjm_opt.design.certify import certify
 from csjm_opt.design.design_evaluation import evaluate_design
 from csjm_opt.design.geometry import GeometryLimits, design_rig
-from csjm_opt.design.optimisation import design_rig_of, optimise
-from csjm_opt.design.optimise_settings import read_optimise_file
-from csjm_opt.design.optimise_shaping import dense_angles, shaping_check
+from csjm_opt.design.optimisation.dense_check import certify
+from csjm_opt.design.optimisation.runner import design_rig_of, optimise
+from csjm_opt.design.optimisation.settings import read_optimise_file
+from csjm_opt.design.optimisation.shaping import dense_angles, shaping_check
 from csjm_opt.errors import CsjmError
 
 HERE = Path(__file__).resolve().parent

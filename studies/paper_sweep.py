@@ -31,8 +31,8 @@ import numpy as np
 
 from csjm_opt._fileio import atomic_write_json, atomic_write_text
 from csjm_opt.design.geometry import PAPER_DESIGN
-from csjm_opt.design.sweep import evaluate_design, run_sweep
-from csjm_opt.design.sweep_file import SweepSpec
+from csjm_opt.design.sweep.runner import evaluate_design, run_sweep
+from csjm_opt.design.sweep.spec import SweepSpec
 from csjm_opt.errors import CsjmError
 from csjm_opt.model import hexagon
 

@@ -29,10 +29,10 @@ sys.path.insert(0, str(Path(__file__).parent))
 
 
 def evidence_terms(fit, s: float) -> dict:
-    """The terms of :func:`csjm_opt.diagnose.evidence.log_evidence` (same algebra, kept apart)."""
+    """The terms of :func:`csjm_opt.diagnose.fitting.evidence.log_evidence` (same algebra, kept apart)."""
     from scipy.special import log_ndtr
 
-    from csjm_opt.diagnose.evidence import TRUST_PRIOR_SDS, _prior
+    from csjm_opt.diagnose.fitting.evidence import TRUST_PRIOR_SDS, _prior
 
     scales = fit.model.scales
     n = fit.n_obs
@@ -89,12 +89,12 @@ def probe(job: dict) -> dict:
     from diagnose_confusion import _simulate, build_plant, job_seed
     from diagnose_identifiability import expected_log_evidence
 
-    import csjm_opt.diagnose._decision as dec
+    import csjm_opt.diagnose.decision_rule as dec
     from csjm_opt.diagnose import diagnose, make_effect
-    from csjm_opt.diagnose.augmented import AugmentedModel
-    from csjm_opt.diagnose.evidence import log_evidence
-    from csjm_opt.diagnose.residuals import compute_residuals
-    from csjm_opt.diagnose.scoring import fit_on_path
+    from csjm_opt.diagnose.data.residuals import compute_residuals
+    from csjm_opt.diagnose.fitting.augmented import AugmentedModel
+    from csjm_opt.diagnose.fitting.evidence import log_evidence
+    from csjm_opt.diagnose.selection.scoring import fit_on_path
     from csjm_opt.measurement.instruments import InstrumentNoise
 
     t0 = time.perf_counter()

@@ -5,7 +5,7 @@ For ``--cases`` random poses (rotation vectors within +-0.25 rad) and loads
 cable is lengthened by 10-50 mm, and:
 
 * MuJoCo settles from the planned pose, or the platform falls over (more than
-  90 deg away): :func:`csjm_opt.testbed.mujoco_reference.settle`, the tests'
+  90 deg away): :func:`csjm_opt.testbed.mujoco.reference.settle`, the tests'
   reference (ball-joint damping ``--damping``, default 1 N m s/rad:
   overdamped; RK4 at 1 ms; then Newton steps on MuJoCo's own net moment
   polish the pose to round-off, and a settled pose must be a stable one);
@@ -30,7 +30,7 @@ import numpy as np
 
 import csjm_opt as co
 from csjm_opt import so3
-from csjm_opt.testbed.mujoco_reference import settle
+from csjm_opt.testbed.mujoco.reference import settle
 
 
 def angle(Ra, Rb):

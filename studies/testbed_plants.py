@@ -103,7 +103,7 @@ def figure(path: Path) -> None:
 
     from csjm_opt import so3
     from csjm_opt.model.rig import paper_rig
-    from csjm_opt.testbed import Plant, as_mujoco, design_cycles
+    from csjm_opt.testbed import TestbedPlant, as_mujoco, design_cycles
 
     rig = paper_rig()
     c = design_cycles(rig, 1, np.random.default_rng(3), steps=6)[0]
@@ -112,8 +112,8 @@ def figure(path: Path) -> None:
             np.repeat(c.R_ref[None], 2 * m, 0))
     u = c.dtau_A_Nm / np.linalg.norm(c.dtau_A_Nm)
     fig, ax = plt.subplots(figsize=(6.0, 4.0))
-    coulomb = dataclasses.replace(Plant.nominal(rig), friction_coulomb_N=np.full(6, 1.5))
-    runs = [("no friction", Plant.nominal(rig), "k", "-"),
+    coulomb = dataclasses.replace(TestbedPlant.nominal(rig), friction_coulomb_N=np.full(6, 1.5))
+    runs = [("no friction", TestbedPlant.nominal(rig), "k", "-"),
             ("Coulomb 1.5 N, quasi-static (rho 0.1)", coulomb, "C0", "-"),
             ("Coulomb 1.5 N, MuJoCo frictionloss", as_mujoco(coulomb), "C1", "--")]
     for label, plant, color, ls in runs:

@@ -10,9 +10,9 @@ import numpy as np
 from .. import so3
 from .._fileio import atomic_write_json
 from .._validate import as_vector3
+from ..model.joint_stiffness import stiffness
 from ..model.numeric import Model
 from ..model.rig import load_rig
-from ..model.stiffness import stiffness
 from ..planning.planner import TensionPlan, plan_tensions
 from ._options import check_outputs, check_rotvec, quantity, rotvec_component
 from .commands import command_help

@@ -5,7 +5,7 @@ Usage: ``csjm diagnose DATA.csv --rig RIG [--test TEST.csv] [--extra MORE.csv] -
 
 Where the nominal model and the rig disagree, which unmodelled effect explains
 it, and how much of the gap it closes on held-out cycles (docs/conventions.md keys and
-vocabulary; see :mod:`csjm_opt.diagnose.selection` for the decision rule).
+vocabulary; see :mod:`csjm_opt.diagnose.selection.decision` for the decision rule).
 """
 
 from __future__ import annotations
@@ -95,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
         Unreadable or invalid input files (rig, logs, load set), raised by their loaders.
     """
     from ..diagnose import diagnose
-    from ..report.diagnosis import write_report
+    from ..report.diagnosis.report import write_report
 
     inputs = [args.data, args.test, args.rig, args.extra, args.loads]
     outputs = {"--json": args.json}
@@ -118,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
     extra = MeasurementLog.from_csv(args.extra) if args.extra else None
     loads = None
     if args.suggest is not None:
-        from ..diagnose.loads import load_load_set
+        from ..diagnose.suggest.dead_weights import load_load_set
 
         loads = load_load_set(args.loads) if args.loads else None
     progress = None
@@ -134,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
     suggestion = None
     if args.suggest is not None:
         from .._atomic_write import atomic_write_text
-        from ..diagnose.suggest import protocol_text, suggest_experiment
+        from ..diagnose.suggest.experiment import protocol_text, suggest_experiment
 
         suggestion = suggest_experiment(rig, diagnosis, args.suggest, loads, seed=args.seed, progress=progress)
         result["suggestion"] = suggestion.as_json() if suggestion else None
@@ -147,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
         write_report(diagnosis, args.report, Path(args.data).name)
         if suggestion is not None:
             from .._atomic_write import atomic_write_text
-            from ..diagnose.suggest import suggestion_markdown
+            from ..diagnose.suggest.experiment import suggestion_markdown
 
             atomic_write_text(Path(args.report) / "suggestion.md", suggestion_markdown(suggestion, args.protocol))
     if args.json != "-":

@@ -169,7 +169,7 @@ def run_identify(args: argparse.Namespace) -> int:
 
     from .. import so3
     from .._plotting import save
-    from ..identification.crlb import SYM_NAMES
+    from ..identification.cramer_rao import SYM_NAMES
     from ..identification.figures import convergence_curve, plot_convergence
     from ..identification.identify import MAX_CONDITION, identify_cycles, identify_log
     from ..identification.stiffness_fits import n_parameters

@@ -73,8 +73,8 @@ def run(args: argparse.Namespace) -> int:
         naming the binding constraint and an orientation where it binds).
     """
     from .._fileio import atomic_write_json
-    from ..design.optimisation import design_rig_of, optimise
-    from ..design.optimise_settings import read_optimise_file
+    from ..design.optimisation.runner import design_rig_of, optimise
+    from ..design.optimisation.settings import read_optimise_file
 
     out = Path(args.out)
     check_outputs([args.sweep, args.starts_from], {"--json": args.json}, dirs={"--out": out})
@@ -83,8 +83,8 @@ def run(args: argparse.Namespace) -> int:
         return _sweep_front(args, spec, settings, out)
     starts = None
     if args.starts_from:
-        from ..design.optimisation import sweep_starts
-        from ..design.store import read_records
+        from ..design.optimisation.runner import sweep_starts
+        from ..design.sweep.store import read_records
 
         starts = sweep_starts(settings, read_records(args.starts_from)[0])
     result = optimise(settings, max_evaluations=args.max_evaluations, workers=args.workers,
@@ -113,8 +113,8 @@ def _sweep_front(args: argparse.Namespace, spec: Any, settings: Any, out: Path) 
     import json
 
     from .._fileio import atomic_write_json, atomic_write_text
-    from ..design.optimisation import design_rig_of
-    from ..design.optimise_sweep_front import sweep_front
+    from ..design.optimisation.front import sweep_front
+    from ..design.optimisation.runner import design_rig_of
 
     result = sweep_front(settings, spec.settings, max_evaluations=args.max_evaluations)
     out.mkdir(parents=True, exist_ok=True)

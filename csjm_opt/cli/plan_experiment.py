@@ -98,9 +98,9 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from ..errors import DesignError
-    from ..identification.crlb import SYM_NAMES
+    from ..identification.cramer_rao import SYM_NAMES
     from ..identification.experiment_design import paper_protocol, plan_experiment
-    from ..identification.load_set import LoadSet
+    from ..identification.experiment_loads import ExperimentLoads
     from ..measurement.instruments import InstrumentNoise
     from ..model.numeric import Model
     from ..model.rig import load_rig
@@ -108,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
     check_outputs([args.rig, args.loads], {"-o/--output": args.output, "--json": args.json},
                   overwrite={"-o/--output": args.force})
     rig = load_rig(args.rig)
-    loads = LoadSet.from_toml(args.loads, rig) if args.loads else LoadSet.default(rig)
+    loads = ExperimentLoads.from_toml(args.loads, rig) if args.loads else ExperimentLoads.default(rig)
     poses = _poses(args.poses)
     noise, model = InstrumentNoise.paper(), Model(rig)
     plan = plan_experiment(rig, args.budget, loads, poses, noise, args.criterion, not args.no_pairs, model)

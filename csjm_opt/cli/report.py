@@ -54,14 +54,14 @@ def run(args: argparse.Namespace) -> int:
         would overwrite an input.
     """
     from ..errors import InvalidInput
-    from ..report.design import write_design_report
+    from ..report.design.report import write_design_report
 
     results = Path(args.results)
     if results.is_dir() and (results / "records.jsonl").is_file():  # csjm optimise --sweep-front: sweep records
         results = results / "records.jsonl"
         out = Path(args.out) if args.out else results.parent.with_name(results.parent.name + "_report")
     elif results.is_dir() and (results / "result.json").is_file():  # a csjm optimise folder
-        from ..report.optimisation_page import write_optimisation_report
+        from ..report.design.optimisation import write_optimisation_report
 
         out = Path(args.out) if args.out else results.with_name(results.name + "_report")
         check_outputs([results / "result.json"], dirs={"--out": out})

@@ -14,9 +14,9 @@ from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..model.rig import load_rig
 from ..testbed.injection import inject, make_plant
-from ..testbed.mujoco_plant import PLANTS
-from ..testbed.plant import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, Plant
-from ..testbed.protocol import read_protocol, simulate_protocol
+from ..testbed.log_protocol import read_protocol, simulate_protocol
+from ..testbed.mujoco.plant import PLANTS
+from ..testbed.plant import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, TestbedPlant
 from ._options import check_outputs, int_in
 from .commands import command_help
 
@@ -94,14 +94,14 @@ def truth(plant) -> dict:
 
     Parameters
     ----------
-    plant : Plant or MujocoPlant
+    plant : TestbedPlant or MujocoPlant
 
     Returns
     -------
     dict
     """
-    p: Plant = plant if isinstance(plant, Plant) else plant.plant
-    nominal = Plant.nominal(p.rig)
+    p: TestbedPlant = plant if isinstance(plant, TestbedPlant) else plant.plant
+    nominal = TestbedPlant.nominal(p.rig)
     out = {}
     for name in ("hardening_per_m", "friction_mu_beta", "friction_coulomb_N", "joint_friction_Nm",
                  "link_compliance_rad_per_Nm", "sensor_bias_A_Nm", "tracker_rotation_B", "eyelet_radius_m",

@@ -6,8 +6,8 @@ import argparse
 import sys
 
 from .._fileio import atomic_write_json
-from ..design.sweep import run_sweep
-from ..design.sweep_file import MAX_DESIGNS, SweepSpec
+from ..design.sweep.runner import run_sweep
+from ..design.sweep.spec import MAX_DESIGNS, SweepSpec
 from ..errors import DesignError
 from ._options import check_outputs, int_in
 from .commands import command_help

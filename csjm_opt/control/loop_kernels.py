@@ -4,7 +4,7 @@ Forward statics (Newton on SO(3), rest-length state, ``log_so3``) live in
 :mod:`csjm_opt.model.statics_kernels`, the shaping QP's matrices in
 :mod:`csjm_opt.shaping.shaping_kernels`, the dense active-set QP in
 :mod:`csjm_opt.planning.kernels`; this module re-exports them for the
-controllers and plants. ``tests/test_loop_kernels.py`` checks them.
+controllers and plants. ``tests/control/test_loop_kernels.py`` checks them.
 """
 
 from __future__ import annotations

@@ -9,13 +9,13 @@ import numpy as np
 
 from ..diagnose import diagnose
 from ..model.rig import Rig
-from ..report.diagnosis import write_report
+from ..report.diagnosis.report import write_report
 from ..report.document import (
     Block,
     Cell,
     Column,
     Figure,
-    Link,
+    Hyperlink,
     Links,
     Section,
     Table,
@@ -103,8 +103,8 @@ def section(s: dict) -> Section:
                    for name, v in s["candidates"].items()], "Held-out error of each candidate model")
     blocks: list[Block] = [facts, cands,
               Figure("candidates.png", "Held-out error of every candidate against the noise floor."),
-              Links([Link(s.get("report_html", "index.html"), "diagnosis report",
+              Links([Hyperlink(s.get("report_html", "index.html"), "diagnosis report",
                           "verdict, figures, fitted parameters with units, where the gap lies"),
-                     Link(s["log"], "log.csv", "the simulated measurement log")])]
+                     Hyperlink(s["log"], "log.csv", "the simulated measurement log")])]
     return Section("Sim-to-real diagnosis", verdict, "ok" if s["correct"] and not s["confounded_with"] else "warn",
                    blocks)

@@ -26,7 +26,7 @@ from ..measurement.instruments import InstrumentNoise
 from ..measurement.logfile import MeasurementLog
 from ..model.numeric import Model
 from ..model.rig import Rig
-from ..report.document import Cell, Column, Document, Figure, Link, Section, Table, sig
+from ..report.document import Cell, Column, Document, Figure, Hyperlink, Section, Table, sig
 from ..report.render import write_document
 from ._step import DemoContext, StepOutput
 
@@ -182,10 +182,10 @@ _LEAD = ("A simulated identification experiment on the paper rig with the paper'
          "parameters (per-cable stiffness and rest-length offsets) are fitted over the whole log.")
 
 
-def _links() -> list[Link]:
-    return [Link("identify.json", "identify.json", "every number of this page"),
-            Link("log.csv", "log.csv", "the simulated measurement log"),
-            Link("identify_verification.txt", "identify_verification.txt", "per-row verification table")]
+def _links() -> list[Hyperlink]:
+    return [Hyperlink("identify.json", "identify.json", "every number of this page"),
+            Hyperlink("log.csv", "log.csv", "the simulated measurement log"),
+            Hyperlink("identify_verification.txt", "identify_verification.txt", "per-row verification table")]
 
 
 def section(s: dict) -> Section:

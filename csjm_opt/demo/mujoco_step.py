@@ -153,7 +153,7 @@ def stiffness_switch(rig: Rig, R: np.ndarray | None = None, tau_ext_A_Nm: np.nda
     """
     R = so3.exp([0.08, -0.05, 0.1]) if R is None else R
     tau = np.array([0.2, -0.15, 0.1]) if tau_ext_A_Nm is None else np.asarray(tau_ext_A_Nm, float)
-    from ..model.stiffness import stiffness
+    from ..model.joint_stiffness import stiffness
 
     K_soft = stiffness(rig, R, plan_tensions(rig, R, tau, t_ref_N=np.full(6, 0.9 * rig.t_max_N)).tensions_N)
     K_stiff = stiffness(rig, R, plan_tensions(rig, R, tau, t_ref_N=np.full(6, 3.0 * rig.t_min_N)).tensions_N)

@@ -22,7 +22,7 @@ import numpy as np
 
 from .._fileio import atomic_write_json
 from ..model.rig import Rig, paper_rig
-from ..report.document import Document, Link
+from ..report.document import Document, Hyperlink
 from ..report.folder import prepare_out_dir
 from ..report.render import write_document
 from . import core_step, diagnose_step, identify_step, mujoco_step, shaping_step
@@ -86,9 +86,9 @@ def _document(ctx: DemoContext, sections: list, seconds: float) -> Document:
             f"simulated data: seed {ctx.seed}, {'quick' if ctx.quick else 'full'} run, {seconds:.0f} s. Each "
             "section starts with what was done, what came out and whether that is what one should expect; "
             "numbers are rounded for reading, `summary.json` keeps every digit.")
-    links = [Link("summary.json", "summary.json", "every number of this report, by step")]
+    links = [Hyperlink("summary.json", "summary.json", "every number of this report, by step")]
     for name, href, note in (("experiment/index.html", "identification report", "the identification step in full"),
                              ("diagnosis/index.html", "diagnosis report", "the diagnosis step in full")):
         if (ctx.out_dir / name).exists():
-            links.append(Link(name, href, note))
+            links.append(Hyperlink(name, href, note))
     return Document("csjm demo report", lead, sections, data_file="summary.json", links=links)

@@ -1,6 +1,6 @@
 """Local worker processes of a sweep: started by a fork server, they die with the sweep.
 
-See :mod:`csjm_opt.design.sweep`.
+See :mod:`csjm_opt.design.sweep.runner`.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ def _pool_context() -> Any:
     """A fork server (modules preloaded, so workers start fast), or ``spawn`` where there is none."""
     if "forkserver" in multiprocessing.get_all_start_methods():
         ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["csjm_opt.design.sweep"])
+        ctx.set_forkserver_preload(["csjm_opt.design.sweep.runner"])
         return ctx
     return multiprocessing.get_context("spawn")  # pragma: no cover - Windows
 

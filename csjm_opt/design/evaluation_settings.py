@@ -11,10 +11,17 @@ import numpy as np
 
 from .._limits import LIMITS
 from ..errors import DesignError
-from ._sweep_limits import MAX_LOADS, MAX_ORIENTATIONS, MAX_SEED, MAX_SHAPING_POSES
-from ._sweep_numbers import _check_base_value, _float, _int
+from ._value_checks import (
+    MAX_LOADS,
+    MAX_ORIENTATIONS,
+    MAX_SEED,
+    MAX_SHAPING_POSES,
+    _check_base_value,
+    _float,
+    _int,
+)
 from .geometry import GeometryLimits
-from .metrics import LoadSet, MetricOptions
+from .metrics import DesignLoads, MetricOptions
 from .sampling import OrientationSampling
 
 
@@ -54,7 +61,7 @@ class EvaluationSettings:
 
     base: dict[str, Any]
     sampling: OrientationSampling
-    loads: LoadSet
+    loads: DesignLoads
     options: MetricOptions
     limits: GeometryLimits
     interference: InterferenceLimits | None = None
@@ -106,7 +113,7 @@ def _settings(data: dict[str, Any], base: dict[str, Any], fail: Any) -> Evaluati
     if arr.size and not moment.contains(arr).all():
         raise fail(f"moments must lie in {moment.describe()}", "loads.tau_ext")
     try:
-        loads = LoadSet(arr)
+        loads = DesignLoads(arr)
     except (ValueError, TypeError) as exc:
         raise fail(f"expected rows of three numbers: {exc}", "loads.tau_ext") from exc
     except DesignError as exc:

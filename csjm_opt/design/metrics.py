@@ -35,7 +35,7 @@ Definitions (all over the orientations of an :class:`OrientationSampling`):
   tensions holding the stiffness load, for u = x, y (bending) and z
   (torsion) of {A}; reported as medians over those poses
   (:mod:`csjm_opt.design.shaping_range`).
-* Interference (:mod:`csjm_opt.design.interference`) over the feasible
+* Interference (:mod:`csjm_opt.design.clearance`) over the feasible
   poses: ``min_cable_distance_m`` between any two cables,
   ``min_link_clearance_m`` from any cable to the link (the rig's, or the
   documented default), ``max_exit_angle_deg`` of any cable against its hole's
@@ -45,20 +45,20 @@ Definitions (all over the orientations of an :class:`OrientationSampling`):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from typing import Any
 
 import numpy as np
 
-from ..errors import InfeasibleLoad
+from ..errors import DesignError, InfeasibleLoad
 from ..model.numeric import Model
 from ..model.rig import Rig
 from ..planning import active_set as active_set
 from ..planning.planner import plan_tensions
 from . import feasibility, shaping_range
-from ._metric_types import DesignMetrics, LoadSet, MetricOptions, PoseMetrics, _json_safe  # noqa: F401
-from .interference import interference
+from .clearance import interference
 from .sampling import OrientationSampling, tilt_torsion_angles, tilt_torsion_rotations
 
 #: Infeasible samples refined by bisection for the tilt cone, and bisection steps
@@ -67,7 +67,103 @@ CONE_RAYS = 64
 CONE_BISECTIONS = 8
 
 
-def evaluate_poses(rig: Rig, Rs: np.ndarray, loads: LoadSet = LoadSet(),
+@dataclasses.dataclass(frozen=True, eq=False)
+class DesignLoads:
+    """External moments (N m, in {A}, weight excluded) a feasible pose must hold; row 0 is the stiffness load."""
+
+    taus_ext_A_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((1, 3)))
+
+    def __post_init__(self) -> None:
+        arr = np.array(self.taus_ext_A_Nm, dtype=float, ndmin=2)
+        if arr.ndim != 2 or arr.shape[1] != 3 or arr.shape[0] < 1:
+            raise DesignError(f"expected rows of [tx, ty, tz], got shape {arr.shape}", "loads.tau_ext")
+        if not np.all(np.isfinite(arr)):
+            raise DesignError("expected finite numbers", "loads.tau_ext")
+        arr.setflags(write=False)
+        object.__setattr__(self, "taus_ext_A_Nm", arr)
+
+
+@dataclasses.dataclass(frozen=True)
+class MetricOptions:
+    """Tolerances and effort of :func:`evaluate`."""
+
+    shaping_poses: int = 16
+    feasibility_tol_Nm: float = 1e-9
+
+    def __post_init__(self) -> None:
+        if isinstance(self.shaping_poses, bool) or not isinstance(self.shaping_poses, int) \
+                or self.shaping_poses < 0:
+            raise DesignError(f"expected an integer >= 0, got {self.shaping_poses!r}", "shaping_poses")
+        if not self.feasibility_tol_Nm >= 0:
+            raise DesignError(f"expected >= 0, got {self.feasibility_tol_Nm}", "feasibility_tol_Nm")
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class PoseMetrics:
+    """Per-orientation arrays behind :class:`DesignMetrics` (n = number of samples)."""
+
+    R: np.ndarray                   # (n, 3, 3)
+    tilt_rad: np.ndarray            # (n,)
+    feasible: np.ndarray            # (n,) bool, all loads held
+    wrench_margin_Nm: np.ndarray    # (n, m) per load
+    tensions_N: np.ndarray          # (n, 6) planned for the stiffness load (valid where feasible)
+    K: np.ndarray                   # (n, 3, 3) at those tensions
+    eig_Nm_per_rad: np.ndarray      # (n, 3) ascending
+    fallbacks: int                  # feasible rows the active-set method did not settle
+
+
+@dataclasses.dataclass(frozen=True)
+class DesignMetrics:
+    """Scalar metrics of one design (defined in :mod:`csjm_opt.design.metrics`); NaN when undefined."""
+
+    n_orientations: int
+    workspace_fraction: float
+    tilt_cone_deg: float
+    min_stiffness_Nm_per_rad: float
+    median_min_stiffness_Nm_per_rad: float
+    max_condition: float
+    median_condition: float
+    min_torsion_stiffness_Nm_per_rad: float
+    median_torsion_stiffness_Nm_per_rad: float
+    min_bending_stiffness_Nm_per_rad: float
+    median_bending_stiffness_Nm_per_rad: float
+    stable_fraction: float
+    min_tension_margin_N: float
+    median_tension_margin_N: float
+    median_wrench_margin_Nm: float
+    home_feasible: bool
+    home_min_stiffness_Nm_per_rad: float
+    home_tension_margin_N: float
+    home_wrench_margin_Nm: float
+    shaping_range_Nm_per_rad: dict[str, tuple[float, float]]
+    planner_fallbacks: int
+    seconds: float
+    #: Interference over the feasible orientations (csjm_opt.design.clearance); NaN without any.
+    min_cable_distance_m: float = math.nan
+    min_link_clearance_m: float = math.nan
+    max_exit_angle_deg: float = math.nan
+
+    def as_dict(self) -> dict[str, Any]:
+        """The metrics as a JSON-able dict (the ``metrics`` of a sweep record).
+
+        Returns
+        -------
+        dict
+        """
+        return {k: _json_safe(v) for k, v in dataclasses.asdict(self).items()}
+
+
+def _json_safe(value: Any) -> Any:
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    return value
+
+
+def evaluate_poses(rig: Rig, Rs: np.ndarray, loads: DesignLoads = DesignLoads(),
                    options: MetricOptions = MetricOptions(), model: Model | None = None) -> PoseMetrics:
     """Feasibility, planned tensions and K at every given orientation.
 
@@ -77,7 +173,7 @@ def evaluate_poses(rig: Rig, Rs: np.ndarray, loads: LoadSet = LoadSet(),
         The design.
     Rs : ndarray, shape (n, 3, 3)
         Orientations of {A} in {B}.
-    loads : LoadSet, optional
+    loads : DesignLoads, optional
         External moments (N m in {A}).
     options : MetricOptions, optional
         Feasibility tolerance.
@@ -115,7 +211,7 @@ def evaluate_poses(rig: Rig, Rs: np.ndarray, loads: LoadSet = LoadSet(),
 
 
 def evaluate(rig: Rig, sampling: OrientationSampling = OrientationSampling(),
-             loads: LoadSet = LoadSet(), options: MetricOptions = MetricOptions(),
+             loads: DesignLoads = DesignLoads(), options: MetricOptions = MetricOptions(),
              model: Model | None = None) -> DesignMetrics:
     """All scalar metrics of one design over sampled orientations (see the module docstring).
 
@@ -125,7 +221,7 @@ def evaluate(rig: Rig, sampling: OrientationSampling = OrientationSampling(),
         The design.
     sampling : OrientationSampling, optional
         Orientations to evaluate (tilt and torsion ranges, count, seed).
-    loads : LoadSet, optional
+    loads : DesignLoads, optional
         External moments (N m in {A}); a pose is feasible when every load can be held; the first
         load is the one the stiffness is computed under.
     options : MetricOptions, optional
@@ -183,7 +279,7 @@ def evaluate(rig: Rig, sampling: OrientationSampling = OrientationSampling(),
 
 
 def _tilt_cone_deg(rig: Rig, model: Model, sampling: OrientationSampling, ok: np.ndarray,
-                   loads: LoadSet, options: MetricOptions) -> float:
+                   loads: DesignLoads, options: MetricOptions) -> float:
     """Largest tilt below which every sampled azimuth/torsion is feasible (deg).
 
     The infeasible samples of smallest tilt (up to ``CONE_RAYS``) are moved
@@ -209,7 +305,7 @@ def _tilt_cone_deg(rig: Rig, model: Model, sampling: OrientationSampling, ok: np
 
 
 def _feasible_at(rig: Rig, model: Model, tilt: np.ndarray, azimuth: np.ndarray, torsion: np.ndarray,
-                 loads: LoadSet, options: MetricOptions) -> np.ndarray:
+                 loads: DesignLoads, options: MetricOptions) -> np.ndarray:
     Rs = tilt_torsion_rotations(tilt, azimuth, torsion)
     tau_load = loads.taus_ext_A_Nm[None, :, :] + model.weight_moment(Rs)[:, None, :]
     margin = feasibility.wrench_margin_Nm(model.jacobian(Rs), tau_load, rig.t_min_N, rig.t_max_N)
@@ -221,7 +317,7 @@ def stiffness_affine_parts(model: Model, Rs: np.ndarray) -> tuple[np.ndarray, np
     return model.stiffness_basis(Rs)
 
 
-def _shaping(rig: Rig, model: Model, pm: PoseMetrics, loads: LoadSet,
+def _shaping(rig: Rig, model: Model, pm: PoseMetrics, loads: DesignLoads,
              count: int) -> dict[str, tuple[float, float]]:
     idx = np.flatnonzero(pm.feasible)[:count]
     if count == 0 or idx.size == 0:

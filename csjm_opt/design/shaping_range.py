@@ -16,7 +16,7 @@ It answers "what stiffness range can shaping reach here", not "which
 tensions give this K" (that is :func:`csjm_opt.shaping.shaper.shape_stiffness`).
 :func:`csjm_opt.shaping.reachable.directional_range` solves the same LPs one pose at a
 time with HiGHS; this batched form is what a sweep over thousands of poses
-needs, and tests/test_design_metrics.py checks the two agree.
+needs, and tests/design/test_metrics.py checks the two agree.
 """
 
 from __future__ import annotations

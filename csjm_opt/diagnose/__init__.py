@@ -1,18 +1,18 @@
 """Sim-to-real gap diagnosis: residuals, localisation, effects, selection, report.
 
-Entry points: :func:`csjm_opt.diagnose.selection.diagnose` (``csjm diagnose``) and
-:func:`csjm_opt.diagnose.suggest.suggest_experiment` (``csjm diagnose --suggest N``).
+Entry points: :func:`csjm_opt.diagnose.selection.decision.diagnose` (``csjm diagnose``) and
+:func:`csjm_opt.diagnose.suggest.experiment.suggest_experiment` (``csjm diagnose --suggest N``).
 """
 
 from __future__ import annotations
 
+from .data.extra import append_log
 from .effects import EFFECTS, Effect, make_effect
-from .evidence import log_evidence
-from .extra import append_log
-from .loads import Load, default_load_set, load_load_set
-from .result import Diagnosis
-from .selection import ALPHA, diagnose
-from .suggest import Suggestion, protocol_text, suggest_experiment, suggestion_markdown
+from .fitting.evidence import log_evidence
+from .selection.decision import ALPHA, diagnose
+from .selection.result import Diagnosis
+from .suggest.dead_weights import Load, default_load_set, load_load_set
+from .suggest.experiment import Suggestion, protocol_text, suggest_experiment, suggestion_markdown
 
 #: The words ``selected`` can take.
 VOCABULARY = ("none",) + tuple(EFFECTS) + ("unexplained",)

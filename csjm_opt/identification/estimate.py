@@ -9,8 +9,8 @@ import numpy as np
 
 from .. import so3
 from ..errors import InvalidInput
-from .crlb import SYM_NAMES, sym_to_full
-from .excitation import MAX_CONDITION, MAX_RELATIVE_HALF_WIDTH
+from .cramer_rao import SYM_NAMES, sym_to_full
+from .refusal import MAX_CONDITION, MAX_RELATIVE_HALF_WIDTH
 
 
 def relative_half_width(half: np.ndarray, K: np.ndarray) -> float:

@@ -6,7 +6,7 @@ direction) is settled on the rig model (:class:`~csjm_opt.model.statics.Equilibr
 dead weight fixed in {B}); a load is *admissible* when the platform settles stably with every
 tension in ``[t_min, t_max]`` and turns at most ``max_rotation_rad`` from the reference (the
 tracker's range). Each admissible load adds its row information ``A^T V^-1 A``
-(:mod:`csjm_opt.identification.crlb`) at its predicted displacement. The budget is then spent
+(:mod:`csjm_opt.identification.cramer_rao`) at its predicted displacement. The budget is then spent
 greedily on the unit that lowers the criterion most (A: trace of the six entries' bound;
 D: log det), followed by exchange passes (a chosen unit swapped for a better one until none
 improves). With ``pairs=True`` (default) a unit is a ``+-`` pair of the same weight and point
@@ -32,10 +32,10 @@ from ..measurement.instruments import InstrumentNoise
 from ..measurement.protocol import Protocol
 from ..model.numeric import Model
 from ..model.rig import Rig
-from .candidates import Cycle, cycle_for
-from .crlb import bound
+from .candidate_loads import Cycle, cycle_for
+from .cramer_rao import bound
+from .experiment_loads import ExperimentLoads
 from .experiment_plan import ExperimentPlan, paper_protocol, predict_bound
-from .load_set import LoadSet
 
 CRITERIA = ("A", "D")
 #: Exchange passes after the greedy selection.
@@ -88,7 +88,7 @@ def _select(base: np.ndarray, units: np.ndarray, costs: np.ndarray, budget: int,
     return chosen
 
 
-def plan_experiment(rig: Rig, budget: int, loads: LoadSet | None = None, poses: np.ndarray | None = None,
+def plan_experiment(rig: Rig, budget: int, loads: ExperimentLoads | None = None, poses: np.ndarray | None = None,
                     noise: InstrumentNoise | None = None, criterion: str = "A", pairs: bool = True,
                     model: Model | None = None) -> ExperimentPlan:
     """Plan an identification experiment of ``budget`` loads minimising the A- or D-criterion of K.
@@ -98,8 +98,8 @@ def plan_experiment(rig: Rig, budget: int, loads: LoadSet | None = None, poses: 
     rig : Rig
     budget : int
         Number of loaded rows (the unloaded reference row of each pose comes on top).
-    loads : LoadSet, optional
-        Weights, points, directions, pretensions and tracker range (default :meth:`LoadSet.default`).
+    loads : ExperimentLoads, optional
+        Weights, points, directions, pretensions and tracker range (default :meth:`ExperimentLoads.default`).
     poses : array (p, 3), optional
         Reference poses as rotation vectors (rad); one cycle each, budget split equally
         (a K field). Default: the home pose (identity).
@@ -125,7 +125,7 @@ def plan_experiment(rig: Rig, budget: int, loads: LoadSet | None = None, poses: 
     if isinstance(budget, bool) or not isinstance(budget, (int, np.integer)) or budget < 3 * len(poses_arr):
         raise DesignError(f"budget: need at least 3 loads per pose ({3 * len(poses_arr)}), got {budget!r}",
                           "budget")
-    loads = loads or LoadSet.default(rig)
+    loads = loads or ExperimentLoads.default(rig)
     noise = noise or InstrumentNoise.paper()
     model = model or Model(rig)
     shares = np.full(len(poses_arr), budget // len(poses_arr))
@@ -166,7 +166,7 @@ def plan_experiment(rig: Rig, budget: int, loads: LoadSet | None = None, poses: 
     return ExperimentPlan(_concat(rows), budget=int(budget), **out)
 
 
-def _design_at(rig: Rig, model: Model, R: np.ndarray, t: float, loads: LoadSet, noise: InstrumentNoise,
+def _design_at(rig: Rig, model: Model, R: np.ndarray, t: float, loads: ExperimentLoads, noise: InstrumentNoise,
                share: int, criterion: str, pairs: bool) -> tuple | None:
     """(criterion, cycle, picked rows, pretension, information) of the best selection at pretension ``t``."""
     cyc = cycle_for(rig, model, R, t, loads, noise)

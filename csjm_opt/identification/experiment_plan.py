@@ -20,9 +20,9 @@ from ..model.numeric import Model
 from ..model.rig import Rig
 from ..model.statics import EquilibriumSolver, solve_equilibrium
 from ..planning.planner import plan_tensions
-from .candidates import admissible, row_information
-from .crlb import bound
-from .load_set import LoadSet
+from .candidate_loads import admissible, row_information
+from .cramer_rao import bound
+from .experiment_loads import ExperimentLoads
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -68,7 +68,7 @@ class ExperimentPlan:
 
 def paper_protocol(rig: Rig, budget: int, rng: np.random.Generator, pose: np.ndarray | None = None,
                    pretension_N: float = 25.0, weights_N: tuple[float, float] = (3.0, 15.0),
-                   loads: LoadSet | None = None, noise: InstrumentNoise | None = None,
+                   loads: ExperimentLoads | None = None, noise: InstrumentNoise | None = None,
                    model: Model | None = None, max_draws: int = 100) -> ExperimentPlan:
     """The paper's protocol: one pose, 25 N pretension, U(3, 15) N loads in random directions.
 
@@ -84,8 +84,8 @@ def paper_protocol(rig: Rig, budget: int, rng: np.random.Generator, pose: np.nda
         Reference tension (clipped into the rig's range).
     weights_N : (float, float)
         Range of the uniformly drawn weights.
-    loads : LoadSet, optional
-        Attachment points and the tracker range (default :meth:`LoadSet.default`).
+    loads : ExperimentLoads, optional
+        Attachment points and the tracker range (default :meth:`ExperimentLoads.default`).
     noise : InstrumentNoise, optional
     model : Model, optional
     max_draws : int
@@ -100,7 +100,7 @@ def paper_protocol(rig: Rig, budget: int, rng: np.random.Generator, pose: np.nda
     DesignError
         No admissible load in ``max_draws`` draws.
     """
-    loads = loads or LoadSet.default(rig)
+    loads = loads or ExperimentLoads.default(rig)
     noise = noise or InstrumentNoise.paper()
     model = model or Model(rig)
     R = so3.exp(np.zeros(3) if pose is None else np.asarray(pose, float))

@@ -10,7 +10,7 @@ For one load cycle (rows in time order, the first row is the reference)::
 The default estimate is ``K_ml`` (``StiffnessEstimate.estimator``): maximum likelihood with
 the tracker and F/T noise and the curvature of the moment-rotation relation from the rig model,
 with the Cramér-Rao bound of its six entries (:mod:`csjm_opt.identification.ml_estimator`,
-:mod:`csjm_opt.identification.crlb`). For comparison, three more estimates are returned
+:mod:`csjm_opt.identification.cramer_rao`). For comparison, three more estimates are returned
 together in :class:`StiffnessEstimate`:
 
 * ``K_D_paper`` / ``K_paper``: the paper's literal ``Psi Omega^+`` on
@@ -46,15 +46,15 @@ marked ``ill_conditioned``.
 # The code lives in excitation, estimate, identify_pose and log_identification; these names
 # stay importable from here.
 from .estimate import StiffnessEstimate
-from .excitation import (
+from .identify_pose import identify_stiffness
+from .log_identification import identify_cycles, identify_log
+from .refusal import (
     MAX_CONDITION,
     MAX_RELATIVE_HALF_WIDTH,
     NOISE_FLOOR_FACTOR,
     excitation,
     weakest_load_direction,
 )
-from .identify_pose import identify_stiffness
-from .log_identification import identify_cycles, identify_log
 
 __all__ = ["MAX_CONDITION", "MAX_RELATIVE_HALF_WIDTH", "NOISE_FLOOR_FACTOR", "StiffnessEstimate",
            "excitation", "identify_cycles", "identify_log", "identify_stiffness", "weakest_load_direction"]

@@ -16,10 +16,11 @@ from .._validate import as_array, as_rotations
 from ..errors import IllConditionedData, InvalidInput
 from ..measurement.instruments import InstrumentNoise
 from ..model.numeric import Model
-from .crlb import sym_to_full
+from .cramer_rao import sym_to_full
 from .curvature import model_curvature, weight_slopes
 from .estimate import StiffnessEstimate, relative_half_width
-from .excitation import (
+from .ml_estimator import fit_ml
+from .refusal import (
     MAX_CONDITION,
     MAX_RELATIVE_HALF_WIDTH,
     _check_rows,
@@ -27,7 +28,6 @@ from .excitation import (
     excitation,
     weakest_load_direction,
 )
-from .ml_estimator import fit_ml
 from .stiffness_fits import (
     affine_fit,
     bootstrap_interval,

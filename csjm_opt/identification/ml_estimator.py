@@ -1,6 +1,6 @@
 """K_ml: maximum likelihood of the symmetric stiffness, both noises, curvature from the rig model.
 
-The model and the information are those of :mod:`csjm_opt.identification.crlb`. With the true
+The model and the information are those of :mod:`csjm_opt.identification.cramer_rao`. With the true
 displacements profiled out, the likelihood of ``theta = (tau0, s)`` is (to first order in the
 tracker noise, which is 3e-4 rad against 0.07 rad displacements) the effective-variance
 generalised least squares::
@@ -34,7 +34,7 @@ import dataclasses
 import numpy as np
 
 from ..measurement.instruments import InstrumentNoise
-from .crlb import bound, design_rows, information, row_covariances, slopes, sym_matrix
+from .cramer_rao import bound, design_rows, information, row_covariances, slopes, sym_matrix
 
 #: Weight iterations of the effective-variance fit.
 ML_ITERATIONS = 4

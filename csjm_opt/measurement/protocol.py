@@ -13,7 +13,7 @@ pulley; straight down is ``0,0,-1``), ``point_*`` where it is attached on the pl
 (:class:`~csjm_opt.measurement.logfile.MeasurementLog`) whose load columns are kept as extra
 columns.
 
-Not to be confused with :class:`csjm_opt.testbed.protocol.LogProtocol`, the protocol ``csjm diagnose --suggest``
+Not to be confused with :class:`csjm_opt.testbed.log_protocol.LogProtocol`, the protocol ``csjm diagnose --suggest``
 writes (dead weights in kg at tool points, intended moments and planned poses); ``csjm simulate`` runs both.
 """
 

@@ -129,7 +129,7 @@ def pose_terms_into(A, B, mr, g, R, c, J, tau_w):
 
 @njit(cache=True)
 def checked_stiffness_into(A, B, k, mr, g, R, T, t_lo, t_hi, tau_ext, check_eq, rot_tol, K, info):
-    """K with the checks of :func:`csjm_opt.model.stiffness.stiffness`, in one call.
+    """K with the checks of :func:`csjm_opt.model.joint_stiffness.stiffness`, in one call.
 
     Returns a status code; ``info`` (2,) receives the largest bound violation
     (N) and the equilibrium residual ``||J^T T + tau_ext + tau_w||`` (N m, when

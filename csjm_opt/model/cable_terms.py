@@ -5,7 +5,7 @@ compiled fast paths (:mod:`csjm_opt.model.kernels`, numba) compute the same
 quantities and are tested against these functions and against the CasADi
 model (:mod:`csjm_opt.model.casadi_model`, the symbolic reference and the
 code-generation path); ``tests/test_cable_terms.py`` and
-``tests/test_stiffness_kernel.py`` do it, together with a finite-difference
+``tests/model/test_stiffness_kernel.py`` do it, together with a finite-difference
 Hessian of the cable energy.
 
 Every function takes one pose ``R`` (3, 3) or a stack (..., 3, 3); hole

@@ -8,7 +8,7 @@ functions loop over poses; their ``*_many_par`` twins do the same in
 parallel (``prange``, ``NUMBA_NUM_THREADS`` threads), for large batches
 called from the main thread (the workqueue threading layer must not be
 entered from two threads at once; see :func:`csjm_opt.model.numeric.parallel_ok`).
-``tests/test_stiffness_kernel.py`` checks every kernel against the numpy reference,
+``tests/model/test_stiffness_kernel.py`` checks every kernel against the numpy reference,
 the CasADi model and a finite-difference energy Hessian.
 Compiled on first use and cached on disk (``cache=True``).
 

@@ -5,7 +5,7 @@ physics of :mod:`csjm_opt.model.kernels` (numba; same closed forms as the
 numpy reference :mod:`csjm_opt.model.cable_terms`). Every method takes one
 pose ``R`` (3, 3) or a stack ``Rs`` (n, 3, 3); stacks run in parallel.
 Inputs are trusted here (float64 rotations of the right shape); the public
-functions in :mod:`csjm_opt.model.stiffness` validate them.
+functions in :mod:`csjm_opt.model.joint_stiffness` validate them.
 
 The named CasADi functions of :mod:`csjm_opt.model.casadi_model` stay
 available as :attr:`Model.functions` and through :meth:`Model.casadi`, the

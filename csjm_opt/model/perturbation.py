@@ -14,7 +14,7 @@ stiffness ``K`` of the load convention (docs/conventions.md) but::
   the world {B} (a constant torque in the engine's world frame, e.g. MuJoCo's
   ``xfrc_applied``).
 
-Both signs were checked against MuJoCo to 1e-10 (``tests/test_mujoco_reference.py``).
+Both signs were checked against MuJoCo to 1e-10 (``tests/testbed/mujoco/test_reference.py``).
 Dead weights fixed in {B} at other points add their own ``H`` like the weight.
 """
 

@@ -47,7 +47,7 @@ from .link import DEFAULT_LINK, Link
 #: total load), tensions planned from mid-range, fitted to the symmetric part of
 #: Table 3's K_D gives k = 4638 N/m, rounded to 4600. Eigenvalues of K are then
 #: about 17, 27, 29 N m/rad against K_D's 6.8, 28.9, 30.6. See docs/guide/modelling.md
-#: and ``tests/test_rig.py``.
+#: and ``tests/model/test_rig.py``.
 PAPER_CABLE_STIFFNESS_N_PER_M = 4600.0
 PAPER_T_MIN_N = 5.0
 PAPER_T_MAX_N = 150.0

@@ -3,7 +3,7 @@
 The compiled twin of the numpy reference in :mod:`csjm_opt.model._statics_newton`
 (the method is described in :mod:`csjm_opt.model.statics`). The cable geometry
 and stiffness come from :mod:`csjm_opt.model.kernels` (tested against the
-numpy reference :mod:`csjm_opt.model.cable_terms`); ``tests/test_loop_kernels.py``
+numpy reference :mod:`csjm_opt.model.cable_terms`); ``tests/control/test_loop_kernels.py``
 checks these against those and the CasADi model. Compiled on first use and
 cached on disk (``cache=True``).
 """
@@ -36,7 +36,7 @@ def exp_so3(w):
 
 
 @njit(cache=True)
-def geometry(A, B, R):
+def geometry(R, A, B):
     """Cable lengths c (6,), unit vectors U in {A} (6, 3), J (6, 3) (model-layer kernel)."""
     c = np.empty(6)
     U = np.empty((6, 3))
@@ -61,7 +61,7 @@ def length_hessians(A, c, U, J):
 @njit(cache=True)
 def stiffness_basis(A, B, k, R):
     """J (6, 3), K0 = J^T diag(k) J, G (6, 3, 3)."""
-    c, U, J = geometry(A, B, R)
+    c, U, J = geometry(R, A, B)
     K0 = (J.T * k) @ J
     return J, K0, length_hessians(A, c, U, J)
 
@@ -69,7 +69,7 @@ def stiffness_basis(A, B, k, R):
 @njit(cache=True)
 def terms(A, B, k, F, P, R, l, tau_ext):
     """Residual g, cable K, tangent K_t, tensions T, cable and point-force moments (see statics)."""
-    c, U, J = geometry(A, B, R)
+    c, U, J = geometry(R, A, B)
     T, K = _rest_from_geometry(A, k, c, U, J, l)
     tau_c = J.T @ T
     tau_p = np.zeros(3)
@@ -148,7 +148,7 @@ def log_so3(R):
 @njit(cache=True)
 def rest_state(A, B, k, R, l):
     """Tensions T (6,) and cable stiffness K (3, 3) for rest lengths ``l`` at ``R`` (slack: nothing)."""
-    c, U, J = geometry(A, B, R)
+    c, U, J = geometry(R, A, B)
     return _rest_from_geometry(A, k, c, U, J, l)
 
 

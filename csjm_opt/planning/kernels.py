@@ -16,7 +16,7 @@ solvers:
   adds a finite primal active-set fallback). It is not used for the tension QP:
   the specialised solver is ~4x faster there (benchmarks/bench_planner.py).
 
-``tests/test_kernels.py`` checks them against the CasADi model and SLSQP.
+``tests/planning/test_kernels.py`` checks them against the CasADi model and SLSQP.
 Compiled on first use and cached on disk (``cache=True``).
 """
 

@@ -136,7 +136,7 @@ class Figure:
 
 
 @dataclasses.dataclass
-class Link:
+class Hyperlink:
     """A link (relative path or URL) with its text and an optional note after it."""
 
     href: str
@@ -148,7 +148,7 @@ class Link:
 class Links:
     """A list of links (sub-reports, data files)."""
 
-    links: list[Link]
+    links: list[Hyperlink]
     kind: str = "links"
 
 
@@ -219,7 +219,7 @@ class Document:
     lead: str = ""
     sections: list[Section] = dataclasses.field(default_factory=list)
     data_file: str = ""
-    links: list[Link] = dataclasses.field(default_factory=list)
+    links: list[Hyperlink] = dataclasses.field(default_factory=list)
     footer: str = ""
 
 

@@ -24,7 +24,7 @@ from ..model.rig import Rig
 from ..model.statics import rest_lengths_for, solve_equilibrium
 from ..planning.planner import plan_tensions
 from .injection import make_plant
-from .plant import Plant
+from .plant import TestbedPlant
 
 
 def load_increments(n: int, rng: np.random.Generator, magnitude_Nm: tuple[float, float]) -> np.ndarray:
@@ -37,7 +37,7 @@ def load_increments(n: int, rng: np.random.Generator, magnitude_Nm: tuple[float,
 def simulate_identification_experiment(
         rig: Rig, n_cycles: int, rng: np.random.Generator, loads_per_cycle: int = 12,
         load_Nm: tuple[float, float] = (0.3, 1.5), max_tilt_rad: float = 0.3,
-        preload_Nm: float = 1.0, effect: str | Iterable[str] | Plant | None = None,
+        preload_Nm: float = 1.0, effect: str | Iterable[str] | TestbedPlant | None = None,
         severity: float = 1.0, noise: InstrumentNoise | None = None, first_cycle: int = 0,
         max_tries: int = 50) -> MeasurementLog:
     """A log of ``n_cycles`` identification cycles (``loads_per_cycle + 1`` rows each).
@@ -50,7 +50,7 @@ def simulate_identification_experiment(
         raise InvalidInput(f"need n_cycles >= 1 and loads_per_cycle >= 1 (got {n_cycles}, {loads_per_cycle})",
                            "n_cycles")
     noise = InstrumentNoise.paper() if noise is None else noise
-    plant = effect if isinstance(effect, Plant) else make_plant(rig, effect, severity, rng)
+    plant = effect if isinstance(effect, TestbedPlant) else make_plant(rig, effect, severity, rng)
     model = Model(rig)
     rows_cycle, rows_l, rows_tau, rows_R = [], [], [], []
     for c in range(n_cycles):

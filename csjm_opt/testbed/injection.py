@@ -58,7 +58,7 @@ import numpy as np
 from .. import so3
 from ..errors import InvalidInput
 from ..model.rig import Rig
-from .plant import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, Plant
+from .plant import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, TestbedPlant
 
 #: Largest severity whose injected magnitudes stay within the diagnosis's default priors (see above).
 PLAUSIBLE_SEVERITY = {"hole_offsets": 1.2, "friction": 7.0, "cable_hardening": 15.0, "link_compliance": 8.0,
@@ -76,8 +76,8 @@ def inject(plant, effect: str, severity: float, rng: np.random.Generator):
 
     Parameters
     ----------
-    plant : Plant or MujocoTestbedPlant
-        A MuJoCo plant gets the effect in its :class:`Plant` description (same draws).
+    plant : TestbedPlant or MujocoTestbedPlant
+        A MuJoCo plant gets the effect in its :class:`TestbedPlant` description (same draws).
     effect : str
         A name of the module's tables.
     severity : float
@@ -85,7 +85,7 @@ def inject(plant, effect: str, severity: float, rng: np.random.Generator):
 
     Returns
     -------
-    Plant or MujocoTestbedPlant
+    TestbedPlant or MujocoTestbedPlant
         Of the same kind as ``plant``.
 
     Raises
@@ -93,7 +93,7 @@ def inject(plant, effect: str, severity: float, rng: np.random.Generator):
     InvalidInput
         Unknown effect name (or one the MuJoCo plant cannot realise).
     """
-    if not isinstance(plant, Plant):            # a MujocoTestbedPlant: inject into its description
+    if not isinstance(plant, TestbedPlant):            # a MujocoTestbedPlant: inject into its description
         return dataclasses.replace(plant, plant=inject(plant.plant, effect, severity, rng))
     s = float(severity)
     rig = plant.rig
@@ -151,13 +151,13 @@ def make_plant(rig: Rig, effects: str | Iterable[str] | None, severity: float,
     rng : numpy.random.Generator
         Draws of the effects (the same for both plants).
     plant : {"quasi-static", "mujoco"}, optional
-        The quasi-static :class:`Plant` or the :class:`~csjm_opt.testbed.mujoco_plant.MujocoTestbedPlant`.
+        The quasi-static :class:`TestbedPlant` or the :class:`~csjm_opt.testbed.mujoco.plant.MujocoTestbedPlant`.
     persistent : bool, optional
         Cycles start where the previous one settled (default) or relaxed.
 
     Returns
     -------
-    Plant or MujocoTestbedPlant
+    TestbedPlant or MujocoTestbedPlant
 
     Raises
     ------
@@ -166,12 +166,12 @@ def make_plant(rig: Rig, effects: str | Iterable[str] | None, severity: float,
     """
     if plant not in ("quasi-static", "mujoco"):
         raise InvalidInput(f"unknown plant {plant!r}; expected 'quasi-static' or 'mujoco'", "plant")
-    made = dataclasses.replace(Plant.nominal(rig), persistent=bool(persistent))
+    made = dataclasses.replace(TestbedPlant.nominal(rig), persistent=bool(persistent))
     if not (effects is None or effects == "none"):
         for name in ([effects] if isinstance(effects, str) else list(effects)):
             made = inject(made, name, severity, rng)
     if plant == "mujoco":
-        from .mujoco_plant import as_mujoco
+        from .mujoco.plant import as_mujoco
 
         return as_mujoco(made)
     return made

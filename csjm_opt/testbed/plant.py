@@ -93,8 +93,10 @@ OUTSIDE_NAMES = ("eyelet_radius", "sensor_drift", "drum_slip", "joint_friction")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
-class Plant:
+class TestbedPlant:
     """A rig with injected effects (all zero/identity = the nominal rig)."""
+
+    __test__ = False                           # a plant, not a pytest test class (its name starts with "Test")
 
     rig: Rig                                   # true geometry, stiffness, mass, com
     hardening_per_m: float = 0.0
@@ -115,7 +117,7 @@ class Plant:
     persistent: bool = True                    # cycles start where the previous one settled
 
     @classmethod
-    def nominal(cls, rig: Rig) -> Plant:
+    def nominal(cls, rig: Rig) -> TestbedPlant:
         """The rig without effects.
 
         Parameters
@@ -124,7 +126,7 @@ class Plant:
 
         Returns
         -------
-        Plant
+        TestbedPlant
         """
         return cls(rig)
 

@@ -13,19 +13,20 @@ from ..measurement.logfile import MeasurementLog
 from ..model.rig import Rig
 from .cycles import design_cycles
 from .injection import make_plant
-from .mujoco_plant import MujocoTestbedPlant
-from .plant import Plant
+from .mujoco.plant import MujocoTestbedPlant
+from .plant import TestbedPlant
 
 
 def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
-                        effect: str | Iterable[str] | Plant | MujocoTestbedPlant | None = None, severity: float = 1.0,
+                        effect: str | Iterable[str] | TestbedPlant | MujocoTestbedPlant | None = None,
+                        severity: float = 1.0,
                         noise: InstrumentNoise | None = None, steps: int = 4,
                         first_cycle: int = 0, persistent: bool | None = None) -> MeasurementLog:
     """A log of ``n_cycles`` load cycles (``2 * steps + 1`` rows each) on ``rig``.
 
     ``effect``: ``None``/``"none"`` (nominal plant), an effect name from the
-    documented vocabulary, several names, or a ready :class:`Plant` or
-    :class:`~csjm_opt.testbed.mujoco_plant.MujocoTestbedPlant`. Rest lengths are
+    documented vocabulary, several names, or a ready :class:`TestbedPlant` or
+    :class:`~csjm_opt.testbed.mujoco.plant.MujocoTestbedPlant`. Rest lengths are
     commanded with the *nominal* rig (as an experimenter would); the plant
     responds; the F/T reading (plus any bias) and the tracked pose get the
     instrument noise (``InstrumentNoise.paper()`` by default). ``persistent``
@@ -36,7 +37,7 @@ def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
     if int(n_cycles) < 1 or int(steps) < 1:
         raise InvalidInput(f"need n_cycles >= 1 and steps >= 1 (got {n_cycles}, {steps})", "n_cycles")
     noise = InstrumentNoise.paper() if noise is None else noise
-    plant = effect if isinstance(effect, (Plant, MujocoTestbedPlant)) else make_plant(rig, effect, severity, rng)
+    plant = effect if isinstance(effect, (TestbedPlant, MujocoTestbedPlant)) else make_plant(rig, effect, severity, rng)
     if persistent is not None:
         plant = with_persistence(plant, bool(persistent))
     cycles = design_cycles(rig, n_cycles, rng, steps=steps)
@@ -50,17 +51,17 @@ def simulate_experiment(rig: Rig, n_cycles: int, rng: np.random.Generator,
 
 
 def with_persistence(plant, persistent: bool):
-    """``plant`` (a :class:`Plant` or a MuJoCo plant) with its ``persistent`` setting changed.
+    """``plant`` (a :class:`TestbedPlant` or a MuJoCo plant) with its ``persistent`` setting changed.
 
     Parameters
     ----------
-    plant : Plant or MujocoTestbedPlant
+    plant : TestbedPlant or MujocoTestbedPlant
     persistent : bool
 
     Returns
     -------
-    Plant or MujocoTestbedPlant
+    TestbedPlant or MujocoTestbedPlant
     """
-    if isinstance(plant, Plant):
+    if isinstance(plant, TestbedPlant):
         return dataclasses.replace(plant, persistent=persistent)
     return dataclasses.replace(plant, plant=dataclasses.replace(plant.plant, persistent=persistent))

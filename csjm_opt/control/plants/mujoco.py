@@ -19,7 +19,7 @@ platform (``qfrc_applied`` of the ball joint, whose axes are {A});
 ``"B"`` applies it fixed in the world (``xfrc_applied``). The load is
 evaluated at every engine step's midpoint.
 
-Not to be confused with :class:`csjm_opt.testbed.mujoco_plant.MujocoTestbedPlant`, which *settles*
+Not to be confused with :class:`csjm_opt.testbed.mujoco.plant.MujocoTestbedPlant`, which *settles*
 each row of a diagnosis log statically with effects injected (friction, hardening, a compliant
 link); both build their engine model with
 :func:`csjm_opt.model.mjcf.rig_to_mjcf`.

@@ -1,6 +1,6 @@
 """Base class of the unmodelled effects (one class per file in this package).
 
-An effect augments the moment balance of :mod:`csjm_opt.diagnose.augmented`
+An effect augments the moment balance of :mod:`csjm_opt.diagnose.fitting.augmented`
 through one or more hooks, each given the effect's own parameter slice ``p``:
 
 ``adjust_load``      the external moment and the platform's first mass moment;
@@ -145,7 +145,7 @@ class Effect(abc.ABC):
         """
         return len(self.param_names)
 
-    # hooks (``ev`` is an :class:`~csjm_opt.diagnose.augmented.Evaluation`)
+    # hooks (``ev`` is an :class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`)
     def adjust_load(self, ev, p: np.ndarray) -> None:
         """Change ``ev.tau_ext_A_Nm`` (n, 3) or ``ev.first_moment_A_kgm`` (3,)."""
 

@@ -4,7 +4,7 @@ Where a cable slides through its guide (or its drive), the tension the platform
 feels, ``T_p``, differs from the elastic tension ``T = k e`` by a friction term
 whose sign follows the cable's motion and which holds any value in between
 while the cable sticks. Two laws, chosen by the data
-(:func:`csjm_opt.diagnose.selection.diagnose` fits both and keeps the better):
+(:func:`csjm_opt.diagnose.selection.decision.diagnose` fits both and keeps the better):
 
 * ``capstan`` (friction over the hole's curved surface): ``T_p = T exp(mu_beta_i s_i)``;
 * ``coulomb`` (a constant force at the drive or guide): ``T_p = T + F_i s_i`` (N).
@@ -32,7 +32,7 @@ is pure sliding (``s = sign(dc)``).
 Between rows the rig moves along a quasi-static ramp of its inputs, and the play
 operator remembers the extremes of its input: each row's change is applied in
 ``RAMP_SUBSTEPS`` steps along the shape of the ramp
-(:mod:`csjm_opt.diagnose.friction_ramp`), so a cable that draws out and back in
+(:mod:`csjm_opt.diagnose.fitting.friction_ramp`), so a cable that draws out and back in
 while the platform swings to the next cycle's pose leaves the state the swing
 leaves, not the state of one step.
 
@@ -44,7 +44,7 @@ fitted ``first_row_state``. ``memory="reset"`` starts every cycle there (a rig
 that is re-homed between cycles). The length changes come from the measured
 poses when fitting, and from the model's own predicted poses, row after row,
 when predicting a held-out cycle, which starts where the measured history before
-it leaves the state (:func:`csjm_opt.diagnose.augmented.with_entry`).
+it leaves the state (:func:`csjm_opt.diagnose.fitting.augmented.with_entry`).
 Eight parameters: six band sizes, ``f``, ``first_row_state``.
 """
 
@@ -53,7 +53,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..friction_ramp import ramp_steps
+from ..fitting.friction_ramp import ramp_steps
 from .base import Effect
 
 #: Smallest stick travel (m): keeps the play operator continuous in the pose for
@@ -128,7 +128,7 @@ def ramp_input(dc_m: np.ndarray, dl_m: np.ndarray, shape_m: np.ndarray | None, t
     dc_m, dl_m : numpy.ndarray
         Changes (n, 6) of the cable lengths and of the rest lengths since the previous row (m).
     shape_m : numpy.ndarray or None
-        The ramp's deviation from even steps (:func:`csjm_opt.diagnose.friction_ramp.predict_ramp`),
+        The ramp's deviation from even steps (:func:`csjm_opt.diagnose.fitting.friction_ramp.predict_ramp`),
         or None (one step).
     travel_m : numpy.ndarray
         Stick travel (n, 6) of each row and cable (m).
@@ -193,7 +193,7 @@ class Friction(Effect):
         if memory == "settled" and law != "coulomb":
             raise ValueError("settled friction is a Coulomb band (law='coulomb')")
         self.law, self.memory, self.t_max_N = law, memory, float(t_max_N)
-        # settled: the rest pose is any static Coulomb equilibrium (:mod:`..friction_stick`), no path
+        # settled: the rest pose is any static Coulomb equilibrium (:mod:`..fitting.friction_stick`), no path
         self.settled = memory == "settled"
         self._memo: dict = {}
 
@@ -314,7 +314,7 @@ class Friction(Effect):
         Parameters
         ----------
         ev : Evaluation
-            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`).
+            The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`).
         stretch_m : numpy.ndarray
             Cable stretch ``e = c - l`` (m), shape (n, 6).
         T_N : numpy.ndarray

@@ -174,7 +174,7 @@ class GuideRadius(Effect):
         Parameters
         ----------
         ev : Evaluation
-            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`), changed in
+            The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`), changed in
             place: ``ev.B_m`` becomes per-row, shape (n, 6, 3).
         p : numpy.ndarray
             ``[guide_radius_m]`` (m).

@@ -4,7 +4,7 @@
 are weakly determined by moment data (e.g. moving a hole along its cable),
 so the fit carries the prior range as a proper zero-mean Gaussian prior (``prior_sd``: the
 +-4 mm range is +-2 sd), and the selection prices only the subspace the log identifies
-(:mod:`csjm_opt.diagnose.evidence`).
+(:mod:`csjm_opt.diagnose.fitting.evidence`).
 """
 
 from __future__ import annotations
@@ -69,7 +69,7 @@ class HoleOffsets(Effect):
         Parameters
         ----------
         ev : Evaluation
-            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`), changed in place.
+            The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`), changed in place.
         p : numpy.ndarray
             Offsets (m): the first 18 the platform holes, the last 18 the base holes, row-major (6, 3).
         """

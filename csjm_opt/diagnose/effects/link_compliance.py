@@ -93,7 +93,7 @@ class LinkCompliance(Effect):
         Parameters
         ----------
         ev : Evaluation
-            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`), changed in place.
+            The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`), changed in place.
         p : numpy.ndarray
             The upper triangle of ``C`` (rad/(N m)), shape (6,).
         """

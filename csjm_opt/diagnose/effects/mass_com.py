@@ -56,7 +56,7 @@ class MassCom(Effect):
         Parameters
         ----------
         ev : Evaluation
-            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`), changed in place.
+            The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`), changed in place.
         p : numpy.ndarray
             The first-moment error ``d(m r)`` (kg m, in {A}), shape (3,).
         """

@@ -45,7 +45,7 @@ class SensorBias(Effect):
         Parameters
         ----------
         ev : Evaluation
-            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`), changed in place.
+            The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`), changed in place.
         p : numpy.ndarray
             The bias ``b`` (N m, in {A}), shape (3,).
         """

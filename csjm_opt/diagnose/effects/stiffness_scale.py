@@ -73,7 +73,7 @@ class StiffnessScale(Effect):
         Parameters
         ----------
         ev : Evaluation
-            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`).
+            The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`).
         stretch_m : numpy.ndarray
             Cable stretch ``e = c - l`` (m), shape (n, 6).
         T_N : numpy.ndarray

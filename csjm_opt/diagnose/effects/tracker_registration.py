@@ -72,7 +72,7 @@ class TrackerRegistration(Effect):
         Parameters
         ----------
         ev : Evaluation
-            The evaluation being built (:class:`~csjm_opt.diagnose.augmented.Evaluation`), changed in place.
+            The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`), changed in place.
         p : numpy.ndarray
             ``b`` (rad, in {B}) and, with ``marker``, ``a`` (rad, in {A}).
         """

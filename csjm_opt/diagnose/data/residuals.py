@@ -1,0 +1,166 @@
+"""Per-row residuals of the nominal model against a measurement log.
+
+For row ``i`` the nominal model (rig file as given) predicts the pose of the
+platform for the row's rest lengths and measured load (the measured moment,
+fixed in {A}, plus the platform weight) by forward statics; the pose residual
+is ``zeta_i = log(R_pred^T R_meas)`` (rad, in {A}). The moment residual is the
+balance ``g = J^T T + tau_ext + tau_w`` evaluated at the *measured* pose (N m):
+what the cables and load fail to balance where the platform really is.
+
+The table also carries what the fits need: the tangent ``G = dg/dzeta`` at
+the measured pose (``G ~ -K``), per-row whitening of the linearised pose
+pose residual under instrument noise (moment noise through ``G^-1``, plus tracker noise), and the length change of each
+cable from row to row within each cycle at the measured poses (friction fits).
+Everything here uses only the log's inputs and the rig file.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+
+from ... import so3
+from ...measurement.instruments import InstrumentNoise
+from ...measurement.logfile import MeasurementLog
+from ...model import kinematics as kin
+from ...model.rig import Rig
+from ..fitting.augmented import AugmentedModel, Rows, cable_steps, log_steps
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ResidualTable:
+    """Nominal-model residuals of a log, row by row."""
+
+    cycle: np.ndarray             # (n,)
+    rows: Rows
+    R_meas: np.ndarray            # (n, 3, 3)
+    R_pred: np.ndarray            # (n, 3, 3) nominal forward statics
+    converged: np.ndarray         # (n,) bool
+    zeta_rad: np.ndarray          # (n, 3) log(R_pred^T R_meas), {A}
+    moment_residual_Nm: np.ndarray  # (n, 3) g at R_meas
+    G: np.ndarray                 # (n, 3, 3) dg/dzeta at R_meas (nominal)
+    whiten: np.ndarray            # (n, 3, 3) W with W zeta ~ N(0, I) under instrument noise
+    branch: np.ndarray            # (n,) +1 loading, -1 unloading, 0 first row of a cycle
+    tau_weight_A_Nm: np.ndarray   # (n, 3) nominal weight moment at R_meas
+    noise: InstrumentNoise        # the instrument model behind ``whiten``
+
+    def __len__(self) -> int:
+        return len(self.cycle)
+
+    @property
+    def rms_rad(self) -> float:
+        """RMS pose residual of the table.
+
+        Returns
+        -------
+        float
+            ``sqrt(mean ||zeta_i||^2)`` (rad).
+        """
+        return rms(self.zeta_rad)
+
+    @property
+    def instrument_floor_rad(self) -> float:
+        """RMS pose residual the instrument noise alone would give: ``sqrt(mean tr Cov_zeta)``."""
+        L = np.linalg.inv(self.whiten)
+        return float(np.sqrt(np.mean(np.sum(L ** 2, axis=(1, 2)))))
+
+    @property
+    def tilt_rad(self) -> np.ndarray:
+        """Angle between the platform z axis and the base z axis."""
+        return np.arccos(np.clip(self.R_meas[:, 2, 2], -1, 1))
+
+    @property
+    def azimuth_rad(self) -> np.ndarray:
+        """Direction of the platform z axis projected on the base xy plane."""
+        return np.arctan2(self.R_meas[:, 1, 2], self.R_meas[:, 0, 2])
+
+    @property
+    def tau_load_A_Nm(self) -> np.ndarray:
+        """Moment the cables must carry: measured external moment plus the nominal weight moment.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape (n, 3) (N m, in {A}).
+        """
+        return self.rows.tau_meas_A_Nm + self.tau_weight_A_Nm
+
+    def linearised_zeta(self, g: np.ndarray) -> np.ndarray:
+        """Pose residual (rad) a balance residual ``g`` implies: ``G^-1 g``."""
+        return np.linalg.solve(self.G, g[..., None])[..., 0]
+
+    def take(self, idx: np.ndarray) -> "ResidualTable":
+        """The rows ``idx`` of this table (the instrument model is shared).
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            Row indices or a boolean mask.
+
+        Returns
+        -------
+        ResidualTable
+            A new table with those rows.
+        """
+        idx = np.asarray(idx)
+        fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        out: dict[str, Any] = {
+            k: (v.take(idx) if isinstance(v, Rows) else v if isinstance(v, InstrumentNoise) else v[idx])
+            for k, v in fields.items()}
+        return ResidualTable(**out)
+
+
+def rms(zeta: np.ndarray) -> float:
+    """``sqrt(mean ||zeta_i||^2)``."""
+    return float(np.sqrt(np.mean(np.sum(np.asarray(zeta) ** 2, axis=-1)))) if len(zeta) else float("nan")
+
+
+def pose_residuals(R_pred: np.ndarray, R_meas: np.ndarray) -> np.ndarray:
+    """``log(R_pred^T R_meas)`` (n, 3), rad."""
+    return so3.log(np.swapaxes(R_pred, -1, -2) @ R_meas)
+
+
+def branches(cycle: np.ndarray, tau_meas: np.ndarray) -> np.ndarray:
+    """Loading (+1) up to the row farthest (in moment) from the cycle's first row, unloading (-1) after."""
+    out = np.zeros(len(cycle), int)
+    for c in np.unique(cycle):
+        idx = np.flatnonzero(cycle == c)
+        d = np.linalg.norm(tau_meas[idx] - tau_meas[idx[0]], axis=1)
+        peak = int(np.argmax(d))
+        out[idx[1:peak + 1]] = 1
+        out[idx[peak + 1:]] = -1
+    return out
+
+
+def compute_residuals(rig: Rig, log: MeasurementLog, noise: InstrumentNoise | None = None) -> ResidualTable:
+    """Nominal residuals of every row of ``log`` (forward statics warm-started at the measured pose)."""
+    noise = noise or InstrumentNoise.paper()
+    R_meas = log.R
+    n = len(log)
+    model = AugmentedModel(rig)
+    theta = model.x0()
+    rows0 = Rows(log.rest_lengths_m, log.tau_ext_A_Nm, np.asarray(log.cycle), np.zeros((n, 6)))
+    sol = model.predict_poses(rows0, theta, R_meas)
+    lengths, _ = kin.cable_terms(R_meas, np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m))
+    rows = Rows(log.rest_lengths_m, log.tau_ext_A_Nm, np.asarray(log.cycle), cable_steps(log.cycle, lengths),
+                log_steps_m=log_steps(lengths), rest_steps_m=log_steps(np.asarray(log.rest_lengths_m, float)))
+    g = model.balance(R_meas, rows, theta)
+    G = kin.tangent(lambda R: model.balance(R, rows, theta), R_meas, g)
+    whiten = np.linalg.inv(np.linalg.cholesky(pose_noise_cov(G, noise)))
+    mr = rig.platform_mass_kg * np.asarray(rig.com_A_m)
+    tau_w = kin.weight_moment(R_meas, mr, np.asarray(rig.gravity_B_m_per_s2))
+    return ResidualTable(np.asarray(log.cycle), rows, R_meas, sol.R, sol.converged(1e-6),
+                         pose_residuals(sol.R, R_meas), g, G, whiten,
+                         branches(log.cycle, log.tau_ext_A_Nm), tau_w, noise)
+
+
+def pose_noise_cov(G: np.ndarray, noise: InstrumentNoise) -> np.ndarray:
+    """Covariance (n, 3, 3) of a predicted-minus-measured pose under instrument noise.
+
+    For tangent ``G``: moment noise through ``G^-1`` plus tracker noise (rad^2).
+    """
+    Ginv = np.linalg.inv(G)
+    cov = (Ginv * np.asarray(noise.tau_sigma_Nm) ** 2) @ np.swapaxes(Ginv, 1, 2)
+    return cov + (noise.angle_sigma_rad ** 2 + 1e-12) * np.eye(3)

@@ -1,0 +1,1 @@
+"""The fitting stage of a diagnosis: the augmented model, its Gauss-Newton fit, evidence, friction paths, pool."""

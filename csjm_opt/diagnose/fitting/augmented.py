@@ -1,0 +1,360 @@
+"""The nominal moment balance augmented by effects, with nominal nuisance parameters.
+
+For each row (rest lengths ``l``, measured moment ``tau_meas``, pose ``R_m``
+of the measured body) the balance residual in N m is::
+
+    g = J(R_c)^T T(e) + E (tau_ext + tau_w(R_m)),   e = c(R_c) - (l + dl)
+
+with ``tau_ext = tau_meas`` and ``tau_w = (m r) x (R_b^T g_B)`` nominally,
+``R_b = R_c = R_m`` (true body pose, cable platform pose) and ``E = I``
+unless an effect says otherwise (see :mod:`csjm_opt.diagnose.effects.base`),
+and ``T = k e`` for taut cables. The one nuisance parameter shared by every
+model (the null model ``nominal_refit`` has only it) is ``dl_common_m``, a
+common rest-length offset (pretension error: drives are zeroed to within a
+fraction of a mm, always). A common stiffness error is the named effect
+``stiffness_scale``, not a nuisance. Parameter vector: nuisance, then each
+effect's.
+``g(R) = 0`` defines the model's predicted pose (:func:`predict_poses`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from typing import Sequence
+
+import numpy as np
+
+from ...model import kinematics as kin
+from ...model.rig import Rig
+from ..effects import Effect
+
+NUISANCE_NAMES = ("dl_common_m",)
+NUISANCE_SCALES = np.array([2e-4])
+N_NUISANCE = len(NUISANCE_NAMES)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Rows:
+    """Per-row inputs of the balance (the part of a log the model needs)."""
+
+    rest_lengths_m: np.ndarray     # (n, 6)
+    tau_meas_A_Nm: np.ndarray      # (n, 3)
+    cycle: np.ndarray              # (n,) rows of a cycle consecutive, in time order
+    cable_steps_m: np.ndarray      # (n, 6) change of each cable length since the previous row
+                                   # of the cycle (from measured poses; 0 on a cycle's first row)
+    # Sequential mode (forward prediction row after row): the previous row's
+    # path state and cable lengths (NaN on a cycle's first row), else None.
+    state_prev: np.ndarray | None = None
+    lengths_prev_m: np.ndarray | None = None
+    # Changes since the previous row *of the log* (across cycle boundaries too; 0 on the
+    # log's first row): cable lengths at the measured poses, and commanded rest lengths.
+    log_steps_m: np.ndarray | None = None
+    rest_steps_m: np.ndarray | None = None
+    # Path state and cable lengths the measured history leaves at the row before each
+    # cycle's first row (NaN where there is none): where a predicted cycle starts.
+    entry_state: np.ndarray | None = None
+    entry_lengths_m: np.ndarray | None = None
+    # Shape (n, S, 6) of each cable's motion along the quasi-static ramp of the inputs into each row,
+    # as a deviation from even steps (:mod:`csjm_opt.diagnose.fitting.friction_ramp`); None: one step.
+    ramp_shape_m: np.ndarray | None = None
+    # Inputs and pose of the log's row before each cycle's first row (NaN elsewhere): where the
+    # ramp into a predicted cycle starts (set by :func:`with_entry` with the entry state).
+    entry_rest_m: np.ndarray | None = None
+    entry_tau_A_Nm: np.ndarray | None = None
+    entry_R: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        return self.rest_lengths_m.shape[0]
+
+    def take(self, idx: np.ndarray) -> "Rows":
+        """Rows ``idx`` (whole cycles, in order, for the sequence to stay meaningful)."""
+        def sub(a):
+            return None if a is None else a[idx]
+
+        return Rows(self.rest_lengths_m[idx], self.tau_meas_A_Nm[idx], self.cycle[idx],
+                    self.cable_steps_m[idx], sub(self.state_prev), sub(self.lengths_prev_m),
+                    sub(self.log_steps_m), sub(self.rest_steps_m), sub(self.entry_state),
+                    sub(self.entry_lengths_m), sub(self.ramp_shape_m), sub(self.entry_rest_m),
+                    sub(self.entry_tau_A_Nm), sub(self.entry_R))
+
+    @property
+    def steps_since_previous(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(cable, rest)`` length changes (n, 6) since the previous row of the log (m)."""
+        c = self.cable_steps_m if self.log_steps_m is None else self.log_steps_m
+        r = np.zeros_like(c) if self.rest_steps_m is None else self.rest_steps_m
+        return c, r
+
+    @functools.cached_property
+    def positions(self) -> np.ndarray:
+        """Position of each row within its cycle (0 = first row)."""
+        first = np.r_[True, self.cycle[1:] != self.cycle[:-1]]
+        start = np.maximum.accumulate(np.where(first, np.arange(len(first)), 0))
+        return np.arange(len(first)) - start
+
+    @functools.cached_property
+    def sequence(self) -> list[np.ndarray]:
+        """Row indices at position 1, 2, ... within their cycle (position 0 = first rows)."""
+        pos = self.positions
+        return [np.flatnonzero(pos == j) for j in range(1, int(pos.max(initial=0)) + 1)]
+
+
+@dataclasses.dataclass
+class Evaluation:
+    """Mutable working state of one evaluation of the balance (hooks edit it)."""
+
+    A_m: np.ndarray
+    B_m: np.ndarray
+    first_moment_A_kgm: np.ndarray
+    tau_ext_A_Nm: np.ndarray
+    R_cable: np.ndarray
+    link_rotation: np.ndarray
+    rows: Rows
+    cable_stiffness_N_per_m: np.ndarray
+    R_body: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))   # true body pose (adjust_frame)
+    tau_weight_A_Nm: np.ndarray | None = None
+    lengths_m: np.ndarray | None = None       # cable lengths at R_cable (set before adjust_tension)
+    state_out: np.ndarray | None = None       # path state after this row (path-dependent effects)
+
+
+class AugmentedModel:
+    """Nominal rig + nuisance parameters + a list of effects."""
+
+    def __init__(self, rig: Rig, effects: Sequence[Effect] = ()):
+        self.rig = rig
+        self.effects = tuple(effects)
+        self._A = np.asarray(rig.platform_holes_A_m, float)
+        self._B = np.asarray(rig.base_holes_B_m, float)
+        self._k = np.asarray(rig.cable_stiffness_N_per_m, float)
+        self._mr = rig.platform_mass_kg * np.asarray(rig.com_A_m, float)
+        self._g = np.asarray(rig.gravity_B_m_per_s2, float)
+        sizes = [len(NUISANCE_NAMES)] + [e.n_params for e in self.effects]
+        self._offsets = np.cumsum([0] + sizes)
+
+    @property
+    def name(self) -> str:
+        """Model name: the effect names joined by ``+``.
+
+        Returns
+        -------
+        str
+            ``"none"`` for the nominal model alone.
+        """
+        return "+".join(e.name for e in self.effects) or "none"
+
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        """Parameter names: the nuisance parameter ``dl_common_m`` (m), then each effect's.
+
+        Returns
+        -------
+        tuple of str
+            One name per parameter, in the order of ``theta``.
+        """
+        return NUISANCE_NAMES + tuple(n for e in self.effects for n in e.param_names)
+
+    @property
+    def n_params(self) -> int:
+        """Number of parameters (nuisance plus every effect's).
+
+        Returns
+        -------
+        int
+            Length of ``theta``.
+        """
+        return int(self._offsets[-1])
+
+    @property
+    def scales(self) -> np.ndarray:
+        """Typical magnitude of each parameter, for the optimiser's scaling.
+
+        Returns
+        -------
+        numpy.ndarray
+            Nuisance scale (2e-4 m) then each effect's scales, same units as the parameters.
+        """
+        return np.concatenate([NUISANCE_SCALES] + [e.scales for e in self.effects])
+
+    @property
+    def lower_bounds(self) -> np.ndarray:
+        """Lower bounds of the parameters.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``-inf`` for the nuisance parameter, then each effect's lower bounds.
+        """
+        return np.concatenate([np.full(N_NUISANCE, -np.inf)] + [e.lower_bounds for e in self.effects])
+
+    @property
+    def upper_bounds(self) -> np.ndarray:
+        """Upper bounds of the parameters.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``+inf`` for the nuisance parameter, then each effect's upper bounds.
+        """
+        return np.concatenate([np.full(N_NUISANCE, np.inf)] + [e.upper_bounds for e in self.effects])
+
+    @property
+    def prior_sd(self) -> np.ndarray:
+        """Ridge prior sd per parameter (inf = no prior)."""
+        parts = [np.full(N_NUISANCE, np.inf)]
+        for e in self.effects:
+            parts.append(np.full(e.n_params, np.inf) if e.prior_sd is None else e.prior_sd)
+        return np.concatenate(parts)
+
+    def x0(self) -> np.ndarray:
+        """Starting parameter vector: the nuisance parameter at zero and each effect's ``x0``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape (n_params,).
+        """
+        return np.concatenate([np.zeros(N_NUISANCE)] + [e.x0() for e in self.effects])
+
+    def starts(self) -> list[np.ndarray]:
+        """Starting parameter vectors: the nominal model, then each effect's extra starts."""
+        out = [self.x0()]
+        for i, e in enumerate(self.effects):
+            for alt in e.extra_starts():
+                x = self.x0()
+                x[self._offsets[i + 1]:self._offsets[i + 2]] = alt
+                out.append(x)
+        return out
+
+    def effect_params(self, theta: np.ndarray) -> list[np.ndarray]:
+        """Split a full parameter vector into the effects' slices.
+
+        Parameters
+        ----------
+        theta : numpy.ndarray
+            Full parameter vector: the nuisance parameters, then each effect's slice.
+
+        Returns
+        -------
+        list of numpy.ndarray
+            One slice (a view of ``theta``) per effect, in order.
+        """
+        return [theta[self._offsets[i + 1]:self._offsets[i + 2]] for i in range(len(self.effects))]
+
+    @property
+    def path_dependent(self) -> bool:
+        """Whether any effect depends on the loading path (e.g. friction with memory).
+
+        Returns
+        -------
+        bool
+            True if some effect has ``path_dependent`` set.
+        """
+        return any(getattr(e, "path_dependent", False) for e in self.effects)
+
+    def balance(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray) -> np.ndarray:
+        """Moment balance residual ``g`` (n, 3) N m at measured-body poses ``R_m``."""
+        return self.evaluate(R_m, rows, theta)[0]
+
+    def evaluate(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray) -> tuple[np.ndarray, Evaluation]:
+        """``(g, evaluation)``; the evaluation holds intermediate quantities (path state, lengths)."""
+        theta = np.asarray(theta, float)
+        n = len(rows)
+        eye = np.broadcast_to(np.eye(3), (n, 3, 3))
+        ev = Evaluation(self._A, self._B, self._mr, rows.tau_meas_A_Nm, R_m, eye, rows, self._k, R_m)
+        params = self.effect_params(theta)
+        for e, p in zip(self.effects, params):
+            e.adjust_load(ev, p)
+        for e, p in zip(self.effects, params):
+            e.adjust_frame(ev, p)
+        assert ev.R_body is not None   # set by adjust_frame
+        ev.R_cable = ev.R_body
+        ev.tau_weight_A_Nm = kin.weight_moment(ev.R_body, ev.first_moment_A_kgm, self._g)
+        for e, p in zip(self.effects, params):
+            e.adjust_pose(ev, p)
+        for e, p in zip(self.effects, params):
+            e.adjust_geometry(ev, p)
+        lengths, J = kin.cable_terms(ev.R_cable, ev.A_m, ev.B_m)
+        ev.lengths_m = lengths
+        stretch = lengths - (rows.rest_lengths_m + theta[0])
+        T = self._k * np.maximum(stretch, 0.0)
+        for e, p in zip(self.effects, params):
+            T = e.adjust_tension(ev, stretch, T, p)
+        tau_load = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm
+        g = np.einsum("nij,ni->nj", J, T) + np.einsum("nij,nj->ni", ev.link_rotation, tau_load)
+        return g, ev
+
+    def predict_poses(self, rows: Rows, theta: np.ndarray, R_init: np.ndarray) -> kin.PoseSolution:
+        """Equilibrium poses of the measured body for each row (forward statics).
+
+        Path-dependent models are stepped row after row within each cycle (all
+        cycles at once), each row starting from the state the model itself
+        reached on the previous row: predictions use only the log's inputs. Rows that carry ramps
+        (``ramp_shape_m``, a path of :func:`csjm_opt.diagnose.fitting.friction_path.on_predicted_path`) are
+        reached along the ramp of their inputs (:func:`csjm_opt.diagnose.fitting.friction_ramp.predict_ramp`).
+        """
+        if not self.path_dependent:
+            return kin.solve_poses(lambda R: self.balance(R, rows, theta), R_init)
+        if rows.ramp_shape_m is not None:
+            from .friction_ramp import predict_ramp
+            return predict_ramp(self, rows, theta, R_init)[0]
+        n = len(rows)
+        R_out, res = np.array(R_init, float), np.zeros(n)
+        state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
+        pos = rows.positions
+        it = 0
+        for j in range(int(pos.max(initial=0)) + 1):
+            idx = np.flatnonzero(pos == j)
+            prev = idx - 1 if j > 0 else None
+            if prev is None:          # a cycle's first row: where the measured history left the path state
+                has = rows.entry_state is not None and rows.entry_lengths_m is not None
+                s_prev = rows.entry_state[idx] if has else np.zeros((len(idx), 6))          # type: ignore[index]
+                c_prev = rows.entry_lengths_m[idx] if has else np.full((len(idx), 6), np.nan)  # type: ignore[index]
+            else:
+                s_prev, c_prev = state[prev], lengths[prev]
+            sub = dataclasses.replace(rows.take(idx), state_prev=np.nan_to_num(s_prev), lengths_prev_m=c_prev)
+            R0 = R_init[idx] if prev is None else R_out[prev]
+            sol = kin.solve_poses(lambda R, sub=sub: self.balance(R, sub, theta), R0)  # type: ignore[misc]
+            _, ev = self.evaluate(sol.R, sub, theta)
+            R_out[idx], res[idx] = sol.R, sol.residual_Nm
+            state[idx] = ev.state_out if ev.state_out is not None else 0.0
+            lengths[idx] = ev.lengths_m
+            it = max(it, sol.iterations)
+        return kin.PoseSolution(R_out, res, it)
+
+
+def with_entry(model: "AugmentedModel", rows: Rows, R_meas: np.ndarray, theta: np.ndarray) -> Rows:
+    """``rows`` with the path state the measured history leaves before each cycle (for prediction).
+
+    The model is evaluated at the measured poses over the whole log (in log order); a cycle's
+    first row gets the state and cable lengths of the log's previous row. Predicting a cycle
+    then uses the measured past, never the cycle's own measurements.
+    """
+    if not model.path_dependent or any(getattr(e, "memory", "carried") != "carried" for e in model.effects):
+        return rows
+    _, ev = model.evaluate(R_meas, rows, theta)
+    n = len(rows)
+    state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
+    rest, tau, R = np.full((n, 6), np.nan), np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan)
+    first = np.flatnonzero(np.r_[False, rows.cycle[1:] != rows.cycle[:-1]])
+    if ev.state_out is not None and ev.lengths_m is not None:
+        state[first] = ev.state_out[first - 1]
+        lengths[first] = ev.lengths_m[first - 1]
+        rest[first], tau[first] = rows.rest_lengths_m[first - 1], rows.tau_meas_A_Nm[first - 1]
+        R[first] = R_meas[first - 1]
+    return dataclasses.replace(rows, entry_state=state, entry_lengths_m=lengths, entry_rest_m=rest,
+                               entry_tau_A_Nm=tau, entry_R=R)
+
+
+def log_steps(lengths_m: np.ndarray) -> np.ndarray:
+    """Change of each length since the previous row of the log (0 on the first row)."""
+    d = np.zeros_like(lengths_m)
+    d[1:] = lengths_m[1:] - lengths_m[:-1]
+    return d
+
+
+def cable_steps(cycle: np.ndarray, cable_lengths_m: np.ndarray) -> np.ndarray:
+    """Length change of each cable since the previous row of the same cycle (0 on first rows)."""
+    d = np.zeros_like(cable_lengths_m)
+    same = cycle[1:] == cycle[:-1]
+    d[1:][same] = (cable_lengths_m[1:] - cable_lengths_m[:-1])[same]
+    return d

@@ -1,0 +1,443 @@
+"""Friction however the rig came to rest: the stick condition per row, without a loading path.
+
+A rig whose cables rub at their guides comes to rest wherever the motion stops: a load hung at
+once swings the platform past the place a slow ramp would leave it, and the cables stick where
+the swing dies out. The rest pose is then a *static Coulomb equilibrium*: the friction force
+``f_j`` of every cable lies within its band ``|f_j| <= F_j`` and, with the elastic tensions, the
+load and the weight, balances the platform::
+
+    g_i(R) + J_i(R)^T f = 0,   |f_j| <= F_j                              (stick condition)
+
+Which equilibrium of that set the rig took depends on its dynamics (inertia, damping, the order
+in which cables stick), not on anything a log records; the play operator of
+:mod:`csjm_opt.diagnose.effects.friction` predicts the one a slow ramp reaches.
+
+Linearised at the measured pose (whitened pose residual ``a_i = W_i G_i^-1 g_i``, the
+diagnosis's residual, :mod:`csjm_opt.diagnose.fitting.gauss_newton`), the poses that satisfy the stick condition
+form a zonotope ``S_i = {a : a = -B_i f, |f| <= F}`` with generators ``F_j b_ij``
+(``B_i = W_i G_i^-1 J_i^T``, 3 x m): the measured pose is explained when it lies within the
+noise of ``S_i``. The residual of a row is its distance to the set,
+``d_i = min_{|f| <= F} |a_i + B_i f|`` (a bounded least-squares problem per row,
+:func:`stick_residual`).
+
+Noise and friction are told apart by a likelihood, not by the distance alone (a band wide
+enough holds every row, noise included): the rest pose is anywhere in ``S_i``, the measurement
+adds noise of scale ``s``, and the density of the whitened residual is::
+
+    p(a_i) = exp(-d_i^2 / (2 s^2)) / Z_i,   Z_i = V + A s sqrt(pi/2) + 2 M s^2 + (2 pi)^(3/2) s^3
+
+``Z_i`` integrates the numerator over space exactly (Steiner's formula for the parallel body of
+a convex set; :func:`log_normaliser`): ``V``, ``A`` and ``M / pi`` are the volume, surface
+area and summed edge lengths of ``S_i``. With ``F = 0`` this is the Gaussian of every other
+model; a wider band explains more rows but pays ``log Z_i`` on every row, so the band and the
+noise scale are both estimated by maximum likelihood (:func:`fit_stick`), and the noise scale
+is not inflated by friction (the within-cycle regression of :mod:`csjm_opt.diagnose.data.noise`
+takes the scatter of stick positions for noise).
+
+The noise scale, though, is not identified where the band is much wider than the noise (noise
+inside the band looks like a stick position): the likelihood is flat below the true scale, and a
+joint fit drifts to a band that holds every row and no noise. The diagnosis therefore fits the band
+at a few noise scales and keeps the largest one the *held-out* rows do not reject
+(:func:`settled_score`). Models are compared on held-out rows by their densities, each at its own
+noise scale, as an equivalent mean squared error (:func:`csjm_opt.diagnose.selection.scoring.equivalent_mse`:
+the variance of the Gaussian with the same mean log density; a point model's own MSE).
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Sequence
+
+import numpy as np
+from numba import njit
+from scipy.optimize import minimize
+
+from ...model import kinematics as kin
+
+#: Iterations of the accelerated projected gradient per row (bounded least squares, 3 x m).
+MAX_ITER = 400
+#: Stop when the squared step (in N^2, relative to the band) falls below this.
+STEP_TOL = 1e-12
+SQRT_HALF_PI = float(np.sqrt(np.pi / 2.0))
+GAUSS3 = float((2.0 * np.pi) ** 1.5)
+
+
+@njit(cache=True)
+def _bounded_lsq(a: np.ndarray, B: np.ndarray, F: np.ndarray, f0: np.ndarray,
+                 max_iter: int, tol: float) -> np.ndarray:   # pragma: no cover (compiled)
+    """``argmin_{|f_j| <= F_j} |a_i + B_i f|`` per row (FISTA with restarts), from ``f0``."""
+    n, _, m = B.shape
+    out = np.empty((n, m))
+    for i in range(n):
+        H = B[i].T @ B[i]
+        q = B[i].T @ a[i]
+        v = np.ones(m)
+        L = 0.0
+        for _ in range(30):                      # largest eigenvalue of H (power iteration)
+            w = H @ v
+            nw = np.sqrt(np.dot(w, w))
+            if nw <= 0.0:
+                break
+            L = nw / np.sqrt(np.dot(v, v))
+            v = w / nw
+        L *= 1.05
+        f = np.minimum(np.maximum(f0[i], -F), F)
+        if L <= 0.0:
+            out[i] = f
+            continue
+        y = f.copy()
+        t = 1.0
+        for _ in range(max_iter):
+            grad = H @ y + q
+            fn = np.minimum(np.maximum(y - grad / L, -F), F)
+            step = fn - f
+            if np.dot(step, H @ step) > 0 and np.dot(H @ fn + q, step) > 0:   # restart on a rise
+                t = 1.0
+                y = f.copy()
+                continue
+            tn = 0.5 * (1.0 + np.sqrt(1.0 + 4.0 * t * t))
+            y = fn + ((t - 1.0) / tn) * step
+            f, t = fn, tn
+            if np.dot(step, step) <= tol * (1.0 + np.dot(F, F)):
+                break
+        out[i] = f
+    return out
+
+
+def stick_residual(a: np.ndarray, B: np.ndarray, F: np.ndarray,
+                   f0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Distance vector of each row to its stick set, and the friction forces that leave it.
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        Residuals (n, 3) without friction (whitened pose, or any linear image of the balance).
+    B : numpy.ndarray
+        Effect (n, 3, m) of a unit friction force on each cable on the residual.
+    F : numpy.ndarray
+        Band (m,) of each cable (N, >= 0).
+    f0 : numpy.ndarray, optional
+        Starting forces (n, m) (a previous solution).
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        ``r = a + B f*`` (n, 3) (zero where friction within the band balances the row) and ``f*``
+        (n, m), ``|f*_j| <= F_j``.
+    """
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    B = np.ascontiguousarray(B, dtype=np.float64)
+    F = np.ascontiguousarray(np.maximum(np.asarray(F, float), 0.0))
+    f0 = np.zeros((len(a), B.shape[2])) if f0 is None else np.ascontiguousarray(f0, dtype=np.float64)
+    f = _bounded_lsq(a, B, F, f0, MAX_ITER, STEP_TOL)
+    return a + np.einsum("nij,nj->ni", B, f), f
+
+
+class ZonotopeMeasures:
+    """Per-row pieces of the volume, area and edge length of the stick sets ``{B_i f : |f| <= F}``.
+
+    The volume is ``8 sum_{j<k<l} F_j F_k F_l |det(b_j, b_k, b_l)|``, the surface area
+    ``8 sum_{j<k} F_j F_k |b_j x b_k|`` and the summed edge length ``M / pi = 2 sum_j F_j |b_j|``
+    (a zonotope is a sum of segments ``[-F_j b_j, F_j b_j]``).
+    """
+
+    def __init__(self, B: np.ndarray):
+        B = np.asarray(B, float)
+        m = B.shape[2]
+        self.triples = np.array(list(itertools.combinations(range(m), 3)), int).reshape(-1, 3)
+        self.pairs = np.array(list(itertools.combinations(range(m), 2)), int).reshape(-1, 2)
+        cols = np.swapaxes(B, 1, 2)                                            # (n, m, 3)
+        self.det = (np.abs(np.linalg.det(cols[:, self.triples]))               # (n, T)
+                    if len(self.triples) else np.zeros((len(B), 0)))
+        self.cross = np.linalg.norm(np.cross(cols[:, self.pairs[:, 0]], cols[:, self.pairs[:, 1]]), axis=-1)
+        self.norm = np.linalg.norm(cols, axis=-1)                              # (n, m)
+
+    def parts(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(V, A, M)`` per row for bands ``F``."""
+        F = np.asarray(F, float)
+        V = 8.0 * (self.det @ np.prod(F[self.triples], axis=1)) if len(self.triples) else 0.0 * self.norm[:, 0]
+        A = 8.0 * (self.cross @ np.prod(F[self.pairs], axis=1))
+        M = 2.0 * np.pi * (self.norm @ F)
+        return V, A, M
+
+
+def log_normaliser(meas: ZonotopeMeasures, F: np.ndarray, s: float) -> np.ndarray:
+    """``log(Z_i / Z0_i)`` per row: the price of the band (0 for ``F = 0``); see the module doc."""
+    V, A, M = meas.parts(F)
+    return np.log1p((V + A * s * SQRT_HALF_PI + 2.0 * M * s ** 2) / (GAUSS3 * s ** 3))
+
+
+def expected_sq_distance(meas: ZonotopeMeasures, F: np.ndarray, s: float) -> np.ndarray:
+    """``E[d_i^2]`` per row under the density of the module doc (``3 s^2`` for ``F = 0``)."""
+    V, A, M = meas.parts(F)
+    Z = V + A * s * SQRT_HALF_PI + 2.0 * M * s ** 2 + GAUSS3 * s ** 3
+    return (A * s ** 3 * SQRT_HALF_PI + 4.0 * M * s ** 4 + 3.0 * GAUSS3 * s ** 5) / Z
+
+
+def stick_design(model, table, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(a, B)``: whitened linearised residuals (n, 3) of ``model`` at ``theta`` and the friction map (n, 3, m).
+
+    The tangent is the table's (nominal, at the measured pose), the same for every band.
+    """
+    g = model.balance(table.R_meas, table.rows, theta)
+    WGinv = table.whiten @ np.linalg.inv(table.G)
+    _, ev = model.evaluate(table.R_meas, table.rows, theta)
+    _, J = kin.cable_terms(ev.R_cable, ev.A_m, ev.B_m)                      # (n, m, 3)
+    return np.einsum("nij,nj->ni", WGinv, g), np.einsum("nij,nkj->nik", WGinv, J)
+
+
+class StickFit:
+    """Maximum-likelihood band ``F`` (m,), noise scale ``s`` and common offset of the stick model."""
+
+    def __init__(self, a0: np.ndarray, da: np.ndarray, B: np.ndarray):
+        self.a0, self.da, self.B = np.asarray(a0, float), np.asarray(da, float), np.asarray(B, float)
+        self.meas = ZonotopeMeasures(self.B)
+        self.f = np.zeros((len(self.a0), self.B.shape[2]))
+
+    def neg_log_lik(self, x: np.ndarray) -> tuple[float, np.ndarray]:
+        """``-log L`` and its gradient in ``x = (offset, F_1..F_m, log s)``."""
+        m = self.B.shape[2]
+        dl, F, s = x[0], np.maximum(x[1:1 + m], 0.0), float(np.exp(x[-1]))
+        r, self.f = stick_residual(self.a0 + dl * self.da, self.B, F, self.f)
+        d2 = np.sum(r ** 2, axis=1)
+        lz = log_normaliser(self.meas, F, s)
+        val = 0.5 * float(np.sum(d2)) / s ** 2 + float(np.sum(lz))
+        grad = np.empty_like(x)
+        grad[0] = float(np.sum(r * self.da)) / s ** 2
+        # d(d^2)/dF_j = 2 r . b_j f*_j / F_j (Danskin: the optimal forces scale with the band)
+        rb = np.einsum("ni,nij->nj", r, self.B)
+        tj = np.divide(self.f, F, out=np.zeros_like(self.f), where=F > 0)
+        grad[1:1 + m] = np.sum(rb * tj, axis=0) / s ** 2
+        h = 1e-6
+        for j in range(m):
+            Fp, Fm = F.copy(), F.copy()
+            Fp[j] += h
+            Fm[j] = max(F[j] - h, 0.0)
+            dz = log_normaliser(self.meas, Fp, s) - log_normaliser(self.meas, Fm, s)
+            grad[1 + j] += float(np.sum(dz)) / (Fp[j] - Fm[j])
+        dz = log_normaliser(self.meas, F, s * np.exp(h)) - log_normaliser(self.meas, F, s * np.exp(-h))
+        grad[-1] = -float(np.sum(d2)) / s ** 2 + float(np.sum(dz)) / (2 * h)
+        # d(log Z0)/d(log s) = 3 per row is in the Gaussian constant of every model: counted here explicitly
+        val += 3.0 * len(d2) * float(np.log(s))
+        grad[-1] += 3.0 * len(d2)
+        return val, grad
+
+    def fit(self, F_max: float, starts: tuple = (0.0, 0.3, 1.0), s: float | None = None) -> tuple[np.ndarray, float]:
+        """``(x, -log L)`` of the best start; ``F_max`` bounds each band (N); ``s``: a fixed noise scale.
+
+        With the noise scale free, the likelihood of a few hundred rows tends to a band that holds
+        every row and a scale near zero (a set-valued model's degeneracy); the diagnosis fixes the
+        scale and chooses it on held-out rows (:func:`settled_score`).
+        """
+        m = self.B.shape[2]
+        s0 = float(np.sqrt(np.mean(np.sum(self.a0 ** 2, axis=1)) / 3.0))
+        best = None
+        for share in starts:
+            self.f = np.zeros_like(self.f)
+            x0 = np.r_[0.0, np.full(m, share * F_max * 0.1), np.log(max(s0 * (1 - share) + 0.3 * share, 1e-3))]
+            bounds = [(None, None)] + [(0.0, F_max)] * m + [(np.log(1e-3), np.log(1e3)) if s is None
+                                                              else (np.log(s), np.log(s))]
+            if s is not None:
+                x0[-1] = np.log(s)
+            res = minimize(self.neg_log_lik, x0, jac=True, method="L-BFGS-B", bounds=bounds,
+                           options={"maxiter": 400, "ftol": 1e-12, "gtol": 1e-8})
+            if best is None or res.fun < best.fun:
+                best = res
+        assert best is not None
+        return best.x, float(best.fun)
+
+
+#: 95 % quantile of chi^2 with one degree of freedom (held-out likelihood ratio of the noise scale).
+CHI2_1_95 = 3.84
+#: Half-normal prior sd of a band as a share of the plausible range (evidence, as :mod:`.evidence` does).
+PRIOR_SD_SHARE = 0.5
+
+
+class SettledModel:
+    """The stick model fitted on a table: bands, offset, and what it says of other rows.
+
+    Parameters
+    ----------
+    model : AugmentedModel
+        Nominal model plus a :class:`~csjm_opt.diagnose.effects.friction.Friction` effect with
+        ``memory="settled"`` (its parameters: the bands ``F_i_N``; the rest unused here).
+    table : ResidualTable
+        Training rows.
+    s : float
+        Noise scale (whitened units) the band is fitted at.
+    F_max_N : float
+        Upper bound of each band.
+    """
+
+    def __init__(self, model, table, s: float, F_max_N: float, fit: bool = True, start=None):
+        self.model, self.s, self.F_max = model, float(s), float(F_max_N)
+        th = model.x0()
+        a0, B = stick_design(model, table, th)
+        th[0] = 1e-5
+        a1, _ = stick_design(model, table, th)
+        self.a0, self.da, self.B = a0, (a1 - a0) / 1e-5, B
+        self.m = B.shape[2]
+        self._f = np.zeros((len(a0), self.m))
+        self.x = np.zeros(1 + self.m)
+        if start is not None:                      # a fit at another noise scale: its band and forces
+            self.x, self._f = start.x.copy(), start._f.copy()
+        if fit:
+            self.fit_on(np.arange(len(a0)), warm=start is not None)
+
+    def _nll(self, idx: np.ndarray, x: np.ndarray, s: float) -> tuple[float, np.ndarray]:
+        sf = StickFit(self.a0[idx], self.da[idx], self.B[idx])
+        sf.f = self._f[idx]
+        val, grad = sf.neg_log_lik(np.r_[x, np.log(s)])
+        self._f[idx] = sf.f
+        n = len(idx)
+        return val - 3.0 * n * np.log(s), grad[:-1]
+
+    def fit_on(self, idx: np.ndarray, warm: bool = True) -> np.ndarray:
+        """Fit ``(offset, F)`` by maximum likelihood at the fixed noise scale on rows ``idx``.
+
+        ``warm``: start from the current band and forces (else from a small band).
+        """
+        best = None
+        for share in (0.05,):
+            x0 = self.x.copy() if warm else np.r_[0.0, np.full(self.m, share * self.F_max)]
+            if not warm:
+                self._f = np.zeros((len(self.a0), self.m))
+            res = minimize(lambda x: self._nll(idx, x, self.s), x0, jac=True, method="L-BFGS-B",
+                           bounds=[(None, None)] + [(0.0, self.F_max)] * self.m,
+                           options={"maxiter": 150, "ftol": 1e-9, "gtol": 1e-6})
+            if best is None or res.fun < best.fun:
+                best = res
+        assert best is not None
+        self.x = best.x
+        return self.x
+
+    def row_terms(self, idx: np.ndarray, x: np.ndarray | None = None,
+                  s: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(r, pen, e_d2)``: whitened distance vectors, band price ``2 s^2 log(Z/Z0)``, ``E[d^2]``."""
+        x = self.x if x is None else x
+        s = self.s if s is None else s
+        F = np.maximum(x[1:], 0.0)
+        r, _ = stick_residual(self.a0[idx] + x[0] * self.da[idx], self.B[idx], F)
+        meas = ZonotopeMeasures(self.B[idx])
+        return r, 2.0 * s ** 2 * log_normaliser(meas, F, s), expected_sq_distance(meas, F, s)
+
+    def log_evidence(self, noise_scale: float, prior_sd_F: float, prior_sd_dl: float) -> float:
+        """Laplace log evidence at ``noise_scale`` (convention of :func:`.evidence.log_evidence`)."""
+        idx = np.arange(len(self.a0))
+        s = float(noise_scale)
+        x = self.x
+        self._f = np.zeros((len(self.a0), self.m))
+        val, g0 = self._nll(idx, x, s)
+        sd = np.r_[prior_sd_dl, np.full(self.m, prior_sd_F)]
+        H = np.empty((len(x), len(x)))
+        for j in range(len(x)):
+            h = 1e-4 * sd[j]
+            xp = x.copy()
+            xp[j] += h
+            H[:, j] = (self._nll(idx, xp, s)[1] - g0) / h
+        H = 0.5 * (H + H.T)
+        quad = float(np.sum((x / sd) ** 2))
+        _, logdet = np.linalg.slogdet(np.eye(len(x)) + sd[:, None] * H * sd[None, :])
+        return float(-val - 0.5 * quad - 0.5 * logdet + self.m * np.log(2.0))
+
+
+class _Evidence:
+    """``noise_scale -> log evidence`` of a fitted stick model (picklable: fits travel back from workers)."""
+
+    def __init__(self, sm: SettledModel, prior_sd_F: float, prior_sd_dl: float):
+        self.sm, self.prior_sd_F, self.prior_sd_dl = sm, prior_sd_F, prior_sd_dl
+        self._memo: dict[float, float] = {}
+
+    def __call__(self, noise_scale: float) -> float:
+        key = float(noise_scale)
+        if key not in self._memo:
+            self._memo[key] = self.sm.log_evidence(key, self.prior_sd_F, self.prior_sd_dl)
+        return self._memo[key]
+
+
+def settled_score(model, train, test, folds, scales: Sequence[float], F_max_N: float, prior_sd_dl: float):
+    """The stick model scored like every other model: fitted on training rows, held-out residuals.
+
+    The held-out "residual" of a row is its distance to the stick set in rad (``L_i r_i``,
+    ``L_i = W_i^-1``); the band's price per row (``2 s^2 log(Z_i / Z0_i)``, in rad^2 through the
+    row's mean noise variance) enters its squared error (:attr:`CandidateScore.heldout_penalty_rad2`),
+    so that held-out errors compare ``-2 s^2 log p`` with the other models' squared errors at the
+    model's own noise scale. That scale is the one of ``scales`` under which the held-out rows are
+    most probable (a band fitted to the training rows at a scale too small holds them all and
+    leaves held-out rows outside, at a scale too large it takes stick positions for noise): the
+    stick model's noise estimate, which friction does not inflate.
+
+    Parameters
+    ----------
+    model : AugmentedModel
+        Nominal model + settled friction.
+    train, test : ResidualTable
+        Training and held-out tables (``test`` None: the folds of ``train``).
+    folds : list of numpy.ndarray or None
+        Held-out row sets of ``train`` when there is no test table.
+    scales : sequence of float
+        Candidate noise scales (whitened units).
+    F_max_N : float
+        Upper bound of a band.
+    prior_sd_dl : float
+        Prior sd of the common offset (m), for the evidence.
+
+    Returns
+    -------
+    CandidateScore
+    """
+    from ..selection.scoring import CandidateScore, equivalent_mse
+    from .gauss_newton import FitResult
+
+    def to_rad(table, idx, r, pen, e_d2):
+        """Distance vectors (rad), ``q = d^2 / s^2 + 2 log(Z / Z0)``, ``E[q]``, mean noise variance (rad^2)."""
+        L = np.linalg.inv(table.whiten[idx])
+        var = np.sum(L ** 2, axis=(1, 2)) / 3.0
+        q = (np.sum(r ** 2, axis=1) + pen) / s ** 2
+        return np.einsum("nij,nj->ni", L, r), q, (e_d2 + pen) / s ** 2, var
+
+    all_rows = np.arange(len(train))
+    sm_t = None if test is None else SettledModel(model, test, 1.0, F_max_N, fit=False)
+    prev = None
+    tried: list[tuple] = []
+    for s in sorted(scales):
+        sm = SettledModel(model, train, s, F_max_N, start=prev)
+        prev = sm
+        if test is not None:
+            assert sm_t is not None
+            idx = np.arange(len(test))
+            r, pen, e = sm_t.row_terms(idx, sm.x, s)
+            zeta, q, eq, var = to_rad(test, idx, r, pen, e)
+            cyc = test.cycle
+        else:
+            zeta, q, eq, var = np.empty((len(train), 3)), *np.empty((3, len(train)))
+            for h in folds or []:
+                x = sm.fit_on(np.setdiff1d(all_rows, h))
+                r, pen, e = sm.row_terms(h, x)
+                zeta[h], q[h], eq[h], var[h] = to_rad(train, h, r, pen, e)
+            sm.fit_on(all_rows)
+            cyc = train.cycle
+        nll = float(np.sum(q) + 6 * len(q) * np.log(s))        # held-out -2 log p (whitened, less a constant)
+        tried.append((nll, sm, zeta, q, eq, var, cyc))
+    # the largest scale the held-out rows do not reject (likelihood ratio, one parameter, 95 %): below the
+    # scale of the noise the likelihood is flat (noise inside the band looks like a stick position)
+    top = min(t[0] for t in tried)
+    _, sm, zeta, q, eq, var, cyc = max((t for t in tried if t[0] <= top + CHI2_1_95), key=lambda t: t[1].s)
+    s = sm.s
+    r_tr, pen_tr, _ = sm.row_terms(all_rows)
+    zeta_tr = to_rad(train, all_rows, r_tr, pen_tr, pen_tr)[0]
+    theta = model.x0()
+    theta[0] = sm.x[0]
+    theta[1:1 + sm.m] = sm.x[1:]
+    prior_sd_F = PRIOR_SD_SHARE * F_max_N
+    n = len(train)
+    rss = float(np.sum(r_tr ** 2) + np.sum(pen_tr))
+    free = np.zeros(model.n_params, bool)
+    free[0] = True
+    free[1:1 + sm.m] = sm.x[1:] > 1e-9
+    fit = FitResult(model, theta, np.zeros((model.n_params, model.n_params)), rss, 3 * n, float(free.sum()),
+                    int(free.sum()), 1.0, zeta_tr, None, None, free, train.rows,
+                    evidence_fn=_Evidence(sm, prior_sd_F, prior_sd_dl))
+    floor = float(np.sqrt(equivalent_mse(eq, var, s))) / s    # per unit noise scale, as the other models'
+    return CandidateScore(model.name, fit, zeta, cyc, zeta_tr, 0, train.instrument_floor_rad,
+                          float(s ** 2), floor, (), heldout_density=(q, var, s))

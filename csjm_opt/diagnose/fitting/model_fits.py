@@ -1,0 +1,175 @@
+"""The fits of one diagnosis: a single candidate or a pair, its variant chosen, then scored.
+
+An effect with variants (friction's law and memory, :data:`VARIANTS`) is fitted in every variant
+on the model it belongs to; the variant with the highest evidence is kept, and its fit is the
+first fit of the score (:func:`csjm_opt.diagnose.selection.scoring.score` with ``fit=``): fitting it again
+would give the same numbers. Each function is one task of :func:`csjm_opt.diagnose.fitting.pool.map_ordered`
+(module level, results that pickle).
+"""
+
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ...errors import CsjmError
+from ...model.rig import Rig
+from ..decision_rule import _Context
+from ..effects import make_effect
+from ..selection.scoring import CandidateScore, score
+from .augmented import AugmentedModel
+from .evidence import NUISANCE_SD_M, log_evidence
+from .friction_stick import settled_score
+from .gauss_newton import FitResult, fit_model
+
+#: Variants of an effect the data choose between (same number of parameters: the highest Laplace evidence
+#: of the training fit wins, at one noise scale for all: the best fit, unless it needs implausible parameters).
+VARIANTS: dict[str, list[dict]] = {"friction": [{"law": law, "memory": mem} for law in ("capstan", "coulomb")
+                                                for mem in ("carried", "reset")]}
+#: Failures of one model's fit that a diagnosis reports instead of stopping.
+FIT_ERRORS = (np.linalg.LinAlgError, CsjmError, FloatingPointError)
+
+
+def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (),
+                after: Sequence = ()) -> tuple[dict, FitResult | None]:
+    """The variant of ``name`` with the highest evidence on the training rows, and its fit.
+
+    The noise scale is the best variant's (whitened RMS): the variants then differ by their fit and by
+    what their priors say of the fitted parameters (a fit that needs a parameter far outside its range
+    pays). ``before`` and ``after`` are the other effects of the model the variant is for (a pair's
+    other effect), in the model's order: the variant is a discrete parameter of that model and is
+    chosen with them fitted alongside.
+
+    Parameters
+    ----------
+    ctx : _Context
+        The diagnosis's rows and folds.
+    rig : Rig
+        The nominal rig.
+    name : str
+        The effect whose variant is chosen.
+    ranges : mapping or None
+        Prior-range overrides.
+    before, after : sequence of Effect, optional
+        Effects before and after ``name`` in the model.
+
+    Returns
+    -------
+    (dict, FitResult or None)
+        The variant's options (``{}`` for an effect without variants) and the plain training fit of
+        the model ``[*before, name(variant), *after]`` (None where there is no choice or every fit failed).
+    """
+    options = VARIANTS.get(name, [])
+    if len(options) < 2:
+        return (options[0] if options else {}), None
+    fits: list[FitResult | None] = []
+    for opt in options:
+        try:
+            fits.append(fit_model(AugmentedModel(rig, [*before, make_effect(name, rig, ranges, **opt), *after]),
+                                  ctx.train))
+        except FIT_ERRORS:
+            fits.append(None)
+    ok = [f for f in fits if f is not None]
+    if not ok:
+        return options[0], None
+    scale = float(np.sqrt(max(min(f.rss for f in ok) / max(ok[0].n_obs, 1), 1e-12)))
+    ev = [-np.inf if f is None else log_evidence(f, scale) for f in fits]
+    best = int(np.nanargmax(np.where(np.isfinite(ev), ev, -np.inf)))
+    return options[best], fits[best]
+
+
+#: The variant of friction that needs no loading path (:mod:`csjm_opt.diagnose.fitting.friction_stick`).
+SETTLED = {"law": "coulomb", "memory": "settled"}
+#: Noise scales tried for the stick model, as shares of the within-cycle estimate (which friction inflates).
+SETTLED_SCALES = (0.25, 0.35, 0.5, 0.7, 1.0)
+
+
+def _settled(ctx: _Context, rig: Rig, ranges: Mapping | None) -> CandidateScore | None:
+    """Friction as a stick condition per row, scored on the diagnosis's rows (None without a noise scale)."""
+    effect = make_effect("friction", rig, ranges, **SETTLED)
+    scale = ctx.local / ctx.instrument if np.isfinite(ctx.local) and ctx.instrument > 0 else float("nan")
+    if not np.isfinite(scale) or scale <= 0:
+        return None
+    top = max(hi for lo, hi in effect.ranges().values())
+    return settled_score(AugmentedModel(rig, [effect]), ctx.train, ctx.test, ctx.folds,
+                         [scale * f for f in SETTLED_SCALES], top, NUISANCE_SD_M)
+
+
+def _prefer_settled(ctx: _Context, settled: CandidateScore, path: CandidateScore) -> bool:
+    """Whether the stick condition explains the log better than the path model.
+
+    A model that closes the held-out gap (its held-out errors at its own floor) beats one that does not
+    (selection rule 3): a path model is the more informative where the rig followed it (a slow ramp: it
+    predicts a point, the stick condition only a set), and leaves a gap where the rig came to rest by its
+    own dynamics. Between two models that both close or both fail, the lower held-out error wins.
+    """
+    a, b = ctx.closes(settled), ctx.closes(path)
+    return a and not b if a != b else settled.heldout_mse < path.heldout_mse
+
+
+def score_with(ctx: _Context, model: AugmentedModel, fit: FitResult | None = None) -> CandidateScore:
+    """``model`` scored on the diagnosis's rows and folds (``fit``: its plain training fit, if known)."""
+    return score(model, ctx.train, ctx.test, ctx.folds, fit)
+
+
+def fit_single(ctx: _Context, rig: Rig, ranges: Mapping | None,
+               name: str) -> tuple[dict, CandidateScore | None, str | None]:
+    """One candidate: ``(variant options, score, None)``, or ``({}, None, message)`` when its fit fails.
+
+    Parameters
+    ----------
+    ctx : _Context
+    rig : Rig
+    ranges : mapping or None
+    name : str
+
+    Returns
+    -------
+    tuple
+    """
+    try:
+        opt, fit = variant_fit(ctx, rig, name, ranges)
+        sc = score_with(ctx, AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), fit)
+        if name == "friction":           # the stick condition beside the path: the better held-out score
+            settled = _settled(ctx, rig, ranges)
+            if settled is not None and _prefer_settled(ctx, settled, sc):
+                return SETTLED, settled, None
+        return opt, sc, None
+    except FIT_ERRORS as exc:
+        return {}, None, f"fit failed: {exc}"
+
+
+def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
+             pair: tuple[str, str]) -> tuple[CandidateScore | None, str | None]:
+    """Pair ``(a, b)`` scored, a variant chosen on the pair model: ``(score, None)`` or ``(None, message)``.
+
+    ``options`` are the singles' variants (kept for an effect without variants in this pair).
+
+    Parameters
+    ----------
+    ctx : _Context
+    rig : Rig
+    ranges : mapping or None
+    options : mapping
+    pair : (str, str)
+
+    Returns
+    -------
+    tuple
+    """
+    a, b = pair
+    try:
+        # an effect's variant (friction's law and memory) is chosen on the model being fitted: a single
+        # fit that had to absorb the partner effect may prefer another law than the pair does
+        fit: FitResult | None = None
+        opt_a = options.get(a, {})
+        if a in VARIANTS:
+            opt_a, fit = variant_fit(ctx, rig, a, ranges, after=[make_effect(b, rig, ranges, **options.get(b, {}))])
+        opt_b = options.get(b, {})
+        if b in VARIANTS:
+            opt_b, fit = variant_fit(ctx, rig, b, ranges, before=[make_effect(a, rig, ranges, **opt_a)])
+        model = AugmentedModel(rig, [make_effect(a, rig, ranges, **opt_a), make_effect(b, rig, ranges, **opt_b)])
+        return score_with(ctx, model, fit), None
+    except FIT_ERRORS as exc:
+        return None, f"fit failed: {exc}"

@@ -1,0 +1,279 @@
+"""Scoring one model: fit on the training rows, residuals on held-out cycles, paired tests.
+
+Held-out rows are ``TEST.csv`` when given, else grouped K-fold
+cross-validation by ``cycle`` (K = min(5, cycles), cycles dealt to folds in
+order of appearance; never random row splits). A fold's parameters are the
+full fit moved by one Gauss-Newton step on the fold's training rows
+(:meth:`~csjm_opt.diagnose.fitting.gauss_newton.FitResult.refit_rows`): exact for the
+linearised problem the fits solve, and about five times cheaper than
+refitting every fold. Fits use linearised,
+whitened pose residuals (:mod:`.fit`); held-out residuals use full forward
+statics of the fitted model on rows the fit did not see.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy import stats
+
+from ...errors import InvalidInput
+from ...model import kinematics as kin
+from ..data.residuals import ResidualTable, pose_noise_cov, pose_residuals, rms
+from ..fitting.augmented import AugmentedModel, with_entry
+from ..fitting.friction_path import on_predicted_path
+from ..fitting.gauss_newton import FitResult, data_jacobian, fit_model, objective
+
+#: Held-out MSE ratios within this of 1 (as a log) are ties: below the precision of the fits.
+TIE_LOG_RATIO = 1e-6
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class CandidateScore:
+    """One model's fit on all training rows and its held-out residuals."""
+
+    name: str
+    fit: FitResult
+    heldout_zeta_rad: np.ndarray    # (n_heldout, 3)
+    heldout_cycle: np.ndarray       # (n_heldout,)
+    train_zeta_rad: np.ndarray      # forward-statics residuals on training rows (full fit)
+    failed_rows: int                # forward solves that did not converge
+    instrument_floor_rad: float     # instrument noise propagated through this model's own tangent
+    noise_ratio2: float             # whitened (own tangent) training residual variance, RSS / (N - p_eff)
+    heldout_floor_rad: float = float("nan")   # RMS held-out error of this model if it were right: noise
+                                    # plus its parameters' estimation error (per unit noise scale)
+    heldout_blocks: tuple = ()      # ((held-out row indices, whitened prediction covariance), ...) per fold
+    # a set-valued model (settled friction, :mod:`..fitting.friction_stick`): per held-out row its -2 log density in
+    # whitened units less the Gaussian constant at its own noise scale s (``d^2 / s^2 + 2 log(Z / Z0)``), the
+    # row's mean noise variance per axis (rad^2), and s; its squared errors are then the equivalent Gaussian
+    # variance of the held-out density (:func:`equivalent_mse`). None: a point model (squared errors)
+    heldout_density: tuple[np.ndarray, np.ndarray, float] | None = None
+
+    def _mse(self, mask: np.ndarray) -> float:
+        if self.heldout_density is None:
+            return float(np.mean(np.sum(self.heldout_zeta_rad[mask] ** 2, axis=1)))
+        q, var, s = self.heldout_density
+        return equivalent_mse(q[mask], var[mask], s)
+
+    @property
+    def heldout_rms_rad(self) -> float:
+        """RMS held-out pose residual.
+
+        Returns
+        -------
+        float
+            ``sqrt(mean ||zeta_i||^2)`` (rad).
+        """
+        return float(np.sqrt(self.heldout_mse))
+
+    @property
+    def heldout_mse(self) -> float:
+        """Mean squared held-out pose residual.
+
+        Returns
+        -------
+        float
+            ``mean ||zeta_i||^2`` (rad^2).
+        """
+        return self._mse(np.ones(len(self.heldout_cycle), bool))
+
+    @property
+    def train_rms_rad(self) -> float:
+        """RMS forward-statics pose residual on the training rows (full fit).
+
+        Returns
+        -------
+        float
+            ``sqrt(mean ||zeta_i||^2)`` (rad).
+        """
+        return rms(self.train_zeta_rad)
+
+    def cycle_mse(self) -> dict[int, float]:
+        """Held-out mean ``||zeta||^2`` of each cycle."""
+        return {int(c): self._mse(self.heldout_cycle == c) for c in np.unique(self.heldout_cycle)}
+
+    def implausible(self) -> list[str]:
+        """Names of fitted effect parameters outside their prior ranges by more than their uncertainty.
+
+        A free parameter the data do not determine at all (no information: zero variance from the
+        pseudo-inverse) is not evidence against the effect wherever it drifts.
+        """
+        m = self.fit.model
+        sd_all = self.fit.stderr.copy()
+        if self.fit.free is not None:
+            sd_all[self.fit.free & (sd_all <= 0)] = np.inf
+        return [n for e, p, sd in zip(m.effects, m.effect_params(self.fit.theta), m.effect_params(sd_all))
+                for n in e.implausible(p, sd)]
+
+
+def equivalent_mse(q: np.ndarray, var_rad2: np.ndarray, s: float) -> float:
+    """Mean squared error of the Gaussian whose density equals a held-out density on average (rad^2).
+
+    For rows with ``-2 log p_i = q_i + 3 log(2 pi s^2)`` (whitened units, noise scale ``s``), the isotropic
+    Gaussian with the same mean log density has variance ``s^2 exp((mean q - 3) / 3)`` per whitened
+    axis; scaled by the rows' mean noise variance it is an MSE in rad^2. A point model at its own noise
+    scale (``q = |r|^2 / s^2``, ``s^2 = mean |r|^2 / 3``) gets its own MSE back, to first order.
+
+    Parameters
+    ----------
+    q : numpy.ndarray
+        Per-row ``-2 log p`` less the Gaussian constant (whitened).
+    var_rad2 : numpy.ndarray
+        Each row's mean noise variance per axis (rad^2 per whitened unit^2).
+    s : float
+        The model's noise scale (whitened).
+
+    Returns
+    -------
+    float
+    """
+    return float(3.0 * np.mean(var_rad2) * s ** 2 * np.exp((np.mean(q) - 3.0) / 3.0))
+
+
+def folds_by_cycle(cycle: np.ndarray, k: int = 5) -> list[np.ndarray]:
+    """Held-out row sets: cycles (in order of appearance) dealt round-robin to ``k`` folds.
+
+    Raises
+    ------
+    InvalidInput
+        Fewer than two cycles.
+    """
+    ids = list(dict.fromkeys(int(c) for c in cycle))
+    if len(ids) < 2:
+        raise InvalidInput(f"held-out scoring needs at least 2 cycles (got {len(ids)}) or a --test file", "cycle")
+    k = min(k, len(ids))
+    return [np.flatnonzero(np.isin(cycle, ids[f::k])) for f in range(k)]
+
+
+def fit_on_path(model: AugmentedModel, train: ResidualTable,
+                fit: FitResult | None = None) -> tuple[FitResult, ResidualTable]:
+    """The fit of ``model`` on all of ``train`` that a diagnosis scores, and the table it was fitted on.
+
+    A path-dependent model (friction with memory) is refitted with its state driven along the poses
+    it predicts itself (:func:`~csjm_opt.diagnose.fitting.friction_path.on_predicted_path`); that fit is kept
+    when it fits the rows better.
+
+    Parameters
+    ----------
+    model : AugmentedModel
+    train : ResidualTable
+    fit : FitResult, optional
+        ``fit_model(model, train)`` when the caller has it already (e.g. the fit that chose a
+        friction law): used instead of fitting again (the fit is deterministic, so nothing changes).
+
+    Returns
+    -------
+    tuple of (FitResult, ResidualTable)
+    """
+    full = fit_model(model, train) if fit is None else fit
+    if model.path_dependent:          # friction state along the model's own path, if it fits better
+        path = on_predicted_path(model, train, full.theta)
+        on_path = fit_model(model, path, full.theta)
+        if on_path.rss < full.rss:
+            return on_path, path
+    return full, train
+
+
+def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | None,
+          folds: list[np.ndarray] | None, fit: FitResult | None = None) -> CandidateScore:
+    """Fit on all training rows; held-out residuals from ``test`` or the folds.
+
+    ``fit``: the plain fit of ``model`` on ``train`` (:func:`fit_on_path`), when the caller has it.
+    """
+    full, path = fit_on_path(model, train, fit)
+    if path is not train:
+        train = path
+        test = None if test is None else on_predicted_path(model, test, full.theta)
+    sol = model.predict_poses(with_entry(model, train.rows, train.R_meas, full.theta), full.theta, train.R_meas)
+    train_zeta = pose_residuals(sol.R, train.R_meas)
+    failed = int(np.sum(~sol.converged(1e-6)))
+    blocks: list[tuple[np.ndarray, np.ndarray]] = []
+    if test is not None:
+        ho = model.predict_poses(with_entry(model, test.rows, test.R_meas, full.theta), full.theta, test.R_meas)
+        zeta, cyc = pose_residuals(ho.R, test.R_meas), test.cycle
+        failed += int(np.sum(~ho.converged(1e-6)))
+        blocks.append((np.arange(len(test)), full.prediction_cov(None, data_jacobian(model, test, full.theta))))
+    else:
+        zeta, cyc = np.empty((len(train), 3)), train.cycle
+        for held in folds or []:
+            keep = np.setdiff1d(np.arange(len(train)), held)
+            theta = _fold_fit(model, full, train.take(keep), keep)
+            part = train.take(held)
+            ho = model.predict_poses(with_entry(model, train.rows, train.R_meas, theta).take(held), theta, part.R_meas)
+            zeta[held] = pose_residuals(ho.R, part.R_meas)
+            failed += int(np.sum(~ho.converged(1e-6)))
+            blocks.append((held, full.prediction_cov(keep, full.held_rows_jacobian(held))))
+
+    # the model's own noise propagation: a softer model turns the same moment noise into more pose noise
+    def g(R: np.ndarray) -> np.ndarray:
+        return model.balance(R, train.rows, full.theta)
+
+    cov = pose_noise_cov(kin.tangent(g, train.R_meas, h=1e-6), train.noise)
+    instrument = float(np.sqrt(np.mean(np.trace(cov, axis1=1, axis2=2))))
+    r = np.linalg.solve(np.linalg.cholesky(cov), train_zeta[..., None])[..., 0]
+    ratio2 = float(np.sum(r ** 2) / max(r.size - full.p_eff, 1.0))
+    held_table = test if test is not None else train
+    return CandidateScore(model.name, full, zeta, cyc, train_zeta, failed, instrument, ratio2,
+                          heldout_floor(held_table, instrument, blocks), tuple(blocks))
+
+
+def _fold_fit(model: AugmentedModel, full: FitResult, kept: ResidualTable, keep: np.ndarray) -> np.ndarray:
+    """A fold's parameters: one Gauss-Newton step from the full fit, or a refit where the step fails.
+
+    The step (:meth:`FitResult.refit_rows`) is trusted only when it fits the fold's own rows at
+    least as well as the full fit does (a least-squares estimate on rows ``keep`` cannot fit
+    them worse than any other parameter vector, the full fit's included); otherwise the step
+    left the region where the linearisation holds (a weakly determined direction, a bound) and
+    the fold is refitted from the full fit's parameters.
+    """
+    theta = full.refit_rows(keep)
+    if objective(model, kept, theta) <= objective(model, kept, full.theta) * (1 + 1e-9):
+        return theta
+    return fit_model(model, kept, theta0=full.theta).theta
+
+
+def heldout_floor(held: ResidualTable, instrument_floor_rad: float, blocks) -> float:
+    """Held-out RMS a correctly specified model still shows: ``sqrt(floor^2 + mean prediction variance)``.
+
+    In rad, per unit noise scale: a many-parameter model pays for its estimation error.
+    """
+    Linv = np.linalg.inv(held.whiten)           # whitened -> rad
+    extra, n = 0.0, 0
+    for idx, P in blocks:
+        h = len(idx)
+        Pii = P.reshape(h, 3, h, 3)[np.arange(h), :, np.arange(h), :]      # (h, 3, 3) diagonal blocks
+        extra += float(np.einsum("nij,njk,nlk->", Linv[idx], Pii, Linv[idx]))
+        n += h
+    return float(np.sqrt(instrument_floor_rad ** 2 + (extra / n if n else 0.0)))
+
+
+def nested_f_test(base: FitResult, cand: FitResult) -> tuple[float, float]:
+    """``(F, p)`` of the candidate's extra parameters on the same training rows (linearised; informative only)."""
+    dp = max(cand.p_eff - base.p_eff, 1e-9)
+    dof = max(cand.n_obs - cand.p_eff, 1.0)
+    F = max(base.rss - cand.rss, 0.0) / dp / (cand.rss / dof)
+    return float(F), float(stats.f.sf(F, dp, dof))
+
+
+def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
+    """One-sided p-value that ``b``'s per-cycle held-out MSE is lower than ``a``'s.
+
+    Paired t-test over cycles of ``log(MSE_a / MSE_b)``: cycles with large loads have large
+    errors under both models, and the log ratio keeps them from drowning the rest. Ratios within
+    ``TIE_LOG_RATIO`` of 1 are ties (the fits' own precision: a model whose added effect fitted to
+    zero predicts the same cycles to round-off), so identical predictions give ``p = 1``, not a
+    "significant" improvement of 1e-15 that every cycle shares.
+    """
+    ma, mb = a.cycle_mse(), b.cycle_mse()
+    tiny = 1e-30
+    d = np.array([np.log((ma[c] + tiny) / (mb[c] + tiny)) for c in ma])
+    d[np.abs(d) < TIE_LOG_RATIO] = 0.0
+    if len(d) < 2 or np.allclose(d, d[0], rtol=0.0, atol=TIE_LOG_RATIO):
+        return 0.0 if d.mean() > 0 else 1.0
+    return float(stats.ttest_1samp(d, 0.0, alternative="greater").pvalue)
+
+
+def improvement_rad(a: CandidateScore, b: CandidateScore) -> float:
+    """Systematic held-out improvement of ``b`` over ``a``: ``sqrt(max(MSE_a - MSE_b, 0))`` (rad)."""
+    return float(np.sqrt(max(a.heldout_mse - b.heldout_mse, 0.0)))

@@ -1,0 +1,1 @@
+"""The next experiment: candidate load cycles, the lab's dead weights, the suggestion and its protocol."""

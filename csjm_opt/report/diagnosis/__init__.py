@@ -1,0 +1,1 @@
+"""The diagnosis page (:mod:`.report`): its verdict, detail sections, figures and units."""

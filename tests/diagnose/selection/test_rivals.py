@@ -1,0 +1,194 @@
+"""Rivals the log does not rule out (csjm_opt.diagnose.selection.rivals): the stated rule, and its held-out part
+against the closed-form power of a paired t-test (noncentral t), an independent construction."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats
+
+from csjm_opt.diagnose.decision_rule import EVIDENCE_MIN, HELDOUT_ALPHA
+from csjm_opt.diagnose.selection.rivals import rival_warning, unsettled_rivals
+
+N_CYCLES = 12
+
+
+def _model(ev, cycle_mse, plausible=True, closes=True):
+    return {"log_evidence": ev, "cycle_mse": list(cycle_mse), "plausible": plausible, "closes_gap": closes}
+
+
+def test_the_stated_rule_on_constructed_models():
+    """Nested: listed iff more probable; replacing: listed iff within EVIDENCE_MIN and not beaten on held-out
+    cycles; a rival short of the closure threshold only when the verdict does not beat it on held-out cycles;
+    parts of the verdict, implausible and already-warned models never."""
+    rng = np.random.default_rng(3)
+    same = np.exp(rng.normal(0.0, 0.1, N_CYCLES))             # held-out errors like the verdict's
+    worse = 3.0 * np.ones(N_CYCLES)                           # the verdict beats it on every cycle
+    one = np.ones(N_CYCLES)
+    models = {
+        "A+B": _model(0.0, one),                               # the verdict
+        "A": _model(-1.0, same), "B": _model(-50.0, same),     # parts of the verdict: never rivals
+        "C": _model(-EVIDENCE_MIN / 2, same),                  # replaces it, close, same errors: listed
+        "D": _model(-EVIDENCE_MIN / 2, worse),                 # close in evidence, beaten held-out: not
+        "E": _model(-2 * EVIDENCE_MIN, same),                  # decisively less probable: not
+        "C+D": _model(+3.0, worse),                            # more probable: listed even though beaten held-out
+        "A+F": _model(-1.0, same, plausible=False),            # implausible: not
+        "A+G": _model(-1.0, same),                             # already warned about (skip): not
+        "H": _model(+20.0, same, closes=False),                # short of the threshold, tied held-out: listed
+        "I": _model(+20.0, worse, closes=False),               # short of the threshold, beaten held-out: not
+    }
+    got = unsettled_rivals(models, "A+B", skip=["G+A"])
+    assert [r["model"] for r in got] == ["H", "C+D", "C"]
+    assert [r["closes_gap"] for r in got] == [False, True, True]
+    assert "within the noise" in rival_warning("A+B", got[0])
+    assert all(r["adds"] == [] for r in got)
+    # a single verdict: a pair that adds to it is listed only when the evidence prefers it
+    single = {"A": _model(0.0, one), "A+B": _model(2.0, same), "A+C": _model(-0.5, same), "B": _model(-20.0, same)}
+    got = unsettled_rivals(single, "A")
+    assert [(r["model"], r["adds"]) for r in got] == [("A+B", ["B"])]
+    assert "B may be present too" in rival_warning("A", got[0])
+    assert unsettled_rivals({"A": _model(0.0, one)}, "A") == []
+
+
+def test_heldout_part_matches_the_noncentral_t_power():
+    """Rival errors with per-cycle log ratios N(delta, s^2) to the verdict's: the rule lists the rival (within
+    EVIDENCE_MIN) exactly when the one-sided paired t-test fails at HELDOUT_ALPHA, i.e. with probability
+    1 - power, the power from the noncentral t distribution (scipy.stats.nct)."""
+    rng = np.random.default_rng(11)
+    n, s, draws = N_CYCLES, 0.3, 600
+    t_crit = stats.t.ppf(1 - HELDOUT_ALPHA, n - 1)
+    for delta in (0.0, 0.1, 0.25):
+        listed = 0
+        for _ in range(draws):
+            d = rng.normal(delta, s, n)
+            models = {"A": _model(0.0, np.ones(n)), "C": _model(-1.0, np.exp(d))}
+            listed += bool(unsettled_rivals(models, "A"))
+        power = 1 - stats.nct.cdf(t_crit, n - 1, delta * np.sqrt(n) / s)
+        expected = 1 - power
+        sd = np.sqrt(expected * (1 - expected) / draws)
+        assert abs(listed / draws - expected) < 4 * sd + 1e-3, (delta, listed / draws, expected)
+
+
+def test_scored_models_reads_acceptability_and_errors_from_the_diagnosis_pieces():
+    """Singles take plausibility and closure from their tests, pairs from their entries; unfitted pairs are
+    left out; the evidence comes from the given function."""
+    from csjm_opt.diagnose.selection.rivals import scored_models
+
+    class Score:
+        def __init__(self, ev, mse):
+            self.ev, self.mse = ev, mse
+
+        def cycle_mse(self):
+            return dict(enumerate(self.mse))
+
+    singles = {"A": Score(-1.0, [1.0, 2.0, 1.5]), "B": Score(-2.0, [20.0, 30.0, 31.0])}
+    tests = {"A": {"plausible": True, "closes_gap": True}, "B": {"plausible": True, "closes_gap": False}}
+    pairs = [{"effects": ["A", "B"], "fitted": True, "plausible": True, "closes_gap": True},
+             {"effects": ["A", "C"], "fitted": False, "plausible": True, "closes_gap": True}]
+    got = scored_models(lambda sc: sc.ev, singles, tests, pairs, {("A", "B"): Score(3.0, [0.5, 0.5, 0.6])})
+    assert set(got) == {"A", "B", "A+B"}
+    assert [got[k]["closes_gap"] for k in ("A", "B", "A+B")] == [True, False, True]
+    assert got["A+B"]["log_evidence"] == 3.0 and got["A"]["cycle_mse"] == {0: 1.0, 1: 2.0, 2: 1.5}
+    # the verdict A: A+B adds B with 4 more nats -> listed as "B may be present too"
+    assert [r["adds"] for r in unsettled_rivals(got, "A")] == [["B"]]
+
+
+def test_heldout_better_rivals_hold_the_bonferroni_level():
+    """K rivals as good as the verdict (per-cycle log ratios N(0, s^2), independent), decisively less probable:
+    only the held-out-better clause can list them, at HELDOUT_ALPHA / K each, so some rival is listed with
+    probability 1 - (1 - HELDOUT_ALPHA / K)^K (uniform p-values of an exact t-test); a rival whose errors are
+    a quarter of the verdict's on every cycle is always listed."""
+    rng = np.random.default_rng(5)
+    k, draws = 4, 500
+    listed = 0
+    for _ in range(draws):
+        models = {"A": _model(0.0, np.ones(N_CYCLES))}
+        models.update({f"R{i}": _model(-3 * EVIDENCE_MIN, np.exp(rng.normal(0.0, 0.3, N_CYCLES))) for i in range(k)})
+        listed += bool(unsettled_rivals(models, "A"))
+    expected = 1 - (1 - HELDOUT_ALPHA / k) ** k
+    assert abs(listed / draws - expected) < 4 * np.sqrt(expected * (1 - expected) / draws), (listed / draws, expected)
+    better = {"A": _model(0.0, np.ones(N_CYCLES)),
+              "B": _model(-3 * EVIDENCE_MIN, 0.25 * np.exp(rng.normal(0.0, 0.1, N_CYCLES)))}
+    got = unsettled_rivals(better, "A")
+    assert [r["model"] for r in got] == ["B"] and got[0]["heldout_better"]
+    assert "yardsticks disagree" in rival_warning("A", got[0])
+
+
+def test_evidence_leads_are_taken_at_the_fitted_parameters():
+    """A rival whose lead exists only at its linearised mode (the fit reached a worse misfit) is not listed; one
+    whose fit realises the lead is, with both leads reported; entries without the fitted evidence fall back."""
+    one = np.ones(N_CYCLES)
+    rng = np.random.default_rng(7)
+    same = np.exp(rng.normal(0.0, 0.1, N_CYCLES))
+
+    def m(lin, fitted, mse):
+        return {**_model(lin, mse), "log_evidence_at_fit": fitted}
+
+    models = {"A": m(0.0, -0.5, one),
+              "A+B": m(10.0, -5.0, same),        # linearised +10 nats, as fitted -4.5: not more probable
+              "A+C": m(-1.0, 2.0, same)}         # linearised -1, as fitted +2.5: more probable
+    got = unsettled_rivals(models, "A")
+    assert [r["model"] for r in got] == ["A+C"]
+    assert abs(got[0]["nats"] - 2.5) < 1e-12 and abs(got[0]["nats_linearised"] + 1.0) < 1e-12
+    assert "2.5 nats more evidence" in rival_warning("A", got[0])
+    # without the fitted evidence the linearised one decides (records made before it was kept)
+    plain = {k: {kk: vv for kk, vv in v.items() if kk != "log_evidence_at_fit"} for k, v in models.items()}
+    assert [r["model"] for r in unsettled_rivals(plain, "A")] == ["A+B"]
+
+
+def test_scored_models_gives_the_evidence_at_the_fit_from_the_context_noise_scale(rig):
+    """``log_evidence_at_fit`` is the evidence module's, at the ``sigma`` of the context whose ``evidence`` is
+    passed (or the explicit noise scale), and never above the linearised evidence."""
+    from csjm_opt.diagnose.data.residuals import compute_residuals
+    from csjm_opt.diagnose.effects import make_effect
+    from csjm_opt.diagnose.fitting.augmented import AugmentedModel
+    from csjm_opt.diagnose.fitting.evidence import log_evidence
+    from csjm_opt.diagnose.fitting.gauss_newton import fit_model
+    from csjm_opt.diagnose.selection.rivals import scored_models
+    from csjm_opt.testbed import simulate_experiment
+
+    t = compute_residuals(rig, simulate_experiment(rig, 2, np.random.default_rng(4), effect="sensor_bias",
+                                                   severity=2.0, steps=2))
+    fit = fit_model(AugmentedModel(rig, [make_effect("sensor_bias", rig)]), t)
+
+    class Score:
+        def __init__(self, f):
+            self.fit = f
+
+        def cycle_mse(self):
+            return {0: 1.0, 1: 1.0}
+
+    class Ctx:
+        sigma = 1.7
+
+        def evidence(self, sc):
+            return log_evidence(sc.fit, self.sigma)
+
+    tests = {"sensor_bias": {"plausible": True, "closes_gap": True}}
+    got = scored_models(Ctx().evidence, {"sensor_bias": Score(fit)}, tests, [], {})["sensor_bias"]
+    assert got["log_evidence_at_fit"] == log_evidence(fit, 1.7, at_fit=True)
+    assert got["log_evidence_at_fit"] <= got["log_evidence"] + 1e-9
+    explicit = scored_models(lambda sc: 0.0, {"sensor_bias": Score(fit)}, tests, [], {}, noise_scale=0.9)
+    assert explicit["sensor_bias"]["log_evidence_at_fit"] == log_evidence(fit, 0.9, at_fit=True)
+    assert scored_models(lambda sc: 0.0, {"sensor_bias": Score(fit)}, tests, [], {})["sensor_bias"][
+        "log_evidence_at_fit"] is None
+
+
+def test_held_out_ties_to_round_off_are_not_improvements():
+    """A rival whose added effect fitted to zero predicts every cycle to round-off of the verdict:
+    no evidence either way (p = 1), where a shared 1e-15 'improvement' once gave p = 0. A real
+    improvement shared by every cycle stays significant, and noisy differences get scipy's t-test."""
+    from csjm_opt.diagnose.selection.rivals import _Cycles
+    from csjm_opt.diagnose.selection.scoring import paired_heldout_test
+
+    rng = np.random.default_rng(3)
+    mse = rng.uniform(1e-6, 4e-6, 12)
+    same = _Cycles(mse * (1.0 - 1e-14))
+    assert paired_heldout_test(_Cycles(mse), same) == 1.0
+    assert unsettled_rivals({"a": {"log_evidence": 0.0, "plausible": True, "closes_gap": True, "cycle_mse": list(mse)},
+                             "a+b": {"log_evidence": -3.0, "plausible": True, "closes_gap": True,
+                                     "cycle_mse": list(mse * (1.0 - 1e-14))}}, "a") == []
+    assert paired_heldout_test(_Cycles(mse), _Cycles(0.9 * mse)) == 0.0
+    other = mse * np.exp(rng.normal(0.05, 0.1, 12))
+    d = np.log(other / mse)
+    assert np.isclose(paired_heldout_test(_Cycles(other), _Cycles(mse)),
+                      stats.ttest_1samp(d, 0.0, alternative="greater").pvalue)
