@@ -38,9 +38,10 @@ The noise scale, though, is not identified where the band is much wider than the
 inside the band looks like a stick position): the likelihood is flat below the true scale, and a
 joint fit drifts to a band that holds every row and no noise. The diagnosis therefore fits the band
 at a few noise scales and keeps the largest one the *held-out* rows do not reject
-(:func:`settled_score`). Models are compared on held-out rows by their densities, each at its own
-noise scale, as an equivalent mean squared error (:func:`csjm_opt.diagnose.selection.scoring.equivalent_mse`:
-the variance of the Gaussian with the same mean log density; a point model's own MSE).
+(:func:`settled_score`). Models are compared on held-out rows by their densities at that noise
+scale: ``-2 s^2 log p`` per row less the Gaussian's constant, the squared distance plus the band's
+price ``2 s^2 log(Z_i / Z0_i)``, which is a point model's squared error
+(:func:`csjm_opt.diagnose.selection.scoring.equivalent_mse`).
 """
 
 from __future__ import annotations

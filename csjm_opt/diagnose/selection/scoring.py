@@ -46,8 +46,8 @@ class CandidateScore:
     heldout_blocks: tuple = ()      # ((held-out row indices, whitened prediction covariance), ...) per fold
     # a set-valued model (settled friction, :mod:`..fitting.friction_stick`): per held-out row its -2 log density in
     # whitened units less the Gaussian constant at its own noise scale s (``d^2 / s^2 + 2 log(Z / Z0)``), the
-    # row's mean noise variance per axis (rad^2), and s; its squared errors are then the equivalent Gaussian
-    # variance of the held-out density (:func:`equivalent_mse`). None: a point model (squared errors)
+    # row's mean noise variance per axis (rad^2), and s; its squared errors are then -2 s^2 log p less the
+    # Gaussian's constant, as a point model's at s (:func:`equivalent_mse`). None: a point model
     heldout_density: tuple[np.ndarray, np.ndarray, float] | None = None
 
     def _mse(self, mask: np.ndarray) -> float:
@@ -108,12 +108,12 @@ class CandidateScore:
 
 
 def equivalent_mse(q: np.ndarray, var_rad2: np.ndarray, s: float) -> float:
-    """Mean squared error of the Gaussian whose density equals a held-out density on average (rad^2).
+    """Mean squared error that ranks a held-out density with the point models' squared errors (rad^2).
 
-    For rows with ``-2 log p_i = q_i + 3 log(2 pi s^2)`` (whitened units, noise scale ``s``), the isotropic
-    Gaussian with the same mean log density has variance ``s^2 exp((mean q - 3) / 3)`` per whitened
-    axis; scaled by the rows' mean noise variance it is an MSE in rad^2. A point model at its own noise
-    scale (``q = |r|^2 / s^2``, ``s^2 = mean |r|^2 / 3``) gets its own MSE back, to first order.
+    For rows with ``-2 log p_i = q_i + 3 log(2 pi s^2)`` (whitened units, noise scale ``s``), ``s^2 q_i``
+    is what a point model's squared (whitened) error is at the same noise scale: ``-2 s^2 log p`` less
+    the Gaussian's constant. Scaled by each row's mean noise variance it is in rad^2, and equals a point
+    model's MSE for ``q = |r|^2 / s^2``.
 
     Parameters
     ----------
@@ -122,13 +122,13 @@ def equivalent_mse(q: np.ndarray, var_rad2: np.ndarray, s: float) -> float:
     var_rad2 : numpy.ndarray
         Each row's mean noise variance per axis (rad^2 per whitened unit^2).
     s : float
-        The model's noise scale (whitened).
+        The noise scale (whitened) both are taken at.
 
     Returns
     -------
     float
     """
-    return float(3.0 * np.mean(var_rad2) * s ** 2 * np.exp((np.mean(q) - 3.0) / 3.0))
+    return float(np.mean(var_rad2 * q) * s ** 2)
 
 
 def folds_by_cycle(cycle: np.ndarray, k: int = 5) -> list[np.ndarray]:
