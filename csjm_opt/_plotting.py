@@ -1,4 +1,4 @@
-"""Figures of the core quantities (tension bars, stiffness ellipsoids) and the one way figures are saved.
+"""Figures of the core quantities (tension bars, directional stiffness) and the one way figures are saved.
 
 Plot functions draw into a figure or axes passed in (a new one when ``None``)
 and return it; the caller saves with :func:`save` (atomic, then closed). The
@@ -57,23 +57,25 @@ def save(fig, path: str | Path) -> Path:
 
 def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.ndarray,
                             t_min_N: float, t_max_N: float, show: tuple[int, ...] | None = None, fig=None):
-    """Tension bars per pose (top), stiffness ellipsoids of a few poses and K's eigenvalues (bottom).
+    """Tension bars per pose (top), K's directional stiffness at a few poses and K's eigenvalues (bottom).
 
-    An ellipsoid's semi-axes are K's eigenvectors scaled by the eigenvalues
-    (N m/rad): a long axis is a stiff direction, drawn in {A}.
+    For a few poses, the directional stiffness ``u^T K u`` (N m/rad) for unit directions ``u`` in
+    the three coordinate planes of {A}, drawn as polar curves beside the circle of the mean
+    eigenvalue: an isotropic K is that circle, and a 1.4:1 anisotropy is a clearly flattened
+    curve (3-D ellipsoids of such a K look like spheres).
 
     Parameters
     ----------
     labels : list of str
         One label per pose.
-    tensions_N : (n, 6) array
+    tensions_N : (n, m) array
         Tensions per pose (N).
     K : (n, 3, 3) array
         Stiffness per pose (N m/rad).
     t_min_N, t_max_N : float
         Tension bounds drawn as dashed lines (N).
     show : tuple of int, optional
-        Poses whose ellipsoids are drawn (first, middle and last by default).
+        Poses whose directional stiffness is drawn (first, middle and last by default).
     fig : matplotlib Figure, optional
         Figure to draw into (a new one when ``None``).
 
@@ -86,12 +88,12 @@ def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.nda
     show = tuple(show if show is not None else sorted({0, n // 2, n - 1}))
     if fig is None:
         fig = figure().figure(figsize=(14, 9), layout="constrained")
-    fig.get_layout_engine().set(wspace=0.1)                  # room for the 3-D z labels, which the layout ignores
     grid = fig.add_gridspec(2, len(show) + 1, height_ratios=(1, 1.1), width_ratios=(1,) * len(show) + (1.3,))
     ax = fig.add_subplot(grid[0, :])
-    width = 0.8 / 6
-    for i in range(6):
-        ax.bar(np.arange(n) + (i - 2.5) * width, tensions_N[:, i], width, label=f"{i + 1}")
+    m = tensions_N.shape[1]                                   # cables, from the data
+    width = 0.8 / m
+    for i in range(m):
+        ax.bar(np.arange(n) + (i - (m - 1) / 2) * width, tensions_N[:, i], width, label=f"{i + 1}")
     ax.axhline(t_min_N, color="k", ls="--", lw=0.8)
     ax.axhline(t_max_N, color="k", ls="--", lw=0.8)
     ax.set_xticks(np.arange(n), labels, rotation=25, ha="right", fontsize=8)
@@ -99,23 +101,30 @@ def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.nda
     ax.set_title("Planned tensions per pose (dashed: t_min, t_max)")
     ax.set_xlabel("pose (tilt, azimuth of the tilt axis in deg)")
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.005, 1.0), title="cable")  # outside: no bar hidden
-    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 32), np.linspace(0, np.pi, 16))
-    sphere = np.stack([np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v)], axis=-1)
-    lim = float(np.max(np.linalg.eigvalsh(K[list(show)])))
+    theta = np.linspace(0.0, 2 * np.pi, 181)
+    c, s_ = np.cos(theta), np.sin(theta)
+    planes = (("x-y", 0, 1), ("y-z", 1, 2), ("z-x", 2, 0))
+    lim = 1.08 * float(np.max(np.linalg.eigvalsh(K[list(show)])))
     for col, j in enumerate(show):
-        w, V = np.linalg.eigh(K[j])
-        pts = sphere @ (V * np.maximum(w, 0)).T
-        a3 = fig.add_subplot(grid[1, col], projection="3d")
-        a3.plot_surface(pts[..., 0], pts[..., 1], pts[..., 2], cmap="viridis", alpha=0.7, lw=0)
-        a3.set_xlim(-lim, lim)
-        a3.set_ylim(-lim, lim)
-        a3.set_zlim(-lim, lim)
-        a3.set_box_aspect((1, 1, 1))
-        a3.set_title(f"{labels[j]}\neig {np.round(w, 1).tolist()} N m/rad", fontsize=8)
-        a3.set_xlabel("x (N m/rad)", fontsize=7)
-        a3.set_ylabel("y (N m/rad)", fontsize=7)
-        a3.set_zlabel("z (N m/rad)", fontsize=7, labelpad=-1)
-        a3.tick_params(labelsize=6)
+        w = np.linalg.eigvalsh(K[j])
+        a2 = fig.add_subplot(grid[1, col])
+        for name, p, q in planes:
+            u = np.zeros((theta.size, 3))
+            u[:, p], u[:, q] = c, s_
+            k_dir = np.einsum("ni,ij,nj->n", u, K[j], u)      # directional stiffness u^T K u (N m/rad)
+            a2.plot(k_dir * c, k_dir * s_, lw=1.6, label=f"{name} plane")
+        mean = float(np.mean(w))
+        a2.plot(mean * c, mean * s_, "k--", lw=0.8, label=f"mean eigenvalue {mean:.1f}")
+        a2.set_xlim(-lim, lim)
+        a2.set_ylim(-lim, lim)
+        a2.set_aspect("equal")
+        a2.set_title(f"{labels[j]}\neig {np.round(w, 1).tolist()} N m/rad, ratio {w.max() / w.min():.2f}:1",
+                     fontsize=8)
+        a2.set_xlabel("first axis of the plane (N m/rad)", fontsize=7)
+        a2.set_ylabel("second axis (N m/rad)", fontsize=7)
+        a2.tick_params(labelsize=6)
+        if col == 0:
+            a2.legend(fontsize=6, loc="best")
     ae = fig.add_subplot(grid[1, -1])
     eig = np.linalg.eigvalsh(K)
     for k in range(3):
@@ -123,9 +132,9 @@ def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.nda
     ae.set_xticks(np.arange(n), [str(i) for i in range(n)], fontsize=7)
     ae.set_xlabel("pose index (as above)")
     ae.yaxis.tick_right()
-    ae.yaxis.set_label_position("right")                     # clear of the ellipsoids' z labels
+    ae.yaxis.set_label_position("right")
     ae.set_ylabel("eigenvalue of K (N m/rad)")
     ae.set_title("Eigenvalues of K per pose")
     ae.legend(fontsize=7, loc="best")
-    fig.suptitle("Tensions and stiffness under the platform's weight (ellipsoid semi-axes: eigenvalues, N m/rad)")
+    fig.suptitle("Tensions and stiffness under the platform's weight (directional stiffness u^T K u, N m/rad)")
     return fig

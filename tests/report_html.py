@@ -16,6 +16,7 @@ class Page(HTMLParser):
         super().__init__(convert_charrefs=True)
         self.links: list[str] = []
         self.images: list[str] = []
+        self.frames: list[str] = []        # iframes (the 3-D views beside the report)
         self.sections: list[dict] = []
         self.cells: list[dict] = []
         self.data_json = ""
@@ -31,6 +32,8 @@ class Page(HTMLParser):
             self.links.append(a["href"])
         elif tag == "img":
             self.images.append(a["src"])
+        elif tag == "iframe" and "src" in a:
+            self.frames.append(a["src"])
         elif tag == "section":
             sec = {"id": a.get("id"), "title": "", "verdict": None, "tables": 0, "figures": 0}
             self.sections.append(sec)
@@ -78,7 +81,7 @@ def parse(path: Path) -> Page:
 def unresolved(page: Page, folder: Path) -> list[str]:
     """Relative links and images of ``page`` that do not name an existing file under ``folder``."""
     bad = []
-    for ref in page.links + page.images:
+    for ref in page.links + page.images + page.frames:
         u = urlparse(ref)
         if u.scheme or ref.startswith("#"):
             continue

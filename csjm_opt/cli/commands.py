@@ -23,6 +23,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "sweep": ("sweep", "hole-geometry design sweep (workspace, stiffness, margins)"),
     "optimise": ("optimise", "hole-geometry optimisation (guaranteed workspace, stiffness, no collisions)"),
     "report": ("report", "design-study report (HTML + Markdown) of csjm sweep results"),
+    "view": ("view", "interactive 3-D view of the rig at a pose (one offline HTML page)"),
     "export-mjcf": ("export_mjcf", "MuJoCo model (MJCF) of a rig"),
     "codegen": ("codegen", "C99 tension planner and K of a rig (no malloc, libm only)"),
 }

@@ -144,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         atomic_write_json(args.json, result)
     if args.report:
-        write_report(diagnosis, args.report, Path(args.data).name)
+        write_report(diagnosis, args.report, Path(args.data).name, rig=rig)
         if suggestion is not None:
             from .._atomic_write import atomic_write_text
             from ..diagnose.suggest.experiment import suggestion_markdown

@@ -8,7 +8,8 @@ from .. import _plotting as plots
 from .. import so3
 from ..model.numeric import Model
 from ..planning.planner import plan_tensions_batch
-from ..report.document import Cell, Column, Figure, Section, Table, quantity_table, sig
+from ..report.document import Cell, Column, Figure, Section, Table, View, quantity_table, sig
+from ..view import poses_view
 from ._step import DemoContext, StepOutput
 
 NAME = "plan tensions and stiffness"
@@ -31,12 +32,15 @@ def step(ctx: DemoContext) -> StepOutput:
     eig = np.linalg.eigvalsh(K)
     plots.save(plots.tensions_and_ellipsoids(labels, T, K, rig.t_min_N, rig.t_max_N),
                ctx.out_dir / "tensions_and_stiffness.png")
+    poses_view(rig, Rs, np.zeros((len(Rs), 3)), labels, title="The paper rig at the demo's poses").write(
+        ctx.out_dir / "rig.html")
     rows = [{"pose": lab, "rotvec": rv.tolist(), "tilt_deg": t, "azimuth_deg": a, "tensions_N": ti.tolist(),
              "min_tension_N": float(ti.min()), "max_tension_N": float(ti.max()), "K": k.tolist(),
              "eigenvalues_Nm_per_rad": e.tolist()}
             for lab, rv, (t, a), ti, k, e in zip(labels, rotvecs, poses, T, K, eig)]
     summary = {"poses": rows, "max_equilibrium_residual_Nm": float(plans.equilibrium_residual_Nm.max()),
                "min_eigenvalue_Nm_per_rad": float(eig.min()), "figure": "tensions_and_stiffness.png",
+               "view": "rig.html",
                "min_tension_N": float(T.min()), "max_tension_N": float(T.max()),
                "t_min_N": float(rig.t_min_N), "t_max_N": float(rig.t_max_N)}
     return StepOutput(summary, section(summary))
@@ -73,6 +77,13 @@ def section(s: dict) -> Section:
             + [Cell(p["eigenvalues_Nm_per_rad"][k], src=("poses", i, "eigenvalues_Nm_per_rad", k)) for k in range(3)]
             for i, p in enumerate(s["poses"])]
     per_pose = Table(cols, body, "Per pose (every tension and K itself: summary.json)")
-    fig = Figure(s["figure"], "Planned tensions per pose (dashed: tension bounds), stiffness ellipsoids of three "
-                              "poses (semi-axes: eigenvectors of K scaled by the eigenvalues) and K's eigenvalues.")
-    return Section("Tensions and stiffness", verdict, "ok" if ok else "warn", [facts, per_pose, fig])
+    fig = Figure(s["figure"], "Planned tensions per pose (dashed: tension bounds); K's directional stiffness "
+                              "u^T K u in the three coordinate planes of {A} at three poses (dashed: the circle of "
+                              "the mean eigenvalue, so the anisotropy shows as the gap between curve and circle); "
+                              "K's eigenvalues per pose.")
+    blocks: list = [facts, per_pose, fig]
+    if s.get("view"):
+        blocks.insert(0, View(s["view"], "The rig in 3-D at the same poses (slider): cables coloured by planned "
+                                         "tension, holes numbered as in the rig file, the compliance ellipsoid of K "
+                                         "at the joint centre (long axis = soft direction)."))
+    return Section("Tensions and stiffness", verdict, "ok" if ok else "warn", blocks)

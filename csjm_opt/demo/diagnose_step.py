@@ -61,7 +61,7 @@ def run_demo(rig: Rig, out_dir: Path, rng: np.random.Generator, effect: str = DE
     log = simulate_experiment(rig, n_cycles, rng, effect=effect, severity=severity)
     log.to_csv(out_dir / "log.csv", overwrite=True)
     d = diagnose(rig, log, secondary=secondary)
-    write_report(d, out_dir, "log.csv (simulated, effect injected: " + effect + ")")
+    write_report(d, out_dir, "log.csv (simulated, effect injected: " + effect + ")", rig=rig)
     j = d.as_json()
     return {"injected": effect, "severity": severity, "selected": j["selected"],
             "correct": j["selected"] == effect, "confounded_with": j["confounded_with"],

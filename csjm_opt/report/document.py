@@ -153,6 +153,16 @@ class Links:
 
 
 @dataclasses.dataclass
+class View:
+    """An interactive page beside the document (``csjm_opt.view``), shown in an iframe; a link in Markdown."""
+
+    path: str
+    caption: str
+    height_px: int = 980
+    kind: str = "view"
+
+
+@dataclasses.dataclass
 class Paragraph:
     """Plain text; ``code`` in backticks is shown as code."""
 
@@ -160,7 +170,7 @@ class Paragraph:
     kind: str = "paragraph"
 
 
-Block = Union[Table, Figure, Links, Paragraph]
+Block = Union[Table, Figure, Links, Paragraph, View]
 
 
 @dataclasses.dataclass
@@ -200,7 +210,7 @@ class Section:
         """Make figure and link paths relative to the parent folder (a section of a sub-folder's step)."""
         folder = folder.rstrip("/") + "/"
         for block in self.blocks:
-            if isinstance(block, Figure) and "://" not in block.path:
+            if isinstance(block, (Figure, View)) and "://" not in block.path:
                 block.path = folder + block.path
             elif isinstance(block, Links):
                 for link in block.links:

@@ -88,6 +88,15 @@ def test_links_and_images_resolve_also_in_a_moved_copy(demo_dir, tmp_path):
     assert "diagnosis/index.html" in links and "experiment/index.html" in links and "summary.json" in links
 
 
+def test_the_rig_is_shown_in_3d(demo_dir, summary):
+    """The demo shows the rig (rig.html in the first section); the diagnosis draws friction/offsets on it."""
+    assert parse(demo_dir / "index.html").frames == ["rig.html"]
+    assert (demo_dir / "rig.html").stat().st_size <= 3_000_000
+    diag = json.loads((demo_dir / "diagnosis" / "diagnosis.json").read_text())
+    drawn = diag["selected"] in ("friction", "hole_offsets")
+    assert parse(demo_dir / "diagnosis" / "index.html").frames == (["rig.html"] if drawn else [])
+
+
 @pytest.mark.parametrize("name", ["index.html", "diagnosis/index.html", "experiment/index.html"])
 def test_table_numbers_equal_the_json(demo_dir, name):
     page = parse(demo_dir / name)

@@ -19,7 +19,7 @@ import numpy as np
 from ..._fileio import atomic_write_json
 from ...errors import InvalidInput
 from ...model.rig import Rig
-from ..document import Cell, Column, Document, Figure, Paragraph, Section, Table, sig
+from ..document import Cell, Column, Document, Figure, Paragraph, Section, Table, View, sig
 from ..render import write_document
 
 __all__ = ["front_figure", "geometry_3d_figure", "load_result", "write_optimisation_report"]
@@ -171,6 +171,11 @@ def write_optimisation_report(result_dir: str | Path, out_dir: str | Path) -> Pa
         plt.close(ax.figure)
         blocks.append(Figure("geometry.png", "design_000 at the orientation where its tightest requirement "
                                              "binds: holes, cables, the link (rod and ball), mm in {B}."))
+        view = _certified_view(doc, Path(result_dir), out)
+        if view is not None:
+            blocks.append(View(view, "The designs side by side in 3-D (at most four), upright under their weight, "
+                                     "each with its certified tilt range as a ring: the platform's centre at tilt "
+                                     "s x max_tilt at every azimuth.", 820))
     else:
         blocks.append(Paragraph(f"Geometry not drawn: no rig file {rig_file.name} beside result.json."))
     names = list(doc["variables"])
@@ -212,3 +217,24 @@ def write_optimisation_report(result_dir: str | Path, out_dir: str | Path) -> Pa
             f"{sig(req['max_exit_angle_deg'])} deg.")])]
     return write_document(Document("Hole-geometry optimisation", f"Result folder `{Path(result_dir).name}`.",
                                    sections, data_file="optimisation_report.json"), out)
+
+
+def _certified_view(doc: dict[str, Any], result_dir: Path, out: Path) -> str | None:
+    """``designs.html``: the designs with rig files (at most four) side by side, certified tilt range as a ring."""
+    from ...view import designs_view
+
+    picked = []
+    for k, d in enumerate(doc["designs"][:4]):
+        path = result_dir / d.get("rig_file", f"design_{k:03d}.toml")
+        if path.is_file():
+            picked.append((f"design_{k:03d}", Rig.from_toml(path),
+                           float(d["objectives"]["range"]) * float(doc["requirements"]["max_tilt_deg"])))
+    if not picked:
+        return None
+    page = designs_view([r for _, r, _ in picked], [lab for lab, _, _ in picked],
+                        certified_tilt_deg=[t for _, _, t in picked],
+                        title="Optimised designs side by side (upright, under their weight)",
+                        note="Green ring: the certified tilt range (range scale s x max_tilt), where the platform's "
+                             "centre goes at its edge, at every azimuth.")
+    page.write(out / "designs.html")
+    return "designs.html"

@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Any
 
 from ..document import (
+    Block,
     Cell,
     Column,
     Document,
@@ -14,6 +15,7 @@ from ..document import (
     Paragraph,
     Section,
     Table,
+    View,
     quantity_table,
     sig,
 )
@@ -29,8 +31,8 @@ def _unit(name: str) -> tuple[str, str, float]:
     return name, "", 1.0
 
 
-def document(s: dict[str, Any], geometry: bool) -> Document:
-    """The design-study page of :meth:`DesignStudy.summary` output ``s``."""
+def document(s: dict[str, Any], geometry: bool, view: str | None = None) -> Document:
+    """The design-study page of :meth:`DesignStudy.summary` output ``s`` (``view``: the 3-D page beside it)."""
     names = list(dict.fromkeys(k for d in s["best"] for k in d["params"]))
     paper = s.get("paper_design")
     best = s["best"]
@@ -79,10 +81,15 @@ def document(s: dict[str, Any], geometry: bool) -> Document:
                                             src=("paper_design", "designs_dominating_it")), "", ""),
         ])]))
     if geometry:
+        blocks: list[Block] = [Figure("geometry.png", "Top view of each design: platform holes A_i, base holes "
+                                                      "B_i, cables between them (mm).")]
+        if view:
+            blocks.append(View(view, "The best designs side by side in 3-D, cables coloured by planned tension, "
+                                     "compliance ellipsoid of K at O (long axis = soft direction), and each design's "
+                                     "tilt cone as a ring.", 820))
         sections.append(Section("Geometry of the best designs", "Holes of the table's designs on the platform "
                                  "(circle) and base (square) hole circles, seen from above at the home pose.", "info",
-                                 [Figure("geometry.png", "Top view of each design: platform holes A_i, base holes "
-                                                         "B_i, cables between them (mm).")]))
+                                 blocks))
     else:
         sections.append(Section("Geometry of the best designs", "", "info", [Paragraph(
             "Not drawn: the designs' geometry needs the sweep's fixed parameters (give --sweep SWEEP.toml).")]))

@@ -64,6 +64,33 @@ def write_design_report(results: str | Path, out_dir: str | Path, sweep: str | P
         shown.append(("paper's design", {} if sweep is not None else study.paper["params"]))
     geometry_fig = geometry_figure(shown)
     geometry = geometry_fig is not None
+    view = None
     if geometry_fig is not None:
         plots.save(geometry_fig, out / "geometry.png")
-    return write_document(document(s, geometry), out)
+        view = _designs_view(s, study, sweep, out)
+    return write_document(document(s, geometry, view), out)
+
+
+def _designs_view(s: dict, study: DesignStudy, sweep: str | Path | None, out: Path) -> str | None:
+    """``designs.html``: the best designs (at most 4) and the paper's side by side, each with its tilt cone."""
+    from ...design.geometry import design_rig
+    from ...view import designs_view
+
+    picked = [(f"design {k + 1}", {**study.base, **d["params"]}, d.get("tilt_cone_deg"))
+              for k, d in enumerate(s["best"][:4])]
+    if study.paper is not None:
+        paper = s.get("paper_design", {})
+        picked.append(("paper's design", {} if sweep is not None else study.paper["params"],
+                       paper.get("tilt_cone_deg")))
+    try:
+        rigs = [design_rig(p) for _, p, _ in picked]
+    except DesignError:
+        return None
+    cones = [float(c) if c is not None else 0.0 for _, _, c in picked]
+    page = designs_view(rigs, [lab for lab, _, _ in picked], certified_tilt_deg=cones,
+                        title="The best designs side by side (upright, under their weight)",
+                        note="Green ring: where the platform's centre goes at the edge of the design's tilt cone "
+                             "(the sweep's tilt_cone_deg: every tilt within it, at any azimuth, holds the sweep's "
+                             "loads).")
+    page.write(out / "designs.html")
+    return "designs.html"

@@ -17,7 +17,8 @@ from ... import _plotting as plots
 from ..._fileio import atomic_write_json
 from ...diagnose import Diagnosis
 from ...diagnose.selection.decision import ALPHA
-from ..document import Document, Figure, Hyperlink, Paragraph, Section, format_number, sig
+from ...model.rig import Rig
+from ..document import Document, Figure, Hyperlink, Paragraph, Section, View, format_number, sig
 from ..render import write_document
 from .figures import before_after, candidate_errors, hysteresis_loops, residual_map
 from .sections import _candidates, _gap_table, _parameters, _secondary_and_pairs, _where, unit_of
@@ -31,7 +32,7 @@ FIGURES = (("residual_map.png", "Held-out residual over the pose (tilt and azimu
            ("before_after.png", "Held-out residual per axis and its distribution, before and after."))
 
 
-def document(j: dict[str, Any], data_name: str, alpha: float = 0.01) -> Document:
+def document(j: dict[str, Any], data_name: str, alpha: float = 0.01, view: tuple[str, str] | None = None) -> Document:
     """The diagnosis report of ``diagnosis.json``'s content ``j`` (figures beside it).
 
     Parameters
@@ -42,6 +43,8 @@ def document(j: dict[str, Any], data_name: str, alpha: float = 0.01) -> Document
         How to name the measurement log.
     alpha : float
         Family-wise significance level (shown when ``j`` does not carry it).
+    view : (str, str), optional
+        The 3-D page of the effect on the rig (path, what it shows), when one was written.
 
     Returns
     -------
@@ -61,6 +64,10 @@ def document(j: dict[str, Any], data_name: str, alpha: float = 0.01) -> Document
     if sel is not None:
         sections.append(_parameters(sel, j["candidates"].index(sel)))
     sections.append(_where(j))
+    if view is not None:
+        sections.append(Section("On the rig", f"The diagnosed effect drawn on the rig: {view[1]}.", "info",
+                                [View(view[0], "The rig upright under its weight with the fitted effect drawn on it "
+                                               "(drag to rotate, scroll to zoom).", 760)]))
     extra = _secondary_and_pairs(j)
     if extra is not None:
         sections.append(extra)
@@ -73,7 +80,7 @@ def document(j: dict[str, Any], data_name: str, alpha: float = 0.01) -> Document
 __all__ = ["document", "headline", "unit_of"]
 
 
-def write_report(d: Diagnosis, out_dir: str | Path, data_name: str = "log") -> Path:
+def write_report(d: Diagnosis, out_dir: str | Path, data_name: str = "log", rig: Rig | None = None) -> Path:
     """Write ``index.html``, ``index.md``, ``diagnosis.json`` and four figures into ``out_dir``.
 
     Parameters
@@ -84,6 +91,9 @@ def write_report(d: Diagnosis, out_dir: str | Path, data_name: str = "log") -> P
         Report folder (created).
     data_name : str
         How the page names the measurement log.
+    rig : Rig, optional
+        The diagnosis' rig: when the selected (or second) effect is hole offsets or friction,
+        ``rig.html`` shows it on the rig (:func:`csjm_opt.view.diagnosis_view`).
 
     Returns
     -------
@@ -98,5 +108,21 @@ def write_report(d: Diagnosis, out_dir: str | Path, data_name: str = "log") -> P
     plots.save(before_after(d), out_dir / "before_after.png")
     j = d.as_json()
     atomic_write_json(out_dir / "diagnosis.json", j)
-    write_document(document(j, data_name, alpha=ALPHA), out_dir)
+    view = _rig_view(j, rig, out_dir) if rig is not None else None
+    write_document(document(j, data_name, alpha=ALPHA, view=view), out_dir)
     return out_dir / "index.md"
+
+
+def _rig_view(j: dict[str, Any], rig: Rig, out_dir: Path) -> tuple[str, str] | None:
+    """``rig.html`` for the selected effect (else the second one) when it is drawn on the rig."""
+    from ...view.diagnosis import DRAWN_EFFECTS, diagnosis_view
+
+    for name in (j.get("selected"), (j.get("secondary") or {}).get("effect")):
+        if name in DRAWN_EFFECTS:
+            cand = next((c for c in j["candidates"] if c["effect"] == name and not c.get("error")), None)
+            params = (j.get("secondary") or {}).get("params") if cand is None else cand.get("params")
+            if params:
+                page = diagnosis_view(rig, name, params, title=f"Where the gap lies: {name}")
+                page.write(out_dir / "rig.html")
+                return "rig.html", page.note
+    return None

@@ -87,6 +87,9 @@ def test_known_optimum_on_the_bound_certified_and_written_by_the_cli(tmp_path):
     page = (tmp_path / "rep" / "index.md").read_text()
     assert "design_000" in page and (tmp_path / "rep" / "front.png").is_file()
     assert (tmp_path / "rep" / "geometry.png").is_file()
+    view = (tmp_path / "rep" / "designs.html").read_text()      # the certified range drawn as a ring
+    tilt = d["objectives"]["range"] * doc["requirements"]["max_tilt_deg"]
+    assert f"certified tilt {tilt:.1f} deg" in view and "designs.html" in page
     # brute force over the radius: the certified stiffness of a grid never beats the optimum
     _, settings = read_optimise_file(path)
     lam = []

@@ -63,6 +63,7 @@ def test_report_of_results(results, tmp_path, capsys):
     page = parse(out / "index.html")
     data = json.loads((out / page.data_json).read_text())
     assert unresolved(page, out) == [] and "pareto.png" in page.images and "geometry.png" in page.images
+    assert page.frames == ["designs.html"] and (out / "designs.html").stat().st_size <= 3_000_000
     assert mismatches(page, data) == [] and len(page.cells) >= 20
     front = sorted(d["params"]["platform_d23_m"] for d in data["pareto_front"])
     assert front == [0.08, 0.1, 0.11]                  # by hand: 1, 3, 2 are not beaten in both
