@@ -77,7 +77,8 @@ effect = json.loads(sys.argv[1])
 log = simulate_experiment(co.paper_rig(), int(sys.argv[2]), np.random.default_rng(0), effect=effect)
 t0, c0 = time.perf_counter(), time.process_time()
 d = diagnose(co.paper_rig(), log)
-print(json.dumps([time.perf_counter() - t0, time.process_time() - c0, d.selected, d.secondary["effect"]]))
+j = d.as_json()   # the JSON keys hold across versions (the objects behind them may not)
+print(json.dumps([time.perf_counter() - t0, time.process_time() - c0, j["selected"], j["secondary"]["effect"]]))
 """
 
 
@@ -138,7 +139,7 @@ def main() -> int:
     d = diagnose(rig, log_s)
     s, wall, cpu = timed(lambda: suggest_experiment(rig, d, 60, progress=bar))
     sj = s.as_json() if s is not None else {}
-    print(f"--suggest 60 after {d.selected} + {d.secondary.get('effect')} on {len(log_s)} rows: {wall:.1f} s wall / "
+    print(f"--suggest 60 after {d.selected} + {d.secondary.effect} on {len(log_s)} rows: {wall:.1f} s wall / "
           f"{cpu:.1f} s CPU (target < 60 s) -> {sj.get('rows', 0)} rows, smallest expected separation "
           f"{sj.get('smallest_expected_separation_sd') or 0:.1f} noise sd")
 

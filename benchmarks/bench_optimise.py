@@ -1,6 +1,6 @@
 """The front in the sweep's own metrics by optimisation, against the sweep of the same space, in the same run.
 
-The optimiser: ``sweep_front`` (``csjm optimise studies/paper_sweep.toml --sweep-front
+The optimiser: ``sweep_front`` (``csjm optimise studies/paper_sweep/paper_sweep.toml --sweep-front
 --max-evaluations 22``, a tenth of the sweep): smooth twins of the workspace
 fraction and the minimum stiffness on the sweep's 1,000 sample orientations,
 trust-region steps on their exact quadratic models, every design scored by the
@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -30,10 +29,9 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 #: A tenth of the sweep's 225 designs.
 BUDGET = 22
-sys.path.insert(0, str(HERE.parent / "studies"))
 
 from csjm_opt.design.optimisation import problem as optimise_problem  # noqa: E402
-from csjm_opt.design.optimisation.front import sweep_front  # noqa: E402
+from csjm_opt.design.optimisation.front import hypervolume, sweep_front  # noqa: E402
 from csjm_opt.design.optimisation.runner import optimise  # noqa: E402
 from csjm_opt.design.optimisation.settings import read_optimise_file  # noqa: E402
 from csjm_opt.design.sweep.runner import run_sweep  # noqa: E402
@@ -50,9 +48,8 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=1, help="processes of the sweep")
     parser.add_argument("--range-front", action="store_true", help="also time optimise() (range x stiffness)")
     args = parser.parse_args()
-    from optimise_paper import hypervolume
 
-    spec, settings = read_optimise_file(HERE.parent / "studies" / "paper_sweep.toml")
+    spec, settings = read_optimise_file(HERE.parent / "studies" / "paper_sweep" / "paper_sweep.toml")
     t_front, t_sweep, t_range, evals, hv_f, hv_s, runs = [], [], [], [], [], [], []
     for _ in range(args.repeats):
         t0 = time.perf_counter()

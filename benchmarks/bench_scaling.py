@@ -201,9 +201,10 @@ def main() -> None:
     poses = bench_poses(rig, sizes, args.max_casadi_poses, args.slsqp_sample)
     print("sweeps (designs/s, one run each):")
     sweeps = bench_sweeps(designs, orientations, not args.no_dask)
-    paper = [] if args.quick else paper_sweep_rate(Path(__file__).resolve().parents[1] / "studies/paper_sweep.toml", 3)
+    paper_toml = Path(__file__).resolve().parents[1] / "studies" / "paper_sweep" / "paper_sweep.toml"
+    paper = [] if args.quick else paper_sweep_rate(paper_toml, 3)
     if paper:
-        print(f"  studies/paper_sweep.toml (225 designs x 1000 orientations x 7 loads, pool(2)): "
+        print(f"  studies/paper_sweep/paper_sweep.toml (225 designs x 1000 orientations x 7 loads, pool(2)): "
               f"median {statistics.median(paper):.0f} designs/s of {[round(p) for p in paper]}")
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak RSS of this process: {rss:,.0f} MB")

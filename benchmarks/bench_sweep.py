@@ -1,7 +1,7 @@
 """Designs per second of a geometry sweep: serial, parallel (processes, Dask) and an SLSQP baseline.
 
 Fixed work per design: 1,000 orientations (tilt <= 45 deg, |torsion| <= 30
-deg, scrambled Halton), the 7-load set of ``studies/paper_sweep.toml``, all
+deg, scrambled Halton), the 7-load set of ``studies/paper_sweep/paper_sweep.toml``, all
 metrics (feasibility, tilt cone refinement, planned tensions, K and its
 eigenvalues at every feasible orientation, shaping range at 16 poses).
 

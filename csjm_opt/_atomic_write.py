@@ -12,10 +12,15 @@ from ._file_input import file_kind
 from .errors import InvalidInput
 
 
-def _file_mode() -> int:
+def _file_mode(executable: bool = False) -> int:
+    """The mode ``open()`` would give a new file under the current umask (``0o644`` under ``022``).
+
+    ``mkstemp`` creates its files ``0o600``: a file renamed into place keeps that unless it is
+    changed, so every atomic writer sets this mode first (``executable``: ``0o777 & ~umask``).
+    """
     mask = os.umask(0)
     os.umask(mask)
-    return 0o666 & ~mask
+    return (0o777 if executable else 0o666) & ~mask
 
 
 def atomic_write_text(path: str | Path, text: str, overwrite: bool = True) -> Path:

@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ._atomic_write import _file_mode
+
 
 def figure():
     """``matplotlib.pyplot`` (imported on first use; the backend is the caller's choice)."""
@@ -47,12 +49,58 @@ def save(fig, path: str | Path) -> Path:
     try:
         constrained = isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine)
         fig.savefig(tmp, dpi=120, bbox_inches=None if constrained else "tight")
+        os.chmod(tmp, _file_mode())                # mkstemp's 0600 would make the figure private
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
         figure().close(fig)
     return path
+
+
+def rig_drawing(platform_holes_A_m: np.ndarray, base_holes_B_m: np.ndarray, title: str = "", fig=None):
+    """The rig at its zero pose: holes, cables and the joint centre, in 3D and seen from above.
+
+    Parameters
+    ----------
+    platform_holes_A_m, base_holes_B_m : ndarray, shape (m, 3)
+        Hole positions (m); at the zero pose {A} and {B} coincide.
+    title : str, optional
+        Figure title.
+    fig : matplotlib.figure.Figure, optional
+        Figure to draw into (a new one when ``None``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    plt = figure()
+    fig = plt.figure(figsize=(10, 4.8), layout="constrained") if fig is None else fig
+    A, B = np.asarray(platform_holes_A_m, float) * 1e3, np.asarray(base_holes_B_m, float) * 1e3
+    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
+    ax2 = fig.add_subplot(1, 2, 2)
+    for ax, dims in ((ax3, 3), (ax2, 2)):
+        for i in range(A.shape[0]):
+            seg = np.array([A[i], B[i]])
+            ax.plot(*seg[:, :dims].T, color=f"C{i % 10}", lw=1.5)
+        ax.scatter(*A[:, :dims].T, color="k", marker="o", s=18, label="platform holes A_i")
+        ax.scatter(*B[:, :dims].T, color="k", marker="s", s=18, label="base holes B_i")
+        ax.scatter(*np.zeros(dims), color="r", marker="+", s=60, label="joint centre O")
+    for i in range(A.shape[0]):
+        ax2.annotate(f"A{i + 1}", A[i, :2], textcoords="offset points", xytext=(3, 3), fontsize=8)
+        ax2.annotate(f"B{i + 1}", B[i, :2], textcoords="offset points", xytext=(3, -9), fontsize=8, color="0.4")
+        ax3.text(*A[i], f"{i + 1}", fontsize=7)
+    ax3.set_xlabel("x (mm)")
+    ax3.set_ylabel("y (mm)")
+    ax3.set_zlabel("z (mm)")
+    ax2.set_xlabel("x (mm)")
+    ax2.set_ylabel("y (mm)")
+    ax2.set_aspect("equal")
+    ax2.set_title("seen from above (+z), cable i joins A_i and B_i")
+    ax2.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
+    if title:
+        fig.suptitle(title)
+    return fig
 
 
 def tensions_and_ellipsoids(labels: list[str], tensions_N: np.ndarray, K: np.ndarray,

@@ -141,6 +141,21 @@ class DesignError(InvalidInput):
         self.path = path
 
 
+class LogRigMismatch(InvalidInput):
+    """A measurement log the rig file cannot have produced (checked by its equilibrium).
+
+    ``source`` names the log, ``residual_N`` the median per-cable tension error that the
+    moment balance of its first rows needs with the rig's cables, ``tolerance_N`` the bound
+    (:func:`csjm_opt.measurement.rig_fit.check_log_rig`).
+    """
+
+    def __init__(self, message: str, source: str | None, residual_N: float, tolerance_N: float):
+        super().__init__(message, "rig")
+        self.source = source
+        self.residual_N = float(residual_N)
+        self.tolerance_N = float(tolerance_N)
+
+
 class UsageError(InvalidInput):
     """Bad command-line usage (unknown option, missing argument, bad value)."""
 

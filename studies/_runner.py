@@ -3,7 +3,8 @@
 A study lists its cases (dicts with a unique ``id``), runs the ones its ``OUT.jsonl`` does
 not hold yet, appends each record as it finishes (a rerun resumes), and summarises every
 record it has. Failed cases are recorded with an ``error`` key and reported, not summarised.
-Studies are scripts, not part of the package: ``sys.path`` holds this folder.
+Studies are scripts, not part of the package: run them from the repository root as modules
+(``python -m studies.<study>.<script>``), so that ``studies._runner`` imports.
 """
 
 from __future__ import annotations

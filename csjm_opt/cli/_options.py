@@ -151,3 +151,68 @@ def check_outputs(inputs: list[str | Path | None], files: dict[str, str | Path |
         seen.append((name, path))
     for name, path in dirs.items():
         check_output_dir(path, *inputs, name=name)
+
+
+# ------------------------------------------------------------ options shared by every command
+#: Old spellings still accepted, hidden from ``--help``: ``--output`` for ``-o/--out``.
+HIDDEN_ALIASES = frozenset({"--output"})
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """The default help layout without the hidden alias spellings."""
+
+    def _format_action_invocation(self, action: argparse.Action) -> str:
+        if action.option_strings and HIDDEN_ALIASES & set(action.option_strings):
+            shown = [s for s in action.option_strings if s not in HIDDEN_ALIASES]
+            action = argparse.Action(shown, action.dest, nargs=action.nargs, metavar=action.metavar)
+        return super()._format_action_invocation(action)
+
+
+def rig_option(what: str = "rig TOML file") -> argparse.ArgumentParser:
+    """A parent parser with ``--rig RIG.toml`` (default: the built-in paper rig), the same in every command."""
+    p = argparse.ArgumentParser(add_help=False)
+    p.add_argument("--rig", default=None, metavar="RIG.toml", help=f"{what} (default: the built-in paper rig)")
+    return p
+
+
+def json_option(what: str = "machine-readable output") -> argparse.ArgumentParser:
+    """A parent parser with ``--json PATH`` (``-`` = stdout), the same in every command."""
+    p = argparse.ArgumentParser(add_help=False)
+    p.add_argument("--json", metavar="PATH", default=None, help=f"write {what} as JSON ('-' = stdout)")
+    return p
+
+
+def out_option(metavar: str, what: str, required: bool = True, default: str | None = None) -> argparse.ArgumentParser:
+    """A parent parser with ``-o/--out`` (``--output`` a hidden alias), the same in every command.
+
+    Parameters
+    ----------
+    metavar : str
+        What the value looks like (``LOG.csv``, ``DIR``).
+    what : str
+        The help text.
+    required : bool
+        Whether the command needs it.
+    default : str, optional
+        Its default when not required.
+    """
+    p = argparse.ArgumentParser(add_help=False)
+    p.add_argument("-o", "--out", "--output", dest="out", metavar=metavar, required=required, default=default,
+                   help=what)
+    return p
+
+
+def workers_option() -> argparse.ArgumentParser:
+    """A parent parser with ``--workers N``, the same in every command (default: :func:`workers_of`)."""
+    p = argparse.ArgumentParser(add_help=False)
+    p.add_argument("--workers", type=int_in(1, 256), default=None, metavar="N",
+                   help="worker processes (default: CSJM_WORKERS if set, else the cores this process may use; "
+                   "1: serial, in this process)")
+    return p
+
+
+def workers_of(args: argparse.Namespace) -> int:
+    """``--workers`` resolved: the number given, else :func:`csjm_opt._workers.default_workers`."""
+    from .._workers import default_workers
+
+    return args.workers if args.workers is not None else default_workers()

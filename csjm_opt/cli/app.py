@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from typing import NoReturn
 
 from ..errors import CsjmError, UsageError
+from ._options import HelpFormatter
 from .commands import COMMANDS
 
 #: Modules that register subcommands, in help order.
@@ -21,8 +23,14 @@ COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values())
 
 
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        super().__init__(*args, **kwargs)
+
     def error(self, message: str) -> NoReturn:  # one line, exit 2 (argparse prints usage too)
-        raise UsageError(f"{self.prog}: {message}")
+        err = UsageError(message)
+        err.prog = self.prog  # type: ignore[attr-defined]  # "csjm plan-experiment": main's prefix, printed once
+        raise err
 
 
 def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
@@ -74,16 +82,25 @@ def main(argv: list[str] | None = None) -> int:
     try:
         argv = sys.argv[1:] if argv is None else argv
         args = build_parser(argv).parse_args(argv)
-        import matplotlib  # after parsing: ``--help`` and usage errors need no plotting library
-
-        matplotlib.use("Agg")
+        _agg_backend()
         return int(args.func(args) or 0)
     except CsjmError as exc:
-        print(f"csjm: error: {exc}".replace("\n", " "), file=sys.stderr)
+        command = getattr(exc, "prog", "csjm").partition(" ")[2]     # "plan-experiment", or "" for csjm itself
+        print(f"csjm: error: {command + ': ' if command else ''}{exc}".replace("\n", " "), file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("csjm: interrupted", file=sys.stderr)
         return 130
+
+
+def _agg_backend() -> None:
+    """Figures go to files: matplotlib's Agg backend, without importing matplotlib for a command that draws none."""
+    if "matplotlib" in sys.modules:
+        import matplotlib
+
+        matplotlib.use("Agg")
+    else:
+        os.environ["MPLBACKEND"] = "Agg"
 
 
 def _version() -> str:

@@ -5,8 +5,7 @@ from __future__ import annotations
 import argparse
 
 from .._fileio import atomic_write_json
-from ..model.rig import load_rig
-from ._options import check_outputs
+from ._options import check_outputs, json_option, out_option, rig_option
 from .commands import command_help
 
 
@@ -20,15 +19,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     """
     p = sub.add_parser(
         "codegen", help=command_help("codegen"),
+        parents=[rig_option(), out_option("DIR", "folder to write (created if missing)"), json_option("a summary")],
                        description="Write a C99 library for a 1 kHz controller: cable lengths, J and the "
                        "weight moment at a pose, the bounded tension QP of `csjm plan` (warm start, fixed "
                        "iteration bound, status codes), rest lengths, K; the rig's constants baked in. "
                        "Also an example 1 kHz loop over a trajectory CSV and a Makefile.")
-    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
-    p.add_argument("-o", "--out", required=True, metavar="DIR", help="folder to write (created if missing)")
     p.add_argument("--build", action="store_true",
                    help="also compile it with the system C compiler (-std=c99 -Wall -Wextra -Werror -O2)")
-    p.add_argument("--json", metavar="PATH", help="write a summary as JSON ('-' = stdout)")
     p.set_defaults(func=run)
 
 
@@ -55,6 +52,7 @@ def run(args: argparse.Namespace) -> int:
         ``--build``: no C compiler, or the compiler failed.
     """
     from ..codegen import build_shared, generate_c  # CasADi code generation: loaded only for this command
+    from ..model.rig import load_rig
 
     check_outputs([args.rig], {"--json": args.json}, {"-o/--out": args.out})
     rig = load_rig(args.rig)

@@ -4,23 +4,21 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .. import so3
 from .._fileio import atomic_write_json
-from .._validate import as_vector3
-from ..model.joint_stiffness import stiffness
-from ..model.numeric import Model
-from ..model.rig import load_rig
-from ..planning.planner import TensionPlan, plan_tensions
-from ._options import check_outputs, check_rotvec, quantity, rotvec_component
+from ._options import check_outputs, check_rotvec, json_option, quantity, rig_option, rotvec_component
 from .commands import command_help
 
+if TYPE_CHECKING:
+    from ..model.numeric import Model
+    from ..planning.plans import TensionPlan
 
-def add_rig_pose_load(p: argparse.ArgumentParser) -> None:
-    """``--rig``, ``--rotvec`` and ``--tau``: shared by commands that take a rig, a pose and a load."""
-    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
+
+def add_pose_load(p: argparse.ArgumentParser) -> None:
+    """``--rotvec`` and ``--tau``: shared by commands that take a pose and a load."""
     p.add_argument("--rotvec", nargs=3, type=rotvec_component, required=True, metavar=("RX", "RY", "RZ"),
                    help="orientation of {A} in {B} as a rotation vector (rad)")
     p.add_argument("--tau", nargs=3, type=quantity("moment_Nm"), default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
@@ -28,14 +26,16 @@ def add_rig_pose_load(p: argparse.ArgumentParser) -> None:
 
 
 def add_pose_arguments(p: argparse.ArgumentParser) -> None:
-    """Arguments of ``plan`` and ``stiffness``: rig, pose, load, reference tension, solver, JSON."""
-    add_rig_pose_load(p)
+    """Arguments of ``plan`` and ``stiffness``: pose, load, reference tension, solver.
+
+    ``--rig`` and ``--json`` come from the shared parent parsers.
+    """
+    add_pose_load(p)
     p.add_argument("--t-ref", type=quantity("tension_N"), default=None,
                    help="reference tension of the objective (N; default mid-range)")
     p.add_argument("--solver", default="active_set",
                    help="'active_set' (default: exact, compiled) or a qpsolvers backend such as osqp or "
                    "clarabel (answer polished exactly and checked)")
-    p.add_argument("--json", metavar="PATH", help="write machine-readable output ('-' = stdout)")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -47,13 +47,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         The ``csjm`` subparsers the command is added to.
     """
     p = sub.add_parser(
-        "plan", help=command_help("plan"),
+        "plan", help=command_help("plan"), parents=[rig_option(), json_option()],
                        description="Plan the six cable tensions (QP, t_min <= t <= t_max) that hold "
                        "the platform at a pose under an external moment plus its own weight.")
     add_pose_arguments(p)
     p.set_defaults(func=run_plan)
     p = sub.add_parser(
-        "stiffness", help=command_help("stiffness"),
+        "stiffness", help=command_help("stiffness"), parents=[rig_option(), json_option()],
                        description="Plan tensions for the pose and load, then the stiffness K "
                        "(N m/rad; Levi-Civita Hessian of the cable energy, convention of docs/conventions.md).")
     add_pose_arguments(p)
@@ -61,6 +61,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _plan(args: argparse.Namespace) -> tuple[TensionPlan, Model, np.ndarray, np.ndarray]:
+    from .. import so3
+    from .._validate import as_vector3
+    from ..model.numeric import Model
+    from ..model.rig import load_rig
+    from ..planning.planner import plan_tensions
+
     check_outputs([args.rig], {"--json": args.json})
     rig = load_rig(args.rig)
     model = Model(rig)
@@ -137,6 +143,8 @@ def run_stiffness(args: argparse.Namespace) -> int:
     InfeasibleLoad
         No tensions within the bounds hold the pose under the load.
     """
+    from ..model.joint_stiffness import stiffness
+
     plan, model, rotvec, tau = _plan(args)
     K = stiffness(model.rig, plan.R, plan.tensions_N, model=model, tau_ext_A_Nm=tau)
     eig = np.linalg.eigvalsh(K)

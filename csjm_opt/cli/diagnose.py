@@ -15,12 +15,9 @@ import sys
 from pathlib import Path
 
 from .._fileio import atomic_write_json
-from ..diagnose import EFFECTS
 from ..errors import InvalidInput, UsageError
-from ..measurement.logfile import MeasurementLog
-from ..model.rig import load_rig
-from ._options import check_outputs
-from .commands import command_help
+from ._options import check_outputs, json_option, rig_option, workers_option
+from .commands import DIAGNOSIS_EFFECTS, command_help
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -32,18 +29,17 @@ def register(sub: argparse._SubParsersAction) -> None:
         The subparsers of the ``csjm`` parser.
     """
     p = sub.add_parser(
-        "diagnose", help=command_help("diagnose"),
+        "diagnose", help=command_help("diagnose"), parents=[rig_option(), json_option("the diagnosis"),
+                                                           workers_option()],
                        description="Compare a measurement log (CSV, docs/conventions.md) with the nominal model of the "
-                       "rig: residuals and where they lie, every candidate effect (" + ", ".join(EFFECTS)
+                       "rig: residuals and where they lie, every candidate effect (" + ", ".join(DIAGNOSIS_EFFECTS)
                        + ") fitted jointly with the nominal stiffness scale and pretension and scored on "
                        "held-out cycles, the selected effect (or none) and the gap it closes.")
     p.add_argument("data", metavar="DATA.csv", help="measurement log (format in docs/conventions.md)")
-    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
     p.add_argument("--test", metavar="TEST.csv", default=None,
                    help="held-out log (default: grouped cross-validation by cycle)")
-    p.add_argument("--json", metavar="OUT", default=None, help="write the diagnosis as JSON ('-' = stdout)")
     p.add_argument("--report", metavar="DIR", default=None, help="write a Markdown report with figures here")
-    p.add_argument("--effects", nargs="+", choices=list(EFFECTS), default=None,
+    p.add_argument("--effects", nargs="+", choices=list(DIAGNOSIS_EFFECTS), default=None,
                    help="candidates to try (default: all)")
     p.add_argument("--prior", action="append", default=[], metavar="NAME=LO:HI",
                    help="override an effect parameter's plausible range (SI units; NAME may be a pattern such "
@@ -61,9 +57,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="the lab's load set for --suggest ([[load]] name, mass_kg, point_A_m; default: masses at "
                         "+-x, +-y of the platform reaching 1/3, 2/3 and all of the log's largest moment)")
     p.add_argument("--seed", type=int, default=0, help="seed of --suggest's candidate draw")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="processes for the independent fits (default: $CSJM_WORKERS, else the usable cores; 1: serial)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-rig-check", action="store_true",
+                   help="skip the check that the rig can have produced the logs (their first rows' equilibrium)")
     p.set_defaults(func=run)
 
 
@@ -95,6 +91,8 @@ def run(args: argparse.Namespace) -> int:
         Unreadable or invalid input files (rig, logs, load set), raised by their loaders.
     """
     from ..diagnose import diagnose
+    from ..measurement.logfile import MeasurementLog
+    from ..model.rig import load_rig
     from ..report.diagnosis.report import write_report
 
     inputs = [args.data, args.test, args.rig, args.extra, args.loads]
@@ -113,9 +111,10 @@ def run(args: argparse.Namespace) -> int:
         if report.exists() and not report.is_dir():
             raise InvalidInput(f"--report {report} exists and is not a folder", "--report")
     rig = load_rig(args.rig)
-    log = MeasurementLog.from_csv(args.data)
-    test = MeasurementLog.from_csv(args.test) if args.test else None
-    extra = MeasurementLog.from_csv(args.extra) if args.extra else None
+    rig_name = args.rig or "paper"
+    log = MeasurementLog.from_csv(args.data).check_cables(rig.n_cables, rig_name)
+    test = MeasurementLog.from_csv(args.test).check_cables(rig.n_cables, rig_name) if args.test else None
+    extra = MeasurementLog.from_csv(args.extra).check_cables(rig.n_cables, rig_name) if args.extra else None
     loads = None
     if args.suggest is not None:
         from ..diagnose.suggest.dead_weights import load_load_set
@@ -129,7 +128,7 @@ def run(args: argparse.Namespace) -> int:
 
         progress = partial(tqdm, file=sys.stderr, disable=None, leave=False)
     diagnosis = diagnose(rig, log, test, effects=args.effects, progress=progress, ranges=_priors(args.prior),
-                         extra=extra, workers=args.workers)
+                         extra=extra, workers=args.workers, check_rig=not args.no_rig_check)
     result = diagnosis.as_json()
     suggestion = None
     if args.suggest is not None:

@@ -6,14 +6,18 @@ import argparse
 
 import numpy as np
 
-from .. import so3
 from .._fileio import atomic_write_json, atomic_write_text
-from .._validate import as_vector3
-from ..model.mjcf import ACTUATIONS
-from ..model.rig import load_rig
-from ..planning.mjcf_export import export_mjcf
-from ._options import check_outputs, check_rotvec, float_in, quantity, rotvec_component
-from .commands import command_help
+from ._options import (
+    check_outputs,
+    check_rotvec,
+    float_in,
+    json_option,
+    out_option,
+    quantity,
+    rig_option,
+    rotvec_component,
+)
+from .commands import MJCF_ACTUATIONS, command_help
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -26,24 +30,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     """
     p = sub.add_parser(
         "export-mjcf", help=command_help("export-mjcf"),
+        parents=[rig_option(), out_option("FILE.xml", "MJCF file to write"), json_option("a summary")],
                        description="Write a MuJoCo model of the rig: ball joint at O, six pull-only tendon "
                        "springs with rest lengths planned for the pose and load, the platform's mass and "
                        "inertia, base sites fixed, load motors in {A}. Frames: world = {B}, body "
                        "'platform' = {A}; the ball joint's qpos is R as (w, x, y, z).")
-    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
     p.add_argument("--rotvec", nargs=3, type=rotvec_component, default=(0.0, 0.0, 0.0),
                    metavar=("RX", "RY", "RZ"), help="pose of {A} in {B} as a rotation vector (rad; default identity)")
     p.add_argument("--tau", nargs=3, type=quantity("moment_Nm"), default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
                    help="external moment about O in {A} (N m), platform weight excluded")
-    p.add_argument("--actuation", choices=ACTUATIONS, default="spring",
+    p.add_argument("--actuation", choices=MJCF_ACTUATIONS, default="spring",
                    help="cables as pull-only springs (default), winch actuators (ctrl = rest length) "
                    "or tension motors (ctrl = tension)")
     p.add_argument("--timestep", type=float_in(0.0, 0.1, low_open=True, unit="s"), default=5e-4,
                    help="engine step (s; default 5e-4)")
     p.add_argument("--integrator", default="RK4", choices=("RK4", "implicitfast", "implicit", "Euler"),
                    help="MuJoCo integrator (default RK4)")
-    p.add_argument("-o", "--output", required=True, metavar="FILE.xml", help="MJCF file to write")
-    p.add_argument("--json", metavar="PATH", help="write a summary as JSON ('-' = stdout)")
     p.set_defaults(func=run)
 
 
@@ -67,12 +69,17 @@ def run(args: argparse.Namespace) -> int:
     InfeasibleLoad
         No tensions within the bounds hold the pose under the load.
     """
-    check_outputs([args.rig], {"-o/--output": args.output, "--json": args.json})
+    from .. import so3
+    from .._validate import as_vector3
+    from ..model.rig import load_rig
+    from ..planning.mjcf_export import export_mjcf
+
+    check_outputs([args.rig], {"-o/--out": args.out, "--json": args.json})
     rig = load_rig(args.rig)
     rotvec, tau = as_vector3(check_rotvec(args.rotvec), "--rotvec"), as_vector3(args.tau, "--tau")
     xml = export_mjcf(rig, so3.exp(rotvec), tau, actuation=args.actuation, timestep_s=args.timestep,
                       integrator=args.integrator)
-    path = atomic_write_text(args.output, xml)
+    path = atomic_write_text(args.out, xml)
     if args.json:
         atomic_write_json(args.json, {"output": str(path), "rotvec": rotvec.tolist(), "tau_ext": tau.tolist(),
                                       "actuation": args.actuation, "timestep_s": args.timestep,

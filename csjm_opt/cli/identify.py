@@ -9,8 +9,7 @@ from typing import Any
 
 from .._fileio import atomic_write_json
 from .._limits import MAX_BOOTSTRAP, MAX_EXACT_INT
-from ..model.rig import load_rig
-from ._options import check_outputs, float_in, int_in
+from ._options import check_outputs, float_in, int_in, json_option, out_option, rig_option
 from .commands import command_help
 
 #: Above this many cycles, one line per cycle is printed and the JSON is compact.
@@ -27,24 +26,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     """
     p = sub.add_parser(
         "preprocess", help=command_help("preprocess"),
+        parents=[rig_option(), out_option("LOG.csv", "measurement log to write"), json_option("a summary")],
                        description="Turn a raw instrument CSV (tracker base points, platform poses "
                        "in the tracker frame, F/T readings in the sensor frame; format in "
                        "docs/guide/input-files.md) into the measurement log of docs/conventions.md: "
                        "least-squares base frame fit, pose in {B} (53)-(54), wrench moved to {A} "
                        "about O (55), weight handled explicitly (56).")
     p.add_argument("raw", metavar="RAW.csv", help="raw instrument CSV")
-    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
-    p.add_argument("-o", "--output", required=True, metavar="LOG.csv", help="measurement log to write")
     p.add_argument("--force", action="store_true", help="replace an existing output file")
     p.add_argument("--origin-tol", type=float_in(0, 1, low_open=True, unit="m"), default=None, metavar="M",
                    help="largest accepted distance between the origins of {A} and {B} (m, default 2e-3)")
     p.add_argument("--ft-includes-weight", action="store_true",
                    help="the F/T moment includes the platform weight: subtract it (56)")
-    p.add_argument("--json", metavar="PATH", help="write a summary ('-' = stdout)")
     p.set_defaults(func=run_preprocess)
 
     p = sub.add_parser(
-        "identify", help=command_help("identify"),
+        "identify", help=command_help("identify"), parents=[rig_option(), json_option()],
                        description="Per cycle (first row = reference): the default estimate K_ml "
                        "(maximum likelihood with tracker and F/T noise, curvature of the moment-rotation "
                        "relation from the rig model) with its interval, the Cramér-Rao bound of K's six "
@@ -53,7 +50,6 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "estimate, a symmetric-constrained estimate K_sym, and the condition number of the "
                        "excitation.")
     p.add_argument("data", metavar="DATA.csv", help="measurement log (format in docs/conventions.md)")
-    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
     p.add_argument("--cycle", type=int_in(-MAX_EXACT_INT, MAX_EXACT_INT), default=None, help="only this cycle id")
     p.add_argument("--order", type=int, choices=(1, 2, 3), default=1,
                    help="1: linear fit (paper); 2, 3: add terms up to that degree in dzeta "
@@ -83,16 +79,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="return estimates that the excitation does not determine to 20 %% (CI half-width "
                    "over ||K||) anyway, marked ill_conditioned; by default such cycles are refused")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
-    p.add_argument("--json", metavar="PATH", help="write machine-readable output ('-' = stdout)")
+    p.add_argument("--no-rig-check", action="store_true",
+                   help="skip the check that the rig can have produced the log (its first rows' equilibrium)")
     p.add_argument("--figures", metavar="DIR", help="write the Figure 5 convergence curve per cycle")
     p.set_defaults(func=run_identify)
 
     p = sub.add_parser(
-        "paper", help=command_help("paper"),
+        "paper", help=command_help("paper"), parents=[json_option()],
                        description="Recompute Table 3 (K_D, K_L, K) and Table 4 (estimated poses, E_theta) "
                        "from the paper's printed numbers; report where the printed numbers disagree "
                        "with the equations (errata 1-5).")
-    p.add_argument("--json", metavar="PATH", help="write machine-readable output ('-' = stdout)")
     p.set_defaults(func=run_paper)
 
 
@@ -120,18 +116,19 @@ def run_preprocess(args: argparse.Namespace) -> int:
         The rig file cannot be read or is malformed.
     """
     from ..measurement.preprocess import DEFAULT_ORIGIN_TOL_M, preprocess_file
+    from ..model.rig import load_rig
 
-    check_outputs([args.raw, args.rig], {"-o/--output": args.output, "--json": args.json},
-                  overwrite={"-o/--output": args.force})
+    check_outputs([args.raw, args.rig], {"-o/--out": args.out, "--json": args.json},
+                  overwrite={"-o/--out": args.force})
     rig = load_rig(args.rig)
     tol = DEFAULT_ORIGIN_TOL_M if args.origin_tol is None else args.origin_tol
     log, info = preprocess_file(args.raw, rig, origin_tol_m=tol, ft_includes_weight=args.ft_includes_weight)
-    log.to_csv(args.output, overwrite=args.force)
-    summary = {"output": str(args.output), "rows": len(log), "cycles": log.cycle_ids, **info}
+    log.to_csv(args.out, overwrite=args.force)
+    summary = {"output": str(args.out), "rows": len(log), "cycles": log.cycle_ids, **info}
     if args.json:
         atomic_write_json(args.json, summary)
     if args.json != "-":
-        print(f"wrote {args.output}: {len(log)} rows, {len(log.cycle_ids)} cycles; base fit rms "
+        print(f"wrote {args.out}: {len(log)} rows, {len(log.cycle_ids)} cycles; base fit rms "
               f"{info['base_fit_rms_m'] * 1e6:.1f} um, max origin offset {info['max_origin_offset_m'] * 1e3:.3f} mm")
     return 0
 
@@ -175,11 +172,15 @@ def run_identify(args: argparse.Namespace) -> int:
     from ..identification.stiffness_fits import n_parameters
     from ..measurement.instruments import InstrumentNoise
     from ..measurement.logfile import MeasurementLog
+    from ..measurement.rig_fit import check_log_rig
     from ..model.numeric import Model
+    from ..model.rig import load_rig
 
     check_outputs([args.data, args.rig], {"--json": args.json}, {"--figures": args.figures})
     rig = load_rig(args.rig)
-    log = MeasurementLog.from_csv(args.data)
+    log = MeasurementLog.from_csv(args.data).check_cables(rig.n_cables, args.rig or "paper")
+    if not args.no_rig_check:
+        check_log_rig(rig, log)
     model = Model(rig)
     noise = InstrumentNoise.paper() if args.noise == "paper" else None
     if args.tau_sigma is not None and args.angle_sigma is None:
@@ -204,7 +205,8 @@ def run_identify(args: argparse.Namespace) -> int:
     if args.cycle is None:  # cycles that cannot determine K are reported, not fatal (unless all are)
         estimates, skipped = identify_cycles(log, rig, model, progress=progress, **options)
     else:
-        estimates, skipped = identify_log(log, rig, args.cycle, model, progress=progress, **options), []
+        estimates, skipped = identify_log(log, rig, args.cycle, model, progress=progress, check_rig=False,
+                                          **options), []
     figures = []
     if args.figures:
         for e in estimates:

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from .._fileio import refuse_input_overwrite
-from ._options import check_outputs, int_in
+from ._options import check_outputs, int_in, out_option
 from .commands import command_help
 
 
@@ -20,6 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     """
     p = sub.add_parser(
         "report", help=command_help("report"),
+        parents=[out_option("DIR", "report folder (default: RESULTS without its suffix + _report)", required=False)],
                        description="Pareto front of workspace against minimum stiffness, the best designs in a "
                        "table and their hole geometry drawn, from a csjm sweep result file; writes index.html "
                        "(open it in a browser), index.md, figures and design_report.json into a folder.")
@@ -28,8 +29,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sweep", metavar="SWEEP.toml", default=None,
                    help="the sweep file of the results: draws the geometry with its [base] parameters and "
                    "evaluates the paper's design with the same settings to mark it")
-    p.add_argument("--out", metavar="DIR", default=None, help="report folder (default: RESULTS without its "
-                   "suffix + _report)")
     p.add_argument("--top", type=int_in(1, 1000), default=8, help="best designs in the table (default 8)")
     p.set_defaults(func=run)
 

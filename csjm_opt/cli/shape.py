@@ -7,16 +7,11 @@ import sys
 
 import numpy as np
 
-from .. import so3
 from .._fileio import atomic_write_json
-from .._validate import as_vector3
 from ..errors import InvalidInput
-from ..model.numeric import Model
-from ..model.rig import load_rig
-from ..shaping.shaper import OBJECTIVES, shape_stiffness
-from ._options import check_outputs, check_rotvec, finite_float, quantity
-from .commands import command_help
-from .core import add_rig_pose_load
+from ._options import check_outputs, check_rotvec, finite_float, json_option, quantity, rig_option
+from .commands import SHAPING_OBJECTIVES, command_help
+from .core import add_pose_load
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -28,23 +23,22 @@ def register(sub: argparse._SubParsersAction) -> None:
         The ``csjm`` subparsers the command is added to.
     """
     p = sub.add_parser(
-        "shape", help=command_help("shape"),
+        "shape", help=command_help("shape"), parents=[rig_option(), json_option()],
                        description="Choose the six cable tensions (t_min <= t <= t_max) that hold the pose "
                        "under the load and bring the stiffness K (N m/rad, docs/conventions.md) closest to "
                        "a target: weighted Frobenius (default), principal ('eigen') or directional objective. "
                        "Reports the achieved K, the residual, whether the target is reached and the active "
                        "bounds; --reachable adds the reachable range of each eigenvalue of K.")
-    add_rig_pose_load(p)
+    add_pose_load(p)
     p.add_argument("--target", nargs=9, type=quantity("stiffness_Nm_per_rad"), required=True, metavar="K",
                    help="target K row by row: K11 K12 K13 K21 ... K33 (N m/rad; symmetrised)")
     p.add_argument("--weights", nargs="+", type=quantity("weight"), default=None, metavar="W",
                    help="frobenius: 9 elementwise weights; eigen: 3; directional: one per direction")
-    p.add_argument("--objective", choices=OBJECTIVES, default="frobenius")
+    p.add_argument("--objective", choices=SHAPING_OBJECTIVES, default="frobenius")
     p.add_argument("--direction", nargs=3, type=finite_float, action="append", metavar=("UX", "UY", "UZ"),
                    help="a direction in {A} for --objective directional (repeatable)")
     p.add_argument("--solver", default="osqp", help="qpsolvers backend or 'active_set' (default osqp)")
     p.add_argument("--reachable", action="store_true", help="also compute the reachable eigenvalue ranges")
-    p.add_argument("--json", metavar="PATH", help="write machine-readable output ('-' = stdout)")
     p.set_defaults(func=run)
 
 
@@ -71,6 +65,12 @@ def run(args: argparse.Namespace) -> int:
     InfeasibleLoad
         No tensions within the bounds hold the pose under the load.
     """
+    from .. import so3
+    from .._validate import as_vector3
+    from ..model.numeric import Model
+    from ..model.rig import load_rig
+    from ..shaping.shaper import shape_stiffness
+
     check_outputs([args.rig], {"--json": args.json})
     for d in args.direction or ():
         if not 1e-9 < float(np.linalg.norm(d)) < 1e9:

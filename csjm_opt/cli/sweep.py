@@ -6,14 +6,8 @@ import argparse
 import sys
 
 from .._fileio import atomic_write_json
-from ..design.sweep.runner import run_sweep
-from ..design.sweep.spec import MAX_DESIGNS, SweepSpec
-from ..errors import DesignError
-from ._options import check_outputs, int_in
-from .commands import command_help
-
-#: Most local worker processes (more than any workstation has cores).
-MAX_WORKERS = 256
+from ._options import check_outputs, int_in, json_option, out_option, workers_option
+from .commands import MAX_DESIGNS, command_help
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -26,16 +20,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     """
     p = sub.add_parser(
         "sweep", help=command_help("sweep"),
-        description="Evaluate every design of a sweep description (TOML; see studies/paper_sweep.toml "
+        parents=[out_option("RESULTS", "result file (JSON Lines; created, or resumed when it exists)"),
+                 workers_option(), json_option("the designs and speed")],
+        description="Evaluate every design of a sweep description (TOML; see studies/paper_sweep/paper_sweep.toml "
         "and docs/guide/design.md): wrench-feasible workspace, stiffness, tension and wrench margins, "
         "shaping range. Results are appended to RESULTS (JSON Lines) as designs finish; "
         "running again with the same RESULTS resumes, skipping finished designs.")
     p.add_argument("sweep", metavar="SWEEP.toml", help="sweep description")
-    p.add_argument("--out", required=True, metavar="RESULTS",
-                   help="result file (JSON Lines; created, or resumed when it exists)")
-    p.add_argument("--workers", type=int_in(1, MAX_WORKERS), default=None,
-                   help="local worker processes (1 = run in this process; default: 2 when the sweep "
-                   "is long enough to repay starting them); with --dask, the size of the local cluster")
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,
                    help="run on the Dask distributed scheduler at ADDRESS (e.g. tcp://host:8786)")
     p.add_argument("--dask", action="store_true",
@@ -43,7 +34,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--limit", type=int_in(1, MAX_DESIGNS), default=None, metavar="N",
                    help="stop after computing N designs (run again to continue)")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
-    p.add_argument("--json", metavar="PATH", help="write the designs and speed as JSON ('-' = stdout)")
     p.set_defaults(func=run)
 
 
@@ -67,6 +57,10 @@ def run(args: argparse.Namespace) -> int:
     InvalidInput
         An output that cannot be written or that names an input.
     """
+    from ..design.sweep.runner import run_sweep
+    from ..design.sweep.spec import SweepSpec
+    from ..errors import DesignError
+
     check_outputs([args.sweep], {"--out": args.out})
     check_outputs([args.sweep, args.out], {"--json": args.json})
     spec = SweepSpec.from_toml(args.sweep)

@@ -4,7 +4,16 @@ from __future__ import annotations
 
 import argparse
 
-from ._options import check_outputs, check_rotvec, int_in, quantity, rotvec_component
+from ._options import (
+    check_outputs,
+    check_rotvec,
+    int_in,
+    json_option,
+    out_option,
+    quantity,
+    rig_option,
+    rotvec_component,
+)
 from .commands import command_help
 
 
@@ -18,12 +27,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     """
     p = sub.add_parser(
         "view", help=command_help("view"),
+        parents=[rig_option(), out_option("VIEW.html", "HTML page to write"), json_option("the numbers shown")],
         description="Write one self-contained HTML page (works offline, no network fetches) showing the rig "
         "in 3-D: base, platform at the pose, joint centre O, holes numbered as in the rig file, cables "
         "coloured by planned tension, the load moment, and the compliance ellipsoid of K. A slider moves "
         "along the straight path from upright and unloaded to the pose and load (or through a log's cycles "
         "with --log). A pose the rig cannot hold still renders and names the cables at their bounds.")
-    p.add_argument("--rig", default=None, help="rig TOML file (default: the built-in paper rig)")
     p.add_argument("--rotvec", nargs=3, type=rotvec_component, default=(0.0, 0.0, 0.0), metavar=("RX", "RY", "RZ"),
                    help="orientation of {A} in {B} as a rotation vector (rad; default identity)")
     p.add_argument("--tau", nargs=3, type=quantity("moment_Nm"), default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
@@ -32,8 +41,6 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="frames on the path from upright to the pose (default 5)")
     p.add_argument("--log", metavar="DATA.csv", default=None,
                    help="show a measurement log's cycles instead (each cycle's most loaded row)")
-    p.add_argument("-o", "--output", required=True, metavar="VIEW.html", help="HTML page to write")
-    p.add_argument("--json", metavar="PATH", help="write the numbers shown as JSON ('-' = stdout)")
     p.set_defaults(func=run)
 
 
@@ -60,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
     from ..model.rig import load_rig
     from ..view import log_view, pose_view
 
-    check_outputs([args.rig, args.log], {"-o/--output": args.output, "--json": args.json})
+    check_outputs([args.rig, args.log], {"-o/--out": args.out, "--json": args.json})
     rig = load_rig(args.rig)
     rotvec, tau = as_vector3(check_rotvec(args.rotvec), "--rotvec"), as_vector3(args.tau, "--tau")
     if args.log:
@@ -69,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
         page = log_view(rig, MeasurementLog.from_csv(args.log))
     else:
         page = pose_view(rig, rotvec, tau, args.steps)
-    path = page.write(args.output)
+    path = page.write(args.out)
     frames = [{"label": lab, "panels": [_numbers(s) for s in f]} for lab, f in zip(page.frame_labels, page.frames)]
     if args.json:
         atomic_write_json(args.json, {"output": str(path), "bytes": len(page), "frames": frames})

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ctypes
 import dataclasses
+import functools
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -34,23 +35,28 @@ _D = ctypes.POINTER(ctypes.c_double)
 _I = ctypes.POINTER(ctypes.c_int)
 
 
-class _Plan(ctypes.Structure):
-    _fields_ = [("tensions_N", ctypes.c_double * 6), ("rest_lengths_m", ctypes.c_double * 6),
-                ("cable_lengths_m", ctypes.c_double * 6), ("J", ctypes.c_double * 18),
-                ("tau_weight_A_Nm", ctypes.c_double * 3), ("R", ctypes.c_double * 9),
-                ("distance_Nm", ctypes.c_double), ("iterations", ctypes.c_int), ("fallback", ctypes.c_int)]
+@functools.cache
+def _structs(m: int) -> tuple[type[ctypes.Structure], type[ctypes.Structure]]:
+    """The ``csjm_plan`` and ``csjm_warm_start`` structs of csjm.h for ``m`` cables."""
 
+    class _Plan(ctypes.Structure):
+        _fields_ = [("tensions_N", ctypes.c_double * m), ("rest_lengths_m", ctypes.c_double * m),
+                    ("cable_lengths_m", ctypes.c_double * m), ("J", ctypes.c_double * (3 * m)),
+                    ("tau_weight_A_Nm", ctypes.c_double * 3), ("R", ctypes.c_double * 9),
+                    ("distance_Nm", ctypes.c_double), ("iterations", ctypes.c_int), ("fallback", ctypes.c_int)]
 
-class _Warm(ctypes.Structure):
-    _fields_ = [("lower", ctypes.c_ubyte * 6), ("upper", ctypes.c_ubyte * 6)]
+    class _Warm(ctypes.Structure):
+        _fields_ = [("lower", ctypes.c_ubyte * m), ("upper", ctypes.c_ubyte * m)]
+
+    return _Plan, _Warm
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class CPlanBatch:
     """Results of :meth:`CPlanner.plan_many`: arrays with a leading axis ``n`` (no exceptions raised)."""
 
-    tensions_N: np.ndarray      # (n, 6)
-    rest_lengths_m: np.ndarray  # (n, 6)
+    tensions_N: np.ndarray      # (n, m)
+    rest_lengths_m: np.ndarray  # (n, m)
     distance_Nm: np.ndarray     # (n,) > 0 where infeasible
     status: np.ndarray          # (n,) SOLVED, INFEASIBLE, ITERATION_CAP or BAD_INPUT
     iterations: np.ndarray      # (n,) active-set iterations
@@ -77,6 +83,11 @@ class CPlanner:
     def __init__(self, path: str | Path):
         self.path = Path(path)
         self._lib = lib = ctypes.CDLL(str(self.path))
+        lib.csjm_n_cables.restype = ctypes.c_int
+        #: m, the number of cables of the rig compiled in.
+        self.n_cables = m = int(lib.csjm_n_cables())
+        _Plan, _Warm = _structs(m)
+        self._Warm = _Warm
         lib.csjm_plan_tensions_R.argtypes = [_D, _D, _D, ctypes.c_int, ctypes.POINTER(_Warm), ctypes.POINTER(_Plan)]
         lib.csjm_plan_tensions_q.argtypes = lib.csjm_plan_tensions_R.argtypes
         lib.csjm_stiffness_R.argtypes = [_D, _D, _D]
@@ -102,7 +113,7 @@ class CPlanner:
     # ------------------------------------------------------------------ one pose
     def reset_warm_start(self) -> None:
         """Forget the active set kept for ``warm_start=True`` calls."""
-        self._warm = _Warm()
+        self._warm = self._Warm()
 
     def plan_tensions(self, R: ArrayLike, tau_ext_A_Nm: ArrayLike = (0.0, 0.0, 0.0),
                       t_ref_N: ArrayLike | None = None, warm_start: bool = False,
@@ -115,7 +126,7 @@ class CPlanner:
             Orientation of {A} in {B}.
         tau_ext_A_Nm : array_like, shape (3,), optional
             External moment in {A}, weight excluded (N m).
-        t_ref_N : float or array_like, shape (6,), optional
+        t_ref_N : float or array_like, shape (m,), optional
             Reference tensions (N); default mid-range.
         warm_start : bool, optional
             Start from the previous warm-started call's active set.
@@ -159,9 +170,9 @@ class CPlanner:
         if status != SOLVED:
             raise SolverError(f"C planner: {plan.iterations} active-set iterations did not settle "
                               f"(status {status})", "c")
-        t_ref_out = np.full(6, 0.5 * (self.t_min_N + self.t_max_N)) if t_ref is None else t_ref
+        t_ref_out = np.full(self.n_cables, 0.5 * (self.t_min_N + self.t_max_N)) if t_ref is None else t_ref
         return TensionPlan(np.array(plan.tensions_N), R_used, tau.copy(), np.array(plan.tau_weight_A_Nm),
-                           np.array(plan.J).reshape(6, 3), self.t_min_N, self.t_max_N, t_ref_out, "c",
+                           np.array(plan.J).reshape(self.n_cables, 3), self.t_min_N, self.t_max_N, t_ref_out, "c",
                            np.array(plan.cable_lengths_m), np.array(plan.rest_lengths_m))
 
     def plan_tensions_q(self, q_wxyz: ArrayLike, tau_ext_A_Nm: ArrayLike = (0.0, 0.0, 0.0)) -> TensionPlan:
@@ -202,7 +213,7 @@ class CPlanner:
         ----------
         R : array_like, shape (3, 3)
             Orientation of {A} in {B}.
-        tensions_N : array_like, shape (6,)
+        tensions_N : array_like, shape (m,)
             Cable tensions (N); ``t_i <= 0`` marks cable i slack.
         check_bounds : bool, optional
             Refuse taut cables outside ``[t_min, t_max]`` (within ``bound_tol_N``).
@@ -224,7 +235,7 @@ class CPlanner:
             A taut cable outside the bounds.
         """
         R_arr = _f64(as_array(R, (3, 3), "R"), (3, 3))
-        T = _f64(as_array(tensions_N, (6,), "tensions"), (6,))
+        T = _f64(as_array(tensions_N, (self.n_cables,), "tensions"), (self.n_cables,))
         if check_bounds:
             taut = T > 0
             bad = taut & ((T < self.t_min_N - bound_tol_N) | (T > self.t_max_N + bound_tol_N))
@@ -241,7 +252,7 @@ class CPlanner:
         return K.reshape(3, 3)
 
     def pose_terms(self, R: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Cable lengths (6,), J (6, 3) and weight moment (3,) at ``R``, computed in C.
+        """Cable lengths (m,), J (m, 3) and weight moment (3,) at ``R``, computed in C.
 
         Parameters
         ----------
@@ -250,9 +261,9 @@ class CPlanner:
 
         Returns
         -------
-        c : ndarray, shape (6,)
+        c : ndarray, shape (m,)
             Cable lengths (m).
-        J : ndarray, shape (6, 3)
+        J : ndarray, shape (m, 3)
             Jacobian of the cable lengths (m/rad).
         tau_weight_A_Nm : ndarray, shape (3,)
             Moment of the platform's weight about O, in {A} (N m).
@@ -265,11 +276,11 @@ class CPlanner:
             ``R`` is not a rotation.
         """
         R_arr = _f64(as_array(R, (3, 3), "R"), (3, 3))
-        c, J, w = np.empty(6), np.empty(18), np.empty(3)
+        c, J, w = np.empty(self.n_cables), np.empty(3 * self.n_cables), np.empty(3)
         if self._lib.csjm_pose_terms_R(_ptr(R_arr), _ptr(c), _ptr(J), _ptr(w)) != SOLVED:
             as_rotation(R_arr)
             raise InvalidInput("the C pose terms refused R", "R")
-        return c, J.reshape(6, 3), w
+        return c, J.reshape(self.n_cables, 3), w
 
     # ------------------------------------------------------------------ many poses
     def plan_many(self, Rs: ArrayLike, taus_A_Nm: ArrayLike, warm_start: bool = False, max_iter: int = 0,
@@ -286,7 +297,7 @@ class CPlanner:
             Warm-start each row from the previous one's active set.
         max_iter : int, optional
             As in :meth:`plan_tensions`.
-        t_ref_N : array_like, shape (n, 6), optional
+        t_ref_N : array_like, shape (n, m), optional
             Reference tensions (N); default mid-range.
 
         Returns
@@ -302,8 +313,8 @@ class CPlanner:
         Rs_a = _f64(as_array(Rs, (None, 3, 3), "Rs"), (-1, 9))
         n = Rs_a.shape[0]
         taus = _f64(as_array(taus_A_Nm, (n, 3), "taus"), (n, 3))
-        t_ref = None if t_ref_N is None else _f64(as_array(t_ref_N, (n, 6), "t_ref"), (n, 6))
-        T, rest, dist = np.empty((n, 6)), np.empty((n, 6)), np.empty(n)
+        t_ref = None if t_ref_N is None else _f64(as_array(t_ref_N, (n, self.n_cables), "t_ref"), (n, self.n_cables))
+        T, rest, dist = np.empty((n, self.n_cables)), np.empty((n, self.n_cables)), np.empty(n)
         status, iters, fb = np.empty(n, np.intc), np.empty(n, np.intc), np.empty(n, np.intc)
         self._lib.csjm_host_plan_batch(n, _ptr(Rs_a), _ptr(taus), None if t_ref is None else _ptr(t_ref),
                                        int(max_iter), int(bool(warm_start)), _ptr(T), _ptr(rest), _ptr(dist),
@@ -317,7 +328,7 @@ class CPlanner:
         ----------
         Rs : array_like, shape (n, 3, 3)
             Orientations of {A} in {B}.
-        tensions_N : array_like, shape (n, 6)
+        tensions_N : array_like, shape (n, m)
             Cable tensions (N).
 
         Returns
@@ -332,7 +343,7 @@ class CPlanner:
         """
         Rs_a = _f64(as_array(Rs, (None, 3, 3), "Rs"), (-1, 9))
         n = Rs_a.shape[0]
-        T = _f64(as_array(tensions_N, (n, 6), "tensions"), (n, 6))
+        T = _f64(as_array(tensions_N, (n, self.n_cables), "tensions"), (n, self.n_cables))
         K, status = np.empty((n, 9)), np.empty(n, np.intc)
         self._lib.csjm_host_stiffness_batch(n, _ptr(Rs_a), _ptr(T), _ptr(K), _ptr(status, _I))
         K[status != SOLVED] = np.nan
@@ -372,8 +383,8 @@ class CPlanner:
     def _t_ref(self, t_ref_N: ArrayLike) -> np.ndarray:
         t = np.asarray(t_ref_N, dtype=np.float64)
         if t.shape == ():
-            t = np.full(6, float(t))
-        return _f64(as_array(t, (6,), "t_ref"), (6,))
+            t = np.full(self.n_cables, float(t))
+        return _f64(as_array(t, (self.n_cables,), "t_ref"), (self.n_cables,))
 
 
 def load(out_dir: str | Path, extra_cflags: Sequence[str] = ()) -> CPlanner:

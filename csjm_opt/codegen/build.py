@@ -16,6 +16,7 @@ import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
+from .._atomic_write import _file_mode
 from ..errors import InvalidInput, SolverError
 
 __all__ = ["CFLAGS", "CORE_SOURCES", "HEADERS", "build_shared", "find_compiler"]
@@ -91,6 +92,7 @@ def build_shared(out_dir: str | Path, extra_cflags: Sequence[str] = (), force: b
         if proc.returncode != 0:
             first = next((ln for ln in proc.stderr.splitlines() if "error" in ln), proc.stderr.strip()[:300])
             raise SolverError(f"{cc} failed on {d}: {first}", "cc")
+        os.chmod(tmp, _file_mode(executable=True))     # not mkstemp's private 0600
         os.replace(tmp, lib)
     finally:
         if os.path.exists(tmp):

@@ -30,7 +30,7 @@ class CTensionPlanningController(PoseHoldingController):
         The loaded library.
     R_ref : ndarray, shape (3, 3), or callable
         Fixed orientation of {A} in {B}, or a function of time (s) returning one.
-    t_ref_N : ndarray, shape (6,), optional
+    t_ref_N : ndarray, shape (m,), optional
         Reference tensions (N); default mid-range.
     integral_gain : float, optional
         Integral pose correction (as :class:`PoseHoldingController`).
@@ -52,7 +52,7 @@ class CTensionPlanningController(PoseHoldingController):
         self.planner = planner
         self.t_ref_N = t_ref_N
         self.warm_start = warm_start
-        self._rest_m = np.zeros(6)
+        self._rest_m = np.zeros(rig.n_cables)
 
     def reset(self) -> None:
         """Forget the integral state and the warm start."""
@@ -72,7 +72,7 @@ class CTensionPlanningController(PoseHoldingController):
         Returns
         -------
         tuple
-            ``(tensions_N, None, None)``: the (6,) tensions (N), no target K and no planned K.
+            ``(tensions_N, None, None)``: the (m,) tensions (N), no target K and no planned K.
 
         Raises
         ------
@@ -95,7 +95,7 @@ class CTensionPlanningController(PoseHoldingController):
 
         Returns
         -------
-        ndarray, shape (6,)
+        ndarray, shape (m,)
             Rest lengths (m).
         """
         return self._rest_m.copy()

@@ -64,12 +64,12 @@ def _symbolic_stiffness(rig: Rig) -> ca.Function:
     ``R`` and ``K`` are flattened row-major (9), as csjm.h documents; ``t_i <= 0`` is a slack
     cable (no ``k_i j_i j_i^T``, no tension term), as in :func:`csjm_opt.stiffness`.
     """
-    f = build_functions()
+    f = build_functions(rig.n_cables)
     A = ca.DM(np.asarray(rig.platform_holes_A_m, float).T)
     B = ca.DM(np.asarray(rig.base_holes_B_m, float).T)
     k = ca.DM(np.asarray(rig.cable_stiffness_N_per_m, float))
     r = ca.SX.sym("R", 9)
-    T = ca.SX.sym("T", 6)
+    T = ca.SX.sym("T", rig.n_cables)
     R = ca.reshape(r, 3, 3).T                      # row-major flat -> matrix
     taut = T > 0
     K = f["stiffness"](R, ca.if_else(taut, T, 0), ca.if_else(taut, k, 0), A, B)
@@ -105,11 +105,12 @@ def _rig_header(rig: Rig, source: str, sha: str, sz_w: int, sz_iw: int) -> str:
 /* tension bounds (N) and cable-plus-drive stiffness (N/m) */
 #define CSJM_T_MIN_N {rig.t_min_N:.17g}
 #define CSJM_T_MAX_N {rig.t_max_N:.17g}
-static const double CSJM_K_N_PER_M[6] = {_c_array(rig.cable_stiffness_N_per_m)};
+static const double CSJM_K_N_PER_M[CSJM_N_CABLES] = {_c_array(rig.cable_stiffness_N_per_m)};
 
-/* holes (6 x 3, row-major, m), first moment of the platform mass m r in {{A}} (kg m), gravity in {{B}} */
-static const double CSJM_PLATFORM_HOLES_A_M[18] = {_c_array(rig.platform_holes_A_m)};
-static const double CSJM_BASE_HOLES_B_M[18] = {_c_array(rig.base_holes_B_m)};
+/* holes (CSJM_N_CABLES x 3, row-major, m), first moment of the platform mass m r in {{A}} (kg m),
+ * gravity in {{B}} */
+static const double CSJM_PLATFORM_HOLES_A_M[3 * CSJM_N_CABLES] = {_c_array(rig.platform_holes_A_m)};
+static const double CSJM_BASE_HOLES_B_M[3 * CSJM_N_CABLES] = {_c_array(rig.base_holes_B_m)};
 static const double CSJM_FIRST_MOMENT_A_KGM[3] = {_c_array(first_moment)};
 static const double CSJM_GRAVITY_B[3] = {_c_array(rig.gravity_B_m_per_s2)};
 
@@ -119,6 +120,16 @@ static const double CSJM_GRAVITY_B[3] = {_c_array(rig.gravity_B_m_per_s2)};
 
 #endif /* CSJM_RIG_H */
 """
+
+
+def _sized_header(text: str, n_cables: int) -> str:
+    """csjm.h with the rig's cable count m and 3^m written into its two size macros."""
+    for old, new in (("#define CSJM_N_CABLES 6\n", f"#define CSJM_N_CABLES {n_cables}\n"),
+                     ("#define CSJM_N_PATTERNS 729L\n", f"#define CSJM_N_PATTERNS {3 ** n_cables}L\n")):
+        if old not in text:
+            raise AssertionError(f"csjm.h template lacks {old.strip()!r}")
+        text = text.replace(old, new)
+    return text
 
 
 def rig_fingerprint(rig: Rig) -> str:
@@ -204,6 +215,7 @@ def generate_c(rig: Rig, out_dir: str | Path, rig_source: str = "paper") -> Gene
     c_dir = resources.files("csjm_opt.codegen") / "c"
     for name in STATIC_FILES:
         texts[name] = (c_dir / name).read_text()
+    texts["csjm.h"] = _sized_header(texts["csjm.h"], rig.n_cables)
     try:
         for name, text in texts.items():
             atomic_write_text(out / name, text)

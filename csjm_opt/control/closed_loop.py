@@ -53,8 +53,8 @@ class ClosedLoopLog:
     R_meas: np.ndarray           # (n, 3, 3) measured pose (what the controller read at t_k)
     R_ref: np.ndarray            # (n, 3, 3) controller's reference
     tau_ext_A_Nm: np.ndarray     # (n, 3) true external moment
-    tensions_cmd_N: np.ndarray   # (n, 6) tensions the controller planned (nan at 0)
-    tensions_N: np.ndarray       # (n, 6) actual tensions of the plant
+    tensions_cmd_N: np.ndarray   # (n, m) tensions the controller planned (nan at 0)
+    tensions_N: np.ndarray       # (n, m) actual tensions of the plant
     K: np.ndarray                # (n, 3, 3) achieved cable stiffness of the plant
     K_target: np.ndarray         # (n, 3, 3) target (nan when the controller sets none)
     step_time_s: np.ndarray      # (n,) wall time of read + control + command + simulate (nan at 0)
@@ -148,9 +148,10 @@ def simulate(rig: Rig, controller: Controller, load: LoadProfile, duration_s: fl
     state = plant.reset(R, omega_init_A_rad_s, load)
 
     t = np.arange(n + 1) * dt_s
+    m_plant = getattr(plant, "rig", plant_rig or rig).n_cables
     out = {name: np.full((n + 1,) + shape, np.nan) for name, shape in
-           [("R", (3, 3)), ("R_meas", (3, 3)), ("R_ref", (3, 3)), ("tau", (3,)), ("T_cmd", (6,)),
-            ("T", (6,)), ("K", (3, 3)), ("K_target", (3, 3)), ("dt", ()), ("cpu", ()), ("omega", (3,))]}
+           [("R", (3, 3)), ("R_meas", (3, 3)), ("R_ref", (3, 3)), ("tau", (3,)), ("T_cmd", (rig.n_cables,)),
+            ("T", (m_plant,)), ("K", (3, 3)), ("K_target", (3, 3)), ("dt", ()), ("cpu", ()), ("omega", (3,))]}
     out["R"][0], out["tau"][0], out["R_ref"][0] = R, state.tau_ext_A_Nm, controller.reference(0.0)
     out["omega"][0] = state.omega_A_rad_s
     if progress is None:

@@ -1,4 +1,4 @@
-"""The MuJoCo part of ``csjm demo`` (and of ``studies/dynamic_controllers.py``): controllers with dynamics.
+"""The MuJoCo part of ``csjm demo`` (and of ``studies/dynamic_controllers/``): controllers with dynamics.
 
 The paper rig follows a tilt-and-torsion reference (10 deg tilt about x and
 15 deg torsion about z, both ``sin(pi t)``: 0.5 Hz) while an external moment
@@ -155,8 +155,8 @@ def stiffness_switch(rig: Rig, R: np.ndarray | None = None, tau_ext_A_Nm: np.nda
     tau = np.array([0.2, -0.15, 0.1]) if tau_ext_A_Nm is None else np.asarray(tau_ext_A_Nm, float)
     from ..model.joint_stiffness import stiffness
 
-    K_soft = stiffness(rig, R, plan_tensions(rig, R, tau, t_ref_N=np.full(6, 0.9 * rig.t_max_N)).tensions_N)
-    K_stiff = stiffness(rig, R, plan_tensions(rig, R, tau, t_ref_N=np.full(6, 3.0 * rig.t_min_N)).tensions_N)
+    K_soft = stiffness(rig, R, plan_tensions(rig, R, tau, t_ref_N=np.full(rig.n_cables, 0.9 * rig.t_max_N)).tensions_N)
+    K_stiff = stiffness(rig, R, plan_tensions(rig, R, tau, t_ref_N=np.full(rig.n_cables, 3.0 * rig.t_min_N)).tensions_N)
     ctrl = StiffnessShapingController(rig, R, lambda t: K_soft if t < switch_s else K_stiff)
     plant = MujocoPlant(rig, joint_damping_Nms_per_rad=0.3)
     load = lambda t: tau  # noqa: E731

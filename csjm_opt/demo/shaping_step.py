@@ -1,6 +1,6 @@
 """The shaping part of ``csjm demo``: shape K at a paper pose, reachable set, short closed loop.
 
-Also holds :func:`soft_stiff_targets`, shared with ``studies/soft_stiff_switch.py``.
+Also holds :func:`soft_stiff_targets`, shared with ``studies/soft_stiff_switch/soft_stiff_switch.py``.
 """
 
 from __future__ import annotations

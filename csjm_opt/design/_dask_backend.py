@@ -14,8 +14,9 @@ def _run_dask(todo: list[tuple[int, dict]], settings: EvaluationSettings | Any, 
               workers: int, timeout_s: float, fn: Callable = evaluate_design) -> Iterator[tuple[int, Any]]:
     try:
         from distributed import Client, LocalCluster, as_completed
-    except ImportError as exc:  # pragma: no cover - dask[distributed] is a dependency
-        raise DesignError("the Dask option needs dask[distributed] installed", "--scheduler") from exc
+    except ImportError as exc:
+        raise DesignError('the Dask option needs the dask extra: pip install -e ".[dask]" (or '
+                          '"csjm_opt[dask]")', "--dask") from exc
     cluster = None
     try:
         if scheduler:

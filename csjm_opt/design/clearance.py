@@ -30,8 +30,14 @@ import numpy as np
 from ..model.link import Link
 from ..model.rig import Rig
 
-#: The 15 cable pairs (0-based), in the order of the ``pair`` axis.
-PAIRS = np.array(list(itertools.combinations(range(6), 2)))
+
+def cable_pairs(n_cables: int) -> np.ndarray:
+    """The m (m - 1) / 2 cable pairs (0-based, i < j), in the order of the ``pair`` axis."""
+    return np.array(list(itertools.combinations(range(n_cables), 2)), dtype=np.int64).reshape(-1, 2)
+
+
+#: The 15 cable pairs of a six-cable rig.
+PAIRS = cable_pairs(6)
 
 
 def segment_distance(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray,
@@ -109,7 +115,7 @@ def cable_ends_B_m(rig: Rig, Rs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     Returns
     -------
-    top, bottom : ndarray, shape (n, 6, 3)
+    top, bottom : ndarray, shape (n, m, 3)
         ``R a_i`` and ``b_i`` (m).
     """
     Rs = np.asarray(Rs, float)
@@ -122,9 +128,9 @@ def cable_ends_B_m(rig: Rig, Rs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 class PoseInterference:
     """Per-orientation interference arrays (n orientations)."""
 
-    cable_distance_m: np.ndarray    # (n, 15) per pair of PAIRS
-    link_clearance_m: np.ndarray    # (n, 6) per cable (negative: the cable cuts the link)
-    exit_angle_deg: np.ndarray      # (n, 6, 2) per cable, at its platform hole and its base hole
+    cable_distance_m: np.ndarray    # (n, m (m - 1) / 2) per pair of cable_pairs(m)
+    link_clearance_m: np.ndarray    # (n, m) per cable (negative: the cable cuts the link)
+    exit_angle_deg: np.ndarray      # (n, m, 2) per cable, at its platform hole and its base hole
 
 
 def pose_interference(rig: Rig, Rs: np.ndarray, link: Link | None = None) -> PoseInterference:
@@ -145,7 +151,8 @@ def pose_interference(rig: Rig, Rs: np.ndarray, link: Link | None = None) -> Pos
     """
     link = link or rig.link_or_default
     top, bottom = cable_ends_B_m(rig, Rs)
-    i, j = PAIRS[:, 0], PAIRS[:, 1]
+    pairs = cable_pairs(rig.n_cables)
+    i, j = pairs[:, 0], pairs[:, 1]
     cc, _, _ = segment_distance(top[:, i], bottom[:, i], top[:, j], bottom[:, j])
     r0, r1 = link.rod_ends_B_m
     rod, _, _ = segment_distance(top, bottom, r0, r1)
@@ -203,12 +210,13 @@ def interference(rig: Rig, Rs: np.ndarray, link: Link | None = None) -> Interfer
     n_cc = int(np.argmin(p.cable_distance_m))
     at_cc, pair = divmod(n_cc, p.cable_distance_m.shape[1])
     n_lk = int(np.argmin(p.link_clearance_m))
-    at_lk, cable = divmod(n_lk, 6)
+    at_lk, cable = divmod(n_lk, rig.n_cables)
+    pairs = cable_pairs(rig.n_cables)
     flat = p.exit_angle_deg.reshape(len(p.exit_angle_deg), -1)
     at_ex = int(np.argmax(flat.max(axis=1)))
     return Interference(
         min_cable_distance_m=float(p.cable_distance_m.flat[n_cc]),
-        min_cable_distance_pair=(int(PAIRS[pair, 0]) + 1, int(PAIRS[pair, 1]) + 1),
+        min_cable_distance_pair=(int(pairs[pair, 0]) + 1, int(pairs[pair, 1]) + 1),
         min_cable_distance_at=int(at_cc),
         min_link_clearance_m=float(p.link_clearance_m.flat[n_lk]), min_link_clearance_cable=int(cable) + 1,
         min_link_clearance_at=int(at_lk),

@@ -26,7 +26,11 @@ import itertools
 import numpy as np
 from numba import njit
 
-_PAIRS = np.array(list(itertools.combinations(range(6), 2)))   # (15, 2)
+
+def _pairs(m: int) -> np.ndarray:
+    """Index pairs (i < j) of m cables, (m (m - 1) / 2, 2): the candidate facet normals j_i x j_k."""
+    return np.array(list(itertools.combinations(range(m), 2)), dtype=np.int64).reshape(-1, 2)
+
 #: Relative flatness below which the moment set counts as rank deficient (J of rank < 3).
 RANK_TOL = 1e-9
 
@@ -35,7 +39,7 @@ def wrench_margin_Nm(J: np.ndarray, tau_load_A_Nm: np.ndarray, t_min_N: float,
                      t_max_N: float) -> np.ndarray:
     """Signed distance (N m) of ``-tau_load`` inside the available moment zonotope.
 
-    ``J`` is (n, 6, 3); ``tau_load_A_Nm`` is (n, 3) or (n, m, 3) for ``m``
+    ``J`` is (n, m_c, 3) for m_c cables; ``tau_load_A_Nm`` is (n, 3) or (n, m, 3) for ``m``
     loads per pose. Returns (n,) or (n, m). Feasible iff the result is >= 0
     (use a small negative tolerance for round-off). Compiled
     (:func:`_margin_kernel`); :func:`wrench_margin_reference` is the same
@@ -46,7 +50,7 @@ def wrench_margin_Nm(J: np.ndarray, tau_load_A_Nm: np.ndarray, t_min_N: float,
     single = tau.ndim == 2
     tau = np.ascontiguousarray(tau[:, None, :] if single else tau)
     out = np.empty(tau.shape[:2])
-    _margin_kernel(J, tau, float(t_min_N), float(t_max_N), RANK_TOL, _PAIRS, out)
+    _margin_kernel(J, tau, float(t_min_N), float(t_max_N), RANK_TOL, _pairs(J.shape[1]), out)
     return out[:, 0] if single else out
 
 
@@ -55,21 +59,23 @@ def _margin_kernel(J, tau, t_min, t_max, rank_tol, pairs, out):
     h = 0.5 * (t_max - t_min)
     mid = 0.5 * (t_min + t_max)
     n_loads = tau.shape[1]
-    unit = np.empty((15, 3))
-    width = np.empty(15)
-    valid = np.empty(15, np.bool_)
+    n_cab = J.shape[1]
+    n_pairs = pairs.shape[0]
+    unit = np.empty((n_pairs, 3))
+    width = np.empty(n_pairs)
+    valid = np.empty(n_pairs, np.bool_)
     for n in range(J.shape[0]):
         G = J[n]
         g_max = 0.0
         c0 = c1 = c2 = 0.0
-        for i in range(6):
+        for i in range(n_cab):
             g_max = max(g_max, np.sqrt(G[i, 0] ** 2 + G[i, 1] ** 2 + G[i, 2] ** 2))
             c0 += G[i, 0]
             c1 += G[i, 1]
             c2 += G[i, 2]
         c0, c1, c2 = mid * c0, mid * c1, mid * c2
         w_max = 0.0
-        for p in range(15):
+        for p in range(n_pairs):
             a, b = pairs[p, 0], pairs[p, 1]
             n0 = G[a, 1] * G[b, 2] - G[a, 2] * G[b, 1]
             n1 = G[a, 2] * G[b, 0] - G[a, 0] * G[b, 2]
@@ -81,7 +87,7 @@ def _margin_kernel(J, tau, t_min, t_max, rank_tol, pairs, out):
             if valid[p]:
                 unit[p, 0], unit[p, 1], unit[p, 2] = n0 / norm, n1 / norm, n2 / norm
                 w = 0.0
-                for i in range(6):
+                for i in range(n_cab):
                     w += abs(unit[p, 0] * G[i, 0] + unit[p, 1] * G[i, 1] + unit[p, 2] * G[i, 2])
                 width[p] = w
                 w_max = max(w_max, w)
@@ -94,7 +100,7 @@ def _margin_kernel(J, tau, t_min, t_max, rank_tol, pairs, out):
             d1 = -tau[n, m, 1] - c1
             d2 = -tau[n, m, 2] - c2
             best = np.inf
-            for p in range(15):
+            for p in range(n_pairs):
                 if valid[p]:
                     off = d0 * unit[p, 0] + d1 * unit[p, 1] + d2 * unit[p, 2]
                     best = min(best, h * width[p] - abs(off))
@@ -109,7 +115,8 @@ def wrench_margin_reference(J: np.ndarray, tau_load_A_Nm: np.ndarray, t_min_N: f
     single = tau.ndim == 2
     if single:
         tau = tau[:, None, :]
-    g_a, g_b = J[:, _PAIRS[:, 0]], J[:, _PAIRS[:, 1]]
+    pairs = _pairs(J.shape[1])
+    g_a, g_b = J[:, pairs[:, 0]], J[:, pairs[:, 1]]
     normals = np.cross(g_a, g_b)                                           # (n, 15, 3)
     norms = np.linalg.norm(normals, axis=-1)
     scale = np.linalg.norm(g_a, axis=-1) * np.linalg.norm(g_b, axis=-1)

@@ -10,9 +10,15 @@ paper's design. Each body (platform {A}, base {B}) is either
   ``*_gamma_deg`` of chord 1-2 (give one pair, not both), rotated by
   ``*_theta0_deg`` about z, at height ``+oo_a_m`` (platform, above O) or
   ``-oo_b_m`` (base, below O); or
-* free coordinates ``platform_holes`` / ``base_holes`` (six [x, y, z] rows, m).
+* free coordinates ``platform_holes`` / ``base_holes`` (m [x, y, z] rows, m).
 
-Per-hole offsets ``A{i}_d{x,y,z}_m`` / ``B{i}_d{x,y,z}_m`` (i = 1..6, m) are
+``n_cables`` (default 6) sets m, the number of cables (4..12; a sweep axis like any
+other). For m != 6 a body's holes form m/2 pairs (m even): pair j centred at
+``theta0 + j * 720/m`` deg, its holes ``gamma`` apart, on the circle of radius
+``*_radius_m`` (or of chords ``*_d12_m`` within a pair and ``*_d23_m`` between
+pairs); m = 6 is the semi-regular hexagon. Odd m needs free coordinates.
+
+Per-hole offsets ``A{i}_d{x,y,z}_m`` / ``B{i}_d{x,y,z}_m`` (i = 1..m, m) are
 added to either, so a sweep can move single holes. Rig scalars
 ``cable_stiffness_N_per_m``, ``t_min_N``, ``t_max_N``, ``platform_mass_kg``,
 ``com_z_m`` complete the rig.
@@ -56,11 +62,12 @@ _SCALARS = {
     "t_max_N": "upper tension bound (N)",
     "platform_mass_kg": "moving platform mass (kg)",
     "com_z_m": "height of the platform's centre of mass above O, in {A} (m)",
+    "n_cables": "number of cables m (4..12; m != 6: holes in m/2 pairs, m even; default 6)",
 }
 _OFFSETS = {f"{body}{i}_d{axis}_m": f"offset of hole {body}{i} along {axis} (m)"
-            for body in "AB" for i in range(1, 7) for axis in "xyz"}
-_ARRAYS = {"platform_holes": "free platform holes A_i in {A}, six [x, y, z] rows (m)",
-           "base_holes": "free base holes B_i in {B}, six [x, y, z] rows (m)"}
+            for body in "AB" for i in range(1, 13) for axis in "xyz"}
+_ARRAYS = {"platform_holes": "free platform holes A_i in {A}, m [x, y, z] rows (m)",
+           "base_holes": "free base holes B_i in {B}, m [x, y, z] rows (m)"}
 #: Every design parameter, with its meaning and unit.
 PARAMETERS: dict[str, str] = {**_SCALARS, **_OFFSETS, **_ARRAYS}
 #: Parameters that take a single number (everything but the free hole arrays).
@@ -110,9 +117,9 @@ def design_holes(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
 
     Returns
     -------
-    platform_A_m : ndarray, shape (6, 3)
+    platform_A_m : ndarray, shape (m, 3)
         Platform holes in {A} (m).
-    base_B_m : ndarray, shape (6, 3)
+    base_B_m : ndarray, shape (m, 3)
         Base holes in {B} (m).
 
     Raises
@@ -123,24 +130,31 @@ def design_holes(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     """
     _check_names(params)
     p = {**PAPER_DESIGN, **params}
+    m = _n_cables(params)
     holes = []
     for body, letter in _BODIES.items():
         if f"{body}_holes" in params:
-            xyz = _as_holes(params[f"{body}_holes"], f"{body}_holes")
+            xyz = _as_holes(params[f"{body}_holes"], f"{body}_holes", m)
         else:
-            d12, d23 = _chords(body, params)
             height_key = "oo_a_m" if body == "platform" else "oo_b_m"
             height = _number(p, height_key)
             if not height > 0:
                 raise DesignError(f"must be > 0, got {height}", height_key)
             z = height if body == "platform" else -height
-            try:
-                xyz = hexagon.hexagon_holes(d12, d23, z_m=z, theta0_deg=_number(p, f"{body}_theta0_deg"))
-            except (InvalidInput, ValueError) as exc:
-                raise DesignError(f"no semi-regular hexagon with chords {d12:g}, {d23:g}: {exc}",
-                                  f"{body}_d12_m") from exc
+            if m == 6:
+                d12, d23 = _chords(body, params)
+                try:
+                    xyz = hexagon.hexagon_holes(d12, d23, z_m=z, theta0_deg=_number(p, f"{body}_theta0_deg"))
+                except (InvalidInput, ValueError) as exc:
+                    raise DesignError(f"no semi-regular hexagon with chords {d12:g}, {d23:g}: {exc}",
+                                      f"{body}_d12_m") from exc
+            else:
+                xyz = _pair_holes(body, params, m, z, _number(p, f"{body}_theta0_deg"))
         xyz = xyz.copy()
-        for i in range(6):
+        for key in params:
+            if key[:1] == letter and key in _OFFSETS and int(key[1:].split("_")[0]) > m:
+                raise DesignError(f"offset of hole {key[1:].split('_')[0]}, but the design has {m} cables", key)
+        for i in range(m):
             for j, axis in enumerate("xyz"):
                 key = f"{letter}{i + 1}_d{axis}_m"
                 if key in params:
@@ -155,9 +169,9 @@ def check_holes(platform_A_m: np.ndarray, base_B_m: np.ndarray,
 
     Parameters
     ----------
-    platform_A_m : ndarray, shape (6, 3)
+    platform_A_m : ndarray, shape (m, 3)
         Platform holes in {A} (m).
-    base_B_m : ndarray, shape (6, 3)
+    base_B_m : ndarray, shape (m, 3)
         Base holes in {B} (m).
     limits : GeometryLimits, optional
         Smallest hole spacing and cable clearance from O.
@@ -176,7 +190,7 @@ def check_holes(platform_A_m: np.ndarray, base_B_m: np.ndarray,
     for name, holes in (("platform_holes", platform_A_m), ("base_holes", base_B_m)):
         if not np.all(np.isfinite(holes)):
             raise DesignError("hole coordinates must be finite", name)
-        gaps = np.where(np.eye(6, dtype=bool), np.inf,
+        gaps = np.where(np.eye(len(holes), dtype=bool), np.inf,
                         np.linalg.norm(holes[:, None] - holes[None], axis=-1))
         i, j = np.unravel_index(np.argmin(gaps), gaps.shape)
         if gaps[i, j] < limits.min_hole_spacing_m:
@@ -194,7 +208,7 @@ def check_holes(platform_A_m: np.ndarray, base_B_m: np.ndarray,
 
 
 def cable_clearance_m(platform_A_m: np.ndarray, base_B_m: np.ndarray) -> np.ndarray:
-    """Distance (m) from O to each cable segment A_i B_i at the home pose R = I, shape (6,)."""
+    """Distance (m) from O to each cable segment A_i B_i at the home pose R = I, shape (m,)."""
     d = base_B_m - platform_A_m
     s = np.clip(-np.sum(platform_A_m * d, axis=1) / np.maximum(np.sum(d * d, axis=1), 1e-300), 0, 1)
     return np.linalg.norm(platform_A_m + s[:, None] * d, axis=1)
@@ -237,7 +251,7 @@ def design_rig(params: Mapping[str, Any] | None = None,
     if not mass >= 0:
         raise DesignError(f"must be >= 0, got {mass}", "platform_mass_kg")
     return paper_rig().replace(platform_holes_A_m=platform, base_holes_B_m=base,
-                               cable_stiffness_N_per_m=np.full(6, k), t_min_N=t_min, t_max_N=t_max,
+                               cable_stiffness_N_per_m=np.full(len(platform), k), t_min_N=t_min, t_max_N=t_max,
                                platform_mass_kg=mass,
                                com_A_m=np.array([0.0, 0.0, _number(p, "com_z_m")]))
 
@@ -281,13 +295,70 @@ def _number(params: Mapping[str, Any], key: str) -> float:
     return float(value)
 
 
-def _as_holes(value: Any, key: str) -> np.ndarray:
+def _n_cables(params: Mapping[str, Any]) -> int:
+    """m: ``n_cables`` when given, else the rows of free hole coordinates of both bodies, else 6."""
+    if "n_cables" in params:
+        value = _number(params, "n_cables")
+        if value != int(value) or not 4 <= value <= 12:
+            raise DesignError(f"expected an integer from 4 to 12, got {value:g}", "n_cables")
+        return int(value)
+    if "platform_holes" in params and "base_holes" in params and np.ndim(params["platform_holes"]) == 2:
+        return int(np.shape(params["platform_holes"])[0])
+    return 6
+
+
+def pair_circle_from_chords(d12_m: float, d23_m: float, n_cables: int) -> tuple[float, float]:
+    """Circle radius (m) and pair angle gamma (rad) of m/2 hole pairs with chords d12 (in a pair) and d23 (between).
+
+    The pair centres are 720/m deg apart, so ``d12 = 2 r sin(gamma / 2)`` and
+    ``d23 = 2 r sin((720/m deg - gamma) / 2)``; gamma is the root of their ratio (m = 6: the
+    semi-regular hexagon of :func:`csjm_opt.model.hexagon.circle_from_chords`).
+
+    Parameters
+    ----------
+    d12_m, d23_m : float
+        Chords (m), both > 0.
+    n_cables : int
+        m (even).
+
+    Returns
+    -------
+    radius_m, gamma_rad : float
+    """
+    from scipy.optimize import brentq
+
+    spacing = 4.0 * math.pi / n_cables
+    gamma = brentq(lambda g: d12_m * math.sin((spacing - g) / 2) - d23_m * math.sin(g / 2), 0.0, spacing,
+                   xtol=1e-15)
+    return d12_m / (2 * math.sin(gamma / 2)), gamma
+
+
+def _pair_holes(body: str, params: Mapping[str, Any], m: int, z: float, theta0_deg: float) -> np.ndarray:
+    """M holes in m/2 pairs on a circle (module docstring), from radius and gamma or from chords."""
+    if m % 2:
+        raise DesignError(f"hole pairs need an even number of cables, got {m}; give platform_holes and "
+                          "base_holes for an odd count", "n_cables")
+    spacing = 4.0 * math.pi / m                               # angle between pair centres (rad)
+    if f"{body}_radius_m" in params:
+        radius, gamma = _number(params, f"{body}_radius_m"), math.radians(_number(params, f"{body}_gamma_deg"))
+        if not (radius > 0 and 0 < gamma < spacing):
+            raise DesignError(f"need radius > 0 and 0 < gamma < {math.degrees(spacing):g} deg for {m} cables, "
+                              f"got {radius:g}, {math.degrees(gamma):g}", f"{body}_radius_m")
+    else:
+        radius, gamma = pair_circle_from_chords(*_chords(body, params), m)
+    centres = math.radians(theta0_deg) + spacing * np.arange(m // 2)
+    angles = np.empty(m)
+    angles[0::2], angles[1::2] = centres - gamma / 2, centres + gamma / 2
+    return np.column_stack([radius * np.cos(angles), radius * np.sin(angles), np.full(m, z)])
+
+
+def _as_holes(value: Any, key: str, m: int = 6) -> np.ndarray:
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:
-        raise DesignError(f"expected six [x, y, z] rows of numbers: {exc}", key) from exc
-    if arr.shape != (6, 3):
-        raise DesignError(f"expected shape (6, 3), got {arr.shape}", key)
+        raise DesignError(f"expected {m} [x, y, z] rows of numbers: {exc}", key) from exc
+    if arr.shape != (m, 3):
+        raise DesignError(f"expected shape ({m}, 3), got {arr.shape}", key)
     if not np.all(np.isfinite(arr)):
         raise DesignError("expected finite numbers", key)
     return arr

@@ -106,7 +106,7 @@ class PoseMetrics:
     tilt_rad: np.ndarray            # (n,)
     feasible: np.ndarray            # (n,) bool, all loads held
     wrench_margin_Nm: np.ndarray    # (n, m) per load
-    tensions_N: np.ndarray          # (n, 6) planned for the stiffness load (valid where feasible)
+    tensions_N: np.ndarray          # (n, m) planned for the stiffness load (valid where feasible)
     K: np.ndarray                   # (n, 3, 3) at those tensions
     eig_Nm_per_rad: np.ndarray      # (n, 3) ascending
     fallbacks: int                  # feasible rows the active-set method did not settle
@@ -193,7 +193,7 @@ def evaluate_poses(rig: Rig, Rs: np.ndarray, loads: DesignLoads = DesignLoads(),
     ok = np.all(margin >= -options.feasibility_tol_Nm, axis=1)
     # Tensions only where the load set can be held (infeasible rows never settle).
     rows = np.flatnonzero(ok)
-    t_ref = np.broadcast_to(rig.t_mid_N, (rows.size, 6))
+    t_ref = np.broadcast_to(rig.t_mid_N, (rows.size, rig.n_cables))
     res = active_set.solve(np.swapaxes(J[rows], 1, 2), -tau_load[rows, 0], np.ascontiguousarray(t_ref),
                            rig.t_min_N, rig.t_max_N)
     T = np.tile(rig.t_mid_N, (Rs.shape[0], 1))

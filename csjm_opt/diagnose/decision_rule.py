@@ -37,8 +37,12 @@ MATERIAL_SHARE = 0.5
 #: Singles a pair search starts from (the first effect, then the lowest held-out errors); 8 = the whole
 #: vocabulary: every pair is fitted (with 3, the right pair was never tried on 2 of 17 separable pairs).
 PAIR_SEEDS = 8
-#: A named model with more effective parameters than this share of 3 x cycles gets a short-log warning.
+#: A model with more effective parameters than this share of 3 x cycles is *flexible* (36 hole offsets on a
+#: short log): it never beats a few-number model that explains the log as well, and is named with a warning
+#: only when such a model is not ruled out (selection.parsimonious, selection._look_alike_warning).
 SHORT_LOG_SHARE = 0.5
+#: A few-number look-alike of a flexible verdict must close this share of CLOSE_FRACTION (1: close the gap).
+LOOK_ALIKE_SHARE = 1.0
 
 
 def combine_scales(s1: float, dof1: float, s2: float, dof2: float) -> float:

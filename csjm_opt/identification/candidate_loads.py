@@ -26,7 +26,7 @@ class Cycle:
     """Admissible loads at one reference pose and pretension, with each row's information."""
 
     R_ref: np.ndarray           # (3, 3) unloaded reference equilibrium
-    rest_lengths_m: np.ndarray  # (6,)
+    rest_lengths_m: np.ndarray  # (m,)
     K: np.ndarray               # (3, 3) model stiffness at the reference
     ref_info: np.ndarray        # (9, 9) information of the reference row
     weight: np.ndarray          # (m,) N
@@ -48,7 +48,7 @@ def admissible(rig: Rig, solver: EquilibriumSolver, l: np.ndarray, R_ref: np.nda
     rig : Rig
     solver : EquilibriumSolver
         With the load as its point force.
-    l : array (6,)
+    l : array (m,)
     R_ref : array (3, 3)
     max_rotation_rad : float
 
@@ -76,7 +76,7 @@ def row_information(model: Model, R_ref: np.ndarray, l: np.ndarray, K: np.ndarra
     ----------
     model : Model
     R_ref : array (3, 3)
-    l : array (6,)
+    l : array (m,)
         Rest lengths.
     K : array (3, 3)
         Stiffness at the reference.
@@ -117,7 +117,8 @@ def cycle_for(rig: Rig, model: Model, R_pose: np.ndarray, pretension_N: float, l
     Cycle or None
     """
     try:
-        l = plan_tensions(rig, R_pose, np.zeros(3), t_ref_N=np.full(6, pretension_N), model=model).rest_lengths_m
+        t_ref = np.full(rig.n_cables, pretension_N)
+        l = plan_tensions(rig, R_pose, np.zeros(3), t_ref_N=t_ref, model=model).rest_lengths_m
         ref = solve_equilibrium(rig, l, R_init=R_pose, model=model)
     except CsjmError:
         return None

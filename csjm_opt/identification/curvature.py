@@ -55,7 +55,7 @@ def model_curvature(model: Model, R_ref: np.ndarray, rest_lengths_m: np.ndarray,
         Numeric model of the rig.
     R_ref : array (3, 3)
         Reference orientation (the linearisation point).
-    rest_lengths_m : array (6,)
+    rest_lengths_m : array (m,)
         Rest lengths of the cycle (m).
     zeta : array (n, 3)
         Displacements from the reference (rad, body frame).

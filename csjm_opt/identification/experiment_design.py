@@ -22,8 +22,6 @@ The paper's protocol and the bound of a given protocol are in
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from .. import so3
@@ -200,8 +198,10 @@ def _cycle_protocol(c: int, cyc: Cycle, picked: list[int]) -> Protocol:
 
 
 def _concat(parts: list[Protocol]) -> Protocol:
-    return Protocol(*(np.concatenate([getattr(p, f.name) for p in parts])
-                      for f in dataclasses.fields(Protocol)))
+    def cat(name: str) -> np.ndarray:
+        return np.concatenate([getattr(p, name) for p in parts])
+
+    return Protocol(cat("cycle"), cat("rest_lengths_m"), cat("load_N"), cat("direction_B"), cat("point_A_m"))
 
 
 __all__ = ["CRITERIA", "ExperimentPlan", "paper_protocol", "plan_experiment", "predict_bound"]

@@ -105,7 +105,7 @@ def paper_protocol(rig: Rig, budget: int, rng: np.random.Generator, pose: np.nda
     model = model or Model(rig)
     R = so3.exp(np.zeros(3) if pose is None else np.asarray(pose, float))
     t = float(np.clip(pretension_N, rig.t_min_N, rig.t_max_N))
-    l = plan_tensions(rig, R, np.zeros(3), t_ref_N=np.full(6, t), model=model).rest_lengths_m
+    l = plan_tensions(rig, R, np.zeros(3), t_ref_N=np.full(rig.n_cables, t), model=model).rest_lengths_m
     try:
         ref = solve_equilibrium(rig, l, R_init=R, model=model)
     except CsjmError as exc:

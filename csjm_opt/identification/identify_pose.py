@@ -178,7 +178,7 @@ def _fit_ml(dzeta, tau_load, R, model, rest_lengths_m, noise, curvature, tracker
     """K_ml of the cycle: the curvature from the rig model when it and the rest lengths are known."""
     W = weight_slopes(model, R, dzeta) if model is not None else None
     if curvature == "model" and model is not None and rest_lengths_m is not None:
-        l = as_array(rest_lengths_m, (6,), "rest_lengths_m")
+        l = as_array(rest_lengths_m, (model.A.shape[0],), "rest_lengths_m")
         c, dc = model_curvature(model, R[0], l, dzeta)
         return fit_ml(dzeta, tau_load, noise, c, dc, W, tracker_sigma_rad=tracker_sigma_rad), "model"
     return fit_ml(dzeta, tau_load, noise, None, None, W, tracker_sigma_rad=tracker_sigma_rad), "none"

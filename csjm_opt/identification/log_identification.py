@@ -9,6 +9,7 @@ import numpy as np
 from .. import so3
 from ..errors import IllConditionedData
 from ..measurement.logfile import MeasurementLog
+from ..measurement.rig_fit import check_log_rig
 from ..model.numeric import Model
 from ..model.rig import Rig
 from .estimate import StiffnessEstimate
@@ -16,7 +17,7 @@ from .identify_pose import identify_stiffness
 
 
 def identify_log(log: MeasurementLog, rig: Rig, cycle: int | None = None, model: Model | None = None,
-                 progress: Any = None, **options: Any) -> list[StiffnessEstimate]:
+                 progress: Any = None, check_rig: bool = True, **options: Any) -> list[StiffnessEstimate]:
     """One :class:`StiffnessEstimate` per cycle of ``log`` (or only ``cycle``).
 
     Parameters
@@ -29,6 +30,8 @@ def identify_log(log: MeasurementLog, rig: Rig, cycle: int | None = None, model:
         Reused numeric model of ``rig``.
     progress : callable, optional
         Wraps the iterable of cycles (e.g. ``functools.partial(tqdm, ...)``).
+    check_rig : bool, optional
+        Refuse a log that ``rig`` cannot have produced (:func:`csjm_opt.measurement.rig_fit.check_log_rig`).
     **options
         Passed to :func:`identify_stiffness`.
 
@@ -40,7 +43,11 @@ def identify_log(log: MeasurementLog, rig: Rig, cycle: int | None = None, model:
     ------
     IllConditionedData
         For the first cycle that cannot be identified (message starts with its id).
+    LogRigMismatch
+        The log's first rows are out of equilibrium with the rig's cables (``check_rig``).
     """
+    if check_rig:
+        check_log_rig(rig, log)
     model = model or Model(rig)
     cycles = log.cycle_ids if cycle is None else [cycle]
     out = []

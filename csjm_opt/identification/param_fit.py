@@ -41,7 +41,7 @@ class ParameterFit:
     names: tuple[str, ...]
     values: np.ndarray              # (p,)
     cov: np.ndarray                 # (p, p)
-    rest_length_offsets_m: np.ndarray  # (6,) dl
+    rest_length_offsets_m: np.ndarray  # (m,) dl
     residual_rms_Nm: float          # rms moment residual per axis at the optimum
     initial_residual_rms_Nm: float
     condition: float                # condition number of the (scaled) Jacobian
@@ -120,9 +120,10 @@ class ParameterFit:
 
 
 def _unpack(theta: np.ndarray, shared: bool, offsets: bool, k0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    nk = 1 if shared else 6
-    k = np.full(6, theta[0]) if shared else theta[:6]
-    dl = theta[nk:nk + 6] if offsets else np.zeros(6)
+    m = k0.shape[0]
+    nk = 1 if shared else m
+    k = np.full(m, theta[0]) if shared else theta[:m]
+    dl = theta[nk:nk + m] if offsets else np.zeros(m)
     return k, dl
 
 
@@ -142,7 +143,7 @@ def fit_parameters(log: MeasurementLog, rig: Rig, *, shared_stiffness: bool = Fa
     rig : Rig
         The nominal rig (geometry and starting values).
     shared_stiffness : bool, optional
-        One stiffness for all six cables instead of one per cable.
+        One stiffness for all cables instead of one per cable.
     rest_length_offsets : bool, optional
         Also fit one rest-length offset per cable (m).
     noise : InstrumentNoise, optional
@@ -166,15 +167,17 @@ def fit_parameters(log: MeasurementLog, rig: Rig, *, shared_stiffness: bool = Fa
     model = model or Model(rig)
     R = log.R
     n = len(log)
-    J = model.jacobian(R)                                   # (n, 6, 3)
-    c = model.cable_lengths(R)                              # (n, 6)
+    J = model.jacobian(R)                                   # (n, m, 3)
+    c = model.cable_lengths(R)                              # (n, m)
     tau_load = log.tau_ext_A_Nm + model.weight_moment(R)    # (n, 3)
     l = log.rest_lengths_m
     w = (1.0 / np.asarray(noise.tau_sigma_Nm)) if noise is not None and min(noise.tau_sigma_Nm) > 0 else np.ones(3)
     k0 = np.asarray(rig.cable_stiffness_N_per_m, float)
-    names = (("k",) if shared_stiffness else tuple(f"k{i}" for i in range(1, 7)))
-    names += tuple(f"dl{i}" for i in range(1, 7)) if rest_length_offsets else ()
-    theta0 = np.r_[[k0.mean()] if shared_stiffness else k0, np.zeros(6 if rest_length_offsets else 0)]
+    m = rig.n_cables
+    log.check_cables(m)
+    names = (("k",) if shared_stiffness else tuple(f"k{i}" for i in range(1, m + 1)))
+    names += tuple(f"dl{i}" for i in range(1, m + 1)) if rest_length_offsets else ()
+    theta0 = np.r_[[k0.mean()] if shared_stiffness else k0, np.zeros(m if rest_length_offsets else 0)]
     if 3 * n <= len(theta0):
         raise IllConditionedData(f"{n} rows ({3 * n} equations) cannot determine {len(theta0)} parameters",
                                  float("inf"), 3 * n)
@@ -188,16 +191,16 @@ def fit_parameters(log: MeasurementLog, rig: Rig, *, shared_stiffness: bool = Fa
         k, dl = _unpack(theta, shared_stiffness, rest_length_offsets, k0)
         stretch = c - l - dl
         taut = stretch > 0
-        dk = J * (np.where(taut, stretch, 0.0))[:, :, None]           # (n, 6, 3): d r / d k_s
+        dk = J * (np.where(taut, stretch, 0.0))[:, :, None]           # (n, m, 3): d r / d k_s
         cols = [dk.sum(axis=1)[:, :, None] if shared_stiffness else dk.transpose(0, 2, 1)]
         if rest_length_offsets:
             cols.append((-J * (k * taut)[:, :, None]).transpose(0, 2, 1))  # d r / d dl_s
         A = np.concatenate(cols, axis=2) * w[None, :, None]            # (n, 3, p)
         return A.reshape(3 * n, -1)
 
-    lower = np.r_[np.full(1 if shared_stiffness else 6, 1e-6), np.full(6 if rest_length_offsets else 0, -np.inf)]
-    x_scale = np.r_[np.full(1 if shared_stiffness else 6, max(k0.mean(), 1.0)),
-                    np.full(6 if rest_length_offsets else 0, 1e-3)]
+    lower = np.r_[np.full(1 if shared_stiffness else m, 1e-6), np.full(m if rest_length_offsets else 0, -np.inf)]
+    x_scale = np.r_[np.full(1 if shared_stiffness else m, max(k0.mean(), 1.0)),
+                    np.full(m if rest_length_offsets else 0, 1e-3)]
     r0 = residual(theta0)
     sol = least_squares(residual, theta0, jac=jacobian, bounds=(lower, np.inf), x_scale=x_scale,
                         xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=200)

@@ -46,7 +46,7 @@ def parse_number(cell: str, column: str, source: str | None, line: int, integer:
 
 
 #: Columns of the log checked against each bound of :data:`csjm_opt._limits.LIMITS`.
-_COLUMN_LIMITS = (("rest_lengths_m", "rest_length_m", ("l1", "l2", "l3", "l4", "l5", "l6")),
+_COLUMN_LIMITS = (("rest_lengths_m", "rest_length_m", tuple(f"l{i}" for i in range(1, 13))),
                   ("tau_ext_A_Nm", "moment_Nm", ("tau_x", "tau_y", "tau_z")))
 
 
@@ -100,4 +100,5 @@ def _check_rows(log: MeasurementLog, source: str | None, lines: np.ndarray) -> N
         raise DataFileError(f"rows of cycle {int(cycle[i])} are not consecutive", source, int(lines[i]), "cycle")
     if np.any(log.rest_lengths_m <= 0):
         i = int(np.argmax(np.any(log.rest_lengths_m <= 0, axis=1)))
-        raise DataFileError("rest lengths must be positive", source, int(lines[i]), "l1..l6")
+        raise DataFileError("rest lengths must be positive", source, int(lines[i]),
+                            f"l{int(np.argmax(log.rest_lengths_m[i] <= 0)) + 1}")

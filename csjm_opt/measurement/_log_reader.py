@@ -30,48 +30,75 @@ from ..errors import DataFileError
 from . import _fast_csv
 from ._log_checks import parse_number
 
-COLUMNS = ("sample", "cycle", "l1", "l2", "l3", "l4", "l5", "l6",
-           "tau_x", "tau_y", "tau_z", "rx", "ry", "rz")
 _IDS = ("sample", "cycle")        # the leading integer columns
+_MEASURED = ("tau_x", "tau_y", "tau_z", "rx", "ry", "rz")
+#: Fewest and most rest-length columns (cables) a log may have.
+MIN_CABLES, MAX_CABLES = 4, 12
+
+
+def columns_for(n_cables: int) -> tuple[str, ...]:
+    """The standard columns of a log of an ``n_cables``-cable rig: ``sample,cycle,l1..lm,tau_*,r*``."""
+    return _IDS + tuple(f"l{i}" for i in range(1, n_cables + 1)) + _MEASURED
+
+
+#: The standard columns of a six-cable log (the paper's rig).
+COLUMNS = columns_for(6)
 
 
 @dataclasses.dataclass
 class LogRows:
     """The rows of a log as read: numbers, line numbers, extra (text) columns."""
 
-    values: np.ndarray      # (n, 14) float, in COLUMNS order
+    values: np.ndarray      # (n, 8 + m) float, in columns_for(m) order
     lines: np.ndarray       # (n,) 1-based line of each row
     extra: dict             # column name -> (n,) str array
+    n_cables: int = 6       # m, the number of rest-length columns l1..lm
+
+
+def header_cables(header: list[str]) -> int:
+    """m, the number of consecutive rest-length columns ``l1, l2, ...`` after ``sample,cycle``."""
+    m = 0
+    while len(header) > 2 + m and header[2 + m] == f"l{m + 1}":
+        m += 1
+    return m
 
 
 def check_header(row: list[str] | None, source: str | None) -> list[str]:
     """The header's cell names (stripped) from the file's first record (``None``: empty file).
 
-    Raises :class:`DataFileError` naming line 1 if the names do not start with :data:`COLUMNS`.
+    Raises :class:`DataFileError` naming line 1 if the names do not start with
+    ``sample,cycle,l1..lm,tau_x,tau_y,tau_z,rx,ry,rz`` for some 4 <= m <= 12.
     """
+    template = "sample,cycle,l1,...,lm,tau_x,tau_y,tau_z,rx,ry,rz (m rest lengths, one per cable)"
     if row is None:
-        raise DataFileError("empty file: expected a header " + ",".join(COLUMNS), source, 1)
+        raise DataFileError("empty file: expected a header " + template, source, 1)
     header = [h.strip() for h in row]
-    if tuple(header[:len(COLUMNS)]) != COLUMNS:
-        missing = [c for c in COLUMNS if c not in header]
-        detail = f"missing {missing}" if missing else f"got {header[:len(COLUMNS)]}"
-        raise DataFileError(f"header must start with {','.join(COLUMNS)}; {detail}", source, 1)
+    m = header_cables(header)
+    columns = columns_for(m)
+    if tuple(header[:len(columns)]) != columns:
+        missing = [c for c in columns if c not in header]
+        detail = f"missing {missing}" if missing else f"got {header[:len(columns)]}"
+        raise DataFileError(f"header must start with {template}; {detail}", source, 1)
+    if not MIN_CABLES <= m <= MAX_CABLES:
+        raise DataFileError(f"expected {MIN_CABLES} to {MAX_CABLES} rest-length columns l1..lm, got {m}", source, 1,
+                            f"l{m}" if m else "l1")
     return header
 
 
-def strict_row(row: list[str], n_header: int, source: str | None, line: int) -> tuple[list, list] | None:
+def strict_row(row: list[str], n_header: int, source: str | None, line: int,
+               columns: tuple[str, ...] = COLUMNS) -> tuple[list, list] | None:
     """Numbers and extra cells of one CSV record, ``None`` for a blank one; faults name the line and column."""
     if not row or all(not c.strip() for c in row):
         return None
-    if len(row) < len(COLUMNS) or len(row) > n_header:
+    if len(row) < len(columns) or len(row) > n_header:
         raise DataFileError(f"expected {n_header} values, got {len(row)}", source, line)
     nums = []
-    for name, cell in zip(COLUMNS, row, strict=False):
+    for name, cell in zip(columns, row, strict=False):
         cell = cell.strip()
         if cell == "":
             raise DataFileError("missing value", source, line, name)
         nums.append(parse_number(cell, name, source, line, integer=name in _IDS))
-    return nums, row[len(COLUMNS):] + [""] * (n_header - len(row))
+    return nums, row[len(columns):] + [""] * (n_header - len(row))
 
 
 def read_log_strict(text: str, source: str | None) -> LogRows:
@@ -96,17 +123,18 @@ def read_log_strict(text: str, source: str | None) -> LogRows:
     reader = csv.reader(io.StringIO(text.removeprefix("\ufeff")))
     try:
         header = check_header(next(reader, None), source)
+        columns = columns_for(header_cables(header))
         values, extras, lines = [], [], []
         for row in reader:
-            parsed = strict_row(row, len(header), source, reader.line_num)
+            parsed = strict_row(row, len(header), source, reader.line_num, columns)
             if parsed is not None:
                 values.append(parsed[0])
                 extras.append(parsed[1])
                 lines.append(reader.line_num)
     except csv.Error as exc:
         raise DataFileError(f"not readable as CSV: {exc}", source, reader.line_num) from None
-    names = header[len(COLUMNS):]
-    V = np.asarray(values, dtype=float).reshape(len(values), len(COLUMNS))
+    names = header[len(columns):]
+    V = np.asarray(values, dtype=float).reshape(len(values), len(columns))
     E = np.asarray(extras, dtype=str).reshape(len(values), len(names))
     return _finish(V, np.asarray(lines, dtype=np.int64), {name: E[:, j] for j, name in enumerate(names)},
                    source)
@@ -115,11 +143,11 @@ def read_log_strict(text: str, source: str | None) -> LogRows:
 def _finish(V: np.ndarray, lines: np.ndarray, extra: dict, source: str | None) -> LogRows:
     if V.shape[0] == 0:
         raise DataFileError("no data rows", source, 2)
-    return LogRows(V, lines, extra)
+    return LogRows(V, lines, extra, V.shape[1] - len(_IDS) - len(_MEASURED))
 
 
-def strict_records(data: bytes, pos: int, line: int, n_header: int,
-                   source: str | None) -> Iterator[tuple[int, int, tuple[list, list] | None]]:
+def strict_records(data: bytes, pos: int, line: int, n_header: int, source: str | None,
+                   columns: tuple[str, ...] = COLUMNS) -> Iterator[tuple[int, int, tuple[list, list] | None]]:
     """Records read by the strict parser from ``data[pos:]`` (``line`` is its first line), one at a time.
 
     Parameters
@@ -166,7 +194,7 @@ def strict_records(data: bytes, pos: int, line: int, n_header: int,
         if row is None:
             return
         last = line + reader.line_num - 1
-        yield after[0], last + 1, strict_row(row, n_header, source, last)
+        yield after[0], last + 1, strict_row(row, n_header, source, last, columns)
 
 
 #: After this many lines for the strict parser, if they are most of the rows so far, it reads the rest.
@@ -203,7 +231,8 @@ def read_log_bytes(data: bytes, source: str | None) -> LogRows:
         header = check_header(next(csv.reader(io.StringIO(first.decode("utf-8"))), None), source)
     except csv.Error as exc:
         raise DataFileError(f"not readable as CSV: {exc}", source, 1) from None
-    n_header, n_num = len(header), len(COLUMNS)
+    columns = columns_for(header_cables(header))
+    n_header, n_num = len(header), len(columns)
     n_max = data.count(b"\n", pos) + 1
     values = np.empty((n_max, n_num))
     lines = np.empty(n_max, np.int64)
@@ -217,7 +246,7 @@ def read_log_bytes(data: bytes, source: str | None) -> LogRows:
                                                      lo, hi)
         if status == _fast_csv.END:
             break
-        for after, next_line, parsed in strict_records(data, pos, line, n_header, source):
+        for after, next_line, parsed in strict_records(data, pos, line, n_header, source, columns):
             pos, line = after, next_line
             if parsed is not None:
                 values[row] = parsed[0]

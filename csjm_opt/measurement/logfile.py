@@ -5,8 +5,11 @@ first, extra columns allowed after them)::
 
     sample,cycle,l1,l2,l3,l4,l5,l6,tau_x,tau_y,tau_z,rx,ry,rz
 
-``l1..l6`` rest lengths (m); ``tau_*`` the external moment about O in {A}
-(N m, platform weight excluded); ``r*`` the measured orientation of {A} in {B}
+for the paper's six cables; an m-cable rig (4 <= m <= 12) has ``l1..lm``
+(same order as the rig's holes), and a log's count must match the rig it is
+used with (:meth:`MeasurementLog.check_cables`). ``l1..lm`` rest lengths (m);
+``tau_*`` the external moment about O in {A} (N m, platform weight excluded);
+``r*`` the measured orientation of {A} in {B}
 as a rotation vector (rad). Rows of one ``cycle`` are consecutive. Malformed
 input raises :class:`DataFileError` naming the file and line; nothing is
 silently dropped. Every number is checked against the bounds of
@@ -28,9 +31,9 @@ from .._fileio import atomic_write_text, decode_text, read_bytes
 from .._limits import MAX_EXACT_INT
 from ..errors import DataFileError, InvalidInput
 from ._log_checks import _check_rows, _rows, parse_number
-from ._log_reader import COLUMNS, LogRows, read_log_bytes, read_log_strict
+from ._log_reader import COLUMNS, LogRows, columns_for, header_cables, read_log_bytes, read_log_strict
 
-__all__ = ["COLUMNS", "MeasurementLog", "parse_number"]
+__all__ = ["COLUMNS", "MeasurementLog", "columns_for", "header_cables", "parse_number"]
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -39,7 +42,7 @@ class MeasurementLog:
 
     sample: np.ndarray              # (n,) int
     cycle: np.ndarray               # (n,) int
-    rest_lengths_m: np.ndarray      # (n, 6)
+    rest_lengths_m: np.ndarray      # (n, m), columns l1..lm
     tau_ext_A_Nm: np.ndarray        # (n, 3)
     rotvec_rad: np.ndarray          # (n, 3)
     extra: dict = dataclasses.field(default_factory=dict)  # column name -> (n,) str array
@@ -47,6 +50,38 @@ class MeasurementLog:
 
     def __len__(self) -> int:
         return int(self.sample.shape[0])
+
+    @property
+    def n_cables(self) -> int:
+        """m, the number of rest-length columns ``l1..lm``."""
+        return int(self.rest_lengths_m.shape[1])
+
+    def check_cables(self, n_cables: int, rig_name: str | None = None) -> "MeasurementLog":
+        """Check that the rest-length columns match an ``n_cables``-cable rig; returns the log.
+
+        Parameters
+        ----------
+        n_cables : int
+            The rig's cable count (``rig.n_cables``).
+        rig_name : str, optional
+            The rig (file) named in the error.
+
+        Returns
+        -------
+        MeasurementLog
+            ``self``.
+
+        Raises
+        ------
+        DataFileError
+            Naming the log's header line and its last rest-length column when the counts differ.
+        """
+        if self.n_cables != n_cables:
+            rig = f"the rig {rig_name}" if rig_name else "the rig"
+            raise DataFileError(f"{self.n_cables} rest-length columns l1..l{self.n_cables}, but {rig} has "
+                                f"{n_cables} cables (expected l1..l{n_cables})", self.source, 1,
+                                f"l{self.n_cables}")
+        return self
 
     @property
     def R(self) -> np.ndarray:
@@ -118,8 +153,8 @@ class MeasurementLog:
         ----------
         cycle : array_like of int, shape (n,)
             Load-cycle id of each row.
-        rest_lengths_m : array_like, shape (n, 6)
-            Commanded rest lengths (m).
+        rest_lengths_m : array_like, shape (n, m)
+            Commanded rest lengths (m), one column per cable (4 <= m <= 12).
         tau_ext_A_Nm : array_like, shape (n, 3)
             Measured external moments in {A} (N m), platform weight excluded.
         R_or_rotvec : array_like, shape (n, 3, 3) or (n, 3)
@@ -152,7 +187,9 @@ class MeasurementLog:
             raise DataFileError("sample id outside +-(2^53 - 1)", None, None, "sample")
         if np.any(np.abs(cycle) > MAX_EXACT_INT):
             raise DataFileError("cycle id outside +-(2^53 - 1)", None, None, "cycle")
-        log = cls(sample.astype(int), cycle.astype(int), _rows(rest_lengths_m, (n, 6), "rest_lengths_m"),
+        l_m = _rows(rest_lengths_m, None, "rest_lengths_m")
+        m = l_m.shape[1] if l_m.ndim == 2 else 6
+        log = cls(sample.astype(int), cycle.astype(int), _rows(rest_lengths_m, (n, m), "rest_lengths_m"),
                   _rows(tau_ext_A_Nm, (n, 3), "tau_ext_A_Nm"), rotvec,
                   {k: _rows(v, (n,), k, float_=False) for k, v in (extra or {}).items()})
         _check_rows(log, None, lines=np.arange(2, n + 2))
@@ -192,7 +229,7 @@ class MeasurementLog:
     def from_text(cls, text: str, source: str | None = None) -> MeasurementLog:
         """Parse and validate log text; ``source`` names it in errors.
 
-        Plain rows (numbers only in the 14 standard columns, no quotes) are read
+        Plain rows (numbers only in the 8 + m standard columns, no quotes) are read
         by a compiled pass over the bytes; any other line is read by the strict
         row-by-row parser, which raises the :class:`DataFileError` naming the
         line and column of a fault. Both accept the same rows with the same
@@ -223,9 +260,9 @@ class MeasurementLog:
 
     @classmethod
     def _from_rows(cls, rows: LogRows, source: str | None) -> MeasurementLog:
-        V = rows.values
-        log = cls(V[:, 0].astype(np.int64), V[:, 1].astype(np.int64), V[:, 2:8], V[:, 8:11], V[:, 11:14],
-                  rows.extra, source)
+        V, m = rows.values, rows.n_cables
+        log = cls(V[:, 0].astype(np.int64), V[:, 1].astype(np.int64), V[:, 2:2 + m], V[:, 2 + m:5 + m],
+                  V[:, 5 + m:8 + m], rows.extra, source)
         _check_rows(log, source, rows.lines)
         return log
 
@@ -261,7 +298,7 @@ class MeasurementLog:
         """
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
-        w.writerow(COLUMNS + tuple(self.extra))
+        w.writerow(columns_for(self.n_cables) + tuple(self.extra))
         for i in range(len(self)):
             w.writerow([int(self.sample[i]), int(self.cycle[i])]
                        + [repr(float(x)) for x in self.rest_lengths_m[i]]

@@ -5,6 +5,8 @@ command and the dead weight to hang. Header::
 
     sample,cycle,l1,l2,l3,l4,l5,l6,tau_x,tau_y,tau_z,rx,ry,rz,load_N,dir_x,dir_y,dir_z,point_x,point_y,point_z
 
+for six cables; an m-cable rig has ``l1..lm`` (as in the log, :func:`~csjm_opt.measurement.logfile.columns_for`).
+
 ``tau_*`` and ``r*`` are empty (the F/T moment and the tracked orientation are filled in by the
 measurement); ``load_N`` the weight (N, 0 for the unloaded reference row, first of each
 cycle), ``dir_*`` the unit direction of its force in the base frame {B} (a cable over a
@@ -28,7 +30,8 @@ import numpy as np
 
 from .._fileio import atomic_write_text, read_text
 from ..errors import DataFileError
-from .logfile import COLUMNS
+from ._log_reader import header_cables
+from .logfile import columns_for
 
 #: Columns after the log's: weight, its direction in {B}, its attachment point in {A}.
 LOAD_COLUMNS = ("load_N", "dir_x", "dir_y", "dir_z", "point_x", "point_y", "point_z")
@@ -40,13 +43,19 @@ class Protocol:
     """An identification protocol; arrays share a leading axis ``n`` (rows in run order)."""
 
     cycle: np.ndarray            # (n,) int
-    rest_lengths_m: np.ndarray   # (n, 6)
+    rest_lengths_m: np.ndarray   # (n, m), columns l1..lm
     load_N: np.ndarray           # (n,) weight, 0 for a reference row
     direction_B: np.ndarray      # (n, 3) unit direction of the force in {B}
     point_A_m: np.ndarray        # (n, 3) attachment point in {A}
+    source: str | None = None    # the file, named in errors
 
     def __len__(self) -> int:
         return int(self.cycle.shape[0])
+
+    @property
+    def n_cables(self) -> int:
+        """m, the number of rest-length columns."""
+        return int(self.rest_lengths_m.shape[1])
 
     @property
     def force_B_N(self) -> np.ndarray:
@@ -72,7 +81,7 @@ class Protocol:
         """
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
-        w.writerow(COLUMNS + LOAD_COLUMNS)
+        w.writerow(columns_for(self.n_cables) + LOAD_COLUMNS)
         for i in range(len(self)):
             w.writerow([i, int(self.cycle[i])] + [repr(float(x)) for x in self.rest_lengths_m[i]]
                        + [""] * len(_MEASURED)
@@ -140,9 +149,11 @@ class Protocol:
         """
         reader = csv.reader(io.StringIO(text))
         header = [h.strip() for h in next(reader, [])]
-        want = COLUMNS + LOAD_COLUMNS
-        if tuple(header[:len(want)]) != want:
-            raise DataFileError(f"protocol header must start with {','.join(want)}", source, 1)
+        m = header_cables(header)
+        want = columns_for(m) + LOAD_COLUMNS
+        if tuple(header[:len(want)]) != want or not 4 <= m <= 12:
+            raise DataFileError("protocol header must start with sample,cycle,l1,...,lm (4 <= m <= 12 cables),"
+                                f"{','.join(want[2 + m:])}", source, 1)
         idx = {name: header.index(name) for name in want}
         rows, lines = [], []
         for row in reader:
@@ -152,7 +163,7 @@ class Protocol:
             if len(row) < len(want):
                 raise DataFileError(f"expected {len(header)} values, got {len(row)}", source, line)
             vals = []
-            for name in ("cycle", "l1", "l2", "l3", "l4", "l5", "l6") + LOAD_COLUMNS:
+            for name in ("cycle",) + want[2:2 + m] + LOAD_COLUMNS:
                 cell = row[idx[name]].strip()
                 try:
                     v = float(cell)
@@ -166,7 +177,7 @@ class Protocol:
         if not rows:
             raise DataFileError("no protocol rows", source, 2)
         V = np.asarray(rows)
-        proto = cls(V[:, 0].astype(int), V[:, 1:7], V[:, 7], V[:, 8:11], V[:, 11:14])
+        proto = cls(V[:, 0].astype(int), V[:, 1:1 + m], V[:, 1 + m], V[:, 2 + m:5 + m], V[:, 5 + m:8 + m], source)
         norm = np.linalg.norm(proto.direction_B, axis=1)
         bad = np.flatnonzero((proto.load_N > 0) & (np.abs(norm - 1) > 1e-6))
         if len(bad):

@@ -19,8 +19,8 @@ from ._pose_kernels import geometry_into, rest_terms_into, stiffness_from_geomet
 # ------------------------------------------------------------------ many poses
 @njit(cache=True)
 def geometry_many(A, B, Rs, c, J):
-    """Lengths ``c`` (n, 6) and J (n, 6, 3) for poses ``Rs`` (n, 3, 3)."""
-    U = np.empty((6, 3))
+    """Lengths ``c`` (n, m) and J (n, m, 3) for poses ``Rs`` (n, 3, 3)."""
+    U = np.empty((A.shape[0], 3))
     for n in range(Rs.shape[0]):
         geometry_into(A, B, Rs[n], c[n], U, J[n])
 
@@ -34,10 +34,11 @@ def weight_moment_many(mr, g, Rs, out):
 
 @njit(cache=True)
 def stiffness_many(A, B, k, Rs, Ts, Ks):
-    """K (n, 3, 3) for poses ``Rs`` (n, 3, 3) and tensions ``Ts`` (n, 6)."""
-    c = np.empty(6)
-    U = np.empty((6, 3))
-    J = np.empty((6, 3))
+    """K (n, 3, 3) for poses ``Rs`` (n, 3, 3) and tensions ``Ts`` (n, m)."""
+    m = A.shape[0]
+    c = np.empty(m)
+    U = np.empty((m, 3))
+    J = np.empty((m, 3))
     for n in range(Rs.shape[0]):
         geometry_into(A, B, Rs[n], c, U, J)
         stiffness_from_geometry_into(A, k, c, U, J, Ts[n], Ks[n])
@@ -45,29 +46,30 @@ def stiffness_many(A, B, k, Rs, Ts, Ks):
 
 @njit(cache=True)
 def rest_terms_many(A, B, k, Rs, ls, Ks, Ts, taus):
-    """:func:`rest_terms_into` for every pose; ``ls`` (n, 6)."""
+    """:func:`rest_terms_into` for every pose; ``ls`` (n, m)."""
     for n in range(Rs.shape[0]):
         rest_terms_into(A, B, k, Rs[n], ls[n], Ks[n], Ts[n], taus[n])
 
 
 @njit(cache=True)
 def stiffness_basis_many(A, B, k, Rs, K0, G):
-    """``K(T) = K0 + sum_i T_i G_i`` (all cables taut): K0 (n, 3, 3), G (n, 6, 3, 3)."""
-    c = np.empty(6)
-    U = np.empty((6, 3))
-    J = np.empty((6, 3))
-    e = np.zeros(6)
-    zero_k = np.zeros(6)
+    """``K(T) = K0 + sum_i T_i G_i`` (all cables taut): K0 (n, 3, 3), G (n, m, 3, 3)."""
+    m = A.shape[0]
+    c = np.empty(m)
+    U = np.empty((m, 3))
+    J = np.empty((m, 3))
+    e = np.zeros(m)
+    zero_k = np.zeros(m)
     for n in range(Rs.shape[0]):
         geometry_into(A, B, Rs[n], c, U, J)
         # K0 = J^T diag(k) J; G_i = Hess(c_i) = K of cable i alone at unit tension and zero stiffness
         for p in range(3):
             for q in range(3):
                 s = 0.0
-                for i in range(6):
+                for i in range(m):
                     s += k[i] * J[i, p] * J[i, q]
                 K0[n, p, q] = s
-        for i in range(6):
+        for i in range(m):
             e[i] = 1.0
             stiffness_from_geometry_into(A, zero_k, c, U, J, e, G[n, i])
             e[i] = 0.0

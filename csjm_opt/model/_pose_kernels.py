@@ -39,8 +39,8 @@ def rotation_error(R):
 
 @njit(cache=True)
 def geometry_into(A, B, R, c, U, J):
-    """Cable lengths ``c`` (6,), unit vectors ``U`` in {A} (6, 3), J (6, 3) of (38)."""
-    for i in range(6):
+    """Cable lengths ``c`` (m,), unit vectors ``U`` in {A} (m, 3), J (m, 3) of (38); m = ``A.shape[0]``."""
+    for i in range(A.shape[0]):
         # v = R^T b_i - a_i, the cable vector in {A}
         v0 = R[0, 0] * B[i, 0] + R[1, 0] * B[i, 1] + R[2, 0] * B[i, 2] - A[i, 0]
         v1 = R[0, 1] * B[i, 0] + R[1, 1] * B[i, 1] + R[2, 1] * B[i, 2] - A[i, 1]
@@ -71,7 +71,7 @@ def stiffness_from_geometry_into(A, k, c, U, J, T, K):
     for p in range(3):
         for q in range(3):
             K[p, q] = 0.0
-    for i in range(6):
+    for i in range(A.shape[0]):
         t = T[i]
         if not t > 0.0:
             continue
@@ -95,10 +95,11 @@ def stiffness_from_geometry_into(A, k, c, U, J, T, K):
 
 @njit(cache=True)
 def stiffness_into(A, B, k, R, T, K):
-    """K at one pose for tensions ``T`` (6,) into ``K`` (3, 3)."""
-    c = np.empty(6)
-    U = np.empty((6, 3))
-    J = np.empty((6, 3))
+    """K at one pose for tensions ``T`` (m,) into ``K`` (3, 3)."""
+    m = A.shape[0]
+    c = np.empty(m)
+    U = np.empty((m, 3))
+    J = np.empty((m, 3))
     geometry_into(A, B, R, c, U, J)
     stiffness_from_geometry_into(A, k, c, U, J, T, K)
 
@@ -106,23 +107,26 @@ def stiffness_into(A, B, k, R, T, K):
 @njit(cache=True)
 def rest_terms_into(A, B, k, R, l, K, T, tau):
     """For rest lengths ``l``: tensions ``T = k (c - l)``, 0 when slack; ``tau = J^T T``; K."""
-    c = np.empty(6)
-    U = np.empty((6, 3))
-    J = np.empty((6, 3))
+    m = A.shape[0]
+    c = np.empty(m)
+    U = np.empty((m, 3))
+    J = np.empty((m, 3))
     geometry_into(A, B, R, c, U, J)
-    for i in range(6):
+    for i in range(m):
         s = c[i] - l[i]
         T[i] = k[i] * s if s > 0.0 else 0.0
     for p in range(3):
-        tau[p] = J[0, p] * T[0] + J[1, p] * T[1] + J[2, p] * T[2] + J[3, p] * T[3] + J[4, p] * T[4] \
-            + J[5, p] * T[5]
+        s = 0.0
+        for i in range(m):
+            s += J[i, p] * T[i]
+        tau[p] = s
     stiffness_from_geometry_into(A, k, c, U, J, T, K)
 
 
 @njit(cache=True)
 def pose_terms_into(A, B, mr, g, R, c, J, tau_w):
     """What a controller needs per step without K: lengths, J and the weight moment."""
-    U = np.empty((6, 3))
+    U = np.empty((A.shape[0], 3))
     geometry_into(A, B, R, c, U, J)
     weight_moment_into(mr, g, R, tau_w)
 
@@ -140,8 +144,9 @@ def checked_stiffness_into(A, B, k, mr, g, R, T, t_lo, t_hi, tau_ext, check_eq, 
         for j in range(3):
             if not np.isfinite(R[i, j]):
                 return NON_FINITE
+    m = A.shape[0]
     viol = 0.0
-    for i in range(6):
+    for i in range(m):
         if not np.isfinite(T[i]):
             return NON_FINITE
         if t_lo <= t_hi and T[i] > 0.0:            # t <= 0: a slack cable, not a bound violation
@@ -150,9 +155,9 @@ def checked_stiffness_into(A, B, k, mr, g, R, T, t_lo, t_hi, tau_ext, check_eq, 
     err, det = rotation_error(R)
     if err > rot_tol or det <= 0.0:
         return NOT_A_ROTATION
-    c = np.empty(6)
-    U = np.empty((6, 3))
-    J = np.empty((6, 3))
+    c = np.empty(m)
+    U = np.empty((m, 3))
+    J = np.empty((m, 3))
     geometry_into(A, B, R, c, U, J)
     stiffness_from_geometry_into(A, k, c, U, J, T, K)
     info[1] = 0.0
@@ -162,7 +167,7 @@ def checked_stiffness_into(A, B, k, mr, g, R, T, t_lo, t_hi, tau_ext, check_eq, 
         res = 0.0
         for p in range(3):
             s = tau_ext[p] + w[p]
-            for i in range(6):
+            for i in range(m):
                 s += J[i, p] * T[i]
             res += s * s
         info[1] = np.sqrt(res)

@@ -9,15 +9,17 @@ import numpy as np
 from .._limits import LIMITS, MIN_HOLE_RADIUS_M, MIN_HOLE_SPACING_M
 from ..errors import RigFileError
 from .cable_terms import cable_lengths
+from .hole_pattern import MAX_CABLES, MIN_CABLES
 
 #: Bound (csjm_opt._limits.LIMITS key) of each rig entry.
 _QUANTITY = {"platform_holes": "position_m", "base_holes": "position_m", "stiffness": "cable_stiffness_N_per_m",
              "t_min": "tension_N", "t_max": "tension_N", "mass": "mass_kg", "com": "position_m",
              "gravity": "gravity_m_per_s2"}
 
+#: Shapes of each entry; ``-1`` stands for m, the number of cables (rows of ``geometry.platform_holes``).
 _SCHEMA: dict[str, dict[str, tuple[int, ...]]] = {
-    "geometry": {"platform_holes": (6, 3), "base_holes": (6, 3)},
-    "cables": {"stiffness": (6,), "t_min": (), "t_max": ()},
+    "geometry": {"platform_holes": (-1, 3), "base_holes": (-1, 3)},
+    "cables": {"stiffness": (-1,), "t_min": (), "t_max": ()},
     "platform": {"mass": (), "com": (3,), "gravity": (3,)},
 }
 
@@ -27,8 +29,9 @@ def _check(data: Any, path: str | None) -> None:
         raise RigFileError(f"expected a table, got {type(data).__name__}", path)
     for section in data:
         if section not in _SCHEMA:
-            raise RigFileError(f"unknown section (expected one of {sorted([*_SCHEMA, 'dynamics', 'link'])})",
-                               path, section)
+            known = sorted([*_SCHEMA, "dynamics", "link", "workspace"])
+            raise RigFileError(f"unknown section (expected one of {known})", path, section)
+    m = -1
     for section, keys in _SCHEMA.items():
         table = data.get(section)
         if not isinstance(table, dict):
@@ -48,9 +51,20 @@ def _check(data: Any, path: str | None) -> None:
                 raise RigFileError(f"integer too large (expected {LIMITS[_QUANTITY[key]].describe()})",
                                    path, dotted)
             arr = np.asarray(value, dtype=float) if _rectangular(value) else None
-            if arr is None or arr.shape != shape:
+            if dotted == "geometry.platform_holes" and arr is not None and arr.ndim == 2 and arr.shape[1] == 3:
+                m = arr.shape[0]
+                if not MIN_CABLES <= m <= MAX_CABLES:
+                    raise RigFileError(f"expected {MIN_CABLES} to {MAX_CABLES} rows (one per cable), got {m}"
+                                       + (": fewer than 4 cables cannot hold 3 rotations by pulling"
+                                          if m < MIN_CABLES else ""), path, dotted)
+            want_shape = tuple(m if n == -1 else n for n in shape)
+            if arr is None or arr.shape != want_shape:
                 got = "ragged rows" if arr is None else f"shape {arr.shape}"
-                want = "a number" if shape == () else f"shape {shape}"
+                want = "a number" if shape == () else f"shape {want_shape}"
+                if -1 in shape and m > 0:
+                    want += f" (one per cable: platform_holes has {m} rows)"
+                elif -1 in shape:
+                    want = f"shape (m, 3) with {MIN_CABLES} <= m <= {MAX_CABLES}"
                 raise RigFileError(f"expected {want}, got {got}", path, dotted)
             if not np.all(np.isfinite(arr)):
                 raise RigFileError("expected finite numbers (no nan or inf)", path, dotted)
@@ -86,7 +100,7 @@ def _check(data: Any, path: str | None) -> None:
             raise RigFileError(f"hole {i + 1} is {r[i] * 1e3:.3g} mm from the joint centre O (at least "
                                f"{MIN_HOLE_RADIUS_M * 1e3:g} mm: a cable through O has no moment arm)",
                                path, f"geometry.{name}")
-        d = np.linalg.norm(P[:, None, :] - P[None, :, :], axis=-1) + np.eye(6) * 1e9
+        d = np.linalg.norm(P[:, None, :] - P[None, :, :], axis=-1) + np.eye(len(P)) * 1e9
         if d.min() < MIN_HOLE_SPACING_M:
             i, j = (int(x) for x in np.unravel_index(int(np.argmin(d)), d.shape))
             raise RigFileError(f"holes {i + 1} and {j + 1} are {d[i, j] * 1e3:.3g} mm apart (at least "

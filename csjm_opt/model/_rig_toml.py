@@ -16,7 +16,7 @@ def _format_toml(data: dict[str, dict[str, Any]]) -> str:
              "com": "m, in {A}", "gravity": "m/s^2, in {B}", "inertia": "kg m^2 about the COM, in {A}",
              "joint_damping": "N m s/rad", "cable_damping": "N s/m",
              "rod_radius": "m, rod from (0, 0, -rod_length) in {B} to O", "rod_length": "m",
-             "ball_radius": "m, the joint's ball at O"}
+             "ball_radius": "m, the joint's ball at O", "tilt_deg": "deg, largest tilt of the stated range"}
     lines = ["# csjm_opt rig file (SI units; frames per docs/conventions.md)"]
     for section, table in data.items():
         lines.append(f"\n[{section}]")

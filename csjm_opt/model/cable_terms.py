@@ -9,7 +9,7 @@ code-generation path); ``tests/test_cable_terms.py`` and
 Hessian of the cable energy.
 
 Every function takes one pose ``R`` (3, 3) or a stack (..., 3, 3); hole
-arrays ``A`` (6, 3) in {A} and ``B`` (6, 3) in {B}, or per-pose (..., 6, 3).
+arrays ``A`` (m, 3) in {A} and ``B`` (m, 3) in {B}, or per-pose (..., m, 3).
 With ``c_i = |b_i - R a_i|``, ``u_i = R^T (b_i - R a_i) / c_i`` (in {A}) and
 ``j_i = a_i x u_i`` (row i of J, (38); ``dc = -J dzeta``), the Levi-Civita
 (geodesic) Hessian of a cable length in body coordinates ``R exp(hat(zeta))``
@@ -50,12 +50,12 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def geometry(R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Cable lengths ``c`` (..., 6), unit vectors ``u`` in {A} (..., 6, 3) and J (..., 6, 3).
+    """Cable lengths ``c`` (..., m), unit vectors ``u`` in {A} (..., m, 3) and J (..., m, 3).
 
     Parameters
     ----------
     R : (..., 3, 3) orientation of {A} in {B}.
-    A_m, B_m : (6, 3) or (..., 6, 3) platform holes in {A}, base holes in {B} (m).
+    A_m, B_m : (m, 3) or (..., m, 3) platform holes in {A}, base holes in {B} (m).
     """
     v = np.asarray(B_m) @ R - A_m                       # rows R^T b_i - a_i: cable vectors in {A}
     c = np.sqrt(np.einsum("...ij,...ij->...i", v, v))
@@ -64,12 +64,12 @@ def geometry(R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> tuple[np.ndarra
 
 
 def cable_lengths(R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> np.ndarray:
-    """Cable lengths ``|b_i - R a_i|`` (..., 6), m."""
+    """Cable lengths ``|b_i - R a_i|`` (..., m), m."""
     return geometry(R, A_m, B_m)[0]
 
 
 def length_hessians(A_m: np.ndarray, c: np.ndarray, U: np.ndarray, J: np.ndarray) -> np.ndarray:
-    """``Hess(c_i)`` (..., 6, 3, 3): the stiffness basis ``dK/dt_i`` (module docstring)."""
+    """``Hess(c_i)`` (..., m, 3, 3): the stiffness basis ``dK/dt_i`` (module docstring)."""
     A = np.broadcast_to(A_m, U.shape)
     aa = A[..., :, None] * A[..., None, :]
     jj = J[..., :, None] * J[..., None, :]
@@ -90,14 +90,14 @@ def _stiffness_from(A_m, k, c, U, J, T) -> np.ndarray:
 
 def stiffness(R: np.ndarray, tensions_N: np.ndarray, A_m: np.ndarray, B_m: np.ndarray,
               k_N_per_m: np.ndarray) -> np.ndarray:
-    """K (..., 3, 3), N m/rad, for tensions (..., 6); cables with ``t_i <= 0`` are slack.
+    """K (..., 3, 3), N m/rad, for tensions (..., m); cables with ``t_i <= 0`` are slack.
 
     Parameters
     ----------
     R : (..., 3, 3) poses.
-    tensions_N : (..., 6) cable tensions.
+    tensions_N : (..., m) cable tensions.
     A_m, B_m : hole arrays (see :func:`geometry`).
-    k_N_per_m : (6,) cable-plus-drive stiffness.
+    k_N_per_m : (m,) cable-plus-drive stiffness.
 
     Returns
     -------
@@ -113,7 +113,7 @@ def stiffness_from_rest(R: np.ndarray, rest_lengths_m: np.ndarray, A_m: np.ndarr
 
     Returns
     -------
-    K : (..., 3, 3); tensions : (..., 6); tau_cables_A_Nm : (..., 3).
+    K : (..., 3, 3); tensions : (..., m); tau_cables_A_Nm : (..., 3).
     """
     c, U, J = geometry(R, A_m, B_m)
     k = np.asarray(k_N_per_m, float)
@@ -136,7 +136,7 @@ def point_force_terms(R: np.ndarray, F_B: np.ndarray, P_A: np.ndarray) -> tuple[
 
 
 class CableTerms:
-    """The reference functions bound to one rig: ``A`` (6, 3) in {A}, ``B`` (6, 3) in {B}, ``k`` (6,).
+    """The reference functions bound to one rig: ``A`` (m, 3) in {A}, ``B`` (m, 3) in {B}, ``k`` (m,).
 
     Kept for the statics and controller code that evaluates one pose at a
     time; every method is a call of the module functions above.
@@ -154,11 +154,11 @@ class CableTerms:
         return cls(rig.platform_holes_A_m, rig.base_holes_B_m, rig.cable_stiffness_N_per_m)
 
     def geometry(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Cable lengths ``c`` (6,), unit vectors ``u`` in {A} (6, 3) and J (6, 3)."""
+        """Cable lengths ``c`` (m,), unit vectors ``u`` in {A} (m, 3) and J (m, 3)."""
         return geometry(R, self.A, self.B)
 
     def length_hessians(self, c: np.ndarray, U: np.ndarray, J: np.ndarray) -> np.ndarray:
-        """``Hess(c_i)`` (6, 3, 3), the stiffness basis ``G_i = dK/dt_i``."""
+        """``Hess(c_i)`` (m, 3, 3), the stiffness basis ``G_i = dK/dt_i``."""
         return length_hessians(self.A, c, U, J)
 
     def stiffness_basis(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

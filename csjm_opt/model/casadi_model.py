@@ -6,14 +6,16 @@ same functions serve fitted or perturbed rigs.
 
 Inputs (shapes):
     R  (3, 3)  orientation of {A} in {B}
-    A  (3, 6)  platform holes A_i in {A} (columns), m
-    B  (3, 6)  base holes B_i in {B} (columns), m
-    T  (6, 1)  cable tensions, N
-    l  (6, 1)  rest lengths (cable plus drive), m
-    k  (6, 1)  cable-plus-drive stiffness, N/m
+    A  (3, m)  platform holes A_i in {A} (columns), m
+    B  (3, m)  base holes B_i in {B} (columns), m
+    T  (m, 1)  cable tensions, N
+    l  (m, 1)  rest lengths (cable plus drive), m
+    k  (m, 1)  cable-plus-drive stiffness, N/m
+
+(m cables: :func:`build_functions` builds one set per cable count.)
 
 Conventions (docs/conventions.md, errata 1-2):
-    * ``J`` (6, 3) has rows ``a_i x (R^T u_i)`` in {A}, (38); ``dc = -J dzeta`` (40).
+    * ``J`` (m, 3) has rows ``a_i x (R^T u_i)`` in {A}, (38); ``dc = -J dzeta`` (40).
     * ``J^T T`` is the cables' moment on the platform in {A}, ``= -dPhi``.
     * ``stiffness`` is the load-convention K of docs/conventions.md,
       ``K = J^T Kdiag J - D + 1/2 hat(J^T T)`` with ``D = d(J^T T)/dzeta`` at
@@ -36,11 +38,11 @@ __all__ = ["build_functions"]
 
 
 def _cable_terms(R: ca.SX, A: ca.SX, B: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
-    """Cable vectors in {B} (3x6), lengths (6x1), and J (6x3)."""
+    """Cable vectors in {B} (3 x m), lengths (m x 1), and J (m x 3)."""
     C = B - R @ A                                   # c_i = b_i - R a_i, in {B}
-    lengths = ca.sqrt(ca.sum1(C * C)).T             # (6, 1)
+    lengths = ca.sqrt(ca.sum1(C * C)).T             # (m, 1)
     U_A = R.T @ C / ca.repmat(lengths.T, 3, 1)      # u_i expressed in {A}
-    J = ca.horzcat(*[ca.cross(A[:, i], U_A[:, i]) for i in range(6)]).T  # (6, 3)
+    J = ca.horzcat(*[ca.cross(A[:, i], U_A[:, i]) for i in range(A.shape[1])]).T  # (m, 3)
     return C, lengths, J
 
 
@@ -59,14 +61,14 @@ def _stiffness_parts(R: ca.SX, T: ca.SX, k: ca.SX, A: ca.SX, B: ca.SX) -> dict[s
 
 
 @functools.cache
-def build_functions() -> dict[str, ca.Function]:
-    """All model functions, built once per process (on first use, not at import)."""
+def build_functions(n_cables: int = 6) -> dict[str, ca.Function]:
+    """All model functions for ``n_cables`` cables, built once per process and count (on first use)."""
     R = ca.SX.sym("R", 3, 3)
-    A = ca.SX.sym("A", 3, 6)
-    B = ca.SX.sym("B", 3, 6)
-    T = ca.SX.sym("T", 6)
-    l = ca.SX.sym("l", 6)
-    k = ca.SX.sym("k", 6)
+    A = ca.SX.sym("A", 3, n_cables)
+    B = ca.SX.sym("B", 3, n_cables)
+    T = ca.SX.sym("T", n_cables)
+    l = ca.SX.sym("l", n_cables)
+    k = ca.SX.sym("k", n_cables)
     m = ca.SX.sym("m")
     r = ca.SX.sym("r", 3)
     g = ca.SX.sym("g", 3)

@@ -49,12 +49,16 @@ def _frozen(value: Any) -> np.ndarray:
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Dynamics:
-    """Inertia about the COM in {A} (kg m^2, 3x3), joint damping (N m s/rad), cable damping (N s/m, (6,))."""
+    """Inertia about the COM in {A} (kg m^2, 3x3), joint damping (N m s/rad), cable damping (N s/m).
+
+    Cable damping is one number for every cable (a 0-d array) or one per cable ((m,));
+    :meth:`cable_damping_per_cable` gives the (m,) values for an m-cable rig.
+    """
 
     inertia_com_A_kgm2: np.ndarray
     joint_damping_Nms_per_rad: float = DEFAULT_JOINT_DAMPING_NMS_PER_RAD
     cable_damping_Ns_per_m: np.ndarray = dataclasses.field(
-        default_factory=lambda: _frozen(np.full(6, DEFAULT_CABLE_DAMPING_NS_PER_M)))
+        default_factory=lambda: _frozen(np.float64(DEFAULT_CABLE_DAMPING_NS_PER_M)))
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "inertia_com_A_kgm2", _frozen(_inertia(self.inertia_com_A_kgm2, None)))
@@ -64,6 +68,20 @@ class Dynamics:
         if not (np.isfinite(d) and d >= 0):
             raise RigFileError(f"joint damping must be finite and >= 0, got {d}", None, "dynamics.joint_damping")
         object.__setattr__(self, "joint_damping_Nms_per_rad", d)
+
+    def cable_damping_per_cable(self, n_cables: int) -> np.ndarray:
+        """Cable damping (N s/m) of each of ``n_cables`` cables, shape (n_cables,).
+
+        Raises
+        ------
+        RigFileError
+            If per-cable values were given for a different number of cables.
+        """
+        c = self.cable_damping_Ns_per_m
+        if c.ndim == 1 and c.shape[0] != n_cables:
+            raise RigFileError(f"expected a number or {n_cables} numbers (one per cable), got {c.shape[0]}",
+                               None, "dynamics.cable_damping")
+        return np.broadcast_to(c, (n_cables,)).copy()
 
     def inertia_about_O_A_kgm2(self, mass_kg: float, com_A_m: np.ndarray) -> np.ndarray:
         """Inertia about the joint centre O in {A}: ``I_com + m (|r|^2 I - r r^T)`` (parallel axes)."""
@@ -77,7 +95,7 @@ class Dynamics:
         c = self.cable_damping_Ns_per_m
         return {"inertia": (np.diag(inertia) if diag else inertia).tolist(),
                 "joint_damping": self.joint_damping_Nms_per_rad,
-                "cable_damping": float(c[0]) if np.all(c == c[0]) else c.tolist()}
+                "cable_damping": float(c.ravel()[0]) if np.all(c == c.ravel()[0]) else c.tolist()}
 
     @classmethod
     def from_dict(cls, table: Any, rig_defaults: "Dynamics", path: str | None = None) -> "Dynamics":
@@ -145,12 +163,10 @@ def _inertia(value: Any, path: str | None) -> np.ndarray:
 def _cable_damping(value: Any, path: str | None) -> np.ndarray:
     key = "dynamics.cable_damping"
     if not (_numbers(value) or isinstance(value, np.ndarray)):
-        raise RigFileError(f"expected a number or six numbers, got {value!r:.60}", path, key)
+        raise RigFileError(f"expected a number or one number per cable, got {value!r:.60}", path, key)
     arr = np.array(value, dtype=float)
-    if arr.shape == ():
-        arr = np.full(6, float(arr))
-    if arr.shape != (6,):
-        raise RigFileError(f"expected a number or six numbers, got shape {arr.shape}", path, key)
+    if arr.ndim > 1 or arr.size == 0:
+        raise RigFileError(f"expected a number or one number per cable, got shape {arr.shape}", path, key)
     if not np.all(np.isfinite(arr)) or np.any(arr < 0):
         raise RigFileError(f"expected finite numbers >= 0, got {arr.tolist()}", path, key)
     return arr

@@ -12,8 +12,8 @@ class Equilibrium:
     """A static equilibrium found by :func:`solve_equilibrium` (checks itself)."""
 
     R: np.ndarray                   # (3, 3) orientation of {A} in {B}
-    rest_lengths_m: np.ndarray      # (6,)
-    tensions_N: np.ndarray          # (6,)
+    rest_lengths_m: np.ndarray      # (m,)
+    tensions_N: np.ndarray          # (m,)
     tau_ext_A_Nm: np.ndarray        # (3,) external moment fixed in {A}
     tau_cable_A_Nm: np.ndarray      # (3,) J^T T
     tau_points_A_Nm: np.ndarray     # (3,) weight plus dead-weight forces

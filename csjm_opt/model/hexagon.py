@@ -34,6 +34,8 @@ def circle_from_chords(d12_m: float, d23_m: float) -> tuple[float, float]:
     def ratio_gap(gamma: float) -> float:
         return d12_m * np.sin(np.pi / 3 - gamma / 2) - d23_m * np.sin(gamma / 2)
 
+    # The closed form is tan(gamma/2) = d12 sin(pi/3) / (d23 + d12 cos(pi/3)); the root is found with
+    # brentq as in every earlier release so that designs keep their numbers to the last bit.
     from scipy.optimize import brentq  # here, not at import: scipy.optimize costs ~0.4 s
 
     gamma = brentq(ratio_gap, 0.0, 2 * np.pi / 3, xtol=1e-15)
@@ -51,8 +53,25 @@ def hexagon_holes(d12_m: float, d23_m: float, z_m: float, theta0_deg: float = 0.
     return np.column_stack([radius * np.cos(angles), radius * np.sin(angles), np.full(6, z_m)])
 
 
+#: The paper rig's holes (m) as :func:`hexagon_holes` gives them for the chords above, written out so that
+#: building the paper rig needs no root finder (the planner's command starts without SciPy's optimisers);
+#: ``tests/model/test_hexagon_chords.py`` checks them against the chord solution bit for bit.
+PAPER_PLATFORM_HOLES_A_M = (
+    (0.05773502691896258, -0.005, 0.08),
+    (0.05773502691896258, 0.005, 0.08),
+    (-0.024537386440559077, 0.05250000000000001, 0.08),
+    (-0.033197640478403484, 0.04750000000000001, 0.08),
+    (-0.0331976404784035, -0.0475, 0.08),
+    (-0.024537386440559136, -0.05249999999999999, 0.08))
+PAPER_BASE_HOLES_B_M = (
+    (0.03983716857408418, -0.064, -0.08),
+    (0.03983716857408418, 0.064, -0.08),
+    (0.035507041555161996, 0.06649999999999999, -0.08),
+    (-0.07534421012924616, 0.0025000000000000235, -0.08),
+    (-0.07534421012924616, -0.002499999999999971, -0.08),
+    (0.03550704155516195, -0.06650000000000002, -0.08))
+
+
 def paper_holes() -> tuple[np.ndarray, np.ndarray]:
     """Platform holes A_i in {A} and base holes B_i in {B} of the paper's rig (m)."""
-    platform = hexagon_holes(*PAPER_PLATFORM_CHORDS_M, z_m=PAPER_OO_A_M)
-    base = hexagon_holes(*PAPER_BASE_CHORDS_M, z_m=-PAPER_OO_B_M)
-    return platform, base
+    return np.array(PAPER_PLATFORM_HOLES_A_M), np.array(PAPER_BASE_HOLES_B_M)

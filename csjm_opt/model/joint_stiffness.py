@@ -49,11 +49,11 @@ def stiffness(rig: Rig, R: np.ndarray, tensions_N: np.ndarray | None = None, mod
     ----------
     rig : the rig.
     R : (3, 3) orientation of {A} in {B}.
-    tensions_N : (6,) cable tensions; ``t_i <= 0`` marks cable i slack.
+    tensions_N : (m,) cable tensions; ``t_i <= 0`` marks cable i slack.
     model : a :class:`Model` of ``rig`` to reuse (optional).
     tau_ext_A_Nm : (3,) external load in {A} (weight excluded); when given, the
         tensions must hold it: ``||J^T T + tau_ext + tau_weight|| <= equilibrium_tol_Nm``.
-    rest_lengths_m : (6,) rest lengths instead of tensions: tensions follow from
+    rest_lengths_m : (m,) rest lengths instead of tensions: tensions follow from
         ``t = k (c - l)``, slack cables are found, the bounds are not checked.
     check_bounds : check ``t_min - bound_tol_N <= t_i <= t_max + bound_tol_N`` for every
         taut cable (``t_i > 0``); set False for states outside the planner's box.
@@ -72,14 +72,14 @@ def stiffness(rig: Rig, R: np.ndarray, tensions_N: np.ndarray | None = None, mod
         raise InvalidInput("give exactly one of tensions_N and rest_lengths_m", "tensions")
     model = model_for(rig, model)
     if rest_lengths_m is not None:
-        K, T, _, _ = model.stiffness_rest(as_rotation(R), as_array(rest_lengths_m, (6,), "rest_lengths_m"))
+        K, T, _, _ = model.stiffness_rest(as_rotation(R), as_array(rest_lengths_m, (rig.n_cables,), "rest_lengths_m"))
         if tau_ext_A_Nm is not None:
             _check_equilibrium(model, as_rotation(R), T, as_vector3(tau_ext_A_Nm, "tau_ext"), equilibrium_tol_Nm)
         return K
     R_arr = R if isinstance(R, np.ndarray) and R.dtype == np.float64 and R.shape == (3, 3) \
         else np.asarray(as_array(R, (3, 3), "R"))
     T = tensions_N if isinstance(tensions_N, np.ndarray) and tensions_N.dtype == np.float64 \
-        and tensions_N.shape == (6,) else as_array(tensions_N, (6,), "tensions")
+        and tensions_N.shape == (rig.n_cables,) else as_array(tensions_N, (rig.n_cables,), "tensions")
     check_eq = tau_ext_A_Nm is not None
     tau = as_vector3(tau_ext_A_Nm, "tau_ext") if check_eq else _NO_LOAD
     lo, hi = (rig.t_min_N, rig.t_max_N) if check_bounds else (1.0, -1.0)
@@ -88,7 +88,7 @@ def stiffness(rig: Rig, R: np.ndarray, tensions_N: np.ndarray | None = None, mod
                                             R_arr, T, lo, hi, tau, check_eq, 1e-12, K, info)
     if status != kernels.OK:  # the slow path says what is wrong, or re-orthonormalises R
         R_arr = as_rotation(R_arr)
-        as_array(T, (6,), "tensions")
+        as_array(T, (rig.n_cables,), "tensions")
         status = kernels.checked_stiffness_into(model.A, model.B, model.k, model.first_moment_A_kgm,
                                                 model.g, R_arr, T, lo, hi, tau, check_eq, ROTATION_TOL, K, info)
     if check_bounds and info[0] > bound_tol_N:
@@ -103,13 +103,13 @@ def stiffness(rig: Rig, R: np.ndarray, tensions_N: np.ndarray | None = None, mod
 
 def stiffness_batch(rig: Rig, Rs: np.ndarray, tensions_N: np.ndarray, model: Model | None = None, *,
                     check_bounds: bool = True, bound_tol_N: float = BOUND_TOL_N) -> np.ndarray:
-    """K for ``n`` poses (n, 3, 3) and tensions (n, 6), compiled and parallel.
+    """K for ``n`` poses (n, 3, 3) and tensions (n, m), compiled and parallel.
 
     Parameters
     ----------
     rig : the rig.
     Rs : (n, 3, 3) orientations.
-    tensions_N : (n, 6) tensions; ``t_i <= 0`` marks a slack cable.
+    tensions_N : (n, m) tensions; ``t_i <= 0`` marks a slack cable.
     model : a :class:`Model` of ``rig`` to reuse (optional).
     check_bounds, bound_tol_N : as in :func:`stiffness`.
 
@@ -124,7 +124,7 @@ def stiffness_batch(rig: Rig, Rs: np.ndarray, tensions_N: np.ndarray, model: Mod
     """
     model = model_for(rig, model)
     Rs = as_rotations_fast(Rs)
-    T = as_array(tensions_N, (Rs.shape[0], 6), "tensions")
+    T = as_array(tensions_N, (Rs.shape[0], rig.n_cables), "tensions")
     if check_bounds and T.size:
         viol = np.where(T > 0, np.maximum(rig.t_min_N - T, T - rig.t_max_N), -np.inf).max(axis=1)
         if viol.max() > bound_tol_N:

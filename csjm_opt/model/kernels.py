@@ -16,8 +16,8 @@ The kernels live in :mod:`csjm_opt.model._pose_kernels` (one pose) and
 :mod:`csjm_opt.model._batch_kernels` (stacks, serial and parallel); this module
 re-exports the same function objects.
 
-Argument names: ``A`` (6, 3) platform holes in {A}, ``B`` (6, 3) base holes
-in {B}, ``k`` (6,) cable stiffness, ``m r`` the first moment of the platform's
+Argument names: ``A`` (m, 3) platform holes in {A}, ``B`` (m, 3) base holes
+in {B}, ``k`` (m,) cable stiffness (m cables, from the arrays), ``m r`` the first moment of the platform's
 mass (kg m) in {A} and ``g`` gravity in {B}; ``R`` (3, 3) or ``Rs`` (n, 3, 3).
 """
 

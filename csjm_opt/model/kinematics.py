@@ -27,9 +27,9 @@ Residual = Callable[[np.ndarray], np.ndarray]   # (n, 3, 3) -> (n, 3)
 
 
 def cable_terms(R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Cable lengths (n, 6) and Jacobian J (n, 6, 3) for poses R (n, 3, 3).
+    """Cable lengths (n, m) and Jacobian J (n, m, 3) for poses R (n, 3, 3).
 
-    ``A_m``, ``B_m`` are (6, 3) or per-row (n, 6, 3) hole positions in {A}, {B}.
+    ``A_m``, ``B_m`` are (m, 3) or per-row (n, m, 3) hole positions in {A}, {B}.
     The physics is :func:`csjm_opt.model.cable_terms.geometry` (the numpy reference).
     """
     c, _, J = _reference.geometry(R, A_m, B_m)

@@ -3,13 +3,13 @@
 Frames and conventions of the file:
 
 * the world frame is {B}; its origin is the joint centre O. The base holes
-  ``B_i`` are world sites ``B1..B6``;
+  ``B_i`` are world sites ``B1..Bm`` (m = ``rig.n_cables``);
 * body ``platform`` has frame {A}, origin at O, identity pose in the model;
   the ball joint ``ball`` sits at O, so the joint's quaternion ``qpos``
   (MuJoCo order ``w, x, y, z``) is the orientation ``R`` of {A} in {B}, and
   its ``qvel`` is the angular velocity **in {A}** (body frame). Generalised
   forces of the joint (``qfrc_*``) are moments about O in {A}, like
-  ``tau_ext`` here. The platform holes ``A_i`` are body sites ``A1..A6``;
+  ``tau_ext`` here. The platform holes ``A_i`` are body sites ``A1..Am``;
 * mass at the COM, inertia about the COM in {A} (``[dynamics]`` of the rig
   file or the defaults of :mod:`csjm_opt.model.dynamics`); gravity
   ``rig.gravity_B_m_per_s2``; the ball joint's damping; no contacts;
@@ -89,7 +89,7 @@ def rig_to_mjcf(rig: Rig, rest_lengths_m: np.ndarray | None = None, R: np.ndarra
     ----------
     rig : Rig
         Geometry, cable stiffness, limits, mass/COM, gravity and (optional) dynamics.
-    rest_lengths_m : (6,) array, optional
+    rest_lengths_m : (m,) array, optional
         Rest lengths written into the springs (``"spring"``) or the winch
         controls of the keyframe (``"winch"``). Default: cable lengths at ``R``
         (every cable just taut, no tension).
@@ -97,7 +97,7 @@ def rig_to_mjcf(rig: Rig, rest_lengths_m: np.ndarray | None = None, R: np.ndarra
         Pose of the keyframe ``planned`` (identity by default).
     tau_ext_A_Nm : (3,) array, optional
         External moment fixed in {A}, the keyframe's ``load_*`` controls.
-    tensions_N : (6,) array, optional
+    tensions_N : (m,) array, optional
         Tensions of the keyframe for ``actuation="tension"`` (default ``t_min``).
     actuation : {"spring", "winch", "tension"}
         How the cables pull (module doc).
@@ -125,10 +125,12 @@ def rig_to_mjcf(rig: Rig, rest_lengths_m: np.ndarray | None = None, R: np.ndarra
     A, B = rig.platform_holes_A_m, rig.base_holes_B_m
     k, dyn = rig.cable_stiffness_N_per_m, rig_dynamics(rig)
     R = np.eye(3) if R is None else np.asarray(R, float)
+    m = A.shape[0]
     c = cable_lengths(R, A, B)
-    l = c if rest_lengths_m is None else np.asarray(rest_lengths_m, float).reshape(6)
+    l = c if rest_lengths_m is None else np.asarray(rest_lengths_m, float).reshape(m)
     tau = np.zeros(3) if tau_ext_A_Nm is None else np.asarray(tau_ext_A_Nm, float).reshape(3)
-    T = np.full(6, rig.t_min_N) if tensions_N is None else np.asarray(tensions_N, float).reshape(6)
+    T = np.full(m, rig.t_min_N) if tensions_N is None else np.asarray(tensions_N, float).reshape(m)
+    b_cable = dyn.cable_damping_per_cable(m)
     damping = dyn.joint_damping_Nms_per_rad if joint_damping_Nms_per_rad is None else joint_damping_Nms_per_rad
     I = dyn.inertia_com_A_kgm2
     l_max = 2.0 * float(np.max(np.linalg.norm(A, axis=1) + np.linalg.norm(B, axis=1)))
@@ -146,25 +148,25 @@ def rig_to_mjcf(rig: Rig, rest_lengths_m: np.ndarray | None = None, R: np.ndarra
            f'    <numeric name="cable_stiffness_N_per_m" data="{_v(k)}"/>',
            "  </custom>",
            "  <worldbody>"]
-    out += [f'    <site name="B{i + 1}" pos="{_v(B[i])}" size="0.003"/>' for i in range(6)]
+    out += [f'    <site name="B{i + 1}" pos="{_v(B[i])}" size="0.003"/>' for i in range(m)]
     out += ['    <body name="platform" pos="0 0 0">',
             f'      <joint name="ball" type="ball" pos="0 0 0" damping="{_f(damping)}"/>',
             f'      <inertial pos="{_v(rig.com_A_m)}" mass="{_f(rig.platform_mass_kg)}" '
             f'fullinertia="{_v([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]])}"/>']
-    out += [f'      <site name="A{i + 1}" pos="{_v(A[i])}" size="0.003"/>' for i in range(6)]
+    out += [f'      <site name="A{i + 1}" pos="{_v(A[i])}" size="0.003"/>' for i in range(m)]
     out += ["    </body>", "  </worldbody>", "  <tendon>"]
-    for i in range(6):
+    for i in range(m):
         spring = (f'stiffness="{_f(k[i])}" springlength="0 {_f(l[i])}"' if actuation == "spring"
                   else 'stiffness="0"')
-        out += [f'    <spatial name="cable{i + 1}" {spring} damping="{_f(dyn.cable_damping_Ns_per_m[i])}" '
+        out += [f'    <spatial name="cable{i + 1}" {spring} damping="{_f(b_cable[i])}" '
                 f'width="0.001">',
                 f'      <site site="A{i + 1}"/>', f'      <site site="B{i + 1}"/>', "    </spatial>"]
     out += ["  </tendon>", "  <actuator>"]
     ctrl: list[float] = []
-    for i in range(6):
+    for i in range(m):
         if actuation == "winch":
             out.append(f'    <general name="winch{i + 1}" tendon="cable{i + 1}" gaintype="fixed" gainprm="{_f(k[i])}" '
-                       f'biastype="affine" biasprm="0 {_f(-k[i])} {_f(-dyn.cable_damping_Ns_per_m[i])}" '
+                       f'biastype="affine" biasprm="0 {_f(-k[i])} {_f(-b_cable[i])}" '
                        f'ctrlrange="0 {_f(l_max)}" forcerange="{_f(-rig.t_max_N)} 0"/>')
             ctrl.append(l[i])
         elif actuation == "tension":

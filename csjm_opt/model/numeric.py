@@ -111,7 +111,8 @@ class Model(CasadiReference):
         self.k = _f64(rig.cable_stiffness_N_per_m).copy()
         self.first_moment_A_kgm = rig.platform_mass_kg * _f64(rig.com_A_m)
         self.g = _f64(rig.gravity_B_m_per_s2).copy()
-        self.t_mid = np.full(6, 0.5 * (rig.t_min_N + rig.t_max_N))
+        self.n_cables = int(self.A.shape[0])
+        self.t_mid = np.full(self.n_cables, 0.5 * (rig.t_min_N + rig.t_max_N))
         self.t_mid.setflags(write=False)
 
     # ------------------------------------------------------- single-pose fast path
@@ -126,26 +127,28 @@ class Model(CasadiReference):
 
         Returns
         -------
-        c : (6,) cable lengths (m); J : (6, 3) Jacobian (38); tau_weight : (3,) weight moment in {A} (N m).
+        c : (m,) cable lengths (m); J : (m, 3) Jacobian (38); tau_weight : (3,) weight moment in {A} (N m).
         """
-        c, J, tau_w = np.empty(6), np.empty((6, 3)), np.empty(3)
+        m = self.n_cables
+        c, J, tau_w = np.empty(m), np.empty((m, 3)), np.empty(3)
         kernels.pose_terms_into(self.A, self.B, self.first_moment_A_kgm, self.g, R, c, J, tau_w)
         return c, J, tau_w
 
     # ----------------------------------------------------------------- kernels
     def geometry(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Cable lengths (m) and J: ``(6,), (6, 3)`` or ``(n, 6), (n, 6, 3)``."""
+        """Cable lengths (m) and J: ``(m,), (m, 3)`` or ``(n, m), (n, m, 3)``."""
         if R.ndim == 2:
-            c, U, J = np.empty(6), np.empty((6, 3)), np.empty((6, 3))
+            m = self.n_cables
+            c, U, J = np.empty(m), np.empty((m, 3)), np.empty((m, 3))
             kernels.geometry_into(self.A, self.B, R, c, U, J)
             return c, J
         n = R.shape[0]
-        c, J = np.empty((n, 6)), np.empty((n, 6, 3))
+        c, J = np.empty((n, self.n_cables)), np.empty((n, self.n_cables, 3))
         _many("geometry_many", R.shape[0])(self.A, self.B, _f64(R), c, J)
         return c, J
 
     def cable_vectors_B(self, R: np.ndarray) -> np.ndarray:
-        """Cable vectors ``c_i = b_i - R a_i`` in {B}: (6, 3) or (n, 6, 3), m."""
+        """Cable vectors ``c_i = b_i - R a_i`` in {B}: (m, 3) or (n, m, 3), m."""
         return self.B - self.A @ np.swapaxes(R, -1, -2)
 
     def cable_lengths(self, R: np.ndarray) -> np.ndarray:
@@ -159,7 +162,7 @@ class Model(CasadiReference):
 
         Returns
         -------
-        ndarray, shape (6,) or (n, 6)
+        ndarray, shape (m,) or (n, m)
             Lengths (m).
         """
         return self.geometry(R)[0]
@@ -175,7 +178,7 @@ class Model(CasadiReference):
 
         Returns
         -------
-        ndarray, shape (6, 3) or (n, 6, 3)
+        ndarray, shape (m, 3) or (n, m, 3)
             ``J`` per pose (m).
         """
         return self.geometry(R)[1]
@@ -188,7 +191,7 @@ class Model(CasadiReference):
         R : ndarray, shape (3, 3) or (n, 3, 3)
             Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
             top-level functions for user input).
-        T : ndarray, shape (6,) or (n, 6)
+        T : ndarray, shape (m,) or (n, m)
             Cable tensions (N).
 
         Returns
@@ -207,7 +210,7 @@ class Model(CasadiReference):
         R : ndarray, shape (3, 3) or (n, 3, 3)
             Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
             top-level functions for user input).
-        T : ndarray, shape (6,) or (n, 6)
+        T : ndarray, shape (m,) or (n, m)
             Cable tensions (N); ``T_i <= 0`` is a slack cable.
 
         Returns
@@ -229,19 +232,19 @@ class Model(CasadiReference):
         Parameters
         ----------
         R : (3, 3) or (n, 3, 3) rotations (trusted).
-        l : (6,) or (n, 6) rest lengths (m).
+        l : (m,) or (n, m) rest lengths (m).
 
         Returns
         -------
-        K : (..., 3, 3); T : (..., 6) tensions ``k (c - l)``, 0 when ``c <= l``;
+        K : (..., 3, 3); T : (..., m) tensions ``k (c - l)``, 0 when ``c <= l``;
         tau : (..., 3) cables' moment ``J^T T`` in {A}; energy : float or (n,) cable energy (J).
         """
         if R.ndim == 2:
-            K, T, tau = np.empty((3, 3)), np.empty(6), np.empty(3)
+            K, T, tau = np.empty((3, 3)), np.empty(self.n_cables), np.empty(3)
             kernels.rest_terms_into(self.A, self.B, self.k, R, _f64(l), K, T, tau)
         else:
             n = R.shape[0]
-            K, T, tau = np.empty((n, 3, 3)), np.empty((n, 6)), np.empty((n, 3))
+            K, T, tau = np.empty((n, 3, 3)), np.empty((n, self.n_cables)), np.empty((n, 3))
             _many("rest_terms_many", R.shape[0])(self.A, self.B, self.k, _f64(R), _f64(l), K, T, tau)
         energy = 0.5 * np.sum(T * T / self.k, axis=-1)       # 1/2 k s^2 = 1/2 t^2 / k
         return K, T, tau, (float(energy) if R.ndim == 2 else energy)
@@ -254,12 +257,12 @@ class Model(CasadiReference):
         R : ndarray, shape (3, 3) or (n, 3, 3)
             Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
             top-level functions for user input).
-        l : ndarray, shape (6,) or (n, 6)
+        l : ndarray, shape (m,) or (n, m)
             Rest lengths (m).
 
         Returns
         -------
-        ndarray, shape (6,) or (n, 6)
+        ndarray, shape (m,) or (n, m)
             Tensions (N).
         """
         return np.maximum(self.k * (self.cable_lengths(R) - l), 0.0)
@@ -272,12 +275,12 @@ class Model(CasadiReference):
         R : ndarray, shape (3, 3) or (n, 3, 3)
             Orientation(s) of {A} in {B} (not validated: the fast path trusts its caller; use the
             top-level functions for user input).
-        T : ndarray, shape (6,) or (n, 6)
+        T : ndarray, shape (m,) or (n, m)
             Cable tensions (N).
 
         Returns
         -------
-        ndarray, shape (6,) or (n, 6)
+        ndarray, shape (m,) or (n, m)
             Rest lengths (m).
         """
         return self.cable_lengths(R) - np.asarray(T) / self.k
@@ -305,9 +308,9 @@ class Model(CasadiReference):
         return out
 
     def stiffness_basis(self, Rs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``K(T) = K0 + sum_i T_i G_i`` (all cables taut): K0 (n, 3, 3), G (n, 6, 3, 3)."""
+        """``K(T) = K0 + sum_i T_i G_i`` (all cables taut): K0 (n, 3, 3), G (n, m, 3, 3)."""
         n = Rs.shape[0]
-        K0, G = np.empty((n, 3, 3)), np.empty((n, 6, 3, 3))
+        K0, G = np.empty((n, 3, 3)), np.empty((n, self.n_cables, 3, 3))
         _many("stiffness_basis_many", Rs.shape[0])(self.A, self.B, self.k, _f64(Rs), K0, G)
         return K0, G
 

@@ -4,10 +4,12 @@ A :class:`Rig` is immutable; arrays are read-only copies. It reads and writes
 the TOML format of docs/conventions.md::
 
     [geometry]
-    platform_holes = [[x, y, z], ...]   # six rows, A_i in {A}, m
-    base_holes     = [[x, y, z], ...]   # six rows, B_i in {B}, m
+    platform_holes = [[x, y, z], ...]   # m rows (4 <= m <= 12), A_i in {A}, m
+    base_holes     = [[x, y, z], ...]   # m rows, B_i in {B}, m
+    # or, instead of the two arrays, a [geometry.pattern] table
+    # (csjm_opt.model.hole_pattern: count, radii, angles, heights, twist, ...)
     [cables]
-    stiffness = [k1, ..., k6]           # N/m, each cable with its drive
+    stiffness = [k1, ..., km]           # N/m, each cable with its drive
     t_min = 5.0                         # N
     t_max = 150.0                       # N
     [platform]
@@ -22,6 +24,13 @@ the TOML format of docs/conventions.md::
     rod_radius = 0.004                  # m, rod from (0, 0, -rod_length) in {B} to O
     rod_length = 0.08                   # m
     ball_radius = 0.005                 # m, the joint's ball at O
+    [workspace]                         # optional, the rig's stated range
+    tilt_deg = 20.0                     # deg, largest tilt the rig must hold its weight at
+
+A rig read from a file or dict is refused when it cannot work
+(:mod:`csjm_opt.model.tension_closure`): no tensions in ``[t_min, t_max]`` hold
+the platform's weight at some pose of its stated range (the zero pose, plus
+tilts up to ``workspace.tilt_deg`` when given).
 """
 
 from __future__ import annotations
@@ -39,6 +48,7 @@ from . import hexagon
 from ._rig_schema import _check
 from ._rig_toml import _format_toml
 from .dynamics import Dynamics
+from .hole_pattern import expand_pattern
 from .link import DEFAULT_LINK, Link
 
 #: Shared cable-plus-drive stiffness of the built-in paper rig (N/m). The paper
@@ -66,9 +76,9 @@ def _frozen(value: Any) -> np.ndarray:
 class Rig:
     """A cable-driven spherical joint module (units SI, frames per docs/conventions.md)."""
 
-    platform_holes_A_m: np.ndarray      # (6, 3) A_i in {A}
-    base_holes_B_m: np.ndarray          # (6, 3) B_i in {B}
-    cable_stiffness_N_per_m: np.ndarray  # (6,)
+    platform_holes_A_m: np.ndarray      # (m, 3) A_i in {A}, 4 <= m <= 12
+    base_holes_B_m: np.ndarray          # (m, 3) B_i in {B}
+    cable_stiffness_N_per_m: np.ndarray  # (m,)
     t_min_N: float
     t_max_N: float
     platform_mass_kg: float = PAPER_MASS_KG
@@ -79,11 +89,14 @@ class Rig:
     dynamics: Dynamics | None = None
     #: The central link the cables must clear; ``None``: :data:`csjm_opt.model.link.DEFAULT_LINK`.
     link: Link | None = None
+    #: The stated range: largest tilt (deg) at which the rig must hold its weight; ``None``: the zero pose.
+    workspace_tilt_deg: float | None = None
 
     def __post_init__(self) -> None:
         data = self.as_dict()
         data.pop("dynamics", None)
         data.pop("link", None)
+        data.pop("workspace", None)
         if self.link is not None and not isinstance(self.link, Link):
             raise RigFileError(f"expected a Link, got {type(self.link).__name__}", None, "link")
         _check(data, path=None)
@@ -95,6 +108,15 @@ class Rig:
         object.__setattr__(self, "t_min_N", float(self.t_min_N))
         object.__setattr__(self, "t_max_N", float(self.t_max_N))
         object.__setattr__(self, "platform_mass_kg", float(self.platform_mass_kg))
+        if self.dynamics is not None:
+            self.dynamics.cable_damping_per_cable(self.n_cables)   # raises on a per-cable count mismatch
+        if self.workspace_tilt_deg is not None:
+            object.__setattr__(self, "workspace_tilt_deg", _tilt_deg(self.workspace_tilt_deg, None))
+
+    @property
+    def n_cables(self) -> int:
+        """m, the number of cables (rows of the hole arrays)."""
+        return int(self.platform_holes_A_m.shape[0])
 
     # ------------------------------------------------------------ derived
     @property
@@ -109,8 +131,8 @@ class Rig:
 
     @property
     def t_mid_N(self) -> np.ndarray:
-        """Mid-range tension, the planner's default reference (N), shape (6,)."""
-        return np.full(6, 0.5 * (self.t_min_N + self.t_max_N))
+        """Mid-range tension, the planner's default reference (N), shape (m,)."""
+        return np.full(self.n_cables, 0.5 * (self.t_min_N + self.t_max_N))
 
     def replace(self, **changes: Any) -> "Rig":
         """A copy with some fields changed (validated again).
@@ -128,7 +150,8 @@ class Rig:
         Raises
         ------
         InvalidInput
-            If a name is not a field of :class:`Rig` or a value is invalid.
+            If a name is not a field of :class:`Rig` or a value is invalid (a change of the
+            cable count must change the holes and stiffness together).
         """
         unknown = sorted(set(changes) - {f.name for f in dataclasses.fields(self)})
         if unknown:
@@ -144,7 +167,7 @@ class Rig:
         -------
         dict
             ``{"geometry": {...}, "cables": {...}, "platform": {...}}`` of plain Python numbers
-            (plus ``"dynamics"`` and ``"link"`` when set).
+            (plus ``"dynamics"``, ``"link"`` and ``"workspace"`` when set).
         """
         tolist = lambda a: np.asarray(a, dtype=float).tolist()  # noqa: E731
         data = {
@@ -159,18 +182,24 @@ class Rig:
             data["dynamics"] = self.dynamics.as_dict()
         if self.link is not None:
             data["link"] = self.link.as_dict()
+        if self.workspace_tilt_deg is not None:
+            data["workspace"] = {"tilt_deg": float(self.workspace_tilt_deg)}
         return data
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any], path: str | None = None) -> "Rig":
+    def from_dict(cls, data: dict[str, Any], path: str | None = None, check_closure: bool = True) -> "Rig":
         """Build a rig from the nested TOML layout.
 
         Parameters
         ----------
         data : dict
-            ``{"geometry": {...}, "cables": {...}, "platform": {...}}`` as in a rig file.
+            ``{"geometry": {...}, "cables": {...}, "platform": {...}}`` as in a rig file; the
+            geometry may be a ``pattern`` table (:mod:`csjm_opt.model.hole_pattern`).
         path : str, optional
             File the data came from, named in errors.
+        check_closure : bool, optional
+            Refuse a rig without tension closure over its stated range
+            (:func:`csjm_opt.model.tension_closure.check_tension_closure`).
 
         Returns
         -------
@@ -181,9 +210,19 @@ class Rig:
         ------
         RigFileError
             If a key is unknown or missing, a shape is wrong, a number is not finite, ``t_min >=
-            t_max``, a stiffness is not positive or holes coincide (naming the key and file).
+            t_max``, a stiffness is not positive, holes coincide, there are fewer than 4 (or
+            more than 12) cables, or the cables cannot hold the platform's weight with tensions
+            in bounds over the stated range (naming the key and file).
         """
-        statics = ({key: value for key, value in data.items() if key not in ("dynamics", "link")}
+        if isinstance(data, dict) and isinstance(data.get("geometry"), dict) and "pattern" in data["geometry"]:
+            geometry = dict(data["geometry"])
+            for key in ("platform_holes", "base_holes"):
+                if key in geometry:
+                    raise RigFileError("give hole coordinates or a pattern, not both", path, f"geometry.{key}")
+            platform, base = expand_pattern(geometry.pop("pattern"), path)
+            geometry.update(platform_holes=platform.tolist(), base_holes=base.tolist())
+            data = {**data, "geometry": geometry}
+        statics = ({key: value for key, value in data.items() if key not in ("dynamics", "link", "workspace")}
                    if isinstance(data, dict) else data)
         _check(statics, path)
         g, c, p = data["geometry"], data["cables"], data["platform"]
@@ -193,10 +232,20 @@ class Rig:
 
             dynamics = Dynamics.from_dict(data["dynamics"], default_dynamics(p["mass"], g["platform_holes"]), path)
         link = Link.from_dict(data["link"], path) if "link" in data else None
-        return cls(platform_holes_A_m=g["platform_holes"], base_holes_B_m=g["base_holes"],
-                   cable_stiffness_N_per_m=c["stiffness"], t_min_N=c["t_min"], t_max_N=c["t_max"],
-                   platform_mass_kg=p["mass"], com_A_m=p["com"], gravity_B_m_per_s2=p["gravity"],
-                   dynamics=dynamics, link=link)
+        tilt = _workspace_tilt(data.get("workspace"), path)
+        if dynamics is not None and np.ndim(dynamics.cable_damping_Ns_per_m) == 1 \
+                and len(dynamics.cable_damping_Ns_per_m) != len(g["platform_holes"]):
+            raise RigFileError(f"expected a number or {len(g['platform_holes'])} numbers (one per cable), got "
+                               f"{len(dynamics.cable_damping_Ns_per_m)}", path, "dynamics.cable_damping")
+        rig = cls(platform_holes_A_m=g["platform_holes"], base_holes_B_m=g["base_holes"],
+                  cable_stiffness_N_per_m=c["stiffness"], t_min_N=c["t_min"], t_max_N=c["t_max"],
+                  platform_mass_kg=p["mass"], com_A_m=p["com"], gravity_B_m_per_s2=p["gravity"],
+                  dynamics=dynamics, link=link, workspace_tilt_deg=tilt)
+        if check_closure:
+            from .tension_closure import check_tension_closure
+
+            check_tension_closure(rig, path)
+        return rig
 
     @classmethod
     def from_toml(cls, path: str | Path) -> "Rig":
@@ -249,6 +298,26 @@ class Rig:
         if path is not None:
             atomic_write_text(path, text, overwrite=overwrite)
         return text
+
+
+def _tilt_deg(value: Any, path: str | None) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) \
+            or not 0.0 <= float(value) <= 90.0:
+        raise RigFileError(f"expected a number of degrees in [0, 90], got {value!r:.60}", path, "workspace.tilt_deg")
+    return float(value)
+
+
+def _workspace_tilt(table: Any, path: str | None) -> float | None:
+    if table is None:
+        return None
+    if not isinstance(table, dict):
+        raise RigFileError(f"expected a table, got {type(table).__name__}", path, "workspace")
+    for key in table:
+        if key != "tilt_deg":
+            raise RigFileError("unknown key (expected one of ['tilt_deg'])", path, f"workspace.{key}")
+    if "tilt_deg" not in table:
+        raise RigFileError("missing key", path, "workspace.tilt_deg")
+    return _tilt_deg(table["tilt_deg"], path)
 
 
 def paper_rig(cable_stiffness_N_per_m: float = PAPER_CABLE_STIFFNESS_N_PER_M) -> Rig:

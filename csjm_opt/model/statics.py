@@ -93,7 +93,7 @@ class EquilibriumSolver:
         return (R, tuple(terms), it), bool(ok)
 
     def solve(self, l: np.ndarray, tau_ext: np.ndarray, R_init: np.ndarray) -> Equilibrium:
-        """Equilibrium for rest lengths ``l`` (6,) and moment ``tau_ext`` (3,) from ``R_init``."""
+        """Equilibrium for rest lengths ``l`` (m,) and moment ``tau_ext`` (3,) from ``R_init``."""
         state, ok = self._newton(l, R_init, tau_ext)
         if not ok and self.continuation_steps > 0 and np.any(tau_ext):
             # load continuation: equilibrium without tau_ext first, then increments
@@ -160,7 +160,7 @@ def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: npt.Ar
     ``||J^T T + tau_load||`` must be below ``verify_tol_Nm``.
     """
     model = model if model is not None and model.rig is rig else Model(rig)
-    l = as_array(rest_lengths_m, (6,), "rest_lengths")
+    l = as_array(rest_lengths_m, (rig.n_cables,), "rest_lengths")
     if np.any(l <= 0):
         raise InvalidInput(f"rest lengths must be positive, got {np.round(l, 6).tolist()} m", "rest_lengths")
     tau_ext = as_vector3(tau_ext_A_Nm, "tau_ext")
@@ -185,4 +185,4 @@ def solve_equilibrium(rig: Rig, rest_lengths_m: np.ndarray, tau_ext_A_Nm: npt.Ar
 def rest_lengths_for(rig: Rig, R: np.ndarray, tensions_N: np.ndarray, model: Model | None = None) -> np.ndarray:
     """Rest lengths ``l = c(R) - T / k`` that give tensions ``T`` at ``R`` (m)."""
     model = model if model is not None and model.rig is rig else Model(rig)
-    return model.rest_lengths(as_rotation(R), as_array(tensions_N, (6,), "tensions"))
+    return model.rest_lengths(as_rotation(R), as_array(tensions_N, (rig.n_cables,), "tensions"))

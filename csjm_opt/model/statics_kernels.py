@@ -37,21 +37,23 @@ def exp_so3(w):
 
 @njit(cache=True)
 def geometry(R, A, B):
-    """Cable lengths c (6,), unit vectors U in {A} (6, 3), J (6, 3) (model-layer kernel)."""
-    c = np.empty(6)
-    U = np.empty((6, 3))
-    J = np.empty((6, 3))
+    """Cable lengths c (m,), unit vectors U in {A} (m, 3), J (m, 3) (model-layer kernel)."""
+    m = A.shape[0]
+    c = np.empty(m)
+    U = np.empty((m, 3))
+    J = np.empty((m, 3))
     geometry_into(A, B, R, c, U, J)
     return c, U, J
 
 
 @njit(cache=True)
 def length_hessians(A, c, U, J):
-    """Hess(c_i) (6, 3, 3): K of cable i alone at unit tension and zero stiffness."""
-    G = np.empty((6, 3, 3))
-    e = np.zeros(6)
-    zero_k = np.zeros(6)
-    for i in range(6):
+    """Hess(c_i) (m, 3, 3): K of cable i alone at unit tension and zero stiffness."""
+    m = A.shape[0]
+    G = np.empty((m, 3, 3))
+    e = np.zeros(m)
+    zero_k = np.zeros(m)
+    for i in range(m):
         e[i] = 1.0
         stiffness_from_geometry_into(A, zero_k, c, U, J, e, G[i])
         e[i] = 0.0
@@ -60,7 +62,7 @@ def length_hessians(A, c, U, J):
 
 @njit(cache=True)
 def stiffness_basis(A, B, k, R):
-    """J (6, 3), K0 = J^T diag(k) J, G (6, 3, 3)."""
+    """J (m, 3), K0 = J^T diag(k) J, G (m, 3, 3)."""
     c, U, J = geometry(R, A, B)
     K0 = (J.T * k) @ J
     return J, K0, length_hessians(A, c, U, J)
@@ -147,18 +149,18 @@ def log_so3(R):
 
 @njit(cache=True)
 def rest_state(A, B, k, R, l):
-    """Tensions T (6,) and cable stiffness K (3, 3) for rest lengths ``l`` at ``R`` (slack: nothing)."""
+    """Tensions T (m,) and cable stiffness K (3, 3) for rest lengths ``l`` at ``R`` (slack: nothing)."""
     c, U, J = geometry(R, A, B)
     return _rest_from_geometry(A, k, c, U, J, l)
 
 
 @njit(cache=True)
 def _rest_from_geometry(A, k, c, U, J, l):
-    """Tensions T (6,) and cable stiffness K (3, 3) from the cable geometry (slack cables: nothing)."""
+    """Tensions T (m,) and cable stiffness K (3, 3) from the cable geometry (slack cables: nothing)."""
     G = length_hessians(A, c, U, J)
-    T = np.zeros(6)
+    T = np.zeros(A.shape[0])
     K = np.zeros((3, 3))
-    for i in range(6):
+    for i in range(A.shape[0]):
         s = c[i] - l[i]
         if s > 0:
             T[i] = k[i] * s

@@ -6,7 +6,7 @@ Solves::
     subject to  A x = b                       (A: m x n, full row rank)
                 lo <= x <= hi
 
-for the handful of variables of a stiffness-shaping problem (n = 6), fast
+for the handful of variables of a stiffness-shaping problem (n = m, the cable count), fast
 enough for a 1 kHz loop and exact to round-off (it also polishes the answer
 of an iterative solver such as OSQP). Two methods:
 
@@ -26,7 +26,6 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from scipy.optimize import linprog
 
 from . import kernels as kernels
 from .active_set import solve as _project_box_eq
@@ -111,10 +110,12 @@ def _kkt(P, q, A, b, lo, hi, lower, upper):
 
 def _feasible_point(A, b, lo, hi) -> np.ndarray | None:
     """A point of ``{A x = b, lo <= x <= hi}``: projection of the box centre, else an LP."""
-    if A.shape[1] == 6 and np.ptp(lo) == 0 and np.ptp(hi) == 0:
+    if A.shape[0] == 3 and A.shape[1] >= 4 and np.ptp(lo) == 0 and np.ptp(hi) == 0:
         proj = _project_box_eq(A[None], b[None], (0.5 * (lo + hi))[None], lo[0], hi[0])
         if proj.converged[0]:
             return proj.t[0].copy()
+    from scipy.optimize import linprog  # only near the boundary of the feasible set
+
     res = linprog(np.zeros(A.shape[1]), A_eq=A, b_eq=b, bounds=list(zip(lo, hi)), method="highs")
     return res.x if res.status == 0 else None
 

@@ -36,9 +36,11 @@ OK, SINGULAR, NOT_CONVERGED, BAD_INPUT = 0, 1, 2, 3
 def solve_one(J, b, t_ref, lo, hi, lower, upper, t, max_iter):
     """Exact solution of min 1/2||t - t_ref||^2, J^T t = b, lo <= t <= hi.
 
-    ``lower``/``upper`` (bool, 6) are the warm-start active sets and are
-    updated in place; ``t`` receives the solution. Returns a status code.
+    ``J`` is (m, 3) for m cables; ``lower``/``upper`` (bool, m) are the warm-start
+    active sets and are updated in place; ``t`` (m,) receives the solution.
+    Returns a status code. Work per iteration: O(m) (a 3x3 system).
     """
+    n_cab = J.shape[0]
     scale = max(1.0, abs(hi))
     eps = 1e-10 * scale
     M = np.empty((3, 3))
@@ -47,7 +49,7 @@ def solve_one(J, b, t_ref, lo, hi, lower, upper, t, max_iter):
     for _ in range(max_iter):
         M[:] = 0.0
         rhs[:] = b
-        for i in range(6):
+        for i in range(n_cab):
             if lower[i] or upper[i]:
                 bound = lo if lower[i] else hi
                 for p in range(3):
@@ -68,7 +70,7 @@ def solve_one(J, b, t_ref, lo, hi, lower, upper, t, max_iter):
                 C[q, p] = rhs[q]
             lam[p] = _det3(C) / det
         stable = True
-        for i in range(6):
+        for i in range(n_cab):
             jl = J[i, 0] * lam[0] + J[i, 1] * lam[1] + J[i, 2] * lam[2]
             if lower[i]:
                 t[i] = lo
@@ -95,7 +97,7 @@ def solve_one(J, b, t_ref, lo, hi, lower, upper, t, max_iter):
 
 @njit(cache=True)
 def _rest_lengths(k, c, T, l):
-    for i in range(6):
+    for i in range(k.shape[0]):
         l[i] = c[i] - T[i] / k[i]
 
 
@@ -114,30 +116,31 @@ def plan_one(A, B, k, mr, g, R, tau_ext, t_ref, lo, hi, max_iter, T, J, tau_w, c
         for q in range(3):
             if not np.isfinite(R[p, q]):
                 return BAD_INPUT
-    for i in range(6):
+    n_cab = A.shape[0]
+    for i in range(n_cab):
         if not np.isfinite(t_ref[i]):
             return BAD_INPUT
     err, det = rotation_error(R)
     if err > 1e-12 or det <= 0.0:
         return BAD_INPUT
-    U = np.empty((6, 3))
+    U = np.empty((n_cab, 3))
     geometry_into(A, B, R, c, U, J)
     weight_moment_into(mr, g, R, tau_w)
     b = np.empty(3)
     for p in range(3):
         b[p] = -(tau_ext[p] + tau_w[p])
-    lower = np.zeros(6, dtype=np.bool_)
-    upper = np.zeros(6, dtype=np.bool_)
+    lower = np.zeros(n_cab, dtype=np.bool_)
+    upper = np.zeros(n_cab, dtype=np.bool_)
     status = solve_one(J, b, t_ref, lo, hi, lower, upper, T, max_iter)
     _rest_lengths(k, c, T, l)
     res = 0.0
     for p in range(3):
         r = -b[p]
-        for i in range(6):
+        for i in range(n_cab):
             r += J[i, p] * T[i]
         res += r * r
     viol = 0.0
-    for i in range(6):
+    for i in range(n_cab):
         viol = max(viol, lo - T[i], T[i] - hi)
     info[0] = np.sqrt(res)
     info[1] = viol
@@ -148,24 +151,25 @@ def plan_one(A, B, k, mr, g, R, tau_ext, t_ref, lo, hi, max_iter, T, J, tau_w, c
 def plan_batch(A, B, k, mr, g, Rs, taus, t_ref, lo, hi, max_iter, T, J_out, tau_w_out, c_out, l_out, status):
     """Plan ``n`` poses in order, each warm-started from the previous active set."""
     n = Rs.shape[0]
-    lower = np.zeros(6, dtype=np.bool_)
-    upper = np.zeros(6, dtype=np.bool_)
+    n_cab = A.shape[0]
+    lower = np.zeros(n_cab, dtype=np.bool_)
+    upper = np.zeros(n_cab, dtype=np.bool_)
     b = np.empty(3)
-    U = np.empty((6, 3))
-    for m in range(n):
-        geometry_into(A, B, Rs[m], c_out[m], U, J_out[m])
-        weight_moment_into(mr, g, Rs[m], tau_w_out[m])
+    U = np.empty((n_cab, 3))
+    for s in range(n):
+        geometry_into(A, B, Rs[s], c_out[s], U, J_out[s])
+        weight_moment_into(mr, g, Rs[s], tau_w_out[s])
         for p in range(3):
-            b[p] = -(taus[m, p] + tau_w_out[m, p])
-        status[m] = solve_one(J_out[m], b, t_ref[m], lo, hi, lower, upper, T[m], max_iter)
-        if status[m] != OK:  # cold restart once before giving up on this pose
+            b[p] = -(taus[s, p] + tau_w_out[s, p])
+        status[s] = solve_one(J_out[s], b, t_ref[s], lo, hi, lower, upper, T[s], max_iter)
+        if status[s] != OK:  # cold restart once before giving up on this pose
             lower[:] = False
             upper[:] = False
-            status[m] = solve_one(J_out[m], b, t_ref[m], lo, hi, lower, upper, T[m], max_iter)
-            if status[m] != OK:
+            status[s] = solve_one(J_out[s], b, t_ref[s], lo, hi, lower, upper, T[s], max_iter)
+            if status[s] != OK:
                 lower[:] = False
                 upper[:] = False
-        _rest_lengths(k, c_out[m], T[m], l_out[m])
+        _rest_lengths(k, c_out[s], T[s], l_out[s])
 
 
 @njit(cache=True, parallel=True)
@@ -262,14 +266,15 @@ def pdas(P, q, A, b, lo, hi, lower, upper, max_iter, tol):
 def outside_margin(J, b, lo, hi):
     """Largest signed distance (N m) of ``b`` past a facet plane of the zonotope ``{J^T t}``.
 
-    The zonotope of the box ``lo <= t <= hi`` under ``J^T`` (``J`` is 6 x 3) has its
-    facet normals among the 15 cross products of pairs of rows of ``J``; ``b``
+    The zonotope of the box ``lo <= t <= hi`` under ``J^T`` (``J`` is m x 3) has its
+    facet normals among the m (m - 1) / 2 cross products of pairs of rows of ``J``; ``b``
     can be held iff the margin is ``<= 0`` (up to round-off). Degenerate pairs
     (parallel rows) are skipped.
     """
+    n_cab = J.shape[0]
     worst = -np.inf
-    for i in range(6):
-        for j in range(i + 1, 6):
+    for i in range(n_cab):
+        for j in range(i + 1, n_cab):
             gi, gj = J[i], J[j]
             n0 = gi[1] * gj[2] - gi[2] * gj[1]
             n1 = gi[2] * gj[0] - gi[0] * gj[2]
@@ -279,7 +284,7 @@ def outside_margin(J, b, lo, hi):
                 continue
             for s in (-1.0, 1.0):
                 h = 0.0
-                for k in range(6):     # support function h(u) = sum_k max(lo u.g_k, hi u.g_k)
+                for k in range(n_cab):     # support function h(u) = sum_k max(lo u.g_k, hi u.g_k)
                     d = s * (n0 * J[k, 0] + n1 * J[k, 1] + n2 * J[k, 2])
                     h += hi * d if d > 0.0 else lo * d
                 m = (s * (n0 * b[0] + n1 * b[1] + n2 * b[2]) - h) / nn
@@ -298,29 +303,30 @@ def boundary_distance(J, b, lo, hi, t):
     """``min |J^T t - b|`` over the faces of dimension <= 2 of the box (N m); ``t`` gets the minimiser.
 
     For a load outside the zonotope ``{J^T t : lo <= t <= hi}`` the nearest
-    point lies on its boundary, which is made of such faces: 15 pairs of free
-    cables x 16 assignments of the other four to their bounds, each a
+    point lies on its boundary, which is made of such faces: m (m - 1) / 2 pairs of free
+    cables x 2^(m - 2) assignments of the others to their bounds (15 x 16 for m = 6), each a
     two-variable box least squares solved in closed form (interior stationary
     point if inside the square, else the four edges' clamped minimisers). For a
     load inside, this is the distance to the boundary, not zero: test with
     :func:`outside_margin` first. The generated C planner does the same.
     """
+    n_cab = J.shape[0]
     best = np.inf
     r0 = np.empty(3)
     xs = np.empty(4)
     ys = np.empty(4)
-    for i in range(6):
-        for j in range(i + 1, 6):
+    for i in range(n_cab):
+        for j in range(i + 1, n_cab):
             gi, gj = J[i], J[j]
             a, c, bb = gi @ gi, gj @ gj, gi @ gj
             det = a * c - bb * bb
             inv_a = 1.0 / a if a > 0.0 else 0.0
             inv_c = 1.0 / c if c > 0.0 else 0.0
             inv_det = 1.0 / det if det > 1e-12 * a * c else 0.0
-            for mask in range(16):     # the four other cables at lo (bit 0) or hi (bit 1)
+            for mask in range(1 << (n_cab - 2)):     # the other cables at lo (bit 0) or hi (bit 1)
                 r0[:] = -b
                 bit = 0
-                for k in range(6):
+                for k in range(n_cab):
                     if k == i or k == j:
                         continue
                     tk = hi if (mask >> bit) & 1 else lo
@@ -345,7 +351,7 @@ def boundary_distance(J, b, lo, hi, t):
                     if d < best:
                         best = d
                         bit = 0
-                        for k in range(6):
+                        for k in range(n_cab):
                             if k == i:
                                 t[k] = xs[e]
                             elif k == j:

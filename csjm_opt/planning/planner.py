@@ -24,14 +24,11 @@ tension box; a load within that tolerance always gets a plan.
 from __future__ import annotations
 
 import warnings
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import numba
 import numpy as np
-import qpsolvers
 from numpy.typing import ArrayLike
-from scipy import sparse
-from scipy.optimize import lsq_linear
 
 from .._validate import as_array, as_rotation, as_vector3
 from ..errors import InfeasibleLoad, InvalidInput, SolverError
@@ -40,6 +37,9 @@ from ..model.rig import Rig
 from . import dense_qp as dense_qp
 from . import kernels as kernels
 from .plans import TensionPlan, TensionPlanBatch
+
+if TYPE_CHECKING:        # qpsolvers and SciPy load only on the paths that use them (csjm plan needs neither)
+    import qpsolvers
 
 __all__ = ["FEASIBILITY_TOL_NM", "SOLVERS", "TensionPlan", "TensionPlanBatch", "build_tension_qp",
            "build_tension_qp_for", "feasibility_distance_Nm", "plan_tensions", "plan_tensions_batch"]
@@ -52,9 +52,13 @@ FEASIBILITY_TOL_NM = 1e-8
 def build_tension_qp(J: np.ndarray, tau_load_A_Nm: np.ndarray, t_min_N: float, t_max_N: float,
                      t_ref_N: np.ndarray) -> qpsolvers.Problem:
     """The tension QP as a :class:`qpsolvers.Problem` (dense), solver-free."""
-    return qpsolvers.Problem(P=sparse.identity(6, format="csc"), q=-np.asarray(t_ref_N, float),
+    import qpsolvers
+    from scipy import sparse
+
+    n_cab = J.shape[0]
+    return qpsolvers.Problem(P=sparse.identity(n_cab, format="csc"), q=-np.asarray(t_ref_N, float),
                              A=sparse.csc_matrix(J.T), b=-np.asarray(tau_load_A_Nm, float),
-                             lb=np.full(6, t_min_N), ub=np.full(6, t_max_N))
+                             lb=np.full(n_cab, t_min_N), ub=np.full(n_cab, t_max_N))
 
 
 def build_tension_qp_for(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray,
@@ -85,7 +89,7 @@ def plan_tensions(rig: Rig, R: np.ndarray, tau_ext_A_Nm: ArrayLike = (0.0, 0.0, 
     rig : the rig.
     R : (3, 3) orientation of {A} in {B}.
     tau_ext_A_Nm : (3,) external moment in {A}, weight excluded.
-    t_ref_N : reference tensions of the objective (scalar or (6,); default mid-range).
+    t_ref_N : reference tensions of the objective (scalar or (m,); default mid-range).
     solver : ``"active_set"`` (default) solves the QP exactly by the compiled
         primal-dual active-set method; if that does not settle (near the
         boundary of the feasible set, where few tensions hold the load) a
@@ -110,8 +114,9 @@ def plan_tensions(rig: Rig, R: np.ndarray, tau_ext_A_Nm: ArrayLike = (0.0, 0.0, 
     t_ref = m.t_mid if t_ref_N is None else _t_ref(rig, t_ref_N)
     if R_arr.shape != (3, 3) or tau_ext.shape != (3,):  # the validators say what is wrong
         R_arr, tau_ext = as_rotation(R), as_vector3(tau_ext_A_Nm, "tau_ext")
-    T, J, tau_w, c, l, info = (np.empty(6), np.empty((6, 3)), np.empty(3), np.empty(6), np.empty(6),
-                               np.empty(2))
+    n_cab = m.A.shape[0]
+    T, J, tau_w, c, l, info = (np.empty(n_cab), np.empty((n_cab, 3)), np.empty(3), np.empty(n_cab),
+                               np.empty(n_cab), np.empty(2))
     default = solver in SOLVERS
     args = (m.A, m.B, m.k, m.first_moment_A_kgm, m.g)
     tail = (rig.t_min_N, rig.t_max_N, 40 if default else 0, T, J, tau_w, c, l, info)
@@ -148,7 +153,7 @@ def plan_tensions_batch(rig: Rig, Rs: np.ndarray, taus_A_Nm: np.ndarray | None =
     rig, solver, model : as in :func:`plan_tensions`.
     Rs : (n, 3, 3) orientations.
     taus_A_Nm : (n, 3) external moments (default zero).
-    t_ref_N : scalar, (6,) or (n, 6) reference tensions.
+    t_ref_N : scalar, (m,) or (n, m) reference tensions.
 
     Returns
     -------
@@ -164,8 +169,9 @@ def plan_tensions_batch(rig: Rig, Rs: np.ndarray, taus_A_Nm: np.ndarray | None =
     t_ref = _t_ref_batch(rig, t_ref_N, n)
     _check_solver(solver)
     m = model_for(rig, model)
-    T, J, tau_w = np.zeros((n, 6)), np.empty((n, 6, 3)), np.empty((n, 3))
-    c, l = np.empty((n, 6)), np.empty((n, 6))
+    n_cab = m.A.shape[0]
+    T, J, tau_w = np.zeros((n, n_cab)), np.empty((n, n_cab, 3)), np.empty((n, 3))
+    c, l = np.empty((n, n_cab)), np.empty((n, n_cab))
     status = np.full(n, kernels.NOT_CONVERGED, np.int64)
     args = (m.A, m.B, m.k, m.first_moment_A_kgm, m.g, Rs, taus, t_ref, rig.t_min_N, rig.t_max_N,
             40 if solver in SOLVERS else 0, T, J, tau_w, c, l, status)
@@ -193,6 +199,7 @@ def _solve_hard(J: np.ndarray, b: np.ndarray, t_ref: np.ndarray, rig: Rig, R: np
     of the feasible set. Raises :class:`InfeasibleLoad` only when it is not.
     """
     lo, hi = rig.t_min_N, rig.t_max_N
+    n_cab = J.shape[0]
     if kernels.outside_margin(np.ascontiguousarray(J, dtype=float), b, float(lo), float(hi)) > FEASIBILITY_TOL_NM:
         # past a facet plane: no solver can hold it
         _raise_infeasible(J, b, lo, hi, R, tau_ext)
@@ -201,11 +208,12 @@ def _solve_hard(J: np.ndarray, b: np.ndarray, t_ref: np.ndarray, rig: Rig, R: np
         if x is not None:
             tol = 1e-5 * max(1.0, hi)
             lower, upper = x <= lo + tol, x >= hi - tol
-            T = np.empty(6)
+            T = np.empty(n_cab)
             if kernels.solve_one(J, b, t_ref, lo, hi, lower, upper, T, 40) == kernels.OK \
                     and _holds(J, b, T, lo, hi):
                 return T, backend
-    res = dense_qp.solve(np.eye(6), -t_ref, np.ascontiguousarray(J.T), b, np.full(6, lo), np.full(6, hi))
+    res = dense_qp.solve(np.eye(n_cab), -t_ref, np.ascontiguousarray(J.T), b, np.full(n_cab, lo),
+                         np.full(n_cab, hi))
     T = np.clip(res.x, lo, hi)
     if res.converged and _holds(J, b, T, lo, hi):
         return T, "active_set" if backend is None else f"{backend}+active_set"
@@ -232,8 +240,10 @@ def _nearest_feasible(J: np.ndarray, tau_load: np.ndarray, lo: float, hi: float)
     J = np.ascontiguousarray(J, dtype=float)
     b = -np.asarray(tau_load, float)
     if kernels.outside_margin(J, b, float(lo), float(hi)) > 0.0:   # outside: nearest point on a face, exact
-        T = np.empty(6)
+        T = np.empty(J.shape[0])
         return T, float(kernels.boundary_distance(J, b, float(lo), float(hi), T))
+    from scipy.optimize import lsq_linear
+
     res = lsq_linear(J.T, b, bounds=(lo, hi), method="bvls", tol=1e-14)
     T = np.clip(res.x, lo, hi)
     return T, float(np.linalg.norm(J.T @ T - b))
@@ -251,23 +261,29 @@ def _t_ref(rig: Rig, t_ref_N: np.ndarray | None) -> np.ndarray:
         return rig.t_mid_N
     t_ref = np.asarray(t_ref_N, float)
     if t_ref.shape == ():
-        t_ref = np.full(6, float(t_ref))
-    return as_array(t_ref, (6,), "t_ref")
+        t_ref = np.full(rig.n_cables, float(t_ref))
+    return as_array(t_ref, (rig.n_cables,), "t_ref")
 
 
 def _t_ref_batch(rig: Rig, t_ref_N: np.ndarray | None, n: int) -> np.ndarray:
     if t_ref_N is not None and np.ndim(t_ref_N) == 2:
-        return np.ascontiguousarray(as_array(t_ref_N, (n, 6), "t_ref"))
-    return np.ascontiguousarray(np.broadcast_to(_t_ref(rig, t_ref_N), (n, 6)))
+        return np.ascontiguousarray(as_array(t_ref_N, (n, rig.n_cables), "t_ref"))
+    return np.ascontiguousarray(np.broadcast_to(_t_ref(rig, t_ref_N), (n, rig.n_cables)))
 
 
 def _check_solver(solver: str) -> None:
-    if solver not in SOLVERS and solver not in qpsolvers.available_solvers:
+    if solver in SOLVERS:
+        return
+    import qpsolvers
+
+    if solver not in qpsolvers.available_solvers:
         raise InvalidInput(f"unknown QP solver {solver!r}; choose from "
                            f"{', '.join(SOLVERS + tuple(qpsolvers.available_solvers))}", "solver")
 
 
 def _solve_qp(problem: qpsolvers.Problem, solver: str) -> np.ndarray | None:
+    import qpsolvers
+
     opts: dict[str, Any] = {"eps_abs": 1e-9, "eps_rel": 1e-9, "verbose": False} if solver == "osqp" else {}
     try:
         with warnings.catch_warnings():  # infeasibility is reported by InfeasibleLoad instead

@@ -17,17 +17,17 @@ import numpy as np
 class TensionPlan:
     """Tensions for one pose and load; checks itself (qpsolvers ``Solution`` style)."""
 
-    tensions_N: np.ndarray          # (6,)
+    tensions_N: np.ndarray          # (m,)
     R: np.ndarray                   # (3, 3) orientation of {A} in {B}
     tau_ext_A_Nm: np.ndarray        # (3,) external moment, {A}
     tau_weight_A_Nm: np.ndarray     # (3,) platform weight moment, {A}
-    J: np.ndarray                   # (6, 3) Jacobian (38) at R
+    J: np.ndarray                   # (m, 3) Jacobian (38) at R
     t_min_N: float
     t_max_N: float
-    t_ref_N: np.ndarray             # (6,) reference tensions of the objective
+    t_ref_N: np.ndarray             # (m,) reference tensions of the objective
     solver: str
-    cable_lengths_m: np.ndarray     # (6,) c_i = |b_i - R a_i| at R
-    rest_lengths_m: np.ndarray      # (6,) l_i = c_i - t_i / k_i: rest lengths that realise the plan
+    cable_lengths_m: np.ndarray     # (m,) c_i = |b_i - R a_i| at R
+    rest_lengths_m: np.ndarray      # (m,) l_i = c_i - t_i / k_i: rest lengths that realise the plan
 
     @property
     def tensions(self) -> np.ndarray:
@@ -75,17 +75,17 @@ class TensionPlan:
 class TensionPlanBatch:
     """Tensions for many poses: arrays with a leading axis ``n``."""
 
-    tensions_N: np.ndarray          # (n, 6)
+    tensions_N: np.ndarray          # (n, m)
     R: np.ndarray                   # (n, 3, 3) the input poses (exact rotations are not copied)
     tau_ext_A_Nm: np.ndarray        # (n, 3)
     tau_weight_A_Nm: np.ndarray     # (n, 3)
-    J: np.ndarray                   # (n, 6, 3)
+    J: np.ndarray                   # (n, m, 3)
     t_min_N: float
     t_max_N: float
     solver: str
     fallbacks: int                  # rows solved by the general QP solver instead
-    cable_lengths_m: np.ndarray     # (n, 6)
-    rest_lengths_m: np.ndarray      # (n, 6) l = c - T / k
+    cable_lengths_m: np.ndarray     # (n, m)
+    rest_lengths_m: np.ndarray      # (n, m) l = c - T / k
 
     @property
     def tensions(self) -> np.ndarray:
@@ -110,4 +110,5 @@ class TensionPlanBatch:
     def __getitem__(self, i: int) -> TensionPlan:
         return TensionPlan(self.tensions_N[i], self.R[i], self.tau_ext_A_Nm[i],
                            self.tau_weight_A_Nm[i], self.J[i], self.t_min_N, self.t_max_N,
-                           np.full(6, np.nan), self.solver, self.cable_lengths_m[i], self.rest_lengths_m[i])
+                           np.full(self.tensions_N.shape[1], np.nan), self.solver, self.cable_lengths_m[i],
+                           self.rest_lengths_m[i])

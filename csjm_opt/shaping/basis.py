@@ -20,9 +20,9 @@ class StiffnessBasis:
     """``K(T) = K0 + sum_i T_i G_i`` at one pose, with J and the weight moment there."""
 
     R: np.ndarray             # (3, 3)
-    J: np.ndarray             # (6, 3)
+    J: np.ndarray             # (m, 3)
     K0: np.ndarray            # (3, 3) N m/rad, J^T diag(k) J
-    G: np.ndarray             # (6, 3, 3) m, dK/dt_i
+    G: np.ndarray             # (m, 3, 3) m, dK/dt_i
     tau_weight_A_Nm: np.ndarray  # (3,)
 
     def K(self, tensions_N: np.ndarray) -> np.ndarray:
@@ -30,7 +30,7 @@ class StiffnessBasis:
 
         Parameters
         ----------
-        tensions_N : (6,) array
+        tensions_N : (m,) array
             Cable tensions (N).
 
         Returns
@@ -56,12 +56,13 @@ def stiffness_basis(rig: Rig, R: np.ndarray) -> StiffnessBasis:
 def qp_matrices(basis: StiffnessBasis, tau_ext: np.ndarray, objective: StiffnessObjective,
                 t_mid: np.ndarray, regularization: float = REGULARIZATION):
     """Dense ``P, q, A, b`` of the shaping QP (``1/2 x^T P x + q^T x``, ``A x = b``)."""
-    M = objective.L @ basis.G.reshape(6, 9).T                     # (m, 6)
+    m = basis.G.shape[0]                                          # cables
+    M = objective.L @ basis.G.reshape(m, 9).T                     # (rows of L, m)
     d = objective.s - objective.L @ basis.K0.reshape(9)
     MW = M.T * objective.w
     H = MW @ M
-    curvature = float(np.trace(H)) / 6.0
+    curvature = float(np.trace(H)) / m
     rho = regularization * (curvature if curvature > 1e-300 else 1.0)   # all-zero weights: regulariser only
-    P = 2.0 * (H + rho * np.eye(6))
+    P = 2.0 * (H + rho * np.eye(m))
     q = -2.0 * (MW @ d + rho * t_mid)
     return P, q, basis.J.T, -(tau_ext + basis.tau_weight_A_Nm)

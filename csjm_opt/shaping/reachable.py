@@ -47,7 +47,7 @@ class ReachableSet:
     eigen_method: tuple[tuple[str, str], ...]   # per bound: "vertex", "cutting-plane", "sampled"
     cutting_plane_gap: float      # largest remaining upper-lower gap of the cutting planes
     trace_range: tuple[float, float]
-    vertices_N: np.ndarray        # (n_v, 6) vertices of the feasible tension polytope
+    vertices_N: np.ndarray        # (n_v, m) vertices of the feasible tension polytope
     sample_eigenvalues: np.ndarray  # (n_s, 3) eigenvalues at sampled feasible tensions
     basis: StiffnessBasis
     tau_load_A_Nm: np.ndarray
@@ -84,21 +84,25 @@ class ReachableSet:
 
 
 def feasible_vertices(J: np.ndarray, tau_load: np.ndarray, t_min: float, t_max: float) -> np.ndarray:
-    """Vertices of ``{T: J^T T + tau_load = 0, t_min <= T <= t_max}`` (n_v, 6), deduplicated."""
+    """Vertices of ``{T: J^T T + tau_load = 0, t_min <= T <= t_max}`` (n_v, m), deduplicated.
+
+    A vertex has m - 3 tensions at a bound and 3 free ones solving the equilibrium.
+    """
     out = []
-    for fixed in itertools.combinations(range(6), 3):
-        free = [i for i in range(6) if i not in fixed]
+    m = J.shape[0]
+    for fixed in itertools.combinations(range(m), m - 3):
+        free = [i for i in range(m) if i not in fixed]
         Af = J[free].T
         if abs(np.linalg.det(Af)) < 1e-12:
             continue
-        for levels in itertools.product((t_min, t_max), repeat=3):
-            T = np.empty(6)
+        for levels in itertools.product((t_min, t_max), repeat=m - 3):
+            T = np.empty(m)
             T[list(fixed)] = levels
             T[free] = np.linalg.solve(Af, -tau_load - J[list(fixed)].T @ np.array(levels))
             if np.all(T[free] >= t_min - 1e-9) and np.all(T[free] <= t_max + 1e-9):
                 out.append(np.clip(T, t_min, t_max))
     if not out:
-        return np.zeros((0, 6))
+        return np.zeros((0, m))
     V = np.array(out)
     _, idx = np.unique(np.round(V, 7), axis=0, return_index=True)
     return V[np.sort(idx)]
@@ -110,9 +114,9 @@ def tension_lp(c: np.ndarray, J: np.ndarray, tau_load: np.ndarray, t_min: float,
 
     Parameters
     ----------
-    c : (6 + extra,) array
+    c : (m + extra,) array
         Cost vector.
-    J : (6, 3) array
+    J : (m, 3) array
         Structure matrix at the pose (row i is ``cross(A_i, u_i)``).
     tau_load : (3,) array
         Total load moment (N m, in {A}); the tensions satisfy ``J^T T + tau_load = 0``.
@@ -125,7 +129,7 @@ def tension_lp(c: np.ndarray, J: np.ndarray, tau_load: np.ndarray, t_min: float,
 
     Returns
     -------
-    (6 + extra,) array
+    (m + extra,) array
         The minimiser (tensions first, N).
 
     Raises
@@ -134,7 +138,7 @@ def tension_lp(c: np.ndarray, J: np.ndarray, tau_load: np.ndarray, t_min: float,
         HiGHS found no solution (empty polytope or numerical failure).
     """
     A_eq = np.hstack([J.T, np.zeros((3, extra))])
-    bounds = [(t_min, t_max)] * 6 + [(None, None)] * extra
+    bounds = [(t_min, t_max)] * J.shape[0] + [(None, None)] * extra
     res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=-tau_load, bounds=bounds, method="highs")
     if res.status != 0:
         raise SolverError(f"reachable-set LP failed: {res.message}", "highs")
@@ -203,7 +207,8 @@ def _cutting_plane(basis: StiffnessBasis, tau_load: np.ndarray, t_min: float, t_
                    tol: float, max_iter: int) -> tuple[float, float, list[np.ndarray]]:
     """Cutting-plane bound: max lambda_min (which="max_min") or min lambda_max ("min_max"); (value, gap, iterates)."""
     sign = 1.0 if which == "max_min" else -1.0
-    Gf = basis.G.reshape(6, 9)
+    m = basis.G.shape[0]
+    Gf = basis.G.reshape(m, 9)
     cuts = [np.eye(3)[i] for i in range(3)]
     iterates: list[np.ndarray] = []
     best, bound = -np.inf, np.inf
@@ -211,8 +216,8 @@ def _cutting_plane(basis: StiffnessBasis, tau_load: np.ndarray, t_min: float, t_
         # maximise s with sign*(u^T K0 u + g_u . T) >= sign*s ... written as sign*s - sign*g.T <= sign*c0
         A_ub = np.array([np.concatenate([-sign * np.einsum("a,b,iab->i", u, u, basis.G), [sign]]) for u in cuts])
         b_ub = np.array([sign * (u @ basis.K0 @ u) for u in cuts])
-        x = tension_lp(np.concatenate([np.zeros(6), [-sign]]), basis.J, tau_load, t_min, t_max, A_ub, b_ub, extra=1)
-        T, s = x[:6], x[6]
+        x = tension_lp(np.concatenate([np.zeros(m), [-sign]]), basis.J, tau_load, t_min, t_max, A_ub, b_ub, extra=1)
+        T, s = x[:m], float(x[m])
         K = basis.K0 + (T @ Gf).reshape(3, 3)
         lam, vec = np.linalg.eigh(0.5 * (K + K.T))
         iterates.append(T)
@@ -277,7 +282,7 @@ def reachable_set(rig: Rig, R: np.ndarray, tau_ext_A_Nm: npt.ArrayLike = (0.0, 0
     if len(V) == 0:
         raise InfeasibleLoad(f"no feasible tensions hold tau_ext={np.round(tau_ext, 4).tolist()} N m at this pose",
                              R, tau_ext, float("nan"))
-    Gf = basis.G.reshape(6, 9)
+    Gf = basis.G.reshape(basis.G.shape[0], 9)
     lam_max1, gap1, it1 = _cutting_plane(basis, tau_load, lo, hi, "max_min", tol, max_cuts)
     lam_min3, gap3, it3 = _cutting_plane(basis, tau_load, lo, hi, "min_max", tol, max_cuts)
     W = rng.dirichlet(np.full(len(V), 0.3), size=n_samples) if n_samples else np.zeros((0, len(V)))

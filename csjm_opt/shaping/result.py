@@ -13,7 +13,7 @@ from .objectives import StiffnessObjective
 class ShapingResult:
     """Shaped tensions for one pose and load; checks itself."""
 
-    tensions_N: np.ndarray       # (6,)
+    tensions_N: np.ndarray       # (m,)
     K: np.ndarray                # (3, 3) achieved stiffness, N m/rad (CasADi model)
     K_target: np.ndarray         # (3, 3)
     objective: StiffnessObjective

@@ -83,7 +83,7 @@ def build_shaping_qp(rig: Rig, R: np.ndarray, tau_ext_A_Nm: np.ndarray, K_target
     obj = make_objective(K_target, weights, objective, directions)
     P, q, A, b = qp_matrices(stiffness_basis(rig, R), tau_ext, obj, rig.t_mid_N, regularization)
     return qpsolvers.Problem(P=sparse.csc_matrix(P), q=q, A=sparse.csc_matrix(A), b=b,
-                             lb=np.full(6, rig.t_min_N), ub=np.full(6, rig.t_max_N))
+                             lb=np.full(rig.n_cables, rig.t_min_N), ub=np.full(rig.n_cables, rig.t_max_N))
 
 
 # --------------------------------------------------------------------- solve
@@ -102,9 +102,10 @@ class Shaper:
         self.rig = rig
         self.regularization = regularization
         self.compiled = compiled
-        self._lo, self._hi = np.full(6, rig.t_min_N), np.full(6, rig.t_max_N)
+        m = rig.n_cables
+        self._lo, self._hi = np.full(m, rig.t_min_N), np.full(m, rig.t_max_N)
         self._basis: StiffnessBasis | None = None
-        self._active = (np.zeros(6, bool), np.zeros(6, bool))
+        self._active = (np.zeros(m, bool), np.zeros(m, bool))
         terms = _terms(rig)
         self._geom = (terms.A, terms.B, terms.k)
         self._weight = (rig.weight_B_N[None], np.asarray(rig.com_A_m, float)[None])
@@ -143,12 +144,12 @@ class Shaper:
             External moment in {A} (N m).
         objective : StiffnessObjective
             From :func:`~csjm_opt.shaping.objectives.make_objective`.
-        x0 : ndarray, shape (6,), optional
+        x0 : ndarray, shape (m,), optional
             Tensions whose active bounds start the active-set method (warm start).
 
         Returns
         -------
-        T : ndarray, shape (6,)
+        T : ndarray, shape (m,)
             Shaped tensions (N).
         basis : StiffnessBasis
             The basis used.

@@ -31,7 +31,7 @@ class CycleDesign:
     tau0_A_Nm: np.ndarray        # (3,) pre-load
     dtau_A_Nm: np.ndarray        # (3,) load increment at the top of the cycle
     alphas: np.ndarray           # (m,) fractions of dtau, up then down
-    rest_lengths_m: np.ndarray   # (6,)
+    rest_lengths_m: np.ndarray   # (m,)
 
     @property
     def tau_ext_A_Nm(self) -> np.ndarray:

@@ -13,6 +13,11 @@ mass_com          mass * (1 + 0.2 severity)^(+-1), com + 15 mm * severity random
 tracker_          tracker frame rotated by 2.5 mrad * severity about a random
 registration      axis (``marker=True`` in :func:`inject`: also the markers)
 stiffness_scale   every stiffness times exp(+-0.03 severity)
+drive_offsets     each drive's rest length off by N(0, (0.3 mm * severity)^2)
+sensor_gain       the F/T moment reading times exp(+-0.05 severity) (common),
+                  each axis's factor times exp(N(0, (0.01 severity)^2))
+joint_friction    Coulomb friction at the ball joint, 0.03 N m * severity per
+                  axis of {A} (MuJoCo's ball-joint ``frictionloss``)
 ================  ===========================================================
 
 A further law of a vocabulary effect (:data:`~csjm_opt.testbed.plant.VARIANT_NAMES`
@@ -30,26 +35,29 @@ magnitudes stay inside the diagnosis's default prior ranges
 coordinates within 4 mm (3.3 sd at 1.2), capstan factors within 0.3,
 hardening within 300 /m, compliance entries within 0.05 rad/(N m), a bias
 within 0.5 N m, ``|d(m r)|`` within 0.1 x mass per axis (com z up to
-120 mm), registration within 0.05 rad, a stiffness factor within [0.5, 2].
+120 mm), registration within 0.05 rad, a stiffness factor within [0.5, 2], drive
+offsets within 2 mm (3.3 sd at 2), a sensor gain within [0.6, 1.4], a joint
+friction moment within 0.3 N m.
 A study that wants an effect larger than that against the noise floor lowers
 the noise instead (a better instrument), not the plausibility of the effect.
 
 Outside the diagnosis's vocabulary (:data:`~csjm_opt.testbed.plant.OUTSIDE_NAMES`):
 
 ================  ===========================================================
-eyelet_radius     guide eyelets of radius 3 mm * severity
+guide_radius      guide eyelets of radius 3 mm * severity (``eyelet_radius``: the
+                  old name, deprecated); the diagnosis has modelled it since the
+                  eyelet round, the testbed keeps it among these
 sensor_drift      F/T offset drifting by 0.5 mN m per row * severity, random
                   direction (0.1 N m over a 200-row log)
 drum_slip         cables slip on their drums above 55 % of the tension range,
                   by 20 um per N over the threshold * severity
-joint_friction    Coulomb friction at the ball joint, 0.03 N m * severity per
-                  axis of {A} (MuJoCo's ball-joint ``frictionloss``)
 ================  ===========================================================
 """
 
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from collections.abc import Iterable
 from typing import Any
 
@@ -58,12 +66,13 @@ import numpy as np
 from .. import so3
 from ..errors import InvalidInput
 from ..model.rig import Rig
-from .plant import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, TestbedPlant
+from .plant import DEPRECATED_NAMES, EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES, TestbedPlant
 
 #: Largest severity whose injected magnitudes stay within the diagnosis's default priors (see above).
 PLAUSIBLE_SEVERITY = {"hole_offsets": 1.2, "friction": 7.0, "cable_hardening": 15.0, "link_compliance": 8.0,
                       "sensor_bias": 4.0, "mass_com": 2.5, "tracker_registration": 15.0,
-                      "stiffness_scale": 15.0, "coulomb_friction": 15.0}
+                      "stiffness_scale": 15.0, "coulomb_friction": 15.0, "drive_offsets": 2.0,
+                      "sensor_gain": 4.0, "joint_friction": 10.0}
 
 
 def _unit(rng: np.random.Generator) -> np.ndarray:
@@ -93,18 +102,23 @@ def inject(plant, effect: str, severity: float, rng: np.random.Generator):
     InvalidInput
         Unknown effect name (or one the MuJoCo plant cannot realise).
     """
+    if effect in DEPRECATED_NAMES:
+        warnings.warn(f"the effect {effect!r} is now called {DEPRECATED_NAMES[effect]!r}; the old name will go",
+                      DeprecationWarning, stacklevel=2)
+        effect = DEPRECATED_NAMES[effect]
     if not isinstance(plant, TestbedPlant):            # a MujocoTestbedPlant: inject into its description
         return dataclasses.replace(plant, plant=inject(plant.plant, effect, severity, rng))
     s = float(severity)
     rig = plant.rig
+    m = rig.n_cables                            # per-cable effects get one draw per cable
     if effect == "hole_offsets":
-        rig = rig.replace(platform_holes_A_m=rig.platform_holes_A_m + rng.normal(0, 1e-3 * s, (6, 3)),
-                          base_holes_B_m=rig.base_holes_B_m + rng.normal(0, 1e-3 * s, (6, 3)))
+        rig = rig.replace(platform_holes_A_m=rig.platform_holes_A_m + rng.normal(0, 1e-3 * s, (m, 3)),
+                          base_holes_B_m=rig.base_holes_B_m + rng.normal(0, 1e-3 * s, (m, 3)))
         changes: dict[str, Any] = {"rig": rig}
     elif effect == "friction":
-        changes = {"friction_mu_beta": 0.03 * s * rng.uniform(0.7, 1.3, 6)}
+        changes = {"friction_mu_beta": 0.03 * s * rng.uniform(0.7, 1.3, m)}
     elif effect == "coulomb_friction":
-        changes = {"friction_coulomb_N": 0.5 * s * rng.uniform(0.7, 1.3, 6)}
+        changes = {"friction_coulomb_N": 0.5 * s * rng.uniform(0.7, 1.3, m)}
     elif effect == "cable_hardening":
         changes = {"hardening_per_m": 15.0 * s}
     elif effect == "link_compliance":
@@ -121,10 +135,16 @@ def inject(plant, effect: str, severity: float, rng: np.random.Generator):
     elif effect == "stiffness_scale":
         factor = np.exp(0.03 * s * rng.choice([-1.0, 1.0]))
         changes = {"rig": rig.replace(cable_stiffness_N_per_m=factor * np.asarray(rig.cable_stiffness_N_per_m))}
+    elif effect == "drive_offsets":
+        m = len(np.asarray(rig.cable_stiffness_N_per_m))
+        changes = {"drive_offsets_m": rng.normal(0.0, 3e-4 * s, m)}
+    elif effect == "sensor_gain":
+        common = np.exp(0.05 * s * rng.choice([-1.0, 1.0]))
+        changes = {"sensor_gain_A": common * np.exp(rng.normal(0.0, 0.01 * s, 3))}
     elif effect == "joint_friction":
         changes = {"joint_friction_Nm": 0.03 * s}
-    elif effect == "eyelet_radius":
-        changes = {"eyelet_radius_m": 3e-3 * s}
+    elif effect == "guide_radius":
+        changes = {"guide_radius_m": 3e-3 * s}
     elif effect == "sensor_drift":
         changes = {"sensor_drift_A_Nm_per_row": 5e-4 * s * _unit(rng)}
     elif effect == "drum_slip":

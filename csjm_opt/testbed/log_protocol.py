@@ -47,7 +47,7 @@ from .. import so3
 from .._fileio import read_text
 from ..errors import DataFileError, InvalidInput, NoEquilibrium
 from ..measurement.instruments import InstrumentNoise
-from ..measurement.logfile import COLUMNS, MeasurementLog, parse_number
+from ..measurement.logfile import COLUMNS, MeasurementLog, columns_for, header_cables, parse_number
 from ..measurement.protocol import Protocol as LoadProtocol
 from ..model import kinematics as kin
 from ..model.rig import Rig
@@ -68,7 +68,7 @@ class LogProtocol:
     Attributes
     ----------
     sample, cycle : (n,) int arrays
-    rest_lengths_m : (n, 6) array
+    rest_lengths_m : (n, m) array
     tau_fixed_A_Nm : (n, 3) array
         Moments fixed in {A} that are applied (zero on dead-weight rows).
     load_first_moment_A_kgm : (n, 3) array
@@ -162,8 +162,11 @@ def read_log_protocol(path_or_text: str | Path, source: str | None = None) -> Lo
     if not rows:
         raise DataFileError("empty file: expected a header " + ",".join(COLUMNS), source, 1)
     header = [h.strip() for h in rows[0]]
-    if tuple(header[:len(COLUMNS)]) != COLUMNS:
-        raise DataFileError(f"header must start with {','.join(COLUMNS)}; got {header[:len(COLUMNS)]}", source, 1)
+    m = header_cables(header)
+    columns = columns_for(m)
+    if tuple(header[:len(columns)]) != columns or not 4 <= m <= 12:
+        raise DataFileError("header must start with sample,cycle,l1,...,lm (4 <= m <= 12 cables),"
+                            f"{','.join(COLUMNS[8:])}; got {header[:len(columns)]}", source, 1)
     col = {name: j for j, name in enumerate(header)}
     body = [(i + 1, r) for i, r in enumerate(rows) if i > 0 and any(c.strip() for c in r)]
     if not body:
@@ -191,18 +194,18 @@ def read_log_protocol(path_or_text: str | Path, source: str | None = None) -> Lo
         return out
 
     ids = cells(("sample", "cycle"), True, integer=True)
-    lengths = cells(COLUMNS[2:8], True)
+    lengths = cells(columns[2:2 + m], True)
     assert ids is not None and lengths is not None
     lines = np.array([line for line, _ in body])
     bad = np.flatnonzero(~(lengths > 0) | (lengths > 10.0))
     if bad.size:
         raise DataFileError("rest length must be in (0, 10] m", source, int(lines[bad[0]]))
     intended = cells(INTENDED_COLUMNS, False)
-    measured_tau = cells(COLUMNS[8:11], False)
+    measured_tau = cells(columns[2 + m:5 + m], False)
     loads = cells(LOAD_COLUMNS, False)
     planned = cells(PLANNED_COLUMNS, False)
     if planned is None:
-        planned = cells(COLUMNS[11:14], False)
+        planned = cells(columns[5 + m:8 + m], False)
     tau = intended if intended is not None else measured_tau
     n = len(body)
     if tau is None:
@@ -220,7 +223,7 @@ def read_log_protocol(path_or_text: str | Path, source: str | None = None) -> Lo
         raise DataFileError("rows of a cycle must be consecutive", source, int(lines[0]))
     if len(np.unique(ids[:, 0])) != n:
         raise DataFileError("sample ids must be unique", source, int(lines[0]))
-    known = set(COLUMNS)
+    known = set(columns)
     extra = {h: np.array([r[col[h]] for _, r in body], dtype=str) for h in header if h not in known}
     return LogProtocol(ids[:, 0].astype(int), cycle, lengths, tau_fixed, mr,
                     None if planned is None else so3.exp(planned), lines, extra, source)
@@ -235,6 +238,20 @@ def _nominal(rig: Rig, protocol: LogProtocol) -> tuple[np.ndarray, np.ndarray]:
                       protocol.load_first_moment_A_kgm)
     c, _ = kin.cable_terms(R, np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m))
     return R, np.asarray(rig.cable_stiffness_N_per_m) * (c - protocol.rest_lengths_m)
+
+
+def check_protocol_cables(rig: Rig, protocol: LogProtocol | LoadProtocol) -> None:
+    """Refuse a protocol whose rest-length columns ``l1..lm`` do not match the rig's cable count.
+
+    Raises
+    ------
+    DataFileError
+        Naming the protocol's header line and its last rest-length column.
+    """
+    m = protocol.rest_lengths_m.shape[1]
+    if m != rig.n_cables:
+        raise DataFileError(f"{m} rest-length columns l1..l{m}, but the rig has {rig.n_cables} cables "
+                            f"(expected l1..l{rig.n_cables})", getattr(protocol, "source", None), 1, f"l{m}")
 
 
 def check_protocol(rig: Rig, protocol: LogProtocol) -> None:
@@ -328,6 +345,7 @@ def simulate_protocol(rig: Rig, protocol: str | Path | LogProtocol | LoadProtoco
     rng = np.random.default_rng(0) if rng is None else rng
     read = protocol if isinstance(protocol, (LogProtocol, LoadProtocol)) else read_protocol(protocol)
     load_protocol, proto = (read, None) if isinstance(read, LoadProtocol) else (None, read)
+    check_protocol_cables(rig, read)
     if proto is not None:
         check_protocol(rig, proto)
     if hasattr(effects, "respond"):
@@ -341,7 +359,7 @@ def simulate_protocol(rig: Rig, protocol: str | Path | LogProtocol | LoadProtoco
         if after is not None:
             raise InvalidInput("--after is not supported for identification protocols (forces fixed in {B})",
                                "after")
-        return run_protocol(truth, load_protocol, rng, noise)
+        return run_protocol(truth, load_protocol, rng, noise, progress=progress)
     assert proto is not None
     R_start = proto.planned_R if proto.planned_R is not None else _nominal(rig, proto)[0]
     if after is None:

@@ -23,6 +23,10 @@ Physics (independent of the diagnosis's fitting models where it can be):
 * link compliance: the loaded, tracked body is joined to the cable platform
   by a symmetric compliance ``C``, ``R_meas = R_cable exp(hat(C tau_m))``;
 * sensor bias: the F/T reading is offset by a constant ``b`` in {A};
+* sensor gain: the F/T reading is the true moment times a gain per axis of {A}
+  (``tau_meas = diag(g) tau + b``);
+* drive offsets: each drive realises its commanded rest length plus a constant
+  ``d_i`` (a homing error), ``l_true = l + d``;
 * tracker registration: the tracker reports ``Q_B R Q_A`` (its frame rotated
   against {B}, the markers against {A});
 * a common stiffness error: a :class:`Rig` with scaled stiffnesses;
@@ -34,7 +38,7 @@ Physics (independent of the diagnosis's fitting models where it can be):
 
 Effects outside the diagnosis's vocabulary (to test that it says so):
 
-* finite eyelet radius: each base guide is a ring of radius ``r`` in the base
+* finite guide radius (``guide_radius``, an eyelet): each base guide is a ring of radius ``r`` in the base
   plane; the cable leaves it at the rim, on the side towards the platform
   hole, so the effective base hole moves with the cable's direction;
 * thermal drift of the F/T sensor: the moment offset grows linearly with the
@@ -54,7 +58,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .. import so3
-from ..errors import NoEquilibrium
+from ..errors import InvalidInput, NoEquilibrium
 from ..model import kinematics as kin
 from ..model.rig import Rig
 
@@ -85,11 +89,13 @@ def _smooth_clip(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, w: float) -> np.
 
 
 EFFECT_NAMES = ("hole_offsets", "friction", "cable_hardening", "link_compliance", "sensor_bias", "mass_com",
-                "tracker_registration", "stiffness_scale")
+                "tracker_registration", "stiffness_scale", "drive_offsets", "sensor_gain", "joint_friction")
 #: Further laws of a vocabulary effect the testbed can inject, and the vocabulary name a diagnosis should give.
 VARIANT_NAMES = {"coulomb_friction": "friction"}
 #: Effects the testbed simulates that the diagnosis has no model for.
-OUTSIDE_NAMES = ("eyelet_radius", "sensor_drift", "drum_slip", "joint_friction")
+OUTSIDE_NAMES = ("guide_radius", "sensor_drift", "drum_slip")
+#: Old effect names still accepted (with a DeprecationWarning) -> their name now.
+DEPRECATED_NAMES = {"eyelet_radius": "guide_radius"}
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -107,14 +113,28 @@ class TestbedPlant:
     joint_friction_Nm: float = 0.0             # Coulomb friction moment of the ball joint, per axis of {A}
     link_compliance_rad_per_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((3, 3)))
     sensor_bias_A_Nm: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+    sensor_gain_A: np.ndarray = dataclasses.field(default_factory=lambda: np.ones(3))   # reading / true, per axis
+    drive_offsets_m: np.ndarray | None = None  # (m,) actual minus commanded rest length per drive (None: 0)
     tracker_rotation_B: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))   # Q_B
     marker_rotation_A: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))    # Q_A
-    eyelet_radius_m: float = 0.0
+    guide_radius_m: float = 0.0
     sensor_drift_A_Nm_per_row: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
     drum_slip_threshold_N: float = np.inf
     drum_slip_compliance_m_per_N: float = 0.0
     effects: tuple[str, ...] = ()
     persistent: bool = True                    # cycles start where the previous one settled
+
+    def __post_init__(self) -> None:
+        m = self.rig.n_cables                   # per-cable effects are sized by the rig
+        for name in ("friction_mu_beta", "friction_coulomb_N"):
+            value = np.asarray(getattr(self, name), float)
+            if value.shape != (m,):
+                if value.shape == (6,) and not value.any():     # the all-zero default
+                    value = np.zeros(m)
+                else:
+                    raise InvalidInput(f"{name}: expected {m} values (one per cable), got shape {value.shape}",
+                                       name)
+                object.__setattr__(self, name, value)
 
     @classmethod
     def nominal(cls, rig: Rig) -> TestbedPlant:
@@ -152,7 +172,7 @@ class TestbedPlant:
 
         Parameters
         ----------
-        rest_lengths_m : (n, 6) array
+        rest_lengths_m : (n, m) array
         tau_ext_A_Nm : (n, 3) array
             True external moments in {A}.
         cycle : (n,) int array
@@ -175,6 +195,8 @@ class TestbedPlant:
             The plant has no equilibrium for some row.
         """
         rest_lengths_m = np.asarray(rest_lengths_m, float)
+        if self.drive_offsets_m is not None:      # what the drives realise for what was commanded
+            rest_lengths_m = rest_lengths_m + np.asarray(self.drive_offsets_m, float)
         tau_ext_A_Nm = np.asarray(tau_ext_A_Nm, float)
         cycle = np.asarray(cycle)
         n = len(cycle)
@@ -187,11 +209,11 @@ class TestbedPlant:
         ends = np.r_[starts[1:], n]
         R_out = np.empty((n, 3, 3))
         R_prev = np.array(R_init[starts], float)
-        u_state = np.full((len(starts), 9), np.nan)    # stuck platform-side lengths, joint anchor (rotvec)
+        u_state = np.full((len(starts), self.rig.n_cables + 3), np.nan)   # stuck platform-side lengths, joint anchor
         tau_prev = np.array(tau_ext_A_Nm[starts], float)
         mr_prev = np.array(mr_load[starts], float)
         l_prev = np.array(rest_lengths_m[starts], float)
-        slip = np.zeros((len(starts), 6))           # drum slip so far in each cycle
+        slip = np.zeros((len(starts), self.rig.n_cables))   # drum slip so far in each cycle
         for j in range(int((ends - starts).max())):
             live = np.flatnonzero(starts + j < ends)
             idx = starts[live] + j
@@ -248,24 +270,25 @@ class TestbedPlant:
         return bool(np.isfinite(self.drum_slip_threshold_N) and self.drum_slip_compliance_m_per_N > 0)
 
     def measured_moment(self, tau_ext_A_Nm: np.ndarray) -> np.ndarray:
-        """What the F/T sensor reads without noise (N m): bias plus drift over the rows (time order)."""
+        """What the F/T sensor reads without noise (N m): gain, bias, and drift over the rows (time order)."""
         tau = np.asarray(tau_ext_A_Nm, float)
         t = np.arange(len(tau))[:, None] if tau.ndim == 2 else 0.0       # rows in time order
-        return tau + self.sensor_bias_A_Nm + t * np.asarray(self.sensor_drift_A_Nm_per_row)
+        drift = t * np.asarray(self.sensor_drift_A_Nm_per_row)
+        return tau * np.asarray(self.sensor_gain_A, float) + self.sensor_bias_A_Nm + drift
 
     def measured_pose(self, R_true: np.ndarray) -> np.ndarray:
         """What the tracker reports without noise: ``Q_B R Q_A``."""
         return self.tracker_rotation_B @ R_true @ self.marker_rotation_A
 
     def _base_holes(self, R_c: np.ndarray) -> np.ndarray:
-        """Effective base holes (n, 6, 3) or (6, 3): on the eyelet's rim, towards the platform hole."""
+        """Effective base holes (n, m, 3) or (m, 3): on the eyelet's rim, towards the platform hole."""
         B = np.asarray(self.rig.base_holes_B_m)
-        if self.eyelet_radius_m <= 0:
+        if self.guide_radius_m <= 0:
             return B
         a_B = np.einsum("nij,kj->nki", R_c, np.asarray(self.rig.platform_holes_A_m))    # R a_i
         d = a_B - B
         d[..., 2] = 0.0
-        return B + self.eyelet_radius_m * d / np.linalg.norm(d, axis=-1, keepdims=True)
+        return B + self.guide_radius_m * d / np.linalg.norm(d, axis=-1, keepdims=True)
 
     def _lengths(self, R_m: np.ndarray) -> np.ndarray:
         """Cable lengths at measured-body poses (the link's twist neglected; used for drum slip)."""
@@ -284,22 +307,23 @@ class TestbedPlant:
         c, J = kin.cable_terms(R_c, np.asarray(rig.platform_holes_A_m), self._base_holes(R_c))
         k = np.asarray(rig.cable_stiffness_N_per_m)
         e = c - l
-        T_p = np.maximum(self._friction(c, l, e, k, u[:, :6], smooth_N), 0.0)
+        m = rig.n_cables
+        T_p = np.maximum(self._friction(c, l, e, k, u[:, :m], smooth_N), 0.0)
         u_new = np.empty_like(u)
-        u_new[:, :6] = c - self.friction_platform_fraction * T_p / k
+        u_new[:, :m] = c - self.friction_platform_fraction * T_p / k
         T = T_p * (1.0 + self.hardening_per_m * np.maximum(e, 0.0))
         g = np.einsum("nij,ni->nj", J, T) + (tau_m if E is None else np.einsum("nij,nj->ni", E, tau_m))
         if self.joint_friction_Nm > 0:     # per axis of {A}: stuck to an anchor pose, slips at the bound
-            a = u[:, 6:]
+            a = u[:, m:]
             z = so3.log(np.swapaxes(so3.exp(np.nan_to_num(a)), 1, 2) @ R_c)
             stick = np.where(np.isnan(a), 0.0, -JOINT_STICK_NM_PER_RAD * z)
             M = np.full_like(stick, self.joint_friction_Nm)
             w = smooth_N * JOINT_SMOOTH_M
             tau_f = _smooth_clip(stick, -M, M, w) if w > 0 else np.clip(stick, -M, M)
             g = g + tau_f
-            u_new[:, 6:] = so3.log(R_c @ so3.exp(tau_f / JOINT_STICK_NM_PER_RAD))
+            u_new[:, m:] = so3.log(R_c @ so3.exp(tau_f / JOINT_STICK_NM_PER_RAD))
         else:
-            u_new[:, 6:] = np.nan
+            u_new[:, m:] = np.nan
         return g, u_new
 
     def _friction(self, c, l, e, k, u, smooth_N):

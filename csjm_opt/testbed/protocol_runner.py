@@ -12,6 +12,8 @@ friction or drum slip step through each cycle in order.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from .. import so3
@@ -44,7 +46,8 @@ def dead_weight_moments(R: np.ndarray, force_B_N: np.ndarray, point_A_m: np.ndar
 
 
 def settle_protocol(plant: TestbedPlant | MujocoTestbedPlant, protocol: Protocol,
-                    R_start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                    R_start: np.ndarray | None = None,
+                    progress: Callable[[int], object] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """True poses (n, 3, 3) and true external moments in {A} (n, 3) of every protocol row.
 
     Parameters
@@ -53,6 +56,9 @@ def settle_protocol(plant: TestbedPlant | MujocoTestbedPlant, protocol: Protocol
     protocol : Protocol
     R_start : array (3, 3), optional
         Where the platform starts (identity by default).
+    progress : callable, optional
+        Called with the number of rows settled, in every pass over the rows (the dead weights' moments
+        are iterated: a pass per iteration, typically a few).
 
     Returns
     -------
@@ -71,10 +77,10 @@ def settle_protocol(plant: TestbedPlant | MujocoTestbedPlant, protocol: Protocol
     f, p, l = protocol.force_B_N, protocol.point_A_m, protocol.rest_lengths_m
     R = np.repeat((np.eye(3) if R_start is None else np.asarray(R_start, float))[None], n, 0)
     # the unloaded poses first (a good start for the loaded rows of each cycle)
-    R = plant.respond(l, np.zeros((n, 3)), cycle, R)
+    R = plant.respond(l, np.zeros((n, 3)), cycle, R, progress=progress)
     for _ in range(MAX_LOAD_ITERATIONS):
         tau = dead_weight_moments(R, f, p)
-        R_new = plant.respond(l, tau, cycle, R)
+        R_new = plant.respond(l, tau, cycle, R, progress=progress)
         step = float(np.max(np.linalg.norm(so3.log(np.swapaxes(R, 1, 2) @ R_new), axis=1)))
         R = R_new
         if step < 1e-12:
@@ -84,7 +90,8 @@ def settle_protocol(plant: TestbedPlant | MujocoTestbedPlant, protocol: Protocol
 
 
 def run_protocol(plant: TestbedPlant | MujocoTestbedPlant | Rig, protocol: Protocol, rng: np.random.Generator,
-                 noise: InstrumentNoise | None = None) -> MeasurementLog:
+                 noise: InstrumentNoise | None = None,
+                 progress: Callable[[int], object] | None = None) -> MeasurementLog:
     """The measurement log a lab would record running ``protocol`` on ``plant``.
 
     Parameters
@@ -96,6 +103,8 @@ def run_protocol(plant: TestbedPlant | MujocoTestbedPlant | Rig, protocol: Proto
         Instrument noise.
     noise : InstrumentNoise, optional
         The paper's instruments by default.
+    progress : callable, optional
+        As in :func:`settle_protocol`.
 
     Returns
     -------
@@ -109,7 +118,7 @@ def run_protocol(plant: TestbedPlant | MujocoTestbedPlant | Rig, protocol: Proto
     """
     plant = plant if isinstance(plant, (TestbedPlant, MujocoTestbedPlant)) else TestbedPlant(plant)
     noise = InstrumentNoise.paper() if noise is None else noise
-    R_true, tau = settle_protocol(plant, protocol)
+    R_true, tau = settle_protocol(plant, protocol, progress=progress)
     tau_meas, R_meas = noise.sample(plant.measured_moment(tau), plant.measured_pose(R_true), rng)
     return MeasurementLog.from_arrays(protocol.cycle, protocol.rest_lengths_m, tau_meas, R_meas,
                                       extra=protocol.extra_columns())

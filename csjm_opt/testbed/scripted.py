@@ -67,7 +67,7 @@ def simulate_cycle(rig: Rig, rotvec_ref, tau_pre_A_Nm, increments_A_Nm, model: M
         Equilibrium poses, reference first.
     tau : (m + 1, 3) array
         External moments of the rows (N m, in {A}).
-    rest_lengths : (6,) array
+    rest_lengths : (m,) array
         Rest lengths held through the cycle (m).
     reference : Equilibrium
         The reference equilibrium (its ``K`` is the true stiffness).

@@ -11,6 +11,7 @@ from csjm_opt import so3
 from csjm_opt.cli import main
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.measurement.logfile import MeasurementLog
+from csjm_opt.model.rig import paper_rig
 from csjm_opt.model.statics import solve_equilibrium
 from csjm_opt.testbed import design_cycles, random_rig, read_protocol, simulate_protocol
 
@@ -164,3 +165,48 @@ def test_plan_experiment_protocol_runs_on_both_plants_and_identifies(tmp_path):
     K_true = co.stiffness(rig, logs[0].R[0], co.solve_equilibrium(rig, logs[0].rest_lengths_m[0],
                                                                    R_init=logs[0].R[0]).tensions_N)
     assert np.linalg.norm(K - K_true) < 0.2 * np.linalg.norm(K_true)
+
+
+# ---- the true parameters of every effect, the guide radius's name, progress (issue 30)
+@pytest.fixture(scope="module")
+def proto1(tmp_path_factory, rig):
+    path = tmp_path_factory.mktemp("sim_truth") / "protocol.csv"
+    path.write_text(protocol_text(rig, n_cycles=1))
+    return path
+
+
+def test_truth_reports_the_rig_effects_by_their_documented_laws(proto1, tmp_path, capsys):
+    js = tmp_path / "s.json"
+    assert main(["simulate", str(proto1), "-o", str(tmp_path / "log.csv"), "--json", str(js), "--no-progress",
+                 "--effect", "stiffness_scale=2", "--effect", "mass_com", "--effect", "hole_offsets"]) == 0
+    truth = json.loads(js.read_text())["truth"]
+    nominal = paper_rig()
+    # testbed.injection's laws: stiffness times exp(+-0.03 severity), mass times (1 + 0.2 severity)^(+-1),
+    # COM moved 15 mm * severity, every hole coordinate ~ N(0, 1 mm)
+    factor = np.array(truth["stiffness_scale"]["factor"])
+    assert np.allclose(np.abs(np.log(factor)), 0.06)
+    assert np.allclose(truth["stiffness_scale"]["cable_stiffness_N_per_m"], factor * nominal.cable_stiffness_N_per_m)
+    assert min(abs(truth["mass_com"]["mass_ratio"] - 1.2), abs(truth["mass_com"]["mass_ratio"] - 1 / 1.2)) < 1e-12
+    assert np.linalg.norm(truth["mass_com"]["com_shift_A_m"]) == pytest.approx(15e-3)
+    dA, dB = np.array(truth["hole_offsets"]["dA_m"]), np.array(truth["hole_offsets"]["dB_m"])
+    assert dA.shape == dB.shape == (6, 3) and 2e-4 < np.std(np.r_[dA, dB]) < 3e-3
+    np.testing.assert_allclose(truth["hole_offsets"]["base_holes_B_m"], nominal.base_holes_B_m + dB, atol=1e-15)
+    assert capsys.readouterr().err == ""                                   # --no-progress
+
+
+def test_guide_radius_is_the_name_and_eyelet_radius_an_alias_that_warns(proto1, tmp_path, capsys):
+    js = tmp_path / "s.json"
+    assert main(["simulate", str(proto1), "-o", str(tmp_path / "a.csv"), "--json", str(js),
+                 "--effect", "guide_radius=2"]) == 0
+    assert json.loads(js.read_text())["truth"]["guide_radius_m"] == pytest.approx(6e-3)   # 3 mm * severity
+    err = capsys.readouterr().err
+    assert "simulate (quasi-static)" in err                                # progress, also when not a terminal
+    assert main(["simulate", str(proto1), "-o", str(tmp_path / "b.csv"), "--json", str(js), "--no-progress",
+                 "--effect", "eyelet_radius"]) == 0
+    assert json.loads(js.read_text())["truth"]["guide_radius_m"] == pytest.approx(3e-3)
+    assert "eyelet_radius is now called guide_radius" in capsys.readouterr().err
+    from csjm_opt.testbed import make_plant
+
+    with pytest.warns(DeprecationWarning, match="guide_radius"):
+        plant = make_plant(paper_rig(), "eyelet_radius", 1.0, np.random.default_rng(0))
+    assert plant.guide_radius_m == 3e-3

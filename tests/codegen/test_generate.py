@@ -69,7 +69,7 @@ def check_against_python(rig, lib, Rs, taus):
 
 def test_plans_match_python_on_the_paper_rig(paper_lib):
     """10^4 random poses and loads (~0.5 % infeasible): same status, tensions to 1e-9 N, rest lengths
-    to 1e-12 m, distance to 1e-9 relative (studies/codegen_equivalence.py runs 10^5 and more)."""
+    to 1e-12 m, distance to 1e-9 relative (studies/codegen_equivalence/codegen_equivalence.py runs 10^5 and more)."""
     rig = co.paper_rig()
     Rs, taus = random_cases(rig, 10_000, 200, np.random.default_rng(0))
     c = check_against_python(rig, paper_lib, Rs, taus)

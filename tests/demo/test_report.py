@@ -147,3 +147,17 @@ def test_report_figures_have_titles_units_and_free_legends(demo_run):
     _, figures = demo_run
     assert set(REPORT_FIGURES) <= set(figures)
     assert [p for name in REPORT_FIGURES for p in problems(name, figures[name])] == []
+
+
+def test_every_written_file_is_readable_by_others(demo_dir):
+    """Figures included: mode ``0o666 & ~umask`` (0644 under the usual umask), never mkstemp's 0600."""
+    import os
+    import stat
+
+    mask = os.umask(0)
+    os.umask(mask)
+    files = [p for p in demo_dir.rglob("*") if p.is_file()]
+    assert any(p.suffix == ".png" for p in files)
+    wrong = {str(p.relative_to(demo_dir)): oct(stat.S_IMODE(p.stat().st_mode)) for p in files
+             if stat.S_IMODE(p.stat().st_mode) != 0o666 & ~mask}
+    assert wrong == {}

@@ -34,7 +34,7 @@ def test_run_demo_summary(rig, tmp_path):
 
 
 def test_study_script_runs(tmp_path):
-    path = Path(__file__).resolve().parents[2] / "studies" / "soft_stiff_switch.py"
+    path = Path(__file__).resolve().parents[2] / "studies" / "soft_stiff_switch" / "soft_stiff_switch.py"
     spec = importlib.util.spec_from_file_location("soft_stiff_switch", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

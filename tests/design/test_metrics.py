@@ -24,7 +24,7 @@ from csjm_opt.design.shaping_range import directional_stiffness_range
 from csjm_opt.design.sweep.runner import evaluate_design
 from csjm_opt.design.sweep.spec import EvaluationSettings
 
-#: The load set of studies/paper_sweep.toml (N m, {A}, weight excluded).
+#: The load set of studies/paper_sweep/paper_sweep.toml (N m, {A}, weight excluded).
 LOADS = DesignLoads(np.array([[0, 0, 0], [3, 0, 0], [-3, 0, 0], [0, 3, 0], [0, -3, 0], [0, 0, 1], [0, 0, -1.0]]))
 ODD_DESIGN = {"platform_radius_m": 0.06, "platform_gamma_deg": 40.0, "base_theta0_deg": 10.0,
               "A2_dz_m": 0.005, "B5_dx_m": -0.004}

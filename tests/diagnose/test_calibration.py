@@ -112,6 +112,12 @@ def _true_params(effect: str, rig, plant: TestbedPlant) -> np.ndarray:
         return so3.log(plant.tracker_rotation_B)
     if effect == "stiffness_scale":
         return np.log(plant.rig.cable_stiffness_N_per_m[:1] / rig.cable_stiffness_N_per_m[:1])
+    if effect == "drive_offsets":
+        return np.asarray(plant.drive_offsets_m)
+    if effect == "sensor_gain":                      # the per-axis variant: each axis's log gain
+        return np.log(plant.sensor_gain_A)
+    if effect == "joint_friction":
+        return np.array([plant.joint_friction_Nm])
     raise AssertionError(effect)
 
 
@@ -125,7 +131,8 @@ def test_plausible_severity_stays_inside_the_priors(effect):
     inside, outside = [], []
     for k in range(120):
         rig = rigs[k % 3]
-        e = make_effect("friction", rig, law="coulomb") if effect == "coulomb_friction" else make_effect(effect, rig)
+        e = (make_effect("friction", rig, law="coulomb") if effect == "coulomb_friction" else
+             make_effect("sensor_gain", rig, axes="per_axis") if effect == "sensor_gain" else make_effect(effect, rig))
         for s, out in ((cap, inside), (2 * cap, outside)):
             try:
                 plant = inject(TestbedPlant.nominal(rig), effect, s, rng)

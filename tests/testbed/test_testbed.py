@@ -131,7 +131,7 @@ def test_tracker_registration_and_drift_laws(rig):
 def test_eyelet_moves_the_base_hole_towards_the_cable(rig):
     import dataclasses
 
-    plant = dataclasses.replace(TestbedPlant.nominal(rig), eyelet_radius_m=2e-3)
+    plant = dataclasses.replace(TestbedPlant.nominal(rig), guide_radius_m=2e-3)
     R = so3.random_rotations(3, np.random.default_rng(7), 0.3)
     B_eff = plant._base_holes(R)
     shift = B_eff - np.asarray(rig.base_holes_B_m)

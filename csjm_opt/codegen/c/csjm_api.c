@@ -99,12 +99,12 @@ int csjm_rotation_from_quaternion(const double q_wxyz[4], double R[9])
  * planner sees the same J to the last bit: near the edge of the feasible set the QP's answer is
  * sensitive to J (a 3x3 solve with a small determinant), and bitwise-equal inputs keep the C and
  * Python answers equal to round-off there too. K, which no QP amplifies, is CasADi's (csjm_model.c). */
-static void pose_terms(const double R[9], double c[6], double J[18], double tau_w[3])
+static void pose_terms(const double R[9], double c[CSJM_N_CABLES], double J[3 * CSJM_N_CABLES], double tau_w[3])
 {
     const double *g = CSJM_GRAVITY_B, *mr = CSJM_FIRST_MOMENT_A_KGM;
     double g0, g1, g2;
     int i;
-    for (i = 0; i < 6; ++i) {
+    for (i = 0; i < CSJM_N_CABLES; ++i) {
         const double *a = CSJM_PLATFORM_HOLES_A_M + 3 * i, *bh = CSJM_BASE_HOLES_B_M + 3 * i;
         /* v = R^T b_i - a_i, the cable vector in {A} */
         double v0 = R[0] * bh[0] + R[3] * bh[1] + R[6] * bh[2] - a[0];
@@ -126,7 +126,7 @@ static void pose_terms(const double R[9], double c[6], double J[18], double tau_
     tau_w[2] = mr[0] * g1 - mr[1] * g0;
 }
 
-int csjm_pose_terms_R(const double R_in[9], double cable_lengths_m[6], double J[18], double tau_weight_A_Nm[3])
+int csjm_pose_terms_R(const double R_in[9], double cable_lengths_m[CSJM_N_CABLES], double J[3 * CSJM_N_CABLES], double tau_weight_A_Nm[3])
 {
     double R[9];
     if (!checked_rotation(R_in, R) || cable_lengths_m == NULL || J == NULL || tau_weight_A_Nm == NULL)
@@ -135,38 +135,38 @@ int csjm_pose_terms_R(const double R_in[9], double cable_lengths_m[6], double J[
     return CSJM_SOLVED;
 }
 
-int csjm_pose_terms_q(const double q_wxyz[4], double cable_lengths_m[6], double J[18], double tau_weight_A_Nm[3])
+int csjm_pose_terms_q(const double q_wxyz[4], double cable_lengths_m[CSJM_N_CABLES], double J[3 * CSJM_N_CABLES], double tau_weight_A_Nm[3])
 {
     double R[9];
     if (csjm_rotation_from_quaternion(q_wxyz, R) != CSJM_SOLVED) return CSJM_BAD_INPUT;
     return csjm_pose_terms_R(R, cable_lengths_m, J, tau_weight_A_Nm);
 }
 
-static void set_warm(csjm_warm_start *warm, const unsigned char lower[6], const unsigned char upper[6])
+static void set_warm(csjm_warm_start *warm, const unsigned char lower[CSJM_N_CABLES], const unsigned char upper[CSJM_N_CABLES])
 {
     int i;
     if (warm == NULL) return;
-    for (i = 0; i < 6; ++i) {
+    for (i = 0; i < CSJM_N_CABLES; ++i) {
         warm->lower[i] = lower[i];
         warm->upper[i] = upper[i];
     }
 }
 
-int csjm_plan_tensions_R(const double R_in[9], const double tau_ext_A_Nm[3], const double t_ref_N[6],
+int csjm_plan_tensions_R(const double R_in[9], const double tau_ext_A_Nm[3], const double t_ref_N[CSJM_N_CABLES],
                          int max_iter, csjm_warm_start *warm, csjm_plan *out)
 {
     const double lo = CSJM_T_MIN_N, hi = CSJM_T_MAX_N;
-    double t_ref[6], b[3], t_near[6], margin;
-    unsigned char lower[6], upper[6];
+    double t_ref[CSJM_N_CABLES], b[3], t_near[CSJM_N_CABLES], margin;
+    unsigned char lower[CSJM_N_CABLES], upper[CSJM_N_CABLES];
     int i, status, no_fallback, cap;
     if (out == NULL || tau_ext_A_Nm == NULL || !all_finite(tau_ext_A_Nm, 3)) return CSJM_BAD_INPUT;
-    if (t_ref_N != NULL && !all_finite(t_ref_N, 6)) return CSJM_BAD_INPUT;
+    if (t_ref_N != NULL && !all_finite(t_ref_N, CSJM_N_CABLES)) return CSJM_BAD_INPUT;
     if (!checked_rotation(R_in, out->R)) return CSJM_BAD_INPUT;
     no_fallback = (max_iter & CSJM_NO_FALLBACK) != 0;
     cap = max_iter > 0 ? max_iter & (CSJM_NO_FALLBACK - 1) : 0;
     if (cap <= 0) cap = CSJM_DEFAULT_MAX_ITER;
     if (cap > CSJM_MAX_ITER_LIMIT) cap = CSJM_MAX_ITER_LIMIT;
-    for (i = 0; i < 6; ++i) {
+    for (i = 0; i < CSJM_N_CABLES; ++i) {
         t_ref[i] = t_ref_N != NULL ? t_ref_N[i] : 0.5 * (lo + hi);
         lower[i] = (unsigned char)(warm != NULL && warm->lower[i] != 0);
         upper[i] = (unsigned char)(warm != NULL && warm->upper[i] != 0 && !lower[i]);
@@ -178,7 +178,7 @@ int csjm_plan_tensions_R(const double R_in[9], const double tau_ext_A_Nm[3], con
     status = CSJM_SOLVED;
     if (csjm_qp_pdas(out->J, b, t_ref, lo, hi, lower, upper, cap, out->tensions_N, &out->iterations)
         != CSJM_QP_OK) {
-        for (i = 0; i < 6; ++i) lower[i] = upper[i] = 0;
+        for (i = 0; i < CSJM_N_CABLES; ++i) lower[i] = upper[i] = 0;
         if (no_fallback) {
             status = CSJM_ITERATION_CAP;
         } else {
@@ -188,10 +188,10 @@ int csjm_plan_tensions_R(const double R_in[9], const double tau_ext_A_Nm[3], con
                 out->fallback = 1;
             } else {
                 double d = csjm_qp_distance(out->J, b, lo, hi, t_near);
-                for (i = 0; i < 6; ++i) out->tensions_N[i] = t_near[i];
+                for (i = 0; i < CSJM_N_CABLES; ++i) out->tensions_N[i] = t_near[i];
                 if (d <= CSJM_FEASIBILITY_TOL_NM) {          /* on the boundary: the nearest point */
                     out->fallback = 2;
-                    for (i = 0; i < 6; ++i) {
+                    for (i = 0; i < CSJM_N_CABLES; ++i) {
                         lower[i] = (unsigned char)(t_near[i] <= lo);
                         upper[i] = (unsigned char)(t_near[i] >= hi);
                     }
@@ -204,12 +204,12 @@ int csjm_plan_tensions_R(const double R_in[9], const double tau_ext_A_Nm[3], con
             }
         }
     }
-    for (i = 0; i < 6; ++i) out->rest_lengths_m[i] = out->cable_lengths_m[i] - out->tensions_N[i] / CSJM_K_N_PER_M[i];
+    for (i = 0; i < CSJM_N_CABLES; ++i) out->rest_lengths_m[i] = out->cable_lengths_m[i] - out->tensions_N[i] / CSJM_K_N_PER_M[i];
     set_warm(warm, lower, upper);
     return status;
 }
 
-int csjm_plan_tensions_q(const double q_wxyz[4], const double tau_ext_A_Nm[3], const double t_ref_N[6],
+int csjm_plan_tensions_q(const double q_wxyz[4], const double tau_ext_A_Nm[3], const double t_ref_N[CSJM_N_CABLES],
                          int max_iter, csjm_warm_start *warm, csjm_plan *out)
 {
     double R[9];
@@ -217,25 +217,25 @@ int csjm_plan_tensions_q(const double q_wxyz[4], const double tau_ext_A_Nm[3], c
     return csjm_plan_tensions_R(R, tau_ext_A_Nm, t_ref_N, max_iter, warm, out);
 }
 
-int csjm_rest_lengths_R(const double R_in[9], const double tensions_N[6], double rest_lengths_m[6])
+int csjm_rest_lengths_R(const double R_in[9], const double tensions_N[CSJM_N_CABLES], double rest_lengths_m[CSJM_N_CABLES])
 {
-    double R[9], c[6], J[18], tau_w[3];
+    double R[9], c[CSJM_N_CABLES], J[3 * CSJM_N_CABLES], tau_w[3];
     int i;
-    if (tensions_N == NULL || rest_lengths_m == NULL || !all_finite(tensions_N, 6) || !checked_rotation(R_in, R))
+    if (tensions_N == NULL || rest_lengths_m == NULL || !all_finite(tensions_N, CSJM_N_CABLES) || !checked_rotation(R_in, R))
         return CSJM_BAD_INPUT;
     pose_terms(R, c, J, tau_w);
-    for (i = 0; i < 6; ++i) rest_lengths_m[i] = c[i] - tensions_N[i] / CSJM_K_N_PER_M[i];
+    for (i = 0; i < CSJM_N_CABLES; ++i) rest_lengths_m[i] = c[i] - tensions_N[i] / CSJM_K_N_PER_M[i];
     return CSJM_SOLVED;
 }
 
-int csjm_stiffness_R(const double R_in[9], const double tensions_N[6], double K[9])
+int csjm_stiffness_R(const double R_in[9], const double tensions_N[CSJM_N_CABLES], double K[9])
 {
     double R[9];
     const double *arg[2];
     double *res[1];
     casadi_int iw[CSJM_CG_SZ_IW + 1];
     double w[CSJM_CG_SZ_W + 1];
-    if (tensions_N == NULL || K == NULL || !all_finite(tensions_N, 6) || !checked_rotation(R_in, R))
+    if (tensions_N == NULL || K == NULL || !all_finite(tensions_N, CSJM_N_CABLES) || !checked_rotation(R_in, R))
         return CSJM_BAD_INPUT;
     arg[0] = R;
     arg[1] = tensions_N;
@@ -244,7 +244,7 @@ int csjm_stiffness_R(const double R_in[9], const double tensions_N[6], double K[
     return CSJM_SOLVED;
 }
 
-int csjm_stiffness_q(const double q_wxyz[4], const double tensions_N[6], double K[9])
+int csjm_stiffness_q(const double q_wxyz[4], const double tensions_N[CSJM_N_CABLES], double K[9])
 {
     double R[9];
     if (csjm_rotation_from_quaternion(q_wxyz, R) != CSJM_SOLVED) return CSJM_BAD_INPUT;
@@ -264,4 +264,9 @@ double csjm_t_max_N(void)
 const char *csjm_rig_sha256(void)
 {
     return CSJM_RIG_SHA256;
+}
+
+int csjm_n_cables(void)
+{
+    return CSJM_N_CABLES;
 }

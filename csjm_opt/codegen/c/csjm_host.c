@@ -6,21 +6,21 @@
 
 #include "csjm.h"
 
-/* Plan n poses (R: n x 9 row-major, tau: n x 3, t_ref: NULL or n x 6), warm-started along the rows
- * when warm != 0, cold otherwise. Outputs: T, l (n x 6), distance (n), status, iterations, fallback (n). */
+/* Plan n poses (R: n x 9 row-major, tau: n x 3, t_ref: NULL or n x m), warm-started along the rows
+ * when warm != 0, cold otherwise. Outputs: T, l (n x m), distance (n), status, iterations, fallback (n). */
 void csjm_host_plan_batch(int n, const double *R, const double *tau, const double *t_ref, int max_iter,
                           int warm, double *T, double *l, double *distance, int *status, int *iterations,
                           int *fallback)
 {
-    csjm_warm_start ws = {{0, 0, 0, 0, 0, 0}, {0, 0, 0, 0, 0, 0}};
+    csjm_warm_start ws = {{0}, {0}};
     csjm_plan plan;
     int m, i;
     for (m = 0; m < n; ++m) {
-        status[m] = csjm_plan_tensions_R(R + 9 * m, tau + 3 * m, t_ref != NULL ? t_ref + 6 * m : NULL, max_iter,
+        status[m] = csjm_plan_tensions_R(R + 9 * m, tau + 3 * m, t_ref != NULL ? t_ref + CSJM_N_CABLES * m : NULL, max_iter,
                                          warm ? &ws : NULL, &plan);
-        for (i = 0; i < 6; ++i) {
-            T[6 * m + i] = status[m] == CSJM_BAD_INPUT ? 0.0 : plan.tensions_N[i];
-            l[6 * m + i] = status[m] == CSJM_BAD_INPUT ? 0.0 : plan.rest_lengths_m[i];
+        for (i = 0; i < CSJM_N_CABLES; ++i) {
+            T[CSJM_N_CABLES * m + i] = status[m] == CSJM_BAD_INPUT ? 0.0 : plan.tensions_N[i];
+            l[CSJM_N_CABLES * m + i] = status[m] == CSJM_BAD_INPUT ? 0.0 : plan.rest_lengths_m[i];
         }
         distance[m] = status[m] == CSJM_BAD_INPUT ? 0.0 : plan.distance_Nm;
         iterations[m] = status[m] == CSJM_BAD_INPUT ? 0 : plan.iterations;
@@ -32,7 +32,7 @@ void csjm_host_plan_batch(int n, const double *R, const double *tau, const doubl
 void csjm_host_stiffness_batch(int n, const double *R, const double *T, double *K, int *status)
 {
     int m;
-    for (m = 0; m < n; ++m) status[m] = csjm_stiffness_R(R + 9 * m, T + 6 * m, K + 9 * m);
+    for (m = 0; m < n; ++m) status[m] = csjm_stiffness_R(R + 9 * m, T + CSJM_N_CABLES * m, K + 9 * m);
 }
 
 static double now_ns(void)
@@ -48,7 +48,7 @@ static double now_ns(void)
 int csjm_host_time_plan(int n, const double *R, const double *tau, int max_iter, int warm, double *ns,
                         double *overhead_ns)
 {
-    csjm_warm_start ws = {{0, 0, 0, 0, 0, 0}, {0, 0, 0, 0, 0, 0}};
+    csjm_warm_start ws = {{0}, {0}};
     csjm_plan plan;
     double t0, t1, sum = 0.0;
     int m, failed = 0;

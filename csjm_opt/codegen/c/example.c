@@ -2,7 +2,7 @@
  *
  * Usage: ./csjm_example trajectory.csv > tensions.csv
  * Input CSV (header line, then one row per 1 ms step): t_s,qw,qx,qy,qz,tau_x,tau_y,tau_z
- * Output CSV: t_s,status,t1..t6 (N),l1..l6 (m),iterations, and on stderr the worst call time.
+ * Output CSV: t_s,status,t1..tm (N),l1..lm (m),iterations (m = CSJM_N_CABLES cables), and on stderr the worst call time.
  * Each step warm-starts from the previous step's active set; on a real controller the loop
  * body is what runs in the 1 ms cycle (reading the sensors and writing the drives instead of
  * the files). */
@@ -24,7 +24,7 @@ int main(int argc, char **argv)
     FILE *in;
     char header[512];
     double t, q[4], tau[3], worst_ns = 0.0;
-    csjm_warm_start warm = {{0, 0, 0, 0, 0, 0}, {0, 0, 0, 0, 0, 0}};
+    csjm_warm_start warm = {{0}, {0}};
     csjm_plan plan;
     long steps = 0, failures = 0;
     int i;
@@ -42,7 +42,10 @@ int main(int argc, char **argv)
         fclose(in);
         return 2;
     }
-    printf("t_s,status,t1_N,t2_N,t3_N,t4_N,t5_N,t6_N,l1_m,l2_m,l3_m,l4_m,l5_m,l6_m,iterations\n");
+    printf("t_s,status");
+    for (i = 1; i <= CSJM_N_CABLES; ++i) printf(",t%d_N", i);
+    for (i = 1; i <= CSJM_N_CABLES; ++i) printf(",l%d_m", i);
+    printf(",iterations\n");
     while (fscanf(in, " %lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &t, &q[0], &q[1], &q[2], &q[3], &tau[0], &tau[1],
                   &tau[2]) == 8) {
         double t0 = now_ns(), dt;
@@ -53,13 +56,13 @@ int main(int argc, char **argv)
         if (status != CSJM_SOLVED) {
             ++failures;
             printf("%.6f,%d", t, status);
-            for (i = 0; i < 12; ++i) printf(",nan");
+            for (i = 0; i < 2 * CSJM_N_CABLES; ++i) printf(",nan");
             printf(",0\n");
             continue;
         }
         printf("%.6f,%d", t, status);
-        for (i = 0; i < 6; ++i) printf(",%.17g", plan.tensions_N[i]);
-        for (i = 0; i < 6; ++i) printf(",%.17g", plan.rest_lengths_m[i]);
+        for (i = 0; i < CSJM_N_CABLES; ++i) printf(",%.17g", plan.tensions_N[i]);
+        for (i = 0; i < CSJM_N_CABLES; ++i) printf(",%.17g", plan.rest_lengths_m[i]);
         printf(",%d\n", plan.iterations);
     }
     fclose(in);

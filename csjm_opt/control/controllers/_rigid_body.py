@@ -24,7 +24,7 @@ class RigidBody:
         dyn = dynamics or rig_dynamics(rig)
         self.I_O = dyn.inertia_about_O_A_kgm2(rig.platform_mass_kg, rig.com_A_m)
         self.c_joint = dyn.joint_damping_Nms_per_rad
-        self.b_cable = np.asarray(dyn.cable_damping_Ns_per_m, float)
+        self.b_cable = dyn.cable_damping_per_cable(rig.n_cables)
         self._terms = CableTerms.from_rig(rig)
 
     def moment(self, R: np.ndarray, omega: np.ndarray, omega_dot: np.ndarray) -> np.ndarray:

@@ -23,16 +23,17 @@ class TensionQP:
 
     def __init__(self, rig: Rig, t_ref_N: np.ndarray | None = None):
         self.rig = rig
-        self.t_ref = (rig.t_mid_N if t_ref_N is None else np.broadcast_to(np.asarray(t_ref_N, float), (6,))).copy()
+        self.t_ref = (rig.t_mid_N if t_ref_N is None else np.broadcast_to(np.asarray(t_ref_N, float),
+                                                                               (rig.n_cables,))).copy()
         self._model = model_for(rig)
-        self._lower = np.zeros(6, np.bool_)
-        self._upper = np.zeros(6, np.bool_)
+        self._lower = np.zeros(rig.n_cables, np.bool_)
+        self._upper = np.zeros(rig.n_cables, np.bool_)
 
     def __call__(self, R: np.ndarray, tau_ext_A_Nm: np.ndarray) -> np.ndarray:
-        """Tensions (6,) N that hold ``tau_ext_A_Nm`` (plus the weight) at ``R``."""
+        """Tensions (m,) N that hold ``tau_ext_A_Nm`` (plus the weight) at ``R``."""
         R = np.ascontiguousarray(R, dtype=np.float64)
         _, J, tau_w = self._model.pose_terms(R)
-        T = np.zeros(6)
+        T = np.zeros(self.rig.n_cables)
         b = -(tau_w + np.asarray(tau_ext_A_Nm, float))
         status = qp_kernels.solve_one(J, b, self.t_ref, self.rig.t_min_N, self.rig.t_max_N, self._lower,
                                       self._upper, T, 40)

@@ -41,8 +41,8 @@ class Command:
     controller does not shape stiffness.
     """
 
-    tensions_N: np.ndarray       # (6,)
-    rest_lengths_m: np.ndarray   # (6,)
+    tensions_N: np.ndarray       # (m,)
+    rest_lengths_m: np.ndarray   # (m,)
     R_cmd: np.ndarray            # (3, 3) pose the command is planned for
     K_target: np.ndarray | None = None
     K_planned: np.ndarray | None = None

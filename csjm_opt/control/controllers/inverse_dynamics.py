@@ -101,7 +101,7 @@ class InverseDynamicsController(PoseHoldingController):
         Returns
         -------
         tuple
-            ``(tensions_N, K_target, K_planned)``: (6,) tensions (N), then ``None, None``
+            ``(tensions_N, K_target, K_planned)``: (m,) tensions (N), then ``None, None``
             (no stiffness shaping).
 
         Raises

@@ -107,7 +107,7 @@ class StiffnessShapingController(PoseHoldingController):
         Returns
         -------
         tuple
-            ``(tensions_N, K_target, K_planned)``: (6,) tensions (N), then the target K and the
+            ``(tensions_N, K_target, K_planned)``: (m,) tensions (N), then the target K and the
             K the tensions give (N m/rad).
 
         Raises

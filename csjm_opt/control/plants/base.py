@@ -20,7 +20,7 @@ class PlantState:
 
     R: np.ndarray                  # (3, 3) orientation of {A} in {B}
     omega_A_rad_s: np.ndarray      # (3,) angular velocity in {A} (zero for a quasi-static plant)
-    tensions_N: np.ndarray         # (6,)
+    tensions_N: np.ndarray         # (m,)
     K: np.ndarray                  # (3, 3) cable stiffness at this state (load convention, docs/conventions.md)
     tau_ext_A_Nm: np.ndarray       # (3,) external moment acting now, in {A}
 

@@ -104,8 +104,9 @@ class MujocoPlant(Plant):
         if self.actuation == "rest_length" and self._l is not None:
             T, K = loop_kernels.rest_state(self._terms.A, self._terms.B, self._terms.k, R, self._l)
         else:
-            T = np.clip(self.data.ctrl[:6], self.rig.t_min_N, self.rig.t_max_N) if self.actuation == "tension" \
-                else np.zeros(6)
+            m = self.rig.n_cables
+            T = np.clip(self.data.ctrl[:m], self.rig.t_min_N, self.rig.t_max_N) if self.actuation == "tension" \
+                else np.zeros(m)
             _, _, G = self._terms.stiffness_basis(R)
             K = np.einsum("i,ijk->jk", T, G)
         return PlantState(R, self.data.qvel.copy(), T, K, self._tau_A.copy())

@@ -59,7 +59,7 @@ class QuasiStaticPlant(Plant):
             raise InvalidInput("a quasi-static plant has no velocity; omega0 must be zero", "omega0_A_rad_s")
         self._R = np.array(R0, float)
         tau = np.zeros(3) if load is None else self.external_moment_A(load, 0.0, self._R)
-        nan = np.full(6, np.nan)
+        nan = np.full(self.rig.n_cables, np.nan)
         return PlantState(self._R, np.zeros(3), nan, np.full((3, 3), np.nan), tau)
 
     def step(self, command, load: LoadFunction, t0_s: float, t1_s: float) -> PlantState:

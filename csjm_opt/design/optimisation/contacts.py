@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from ..clearance import PAIRS, cable_ends_B_m, point_segment_distance, segment_distance
+from ..clearance import cable_ends_B_m, cable_pairs, point_segment_distance, segment_distance
 from ..sampling import tilt_torsion_rotations
 from .problem import Contact
 from .settings import OptimiseSettings
@@ -39,7 +39,8 @@ def contacts_near(settings: OptimiseSettings, rig: Any, angles: np.ndarray, scal
     req, link = settings.requirements, settings.link
     Rs = tilt_torsion_rotations(angles[:, 0] * scale, angles[:, 1], angles[:, 2] * scale)
     top, bottom = cable_ends_B_m(rig, Rs)
-    i, j = PAIRS[:, 0], PAIRS[:, 1]
+    pairs = cable_pairs(rig.n_cables)
+    i, j = pairs[:, 0], pairs[:, 1]
     out: list[Contact] = []
 
     def closest(gap: np.ndarray, limit: float, make: Any) -> None:

@@ -301,3 +301,28 @@ def sweep_front(settings: OptimiseSettings, evaluation: EvaluationSettings, poin
         ends.append(_branch(work, m, points, end).u)
     return SweepFrontResult(records=work.records, evaluations=work.twins_n + work.sweep_n,
                             twin_evaluations=work.twins_n, sweep_evaluations=work.sweep_n)
+
+
+def hypervolume(points: np.ndarray) -> float:
+    """Area dominated by ``points`` (range, stiffness; both maximised) above the reference point (0, 0).
+
+    Parameters
+    ----------
+    points : numpy.ndarray
+        (n, 2) points of a front.
+
+    Returns
+    -------
+    float
+        The dominated area (0 when no point is positive in both).
+    """
+    pts = np.asarray([p for p in points if p[0] > 0 and p[1] > 0])
+    if not len(pts):
+        return 0.0
+    pts = pts[np.argsort(-pts[:, 0])]
+    area, best_y = 0.0, 0.0
+    for x, y in pts:   # widest first: each point adds the strip above everything wider
+        if y > best_y:
+            area += x * (y - best_y)
+            best_y = y
+    return float(area)

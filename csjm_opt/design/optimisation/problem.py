@@ -2,7 +2,7 @@
 
 Decision variables: the optimised design parameters (scaled to [0, 1] on their
 bounds), the objective's variable, and for every sampled orientation and every
-load but the first the six cable tensions. Constraints at every sampled
+load but the first the m cable tensions. Constraints at every sampled
 orientation R_j of the required set (tilt <= s max_tilt, |torsion| <= s
 max_torsion; R = I always included):
 
@@ -44,10 +44,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..clearance import PAIRS
+from ..clearance import cable_pairs
 from .budget import BOUNDED_OPTIONS, IterationStop
 from .settings import OptimiseSettings
-from .shaping import N_TENSIONS, initial_tensions, shaping_block
+from .shaping import initial_tensions, n_tensions, shaping_block
 from .symbols import (
     HESSIAN,
     LENGTH_SCALE_M,
@@ -92,6 +92,7 @@ class Problem:
     constraints_of: Any   # casadi Function: x, p -> g
     n_slots: int = 0      # orientation slots (the pose constraints come first, slot by slot)
     stop: Any = None      # IterationStop of a bounded solver (budget.py), else None
+    n_cables: int = 6     # m of the design (tension rows per load)
 
 
 @dataclasses.dataclass
@@ -105,6 +106,7 @@ class _Built:
     n_slots: int
     n_contacts: int
     stop: Any = None
+    n_cables: int = 6
 
 
 def _quantity_values(settings: OptimiseSettings, epsilon: dict[str, float]) -> dict[str, float]:
@@ -151,19 +153,21 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
     padded = np.vstack([angles, np.zeros((n_slots - angles.shape[0], 3))])
     values = _quantity_values(settings, epsilon)
     p_q = [values["tension_margin"], values["stiffness"], values["range"], values["size"], values["shaping"]]
-    p_c = np.zeros((n_contacts, _CONTACT_WIDTH))
+    m = built.n_cables
+    p_c = np.zeros((n_contacts, contact_width(m)))
     p_c[:, -1] = -1.0                                   # unused slot: needs a negative distance
     link, req = settings.link, settings.requirements
     for row, c in zip(p_c, contacts):
         row[:3] = padded[c.orientation]
         row[3 + c.i] = 1.0
-        row[15], row[16] = c.s, c.t
+        row[3 + 2 * m], row[4 + 2 * m] = c.s, c.t
         if c.kind == "pair":
-            row[9 + c.j] = 1.0
-            row[18] = req.min_cable_distance_m
+            row[3 + m + c.j] = 1.0
+            row[6 + 2 * m] = req.min_cable_distance_m
         else:
-            row[17] = link.rod_length_m if c.kind == "rod" else 0.0
-            row[18] = req.min_link_clearance_m + (link.rod_radius_m if c.kind == "rod" else link.ball_radius_m)
+            row[5 + 2 * m] = link.rod_length_m if c.kind == "rod" else 0.0
+            row[6 + 2 * m] = req.min_link_clearance_m + (link.rod_radius_m if c.kind == "rod"
+                                                         else link.ball_radius_m)
     p = np.concatenate([padded.ravel(), p_q, p_c.ravel()])
     names, lo, hi = settings.names, settings.lower, settings.upper
     obj = settings.objective
@@ -175,15 +179,16 @@ def build_problem(settings: OptimiseSettings, angles: np.ndarray, start: dict[st
                                                               "shaping": 0.0}[obj]
     q0 = min(max(q0 / _SCALE[obj], q_lo), q_hi)
     loads = np.asarray(req.loads, float)
-    n_t = 6 * (loads.shape[0] - 1) * n_slots
-    n_s = N_TENSIONS * n_slots if _shaping(settings) else 0
+    n_t = m * (loads.shape[0] - 1) * n_slots
+    n_s = n_tensions(m) * n_slots if _shaping(settings) else 0
     x0 = np.concatenate([u0, [q0], initial_load_tensions(built.design, u0, q0, np.array(p_q), padded, loads),
                          initial_tensions(built.design, u0, q0, np.array(p_q), padded, loads) if n_s else []])
     lbx = np.concatenate([np.zeros(len(names)), [q_lo], np.zeros(n_t + n_s)])
     ubx = np.concatenate([np.ones(len(names)), [q_hi], np.full(n_t + n_s, np.inf)])
     return Problem(solver=built.solver, x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=built.lbg, ubg=built.ubg,
                    n_design=len(names), objective_index=len(names), design_of=built.design_of,
-                   constraints_of=built.constraints_of, n_slots=n_slots, stop=built.stop)
+                   constraints_of=built.constraints_of, n_slots=n_slots, stop=built.stop,
+                   n_cables=m)
 
 
 _SCALE = {"stiffness": STIFFNESS_SCALE_NM_PER_RAD, "tension_margin": MARGIN_SCALE_N, "range": 1.0,
@@ -199,7 +204,24 @@ def _shaping(settings: OptimiseSettings) -> bool:
 SLOT_STEP = 16
 #: Contact slots of every solver (a round with more builds a larger one).
 MIN_CONTACT_SLOTS = 32
-_CONTACT_WIDTH = 19    # angles (3), one-hot cable i (6), one-hot cable j (6), s, t, rod length, need
+
+
+def contact_width(n_cables: int) -> int:
+    """Parameters of one contact slot: angles (3), one-hot cable i (m), one-hot cable j (m), s, t, rod, need.
+
+    Parameters
+    ----------
+    n_cables : int
+        m.
+
+    Returns
+    -------
+    int
+        ``2 m + 7`` (19 for six cables).
+    """
+    return 2 * n_cables + 7
+
+
 _NO_SIZE_LIMIT_M = 1e3
 
 
@@ -243,40 +265,43 @@ def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int, bounded: b
     held = {"tension_margin": pq[0], "stiffness": pq[1], "range": pq[2], "size": pq[3], "shaping": pq[4]}
     q = {k: (q_var * _SCALE[k] if k == obj else v) for k, v in held.items()}
     p, A, B, rig = design_sym(settings, u)
+    m = A.size2()
+    cw = contact_width(m)
     qv = ca.vertcat(q["tension_margin"], q["stiffness"], q["range"], math.cos(math.radians(req.max_exit_angle_deg)))
     design = ca.Function("design", [u, q_var, pq], [A, B, rig, qv, q["shaping"]])
-    pc = ca.SX.sym("pc", _CONTACT_WIDTH, n_contacts)
+    pc = ca.SX.sym("pc", cw, n_contacts)
     fixed: list[Any] = []
     for c in range(n_contacts):
         row = pc[:, c]
         R = rotation_sym(q["range"] * row[0], row[1], q["range"] * row[2])
         top, bottom = R @ A, B
-        point = (top + row[15] * (bottom - top)) @ row[3:9]
-        other = (top + row[16] * (bottom - top)) @ row[9:15] \
-            + ca.vertcat(0, 0, -row[17] * (1.0 - row[16]))
-        fixed.append((ca.sqrt(ca.sumsqr(point - other) + 1e-18) - row[18]) / LENGTH_SCALE_M)
+        s_i, t_j, rod, need = row[3 + 2 * m], row[4 + 2 * m], row[5 + 2 * m], row[6 + 2 * m]
+        point = (top + s_i * (bottom - top)) @ row[3:3 + m]
+        other = (top + t_j * (bottom - top)) @ row[3 + m:3 + 2 * m] \
+            + ca.vertcat(0, 0, -rod * (1.0 - t_j))
+        fixed.append((ca.sqrt(ca.sumsqr(point - other) + 1e-18) - need) / LENGTH_SCALE_M)
     for H in (A, B):
-        for a, b in PAIRS:
+        for a, b in cable_pairs(m):
             fixed.append((ca.norm_2(H[:, a] - H[:, b]) - req.min_hole_spacing_m) / LENGTH_SCALE_M)
     if "size" in (obj, settings.pareto_with):
         for H in (A, B):
             fixed.append((q["size"] ** 2 - ca.sum1(H[:2, :] ** 2).T) / SIZE_SCALE_M ** 2)
     g_fixed = ca.Function("fixed", [u, q_var, pq, pc], [ca.vertcat(*fixed)])
 
-    n_t = 6 * (n_l - 1) * n_slots
-    n_s = N_TENSIONS * n_slots if _shaping(settings) else 0
+    n_t = m * (n_l - 1) * n_slots
+    n_s = n_tensions(m) * n_slots if _shaping(settings) else 0
     x = ca.MX.sym("x", n_d + 1 + n_t + n_s)
-    par = ca.MX.sym("p", 3 * n_slots + 5 + _CONTACT_WIDTH * n_contacts)
+    par = ca.MX.sym("p", 3 * n_slots + 5 + cw * n_contacts)
     ux, qx = x[:n_d], x[n_d]
     ang = ca.reshape(par[:3 * n_slots], 3, n_slots)
     pq_m = par[3 * n_slots:3 * n_slots + 5]
-    pc_m = ca.reshape(par[3 * n_slots + 5:], _CONTACT_WIDTH, n_contacts)
+    pc_m = ca.reshape(par[3 * n_slots + 5:], cw, n_contacts)
     A_m, B_m, rig_m, q_m, s_shape = design(ux, qx, pq_m)
-    F = pose_constraints(n_l, exit_limit).map(n_slots, "serial")
-    g_pose, _ = F(A_m, B_m, rig_m, q_m, ang, ca.DM(loads.T), ca.reshape(x[n_d + 1:n_d + 1 + n_t], 6 * (n_l - 1),
+    F = pose_constraints(n_l, exit_limit, m).map(n_slots, "serial")
+    g_pose, _ = F(A_m, B_m, rig_m, q_m, ang, ca.DM(loads.T), ca.reshape(x[n_d + 1:n_d + 1 + n_t], m * (n_l - 1),
                                                                           n_slots))
     g = ca.vertcat(ca.vec(g_pose), g_fixed(ux, qx, pq_m, pc_m))
-    lo_pose, hi_pose = pose_bounds(n_l, exit_limit)
+    lo_pose, hi_pose = pose_bounds(n_l, exit_limit, m)
     n_fixed = g_fixed.size1_out(0)
     lbg = np.concatenate([np.tile(lo_pose, n_slots), np.zeros(n_fixed)])
     ubg = np.concatenate([np.tile(hi_pose, n_slots), np.full(n_fixed, np.inf)])
@@ -295,7 +320,7 @@ def _built(settings: OptimiseSettings, n_slots: int, n_contacts: int, bounded: b
     design_of = ca.Function("design_of", [u], [ca.vertcat(*[p[n] for n in names])])
     return _Built(solver=solver, design=design, design_of=design_of,
                   constraints_of=ca.Function("constraints_of", [x, par], [g]), lbg=lbg, ubg=ubg,
-                  n_slots=n_slots, n_contacts=n_contacts, stop=stop)
+                  n_slots=n_slots, n_contacts=n_contacts, stop=stop, n_cables=m)
 
 
 def _objective_bounds(settings: OptimiseSettings, scale: float) -> tuple[float, float]:

@@ -8,7 +8,8 @@ section only changes the defaults::
     pareto_with = "stiffness"      # second objective of an epsilon-constraint front ("" = none)
     pareto_points = 4              # designs on the front
     variables = ["platform_gamma_deg", "base_gamma_deg"]   # default: the swept parameters,
-                                   # between their min and max (or smallest and largest value)
+                                   # between their min and max (or smallest and largest value);
+                                   # the cable count n_cables is fixed (in [base]), never a variable
     max_tilt_deg = 45.0            # the required orientation set (default: [sampling]);
     max_torsion_deg = 30.0         #   "range" scales both by s <= 1
     range_scale = 1.0              # required scale s when the objective is not "range"
@@ -41,6 +42,7 @@ from ...errors import DesignError
 from ...model.link import DEFAULT_LINK, Link
 from ...model.rig import STANDARD_GRAVITY_B
 from ..geometry import SCALAR_PARAMETERS
+from ..sweep.axes import INTEGER_PARAMETERS
 from ..sweep.spec import SweepSpec, read_sweep_toml
 
 #: Objectives (each maximised, except "size", minimised). "shaping" is the smallest shaping range
@@ -208,6 +210,9 @@ def settings_from(spec: SweepSpec, section: Any, path: str | None = None) -> Opt
     if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
         raise fail("expected a non-empty list of swept parameter names", "variables")
     for n in names:
+        if n in INTEGER_PARAMETERS:
+            raise fail(f"{n!r} takes integer values and cannot be optimised: fix it in [base] (one optimisation "
+                       "per cable count) and name the continuous parameters in optimise.variables", "variables")
         if n not in axes:
             hint = "not a design parameter" if n not in SCALAR_PARAMETERS else "not swept in [parameters]"
             raise fail(f"{n!r} is {hint} (the optimiser uses the sweep's parameters and bounds)", "variables")

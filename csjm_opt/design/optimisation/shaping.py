@@ -45,10 +45,37 @@ from .symbols import (
     start_tensions,
 )
 
-#: Tension vectors per orientation: (T_hi, T_lo) for each axis, six cables each.
-N_TENSIONS = 2 * len(AXES) * 6
-#: Constraint rows per orientation: 12 bounds and 3 equilibrium rows per tension vector, one epigraph row per axis.
-SHAPING_ROWS = 2 * len(AXES) * 15 + len(AXES)
+
+def n_tensions(n_cables: int) -> int:
+    """Tension variables per orientation: (T_hi, T_lo) for each axis, m cables each (36 for m = 6).
+
+    Parameters
+    ----------
+    n_cables : int
+        m.
+
+    Returns
+    -------
+    int
+    """
+    return 2 * len(AXES) * n_cables
+
+
+def shaping_rows(n_cables: int) -> int:
+    """Constraint rows per orientation: 2 m bounds and 3 equilibrium rows per tension vector, one epigraph row per axis.
+
+    Parameters
+    ----------
+    n_cables : int
+        m.
+
+    Returns
+    -------
+    int
+        93 for m = 6.
+    """
+    return 2 * len(AXES) * (2 * n_cables + 3) + len(AXES)
+
 #: Worst dense orientations refined by the certification's pattern search, its rounds and first steps (deg).
 LOCAL_SEEDS = 4
 LOCAL_ROUNDS = 10
@@ -56,23 +83,29 @@ LOCAL_STEPS_DEG = (2.0, 10.0, 2.0)
 
 
 @functools.lru_cache(maxsize=4)
-def shaping_pose_constraints() -> Any:
+def shaping_pose_constraints(n_cables: int = 6) -> Any:
     """The shaping constraints at one orientation, as a CasADi function (mapped over orientations).
 
     Inputs as :func:`csjm_opt.design.optimisation.symbols.pose_constraints` (``A``, ``B``, ``rig``,
     ``q`` = [margin, lambda, s, cos(exit limit)], ``ang``), then ``load`` (3, the stiffness load),
-    ``T`` (36: per axis x, y, z the tensions T_hi then T_lo, scaled by t_max) and ``s_shape``
-    (N m/rad). Output ``g``: per tension vector 12 box rows (>= 0) and 3 equilibrium rows (== 0),
+    ``T`` (6 m: per axis x, y, z the tensions T_hi then T_lo, scaled by t_max) and ``s_shape``
+    (N m/rad). Output ``g``: per tension vector 2 m box rows (>= 0) and 3 equilibrium rows (== 0),
     then 3 epigraph rows ``(u^T K(T_hi) u - u^T K(T_lo) u - s_shape) / scale >= 0``.
+
+    Parameters
+    ----------
+    n_cables : int
+        m.
 
     Returns
     -------
     casadi.Function
     """
-    A, B = ca.SX.sym("A", 3, 6), ca.SX.sym("B", 3, 6)
+    c = n_cables
+    A, B = ca.SX.sym("A", 3, c), ca.SX.sym("B", 3, c)
     rig, q, ang = ca.SX.sym("rig", 8), ca.SX.sym("q", 4), ca.SX.sym("ang", 3)
-    load, tv, s_shape = ca.SX.sym("load", 3), ca.SX.sym("T", N_TENSIONS), ca.SX.sym("s_shape")
-    f = build_functions()
+    load, tv, s_shape = ca.SX.sym("load", 3), ca.SX.sym("T", n_tensions(c)), ca.SX.sym("s_shape")
+    f = build_functions(c)
     k, t_min, t_max, mass, com_z = rig[0], rig[1], rig[2], rig[3], rig[4]
     mu = q[0]
     R = rotation_sym(q[2] * ang[0], ang[1], q[2] * ang[2])
@@ -80,26 +113,31 @@ def shaping_pose_constraints() -> Any:
     tau_w = f["weight_moment"](R, mass, ca.vertcat(0, 0, com_z), rig[5:8])[0]
     out, directional = [], []
     for v in range(2 * len(AXES)):
-        T = tv[6 * v:6 * v + 6] * t_max
+        T = tv[c * v:c * v + c] * t_max
         out += [(T - t_min - mu) / MARGIN_SCALE_N, (t_max - mu - T) / MARGIN_SCALE_N,
                 (J.T @ T + load + tau_w) / MOMENT_SCALE_NM]
         u = ca.DM(list(AXES.values())[v // 2])
-        directional.append(u.T @ f["stiffness"](R, T, k * ca.DM.ones(6), A, B) @ u)
+        directional.append(u.T @ f["stiffness"](R, T, k * ca.DM.ones(c), A, B) @ u)
     for d in range(len(AXES)):
         out.append((directional[2 * d] - directional[2 * d + 1] - s_shape) / STIFFNESS_SCALE_NM_PER_RAD)
     return ca.Function("shaping_constraints", [A, B, rig, q, ang, load, tv, s_shape], [ca.vertcat(*out)],
                        ["A", "B", "rig", "q", "ang", "load", "T", "s_shape"], ["g"])
 
 
-def shaping_bounds() -> tuple[np.ndarray, np.ndarray]:
+def shaping_bounds(n_cables: int = 6) -> tuple[np.ndarray, np.ndarray]:
     """Lower and upper bounds of :func:`shaping_pose_constraints`'s ``g``.
+
+    Parameters
+    ----------
+    n_cables : int
+        m.
 
     Returns
     -------
     lower, upper : ndarray
     """
-    per_lo = np.concatenate([np.zeros(12), np.zeros(3)])
-    per_hi = np.concatenate([np.full(12, np.inf), np.zeros(3)])
+    per_lo = np.concatenate([np.zeros(2 * n_cables), np.zeros(3)])
+    per_hi = np.concatenate([np.full(2 * n_cables, np.inf), np.zeros(3)])
     n_v = 2 * len(AXES)
     return (np.concatenate([np.tile(per_lo, n_v), np.zeros(len(AXES))]),
             np.concatenate([np.tile(per_hi, n_v), np.full(len(AXES), np.inf)]))
@@ -117,7 +155,7 @@ def shaping_block(A: Any, B: Any, rig: Any, q: Any, ang: Any, load: np.ndarray, 
         Orientations at range scale 1.
     load : ndarray, shape (3,)
         The stiffness load (N m, {A}, weight excluded).
-    T : casadi.MX, shape (36 n_slots,)
+    T : casadi.MX, shape (6 m n_slots,)
         The tension vectors (scaled by t_max), slot by slot.
     s_shape : casadi.MX
         The range every slot and axis must reach (N m/rad).
@@ -129,15 +167,16 @@ def shaping_block(A: Any, B: Any, rig: Any, q: Any, ang: Any, load: np.ndarray, 
     g : casadi.MX
     lbg, ubg : ndarray
     """
-    F = shaping_pose_constraints().map(n_slots, "serial")
-    g = F(A, B, rig, q, ang, ca.DM(np.asarray(load, float)), ca.reshape(T, N_TENSIONS, n_slots), s_shape)
-    lo, hi = shaping_bounds()
+    c = A.size2()
+    F = shaping_pose_constraints(c).map(n_slots, "serial")
+    g = F(A, B, rig, q, ang, ca.DM(np.asarray(load, float)), ca.reshape(T, n_tensions(c), n_slots), s_shape)
+    lo, hi = shaping_bounds(c)
     return ca.vec(g), np.tile(lo, n_slots), np.tile(hi, n_slots)
 
 
 def initial_tensions(design: Any, u0: np.ndarray, q0: float, pq: np.ndarray, angles: np.ndarray,
                      loads: np.ndarray) -> np.ndarray:
-    """Start values of the tension vectors: the stiffness load's least-squares tensions, clipped, for all six.
+    """Start values of the tension vectors: the stiffness load's least-squares tensions, clipped, for all six vectors.
 
     Parameters
     ----------
@@ -151,12 +190,12 @@ def initial_tensions(design: Any, u0: np.ndarray, q0: float, pq: np.ndarray, ang
         Held values.
     angles : ndarray, shape (n_slots, 3)
         Orientations at range scale 1.
-    loads : ndarray, shape (m, 3)
+    loads : ndarray, shape (L, 3)
         Loads (row 0 the stiffness load).
 
     Returns
     -------
-    ndarray, shape (36 n_slots,)
+    ndarray, shape (6 m n_slots,)
         Scaled by t_max, slot by slot.
     """
     T = start_tensions(design, u0, q0, pq, angles, loads[0])
@@ -327,6 +366,6 @@ def objective_shortfall_only(settings: Any, check: Check) -> bool:
     return settings.objective == "shaping" and failing == ["shaping"] and math.isfinite(check.worst["shaping"][0])
 
 
-__all__ = ["N_TENSIONS", "SHAPING_ROWS", "dense_angles", "initial_tensions", "lp_shaping_range",
-           "objective_shortfall_only", "shaping_block", "shaping_bounds", "shaping_check", "shaping_pose_constraints",
+__all__ = ["dense_angles", "initial_tensions", "lp_shaping_range", "n_tensions", "objective_shortfall_only",
+           "shaping_block", "shaping_bounds", "shaping_rows", "shaping_check", "shaping_pose_constraints",
            "with_shaping"]

@@ -5,7 +5,7 @@ orientations R_i (``[sampling]``):
 
 * ``workspace_fraction`` = mean over i of [every load holdable at R_i], the
   exact zonotope test of :mod:`csjm_opt.design.feasibility`: the wrench margin
-  ``m_i = min_k min_p (h w_p - |n_p . (w_k - c)|)`` over the 15 facet normals
+  ``m_i = min_k min_p (h w_p - |n_p . (w_k - c)|)`` over the m (m - 1) / 2 facet normals
   ``n_p = g_a x g_b`` (unit) of the moment zonotope and the loads k;
 * ``min_stiffness_Nm_per_rad`` = min over the feasible i of the smallest
   eigenvalue of K at the planner's tensions of load 0.
@@ -53,7 +53,6 @@ MARGIN_SOFTMIN_NM = 0.01
 #: weighted mean; a wider one is smoother: poses entering the set move it gradually).
 STIFFNESS_SOFTMIN = 0.1
 _ABS_EPS = 1e-9
-_PAIRS = list(itertools.combinations(range(6), 2))
 
 
 def _softmin(values: Any, width: float) -> Any:
@@ -72,27 +71,28 @@ def _smallest_eigenvalue(K: Any) -> Any:
     return q + 2 * p * ca.cos(phi + 2 * math.pi / 3)
 
 
-def _pose_function(n_loads: int) -> Any:
-    """Soft wrench margin and smallest eigenvalue of K at one pose, as a CasADi function."""
-    A, B, R = ca.SX.sym("A", 3, 6), ca.SX.sym("B", 3, 6), ca.SX.sym("R", 3, 3)
+def _pose_function(n_loads: int, n_cables: int = 6) -> Any:
+    """Soft wrench margin and smallest eigenvalue of K at one pose (m = ``n_cables``), as a CasADi function."""
+    c = n_cables
+    A, B, R = ca.SX.sym("A", 3, c), ca.SX.sym("B", 3, c), ca.SX.sym("R", 3, 3)
     rig, loads = ca.SX.sym("rig", 8), ca.SX.sym("load", 3, n_loads)
-    f = build_functions()
+    f = build_functions(c)
     k, t_min, t_max, mass, com_z = rig[0], rig[1], rig[2], rig[3], rig[4]
     J = f["jacobian"](R, A, B)
     tau_w = f["weight_moment"](R, mass, ca.vertcat(0, 0, com_z), rig[5:8])[0]
     h, t_mid = 0.5 * (t_max - t_min), 0.5 * (t_min + t_max)
     centre = t_mid * ca.sum1(J).T
     slacks = []
-    for a, b in _PAIRS:
+    for a, b in itertools.combinations(range(c), 2):
         n = ca.cross(J[a, :].T, J[b, :].T)
         unit = n / ca.sqrt(ca.sumsqr(n) + 1e-30)
-        width = sum(ca.sqrt((J[i, :] @ unit) ** 2 + _ABS_EPS ** 2) for i in range(6) if i not in (a, b))
+        width = sum(ca.sqrt((J[i, :] @ unit) ** 2 + _ABS_EPS ** 2) for i in range(c) if i not in (a, b))
         for kk in range(n_loads):
             off = unit.T @ (-(loads[:, kk] + tau_w) - centre)
             slacks.append(h * width - ca.sqrt(off ** 2 + _ABS_EPS ** 2))
     margin = _softmin(ca.vertcat(*slacks), MARGIN_SOFTMIN_NM)
-    T0 = t_mid + J @ ca.solve(J.T @ J, -(loads[:, 0] + tau_w) - J.T @ (t_mid * ca.DM.ones(6)))
-    K = f["stiffness"](R, T0, k * ca.DM.ones(6), A, B)
+    T0 = t_mid + J @ ca.solve(J.T @ J, -(loads[:, 0] + tau_w) - J.T @ (t_mid * ca.DM.ones(c)))
+    K = f["stiffness"](R, T0, k * ca.DM.ones(c), A, B)
     return ca.Function("sweep_pose", [A, B, rig, R, loads], [margin, _smallest_eigenvalue(K)])
 
 
@@ -117,7 +117,7 @@ def sweep_surrogate(settings: OptimiseSettings, evaluation: EvaluationSettings) 
     p, A, B, rig = design_sym(settings, u)
     Rs = evaluation.sampling.rotations()
     loads = np.asarray(evaluation.loads.taus_ext_A_Nm, float)
-    pose = _pose_function(loads.shape[0]).map(Rs.shape[0], "serial")
+    pose = _pose_function(loads.shape[0], A.size2()).map(Rs.shape[0], "serial")
     margin, lam = pose(A, B, rig, ca.DM(np.concatenate(list(Rs), axis=1)), ca.DM(loads.T))
     held = 1.0 / (1.0 + ca.exp(-margin / FEASIBLE_WIDTH_NM))
     F = ca.sum2(held) / Rs.shape[0]

@@ -52,12 +52,46 @@ def rotation_sym(tilt: Any, azimuth: Any, torsion: Any) -> Any:
     return rz(azimuth) @ ry @ rz(torsion - azimuth)
 
 
-def holes_sym(p: dict[str, Any]) -> tuple[Any, Any]:
-    """Platform and base holes (3 x 6, columns) of a design whose parameters may be symbolic.
+def n_cables_sym(p: dict[str, Any]) -> int:
+    """m, the number of cables of a design whose parameters may be symbolic (never m itself).
 
-    Same parametrisation as :func:`csjm_opt.design.geometry.design_holes` (hexagon on a circle of
-    radius r with chord 1-2 spanning gamma, rotated by theta0, at height +oo_a / -oo_b; per-hole
-    offsets; or free hole coordinates). Chords ``*_d12_m`` / ``*_d23_m`` must be numbers here.
+    ``n_cables`` when given (a number: the cable count cannot be optimised), else the rows of the
+    free platform holes, else 6 (as :func:`csjm_opt.design.geometry.design_holes`).
+
+    Parameters
+    ----------
+    p : dict
+        Every parameter of the design.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    DesignError
+        If ``n_cables`` is symbolic or not an integer from 4 to 12.
+    """
+    if "n_cables" in p:
+        value = p["n_cables"]
+        if isinstance(value, (ca.SX, ca.MX)):
+            raise DesignError("the cable count is an integer and cannot be optimised: fix it in [base] "
+                              "(one optimisation per count)", "n_cables")
+        if float(value) != int(value) or not 4 <= int(value) <= 12:
+            raise DesignError(f"expected an integer from 4 to 12, got {value}", "n_cables")
+        return int(value)
+    if "platform_holes" in p:
+        return int(np.shape(p["platform_holes"])[0])
+    return 6
+
+
+def holes_sym(p: dict[str, Any]) -> tuple[Any, Any]:
+    """Platform and base holes (3 x m, columns) of a design whose parameters may be symbolic.
+
+    Same parametrisation as :func:`csjm_opt.design.geometry.design_holes`: m/2 hole pairs on a
+    circle of radius r, pair j centred at ``theta0 + j 720/m`` deg, its holes gamma apart (m = 6:
+    the semi-regular hexagon), at height +oo_a / -oo_b; per-hole offsets; or free hole coordinates.
+    Chords ``*_d12_m`` / ``*_d23_m`` must be numbers here.
 
     Parameters
     ----------
@@ -66,13 +100,17 @@ def holes_sym(p: dict[str, Any]) -> tuple[Any, Any]:
 
     Returns
     -------
-    A, B : casadi.SX, shape (3, 6)
+    A, B : casadi.SX, shape (3, m)
     """
+    n_cab = n_cables_sym(p)
     out = []
     for body, letter, height in (("platform", "A", "oo_a_m"), ("base", "B", "oo_b_m")):
         if f"{body}_holes" in p:
             xyz = ca.SX(np.asarray(p[f"{body}_holes"], float).T)
         else:
+            if n_cab % 2:
+                raise DesignError(f"hole pairs need an even number of cables, got {n_cab}; give platform_holes "
+                                  "and base_holes for an odd count", "n_cables")
             if f"{body}_radius_m" in p:
                 r, gamma = p[f"{body}_radius_m"], p[f"{body}_gamma_deg"] * math.pi / 180
             else:
@@ -80,16 +118,22 @@ def holes_sym(p: dict[str, Any]) -> tuple[Any, Any]:
                 if isinstance(d12, ca.SX) or isinstance(d23, ca.SX):
                     raise DesignError("chords cannot be optimised: optimise the radius and gamma instead",
                                       f"{body}_d12_m")
-                r, gamma = hexagon.circle_from_chords(float(d12), float(d23))
+                if n_cab == 6:
+                    r, gamma = hexagon.circle_from_chords(float(d12), float(d23))
+                else:
+                    from ..geometry import pair_circle_from_chords
+
+                    r, gamma = pair_circle_from_chords(float(d12), float(d23), n_cab)
             theta0 = p[f"{body}_theta0_deg"] * math.pi / 180
             z = p[height] if body == "platform" else -p[height]
+            spacing = 2 * math.pi / 3 if n_cab == 6 else 4 * math.pi / n_cab   # between pair centres
             cols = []
-            for m in range(3):
+            for m in range(n_cab // 2):
                 for sign in (-1, 1):
-                    a = theta0 + 2 * math.pi / 3 * m + sign * gamma / 2
+                    a = theta0 + spacing * m + sign * gamma / 2
                     cols.append(ca.vertcat(r * ca.cos(a), r * ca.sin(a), z))
             xyz = ca.horzcat(*cols)
-        offsets = ca.vertcat(*[ca.horzcat(*[p.get(f"{letter}{i + 1}_d{ax}_m", 0.0) for i in range(6)])
+        offsets = ca.vertcat(*[ca.horzcat(*[p.get(f"{letter}{i + 1}_d{ax}_m", 0.0) for i in range(n_cab)])
                                for ax in "xyz"])
         out.append(xyz + offsets)
     return out[0], out[1]
@@ -109,7 +153,7 @@ def design_sym(settings: Any, u: Any) -> tuple[dict[str, Any], Any, Any, Any]:
     -------
     p : dict
         Every design parameter (paper values filled in), symbolic where optimised.
-    A, B : casadi expression, shape (3, 6)
+    A, B : casadi expression, shape (3, m)
         Platform and base holes (:func:`holes_sym`).
     rig : casadi expression
         ``(k, t_min, t_max, mass, com_z, g_B)``, the rig inputs of the model functions.
@@ -127,43 +171,46 @@ def design_sym(settings: Any, u: Any) -> tuple[dict[str, Any], Any, Any, Any]:
 
 
 @functools.lru_cache(maxsize=16)
-def pose_constraints(n_loads: int, exit_limit: bool) -> Any:
+def pose_constraints(n_loads: int, exit_limit: bool, n_cables: int = 6) -> Any:
     """Constraints at one orientation, as a CasADi function (built once, mapped over orientations).
 
-    Inputs: ``A``, ``B`` (3 x 6), ``rig`` = [k, t_min, t_max, mass, com_z, g_x, g_y, g_z],
+    Inputs: ``A``, ``B`` (3 x c for c cables), ``rig`` = [k, t_min, t_max, mass, com_z, g_x, g_y, g_z],
     ``q`` = [margin, lambda, s, cos(exit limit)], ``ang`` = [tilt, azimuth, torsion] at scale 1,
-    ``load`` (3 x m), ``T`` (6 (m - 1), scaled by t_max). Output ``g`` (all >= 0 but the
+    ``load`` (3 x L), ``T`` (c (L - 1), scaled by t_max). Output ``g`` (all >= 0 but the
     equilibrium rows, == 0) and ``T0`` (the stiffness load's tensions).
 
     Parameters
     ----------
     n_loads : int
-        Loads m of the set (row 0 the stiffness load).
+        Loads L of the set (row 0 the stiffness load).
     exit_limit : bool
         Include the exit-angle rows.
+    n_cables : int
+        Cables c of the design.
 
     Returns
     -------
     casadi.Function
     """
-    A, B = ca.SX.sym("A", 3, 6), ca.SX.sym("B", 3, 6)
+    c = n_cables
+    A, B = ca.SX.sym("A", 3, c), ca.SX.sym("B", 3, c)
     rig, q, ang = ca.SX.sym("rig", 8), ca.SX.sym("q", 4), ca.SX.sym("ang", 3)
     loads = ca.SX.sym("load", 3, n_loads)
-    tv = ca.SX.sym("T", 6 * (n_loads - 1))
-    f = build_functions()
+    tv = ca.SX.sym("T", c * (n_loads - 1))
+    f = build_functions(c)
     k, t_min, t_max, mass, com_z = rig[0], rig[1], rig[2], rig[3], rig[4]
     mu, lam, s_range, cos_exit = q[0], q[1], q[2], q[3]
     R = rotation_sym(s_range * ang[0], ang[1], s_range * ang[2])
     J = f["jacobian"](R, A, B)
     tau_w = f["weight_moment"](R, mass, ca.vertcat(0, 0, com_z), rig[5:8])[0]
-    t_mid = 0.5 * (t_min + t_max) * ca.DM.ones(6)
+    t_mid = 0.5 * (t_min + t_max) * ca.DM.ones(c)
     T0 = t_mid + J @ ca.solve(J.T @ J, -(loads[:, 0] + tau_w) - J.T @ t_mid)
     out = [(T0 - t_min - mu) / MARGIN_SCALE_N, (t_max - mu - T0) / MARGIN_SCALE_N]
-    M = (f["stiffness"](R, T0, k * ca.DM.ones(6), A, B) - lam * ca.DM.eye(3)) / STIFFNESS_SCALE_NM_PER_RAD
+    M = (f["stiffness"](R, T0, k * ca.DM.ones(c), A, B) - lam * ca.DM.eye(3)) / STIFFNESS_SCALE_NM_PER_RAD
     out.append(ca.vertcat(M[0, 0], M[1, 1], M[2, 2], M[0, 0] * M[1, 1] - M[0, 1] ** 2,
                           M[0, 0] * M[2, 2] - M[0, 2] ** 2, M[1, 1] * M[2, 2] - M[1, 2] ** 2, ca.det(M)))
     for kk in range(1, n_loads):
-        T = tv[6 * (kk - 1):6 * kk] * t_max
+        T = tv[c * (kk - 1):c * kk] * t_max
         out += [(T - t_min - mu) / MARGIN_SCALE_N, (t_max - mu - T) / MARGIN_SCALE_N,
                 (J.T @ T + loads[:, kk] + tau_w) / MOMENT_SCALE_NM]
     if exit_limit:
@@ -174,26 +221,28 @@ def pose_constraints(n_loads: int, exit_limit: bool) -> Any:
                        ["A", "B", "rig", "q", "ang", "load", "T"], ["g", "T0"])
 
 
-def pose_bounds(n_loads: int, exit_limit: bool) -> tuple[np.ndarray, np.ndarray]:
+def pose_bounds(n_loads: int, exit_limit: bool, n_cables: int = 6) -> tuple[np.ndarray, np.ndarray]:
     """Lower and upper bounds of :func:`pose_constraints`'s ``g``.
 
     Parameters
     ----------
     n_loads : int
     exit_limit : bool
+    n_cables : int
 
     Returns
     -------
     lower, upper : ndarray
     """
-    lo = [np.zeros(12 + 7)]
-    hi = [np.full(12 + 7, np.inf)]
+    box = 2 * n_cables                                  # lower and upper tension rows
+    lo = [np.zeros(box + 7)]
+    hi = [np.full(box + 7, np.inf)]
     for _ in range(1, n_loads):
-        lo += [np.zeros(12), np.zeros(3)]
-        hi += [np.full(12, np.inf), np.zeros(3)]
+        lo += [np.zeros(box), np.zeros(3)]
+        hi += [np.full(box, np.inf), np.zeros(3)]
     if exit_limit:
-        lo.append(np.zeros(12))
-        hi.append(np.full(12, np.inf))
+        lo.append(np.zeros(box))
+        hi.append(np.full(box, np.inf))
     return np.concatenate(lo), np.concatenate(hi)
 
 
@@ -213,7 +262,7 @@ def initial_load_tensions(design: Any, u0: np.ndarray, q0: float, pq: np.ndarray
         Held values.
     angles : ndarray, shape (n_slots, 3)
         Orientations at range scale 1.
-    loads : ndarray, shape (m, 3)
+    loads : ndarray, shape (L, 3)
         Loads (row 0 the stiffness load).
 
     Returns
@@ -248,11 +297,11 @@ def start_tensions(design: Any, u0: np.ndarray, q0: float, pq: np.ndarray, angle
 
     Returns
     -------
-    ndarray, shape (6, n_slots)
+    ndarray, shape (m, n_slots)
         The tensions clipped to ``[t_min, t_max]``, divided by ``t_max``.
     """
     A, B, rig, q, _ = (np.array(v) for v in design(u0, q0, pq))
     n = angles.shape[0]
-    _, T0 = pose_constraints(1, False).map(n, "serial")(A, B, rig, q, angles.T,
+    _, T0 = pose_constraints(1, False, A.shape[1]).map(n, "serial")(A, B, rig, q, angles.T,
                                                         np.asarray(load, float).reshape(3, 1), np.zeros((0, n)))
     return np.clip(np.array(T0), rig[1, 0], rig[2, 0]) / rig[2, 0]

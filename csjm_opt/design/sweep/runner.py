@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from ..._workers import default_workers
 from ...errors import DesignError
 from .._dask_backend import _run_dask, dask_stream
 from .._worker_processes import _run_processes
@@ -54,6 +55,7 @@ __all__ = ["SweepResult", "TIMING_KEYS", "dask_stream", "design_id", "evaluate_d
 
 
 #: Worker processes of an automatic local run (``workers=None``).
+#: Kept for callers that read it; the worker count of the automatic mode is :func:`default_workers`.
 AUTO_WORKERS = 2
 #: Time (s) taken as the cost of starting the worker processes, in the automatic choice.
 POOL_STARTUP_S = 1.0
@@ -77,7 +79,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None, sche
         Result file; created, or resumed when it exists with the same settings.
     workers : int, optional
         Local worker processes (1 runs in this process); with ``dask``, the local cluster size.
-        ``None`` (default): :data:`AUTO_WORKERS` processes when the sweep is long enough to
+        ``None`` (default): :func:`~csjm_opt._workers.default_workers` processes when the sweep is long enough to
         repay starting them, else this process (2 for a Dask cluster).
     scheduler : str, optional
         Address of a running Dask scheduler (``tcp://host:8786``).
@@ -118,7 +120,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, workers: int | None = None, sche
         bar = _progress(len(designs), skipped, progress)
         try:
             if dask or scheduler:
-                stream = _run_dask(todo, settings, scheduler, workers or AUTO_WORKERS, connect_timeout_s)
+                stream = _run_dask(todo, settings, scheduler, workers or default_workers(), connect_timeout_s)
             elif workers is None:
                 stream = _run_auto(todo, settings)
             elif workers == 1 or len(todo) <= 1:
@@ -153,10 +155,11 @@ def _run_auto(todo: list[tuple[int, dict]], settings: EvaluationSettings) -> Ite
         return
     # the first design also loads the compiled kernels: the median of the others is the estimate
     per_design_s = float(np.median(seconds[1:]))
-    if len(rest) * per_design_s * (1.0 - 1.0 / AUTO_WORKERS) < POOL_STARTUP_S:
+    n = default_workers()
+    if n < 2 or len(rest) * per_design_s * (1.0 - 1.0 / n) < POOL_STARTUP_S:
         yield from ((i, evaluate_design(p, settings)) for i, p in rest)
     else:
-        yield from _run_processes(rest, settings, AUTO_WORKERS)
+        yield from _run_processes(rest, settings, n)
 
 
 def _progress(total: int, done: int, show: bool | None) -> Any:

@@ -113,13 +113,7 @@ class SweepSpec:
             u = np.random.default_rng(self.seed).random((n, d))
         out = []
         for row in u:
-            design = {}
-            for a, x in zip(self.axes, row):
-                if a.log:
-                    design[a.name] = float(math.exp(math.log(a.low) + x * (math.log(a.high) - math.log(a.low))))
-                else:
-                    design[a.name] = float(a.low + x * (a.high - a.low))
-            out.append(design)
+            out.append({a.name: a.value_at(x) for a, x in zip(self.axes, row)})
         return out
 
     @classmethod

@@ -138,10 +138,9 @@ def compute_residuals(rig: Rig, log: MeasurementLog, noise: InstrumentNoise | No
     """Nominal residuals of every row of ``log`` (forward statics warm-started at the measured pose)."""
     noise = noise or InstrumentNoise.paper()
     R_meas = log.R
-    n = len(log)
     model = AugmentedModel(rig)
     theta = model.x0()
-    rows0 = Rows(log.rest_lengths_m, log.tau_ext_A_Nm, np.asarray(log.cycle), np.zeros((n, 6)))
+    rows0 = Rows(log.rest_lengths_m, log.tau_ext_A_Nm, np.asarray(log.cycle), np.zeros(np.shape(log.rest_lengths_m)))
     sol = model.predict_poses(rows0, theta, R_meas)
     lengths, _ = kin.cable_terms(R_meas, np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m))
     rows = Rows(log.rest_lengths_m, log.tau_ext_A_Nm, np.asarray(log.cycle), cable_steps(log.cycle, lengths),

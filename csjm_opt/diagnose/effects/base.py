@@ -7,7 +7,9 @@ through one or more hooks, each given the effect's own parameter slice ``p``:
 ``adjust_frame``     the true pose of the measured body from the tracked pose (registration);
 ``adjust_pose``      the pose of the cable-driven platform from the measured pose;
 ``adjust_geometry``  hole positions;
-``adjust_tension``   the tension law ``T(e)`` of the cables (``e = c - l``).
+``adjust_rest``      the actual rest lengths from the commanded ones (drive offsets);
+``adjust_tension``   the tension law ``T(e)`` of the cables (``e = c - l``);
+``adjust_balance``   further moments on the cable platform (joint friction).
 
 Every hook defaults to "no change", and every effect reduces to the nominal
 model when its strength parameters are zero (``x0`` starts there), so
@@ -44,6 +46,11 @@ class Effect(abc.ABC):
     path_dependent: ClassVar[bool] = False
     #: per-rig overrides of the prior ranges (name or fnmatch pattern -> (lo, hi))
     range_overrides: Mapping[str, tuple[float, float]] = {}
+    #: the rig's cable count m (per-cable parameters are sized by it)
+    n_cables: int = 6
+
+    def __init__(self, n_cables: int = 6):
+        self.n_cables = int(n_cables)
 
     def with_ranges(self, overrides: Mapping[str, tuple[float, float]] | None) -> "Effect":
         """Override the prior ranges of this effect in place.
@@ -156,11 +163,18 @@ class Effect(abc.ABC):
         """Change ``ev.R_cable`` (n, 3, 3) and ``ev.link_rotation`` (n, 3, 3)."""
 
     def adjust_geometry(self, ev, p: np.ndarray) -> None:
-        """Change ``ev.A_m``, ``ev.B_m`` (6, 3)."""
+        """Change ``ev.A_m``, ``ev.B_m`` (m, 3)."""
+
+    def adjust_rest(self, ev, p: np.ndarray) -> None:
+        """Change ``ev.rest_lengths_m`` (n, m): the actual rest lengths from the commanded ones."""
 
     def adjust_tension(self, ev, stretch_m: np.ndarray, T_N: np.ndarray, p: np.ndarray) -> np.ndarray:
-        """Return the tensions (n, 6) given stretch and the tensions so far."""
+        """Return the tensions (n, m) given stretch and the tensions so far."""
         return T_N
+
+    def adjust_balance(self, ev, g_Nm: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """Return the balance (n, 3) N m with the moments this effect adds on the cable platform."""
+        return g_Nm
 
     def describe(self, p: np.ndarray) -> dict:
         """Derived, physically readable quantities for the report (JSON-able)."""

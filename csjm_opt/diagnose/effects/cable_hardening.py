@@ -13,7 +13,7 @@ from .base import Effect
 
 
 class CableHardening(Effect):
-    """Quadratic hardening coefficient ``h`` (1/m), shared by the six cables."""
+    """Quadratic hardening coefficient ``h`` (1/m), shared by the cables."""
 
     name = "cable_hardening"
     description = "T = k e (1 + h e): stiffness rising with stretch (h in 1/m)"
@@ -52,16 +52,16 @@ class CableHardening(Effect):
         ev : Evaluation
             The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`).
         stretch_m : numpy.ndarray
-            Cable stretch ``e = c - l`` (m), shape (n, 6).
+            Cable stretch ``e = c - l`` (m), shape (n, m).
         T_N : numpy.ndarray
-            Tensions from the tension law so far (N), shape (n, 6).
+            Tensions from the tension law so far (N), shape (n, m).
         p : numpy.ndarray
             ``[h]``, the hardening coefficient (1/m).
 
         Returns
         -------
         numpy.ndarray
-            The changed tensions (N), shape (n, 6).
+            The changed tensions (N), shape (n, m).
         """
         return T_N * (1.0 + p[0] * np.maximum(stretch_m, 0.0))
 

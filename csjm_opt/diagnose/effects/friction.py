@@ -45,7 +45,7 @@ that is re-homed between cycles). The length changes come from the measured
 poses when fitting, and from the model's own predicted poses, row after row,
 when predicting a held-out cycle, which starts where the measured history before
 it leaves the state (:func:`csjm_opt.diagnose.fitting.augmented.with_entry`).
-Eight parameters: six band sizes, ``f``, ``first_row_state``.
+m + 2 parameters (eight on a six-cable rig): m band sizes, ``f``, ``first_row_state``.
 """
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ def _ramp_play(prev: float, step: np.ndarray, i: int, j: int, w: float) -> float
 
 @njit(cache=True)
 def _carried_band(step: np.ndarray, s0: float, w: float) -> np.ndarray:   # pragma: no cover (compiled)
-    """The play operator over the whole log in order, ramp by ramp (``step`` (n, S, 6))."""
+    """The play operator over the whole log in order, ramp by ramp (``step`` (n, S, m))."""
     n, _, m = step.shape
     s = np.empty((n, m))
     for j in range(m):
@@ -110,7 +110,7 @@ def _carried_band(step: np.ndarray, s0: float, w: float) -> np.ndarray:   # prag
 
 @njit(cache=True)
 def _rows_band(prev: np.ndarray, step: np.ndarray, w: float) -> np.ndarray:   # pragma: no cover (compiled)
-    """The play operator over each row's own ramp from the states ``prev`` (n, 6) (rows independent)."""
+    """The play operator over each row's own ramp from the states ``prev`` (n, m) (rows independent)."""
     n, _, m = step.shape
     s = np.empty((n, m))
     for i in range(n):
@@ -121,17 +121,17 @@ def _rows_band(prev: np.ndarray, step: np.ndarray, w: float) -> np.ndarray:   # 
 
 def ramp_input(dc_m: np.ndarray, dl_m: np.ndarray, shape_m: np.ndarray | None, travel_m: np.ndarray,
                rest_weight: float) -> np.ndarray:
-    """The play operator's input steps (n, S, 6) along each row's ramp, in units of the stick travel.
+    """The play operator's input steps (n, S, m) along each row's ramp, in units of the stick travel.
 
     Parameters
     ----------
     dc_m, dl_m : numpy.ndarray
-        Changes (n, 6) of the cable lengths and of the rest lengths since the previous row (m).
+        Changes (n, m) of the cable lengths and of the rest lengths since the previous row (m).
     shape_m : numpy.ndarray or None
         The ramp's deviation from even steps (:func:`csjm_opt.diagnose.fitting.friction_ramp.predict_ramp`),
         or None (one step).
     travel_m : numpy.ndarray
-        Stick travel (n, 6) of each row and cable (m).
+        Stick travel (n, m) of each row and cable (m).
     rest_weight : float
         Weight of the rest-length change (the stick travel factor: one compliance split).
 
@@ -148,7 +148,7 @@ def ramp_input(dc_m: np.ndarray, dl_m: np.ndarray, shape_m: np.ndarray | None, t
 
 def band_position(rows, travel_m: np.ndarray, s0: float = 0.0, rest_weight: float = 0.0,
                   carried: bool = True) -> np.ndarray:
-    """``s`` (n, 6) of the play operator over the log's rows (``travel_m`` (n, 6) > 0).
+    """``s`` (n, m) of the play operator over the log's rows (``travel_m`` (n, m) > 0).
 
     Each row is reached from the previous row of the log along the ramp of its inputs
     (``rows.ramp_shape_m``; one step where it is None).
@@ -181,18 +181,20 @@ def band_position(rows, travel_m: np.ndarray, s0: float = 0.0, rest_weight: floa
 
 
 class Friction(Effect):
-    """Dry cable friction: six band sizes, the stick travel factor, the first state."""
+    """Dry cable friction: m band sizes (one per cable), the stick travel factor, the first state."""
 
     name = "friction"
     description = ("dry cable friction with memory: T_platform = T exp(mu_beta_i s_i) (capstan) or "
                    "T + F_i s_i (Coulomb), s_i a play operator of the cable's motion carried over the log")
 
-    def __init__(self, law: str = "capstan", memory: str = "carried", t_max_N: float = 100.0):
+    def __init__(self, law: str = "capstan", memory: str = "carried", t_max_N: float = 100.0,
+                 n_cables: int = 6):
         if law not in LAWS or memory not in MEMORIES:
             raise ValueError(f"law must be one of {LAWS} and memory one of {MEMORIES}")
         if memory == "settled" and law != "coulomb":
             raise ValueError("settled friction is a Coulomb band (law='coulomb')")
         self.law, self.memory, self.t_max_N = law, memory, float(t_max_N)
+        self.n_cables = int(n_cables)
         # settled: the rest pose is any static Coulomb equilibrium (:mod:`..fitting.friction_stick`), no path
         self.settled = memory == "settled"
         self._memo: dict = {}
@@ -237,11 +239,11 @@ class Friction(Effect):
         Returns
         -------
         tuple of str
-            Six band sizes (``mu_beta_i`` for the capstan law, ``F_i_N`` in N for Coulomb),
+            m band sizes (``mu_beta_i`` for the capstan law, ``F_i_N`` in N for Coulomb; ``i = 1..m``),
             then ``stick_travel_factor`` and ``first_row_state``.
         """
         unit = "" if self.law == "capstan" else "_N"
-        bands = tuple(f"{self._band}_{i + 1}{unit}" for i in range(6))
+        bands = tuple(f"{self._band}_{i + 1}{unit}" for i in range(self.n_cables))
         return bands if self.memory == "settled" else bands + ("stick_travel_factor", "first_row_state")
 
     @property
@@ -251,10 +253,10 @@ class Friction(Effect):
         Returns
         -------
         numpy.ndarray
-            Band scale (0.03, or 2 % of ``t_max_N`` in N) for the six bands, 0.5 for the other two.
+            Band scale (0.03, or 2 % of ``t_max_N`` in N) for the m bands, 0.5 for the other two.
         """
         band = 0.03 if self.law == "capstan" else 0.02 * self.t_max_N
-        return np.r_[np.full(6, band), 0.5, 0.5][:self.n_params]
+        return np.r_[np.full(self.n_cables, band), 0.5, 0.5][:self.n_params]
 
     @property
     def lower_bounds(self):
@@ -265,7 +267,7 @@ class Friction(Effect):
         numpy.ndarray
             Zero for the bands and the stick factor; -1 for the first state.
         """
-        return np.r_[np.zeros(7), -1.0][:self.n_params]
+        return np.r_[np.zeros(self.n_cables + 1), -1.0][:self.n_params]
 
     @property
     def upper_bounds(self):
@@ -276,7 +278,7 @@ class Friction(Effect):
         numpy.ndarray
             Unbounded for the bands and the stick factor; 1 for the first state.
         """
-        return np.r_[np.full(7, np.inf), 1.0][:self.n_params]
+        return np.r_[np.full(self.n_cables + 1, np.inf), 1.0][:self.n_params]
 
     def default_ranges(self):
         """Plausible ranges of the friction parameters.
@@ -290,7 +292,7 @@ class Friction(Effect):
             Parameter name -> ``(lo, hi)``.
         """
         top = 0.3 if self.law == "capstan" else 0.1 * self.t_max_N
-        out = {n: (0.0, top) for n in self.param_names[:6]}
+        out = {n: (0.0, top) for n in self.param_names[:self.n_cables]}
         if self.memory != "settled":
             out.update({"stick_travel_factor": (0.0, 2.0), "first_row_state": (-1.0, 1.0)})
         return out
@@ -301,9 +303,9 @@ class Friction(Effect):
         Returns
         -------
         numpy.ndarray
-            The eight starting values.
+            The m + 2 starting values.
         """
-        return np.r_[np.zeros(6), 0.5, 0.0][:self.n_params]
+        return np.r_[np.zeros(self.n_cables), 0.5, 0.0][:self.n_params]
 
     def adjust_tension(self, ev, stretch_m, T_N, p):
         """Platform-side tensions with dry friction, ``T exp(mu_beta_i s_i)`` or ``max(T + F_i s_i, 0)``.
@@ -316,20 +318,21 @@ class Friction(Effect):
         ev : Evaluation
             The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`).
         stretch_m : numpy.ndarray
-            Cable stretch ``e = c - l`` (m), shape (n, 6).
+            Cable stretch ``e = c - l`` (m), shape (n, m).
         T_N : numpy.ndarray
-            Tensions from the tension law so far (N), shape (n, 6).
+            Tensions from the tension law so far (N), shape (n, m).
         p : numpy.ndarray
-            Six band sizes, the stick travel factor, the first state.
+            m band sizes, the stick travel factor, the first state.
 
         Returns
         -------
         numpy.ndarray
-            The changed tensions (N), shape (n, 6).
+            The changed tensions (N), shape (n, m).
         """
         if self.memory == "settled":              # friction forces are latent per row: no mean tension change
             return T_N
-        band, factor, s0 = p[:6], p[6], p[7]
+        m = self.n_cables
+        band, factor, s0 = p[:m], p[m], p[m + 1]
         w = factor                                   # one compliance split weighs both sides
         k = ev.cable_stiffness_N_per_m
         size = band * np.maximum(T_N, 1e-3) if self.law == "capstan" else band * np.ones_like(T_N)
@@ -364,5 +367,5 @@ class Friction(Effect):
         p = np.asarray(p, float)
         if self.law == "capstan":
             return {"law": self.law, "memory": self.memory,
-                    "tension_band_percent": (100 * (np.exp(p[:6]) - 1)).tolist()}
-        return {"law": self.law, "memory": self.memory, "friction_force_N": p[:6].tolist()}
+                    "tension_band_percent": (100 * (np.exp(p[:self.n_cables]) - 1)).tolist()}
+        return {"law": self.law, "memory": self.memory, "friction_force_N": p[:self.n_cables].tolist()}

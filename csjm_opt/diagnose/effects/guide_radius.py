@@ -49,7 +49,7 @@ def guide_axis(B_m: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     B_m : numpy.ndarray
-        Base holes in {B} (m), shape (6, 3).
+        Base holes in {B} (m), shape (m, 3).
 
     Returns
     -------
@@ -72,9 +72,9 @@ def ring_exit_points(R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray, radius_m: 
     R : numpy.ndarray
         Orientations of {A} in {B}, shape (n, 3, 3).
     A_m : numpy.ndarray
-        Platform holes in {A} (m), shape (6, 3) or (n, 6, 3).
+        Platform holes in {A} (m), shape (m, 3) or (n, m, 3).
     B_m : numpy.ndarray
-        Ring centres (the rig's base holes) in {B} (m), shape (6, 3) or (n, 6, 3).
+        Ring centres (the rig's base holes) in {B} (m), shape (m, 3) or (n, m, 3).
     radius_m : float
         Ring radius ``r`` (m).
     axis_B : numpy.ndarray
@@ -83,7 +83,7 @@ def ring_exit_points(R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray, radius_m: 
     Returns
     -------
     numpy.ndarray
-        Exit points in {B} (m), shape (n, 6, 3).
+        Exit points in {B} (m), shape (n, m, 3).
     """
     R = np.asarray(R, float)
     p = np.einsum("nij,...kj->nki", R, np.asarray(A_m, float))        # platform holes in {B}
@@ -102,7 +102,8 @@ class GuideRadius(Effect):
     name = "guide_radius"
     description = "base guides of radius r (m): the cable leaves the ring's rim towards its platform hole"
 
-    def __init__(self, axis_B: np.ndarray | None = None):
+    def __init__(self, axis_B: np.ndarray | None = None, n_cables: int = 6):
+        self.n_cables = int(n_cables)
         self.axis_B = None if axis_B is None else np.asarray(axis_B, float) / np.linalg.norm(axis_B)
 
     @property
@@ -175,7 +176,7 @@ class GuideRadius(Effect):
         ----------
         ev : Evaluation
             The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`), changed in
-            place: ``ev.B_m`` becomes per-row, shape (n, 6, 3).
+            place: ``ev.B_m`` becomes per-row, shape (n, m, 3).
         p : numpy.ndarray
             ``[guide_radius_m]`` (m).
         """

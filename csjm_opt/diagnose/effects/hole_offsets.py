@@ -1,6 +1,7 @@
 """``hole_offsets``: position errors of the platform and base holes.
 
-36 parameters, ``dA_i`` (in {A}) and ``dB_i`` (in {B}), m. Several directions
+6 m parameters (36 on a six-cable rig, m its cable count), ``dA_i`` (in {A}) and ``dB_i`` (in {B}),
+m. Several directions
 are weakly determined by moment data (e.g. moving a hole along its cable),
 so the fit carries the prior range as a proper zero-mean Gaussian prior (``prior_sd``: the
 +-4 mm range is +-2 sd), and the selection prices only the subspace the log identifies
@@ -18,12 +19,13 @@ RANGE_M = 4e-3
 
 
 class HoleOffsets(Effect):
-    """Offsets of the six platform holes and six base holes (m)."""
+    """Offsets of the m platform holes and m base holes (m)."""
 
     name = "hole_offsets"
     description = "hole position errors dA_i (in {A}), dB_i (in {B}), m"
 
-    def __init__(self, prior_sd_m: float = RANGE_M / 2):
+    def __init__(self, n_cables: int = 6, prior_sd_m: float = RANGE_M / 2):
+        self.n_cables = int(n_cables)
         self.prior_sd_m = float(prior_sd_m)
 
     @property
@@ -33,9 +35,10 @@ class HoleOffsets(Effect):
         Returns
         -------
         tuple of str
-            ``dA{i}_{x,y,z}_m`` (platform holes, in {A}) then ``dB{i}_{x,y,z}_m`` (base holes, in {B}), 36 names (m).
+            ``dA{i}_{x,y,z}_m`` (platform holes, in {A}) then ``dB{i}_{x,y,z}_m`` (base holes, in {B}),
+            ``i = 1..m``: 6 m names (m).
         """
-        return tuple(f"d{s}{i + 1}_{a}_m" for s in "AB" for i in range(6) for a in "xyz")
+        return tuple(f"d{s}{i + 1}_{a}_m" for s in "AB" for i in range(self.n_cables) for a in "xyz")
 
     @property
     def scales(self):
@@ -44,9 +47,9 @@ class HoleOffsets(Effect):
         Returns
         -------
         numpy.ndarray
-            1e-3 m for each of the 36 coordinates.
+            1e-3 m for each of the 6 m coordinates.
         """
-        return np.full(36, 1e-3)
+        return np.full(6 * self.n_cables, 1e-3)
 
     @property
     def prior_sd(self):
@@ -55,9 +58,9 @@ class HoleOffsets(Effect):
         Returns
         -------
         numpy.ndarray
-            ``prior_sd_m`` (m) for each of the 36 coordinates.
+            ``prior_sd_m`` (m) for each of the 6 m coordinates.
         """
-        return np.full(36, self.prior_sd_m)
+        return np.full(6 * self.n_cables, self.prior_sd_m)
 
     def default_ranges(self):
         """A few mm per coordinate: beyond that the rig was built to another drawing."""
@@ -71,10 +74,11 @@ class HoleOffsets(Effect):
         ev : Evaluation
             The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`), changed in place.
         p : numpy.ndarray
-            Offsets (m): the first 18 the platform holes, the last 18 the base holes, row-major (6, 3).
+            Offsets (m): the first 3 m the platform holes, the last 3 m the base holes, row-major (m, 3).
         """
-        ev.A_m = ev.A_m + p[:18].reshape(6, 3)
-        ev.B_m = ev.B_m + p[18:].reshape(6, 3)
+        m = self.n_cables
+        ev.A_m = ev.A_m + p[:3 * m].reshape(m, 3)
+        ev.B_m = ev.B_m + p[3 * m:].reshape(m, 3)
 
     def describe(self, p):
         """Physically readable quantities derived from the fitted parameters.
@@ -89,5 +93,6 @@ class HoleOffsets(Effect):
         dict
             ``platform_hole_offset_mm`` and ``base_hole_offset_mm``: the offset length of each hole (mm).
         """
-        d = np.linalg.norm(np.asarray(p).reshape(12, 3), axis=1)
-        return {"platform_hole_offset_mm": (1e3 * d[:6]).tolist(), "base_hole_offset_mm": (1e3 * d[6:]).tolist()}
+        m = self.n_cables
+        d = np.linalg.norm(np.asarray(p).reshape(2 * m, 3), axis=1)
+        return {"platform_hole_offset_mm": (1e3 * d[:m]).tolist(), "base_hole_offset_mm": (1e3 * d[m:]).tolist()}

@@ -20,7 +20,8 @@ class MassCom(Effect):
     name = "mass_com"
     description = "platform mass / centre-of-mass error, fitted as the first mass moment m r (kg m)"
 
-    def __init__(self, mass_kg: float = 0.4913):
+    def __init__(self, mass_kg: float = 0.4913, n_cables: int = 6):
+        self.n_cables = int(n_cables)
         self.mass_kg = float(mass_kg)
 
     @property

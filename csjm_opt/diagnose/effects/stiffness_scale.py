@@ -75,16 +75,16 @@ class StiffnessScale(Effect):
         ev : Evaluation
             The evaluation being built (:class:`~csjm_opt.diagnose.fitting.augmented.Evaluation`).
         stretch_m : numpy.ndarray
-            Cable stretch ``e = c - l`` (m), shape (n, 6).
+            Cable stretch ``e = c - l`` (m), shape (n, m).
         T_N : numpy.ndarray
-            Tensions from the tension law so far (N), shape (n, 6).
+            Tensions from the tension law so far (N), shape (n, m).
         p : numpy.ndarray
             ``[log_k_scale]`` (dimensionless).
 
         Returns
         -------
         numpy.ndarray
-            The changed tensions (N), shape (n, 6).
+            The changed tensions (N), shape (n, m).
         """
         return T_N * np.exp(p[0])
 

@@ -28,7 +28,8 @@ class TrackerRegistration(Effect):
     name = "tracker_registration"
     description = "tracker frame rotated against {B} (and markers against {A}): R_meas = Q_B R Q_A"
 
-    def __init__(self, gravity_B_m_per_s2=(0.0, 0.0, -9.81), marker: bool = False):
+    def __init__(self, gravity_B_m_per_s2=(0.0, 0.0, -9.81), marker: bool = False, n_cables: int = 6):
+        self.n_cables = int(n_cables)
         self.gravity = np.asarray(gravity_B_m_per_s2, float)
         self.marker = bool(marker)
 

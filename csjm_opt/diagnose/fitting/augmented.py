@@ -38,10 +38,10 @@ N_NUISANCE = len(NUISANCE_NAMES)
 class Rows:
     """Per-row inputs of the balance (the part of a log the model needs)."""
 
-    rest_lengths_m: np.ndarray     # (n, 6)
+    rest_lengths_m: np.ndarray     # (n, m)
     tau_meas_A_Nm: np.ndarray      # (n, 3)
     cycle: np.ndarray              # (n,) rows of a cycle consecutive, in time order
-    cable_steps_m: np.ndarray      # (n, 6) change of each cable length since the previous row
+    cable_steps_m: np.ndarray      # (n, m) change of each cable length since the previous row
                                    # of the cycle (from measured poses; 0 on a cycle's first row)
     # Sequential mode (forward prediction row after row): the previous row's
     # path state and cable lengths (NaN on a cycle's first row), else None.
@@ -55,7 +55,7 @@ class Rows:
     # cycle's first row (NaN where there is none): where a predicted cycle starts.
     entry_state: np.ndarray | None = None
     entry_lengths_m: np.ndarray | None = None
-    # Shape (n, S, 6) of each cable's motion along the quasi-static ramp of the inputs into each row,
+    # Shape (n, S, m) of each cable's motion along the quasi-static ramp of the inputs into each row,
     # as a deviation from even steps (:mod:`csjm_opt.diagnose.fitting.friction_ramp`); None: one step.
     ramp_shape_m: np.ndarray | None = None
     # Inputs and pose of the log's row before each cycle's first row (NaN elsewhere): where the
@@ -80,7 +80,7 @@ class Rows:
 
     @property
     def steps_since_previous(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(cable, rest)`` length changes (n, 6) since the previous row of the log (m)."""
+        """``(cable, rest)`` length changes (n, m) since the previous row of the log (m)."""
         c = self.cable_steps_m if self.log_steps_m is None else self.log_steps_m
         r = np.zeros_like(c) if self.rest_steps_m is None else self.rest_steps_m
         return c, r
@@ -114,6 +114,8 @@ class Evaluation:
     R_body: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(3))   # true body pose (adjust_frame)
     tau_weight_A_Nm: np.ndarray | None = None
     lengths_m: np.ndarray | None = None       # cable lengths at R_cable (set before adjust_tension)
+    rest_lengths_m: np.ndarray | None = None  # actual rest lengths (n, m): commanded + common offset (adjust_rest)
+    cable_jacobian: np.ndarray | None = None  # J (n, m, 3) at R_cable: J^T T is the cables' moment, dc = -J dzeta
     state_out: np.ndarray | None = None       # path state after this row (path-dependent effects)
 
 
@@ -130,6 +132,31 @@ class AugmentedModel:
         self._g = np.asarray(rig.gravity_B_m_per_s2, float)
         sizes = [len(NUISANCE_NAMES)] + [e.n_params for e in self.effects]
         self._offsets = np.cumsum([0] + sizes)
+        self._geometry: tuple | None = None     # the last cable terms: (R, A, B, lengths, J)
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state["_geometry"] = None                # a cache, not state: not pickled to the workers
+        return state
+
+    def cable_terms(self, R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Cable lengths and Jacobian (:func:`csjm_opt.model.kinematics.cable_terms`), the last ones remembered.
+
+        A fit evaluates the balance at the same poses and holes for every parameter its Jacobian
+        perturbs that leaves the geometry alone (loads, tension laws, rest lengths): the last result
+        is returned when the poses and holes are equal to the last ones, value for value (read-only
+        arrays: bit for bit what a new evaluation gives).
+        """
+        last = self._geometry
+        if (last is not None and last[0].shape == np.shape(R) and np.shape(A_m) == last[1].shape
+                and np.shape(B_m) == last[2].shape and np.array_equal(last[0], R)
+                and np.array_equal(last[1], A_m) and np.array_equal(last[2], B_m)):
+            return last[3], last[4]
+        lengths, J = kin.cable_terms(R, A_m, B_m)
+        lengths.setflags(write=False)
+        J.setflags(write=False)
+        self._geometry = (np.array(R, float), np.array(A_m, float), np.array(B_m, float), lengths, J)
+        return lengths, J
 
     @property
     def name(self) -> str:
@@ -273,14 +300,19 @@ class AugmentedModel:
             e.adjust_pose(ev, p)
         for e, p in zip(self.effects, params):
             e.adjust_geometry(ev, p)
-        lengths, J = kin.cable_terms(ev.R_cable, ev.A_m, ev.B_m)
-        ev.lengths_m = lengths
-        stretch = lengths - (rows.rest_lengths_m + theta[0])
+        ev.rest_lengths_m = rows.rest_lengths_m + theta[0]
+        for e, p in zip(self.effects, params):
+            e.adjust_rest(ev, p)
+        lengths, J = self.cable_terms(ev.R_cable, ev.A_m, ev.B_m)
+        ev.lengths_m, ev.cable_jacobian = lengths, J
+        stretch = lengths - ev.rest_lengths_m
         T = self._k * np.maximum(stretch, 0.0)
         for e, p in zip(self.effects, params):
             T = e.adjust_tension(ev, stretch, T, p)
         tau_load = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm
         g = np.einsum("nij,ni->nj", J, T) + np.einsum("nij,nj->ni", ev.link_rotation, tau_load)
+        for e, p in zip(self.effects, params):
+            g = e.adjust_balance(ev, g, p)
         return g, ev
 
     def predict_poses(self, rows: Rows, theta: np.ndarray, R_init: np.ndarray) -> kin.PoseSolution:
@@ -297,9 +329,9 @@ class AugmentedModel:
         if rows.ramp_shape_m is not None:
             from .friction_ramp import predict_ramp
             return predict_ramp(self, rows, theta, R_init)[0]
-        n = len(rows)
+        n, m = np.shape(rows.rest_lengths_m)
         R_out, res = np.array(R_init, float), np.zeros(n)
-        state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
+        state, lengths = np.full((n, m), np.nan), np.full((n, m), np.nan)
         pos = rows.positions
         it = 0
         for j in range(int(pos.max(initial=0)) + 1):
@@ -307,8 +339,8 @@ class AugmentedModel:
             prev = idx - 1 if j > 0 else None
             if prev is None:          # a cycle's first row: where the measured history left the path state
                 has = rows.entry_state is not None and rows.entry_lengths_m is not None
-                s_prev = rows.entry_state[idx] if has else np.zeros((len(idx), 6))          # type: ignore[index]
-                c_prev = rows.entry_lengths_m[idx] if has else np.full((len(idx), 6), np.nan)  # type: ignore[index]
+                s_prev = rows.entry_state[idx] if has else np.zeros((len(idx), m))          # type: ignore[index]
+                c_prev = rows.entry_lengths_m[idx] if has else np.full((len(idx), m), np.nan)  # type: ignore[index]
             else:
                 s_prev, c_prev = state[prev], lengths[prev]
             sub = dataclasses.replace(rows.take(idx), state_prev=np.nan_to_num(s_prev), lengths_prev_m=c_prev)
@@ -332,12 +364,12 @@ def with_entry(model: "AugmentedModel", rows: Rows, R_meas: np.ndarray, theta: n
     if not model.path_dependent or any(getattr(e, "memory", "carried") != "carried" for e in model.effects):
         return rows
     _, ev = model.evaluate(R_meas, rows, theta)
-    n = len(rows)
-    state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
-    rest, tau, R = np.full((n, 6), np.nan), np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan)
+    n, m = np.shape(rows.rest_lengths_m)
+    state, lengths = np.full((n, m), np.nan), np.full((n, m), np.nan)
+    rest, tau, R = np.full((n, m), np.nan), np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan)
     first = np.flatnonzero(np.r_[False, rows.cycle[1:] != rows.cycle[:-1]])
-    if ev.state_out is not None and ev.lengths_m is not None:
-        state[first] = ev.state_out[first - 1]
+    if ev.lengths_m is not None:         # a model without a state of its own (joint friction) starts at 0
+        state[first] = 0.0 if ev.state_out is None else ev.state_out[first - 1]
         lengths[first] = ev.lengths_m[first - 1]
         rest[first], tau[first] = rows.rest_lengths_m[first - 1], rows.tau_meas_A_Nm[first - 1]
         R[first] = R_meas[first - 1]

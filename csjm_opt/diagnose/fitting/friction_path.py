@@ -66,7 +66,7 @@ def on_predicted_path(model: AugmentedModel, table: ResidualTable, theta: np.nda
 
 def end_state(model: AugmentedModel, rows: Rows, R_meas: np.ndarray,
               theta: np.ndarray) -> tuple[np.ndarray, np.ndarray] | tuple[None, None]:
-    """Path state and cable lengths (6,) the log leaves at its last row, on the path ``rows`` carry.
+    """Path state and cable lengths (m,) the log leaves at its last row, on the path ``rows`` carry.
 
     ``rows`` are those the model was fitted on (:attr:`csjm_opt.diagnose.fitting.gauss_newton.FitResult.rows`: the
     measured steps, or the predicted path and ramps of :func:`on_predicted_path`), so the state a

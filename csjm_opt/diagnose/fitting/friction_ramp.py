@@ -67,7 +67,7 @@ def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray, substeps: i
     Returns
     -------
     (PoseSolution, numpy.ndarray)
-        The predicted poses at the rows (residuals of the last step), and the shape (n, S, 6) of
+        The predicted poses at the rows (residuals of the last step), and the shape (n, S, m) of
         each cable's motion along the ramp into each row (:func:`ramp_shape_of`; zero where
         a step did not converge, and on rows without history).
     """
@@ -76,8 +76,9 @@ def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray, substeps: i
     l_all, tau_all = np.asarray(rows.rest_lengths_m, float), np.asarray(rows.tau_meas_A_Nm, float)
     pos = rows.positions
     R_out, res = R_init.copy(), np.zeros(n)
-    state, lengths = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
-    path = np.zeros((n, substeps + 1, 6))
+    m = l_all.shape[1]
+    state, lengths = np.full((n, m), np.nan), np.full((n, m), np.nan)
+    path = np.zeros((n, substeps + 1, m))
     ok, no_ramp = np.ones(n, bool), np.zeros(n, bool)
     it = 0
     for j in range(int(pos.max(initial=0)) + 1):
@@ -85,7 +86,7 @@ def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray, substeps: i
         if j == 0:              # from the log's row before the cycle, as the measured history left it
             has = all(a is not None for a in (rows.entry_state, rows.entry_lengths_m, rows.entry_rest_m,
                                               rows.entry_tau_A_Nm, rows.entry_R))
-            nan = np.full((len(idx), 6), np.nan)
+            nan = np.full((len(idx), m), np.nan)
             s_q = rows.entry_state[idx] if has else nan                     # type: ignore[index]
             c_q = rows.entry_lengths_m[idx] if has else nan                 # type: ignore[index]
             l_p = rows.entry_rest_m[idx] if has else nan                    # type: ignore[index]
@@ -120,7 +121,7 @@ def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray, substeps: i
             _, ev = model.evaluate(sol.R, sub, theta)
             ok[idx] &= sol.converged(1e-6)
             R_q = sol.R
-            s_q = ev.state_out if ev.state_out is not None else np.zeros((len(idx), 6))
+            s_q = ev.state_out if ev.state_out is not None else np.zeros((len(idx), m))
             c_q = np.where(fresh[:, None], np.nan, ev.lengths_m)
             for h in range(1, every + 1):          # interpolated points between the solved ones
                 path[idx, q - every + h] = path[idx, q - every] + (h / every) * (ev.lengths_m - path[idx, q - every])
@@ -133,7 +134,7 @@ def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray, substeps: i
 
 
 def ramp_shape_of(path_m: np.ndarray) -> np.ndarray:
-    """Deviation (n, S, 6) of each cable's steps along ramps ``path_m`` (n, S + 1, 6) from even steps (m).
+    """Deviation (n, S, m) of each cable's steps along ramps ``path_m`` (n, S + 1, m) from even steps (m).
 
     Parameters
     ----------
@@ -150,7 +151,7 @@ def ramp_shape_of(path_m: np.ndarray) -> np.ndarray:
 
 
 def ramp_steps(dc_m: np.ndarray, shape_m: np.ndarray | None) -> np.ndarray:
-    """Each cable's steps (n, S, 6) along the ramp into each row, for row changes ``dc_m`` (n, 6).
+    """Each cable's steps (n, S, m) along the ramp into each row, for row changes ``dc_m`` (n, m).
 
     Parameters
     ----------

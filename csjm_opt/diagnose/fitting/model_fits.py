@@ -23,10 +23,12 @@ from .evidence import NUISANCE_SD_M, log_evidence
 from .friction_stick import settled_score
 from .gauss_newton import FitResult, fit_model
 
-#: Variants of an effect the data choose between (same number of parameters: the highest Laplace evidence
-#: of the training fit wins, at one noise scale for all: the best fit, unless it needs implausible parameters).
+#: Variants of an effect the data choose between: the highest Laplace evidence of the training fit wins, at one
+#: noise scale for all (the best fit, unless it needs implausible parameters; a variant with more parameters,
+#: the sensor gain per axis against the common one, pays their Occam factor).
 VARIANTS: dict[str, list[dict]] = {"friction": [{"law": law, "memory": mem} for law in ("capstan", "coulomb")
-                                                for mem in ("carried", "reset")]}
+                                                for mem in ("carried", "reset")],
+                                   "sensor_gain": [{"axes": "common"}, {"axes": "per_axis"}]}
 #: Failures of one model's fit that a diagnosis reports instead of stopping.
 FIT_ERRORS = (np.linalg.LinAlgError, CsjmError, FloatingPointError)
 

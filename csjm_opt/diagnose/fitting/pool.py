@@ -15,44 +15,16 @@ test runner that runs several processes itself).
 from __future__ import annotations
 
 import multiprocessing as mp
-import os
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any, Callable, Sequence
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from ..._workers import default_workers
 from ...errors import InvalidInput
 
 _SHARED: dict[str, Any] = {}
-
-
-def default_workers() -> int:
-    """Worker processes a diagnosis uses by default: the cores this process may run on.
-
-    Returns
-    -------
-    int
-        ``CSJM_WORKERS`` when set; else ``len(os.sched_getaffinity(0))`` (or ``os.cpu_count()``), and 1
-        in a process started by :mod:`multiprocessing` (a worker of a pool: the pool spreads the work
-        over the cores already).
-
-    Raises
-    ------
-    InvalidInput
-        ``CSJM_WORKERS`` is not a positive integer.
-    """
-    env = os.environ.get("CSJM_WORKERS", "").strip()
-    if env:
-        if not env.isdigit() or int(env) < 1:
-            raise InvalidInput(f"CSJM_WORKERS must be a positive integer (got {env!r})", "CSJM_WORKERS")
-        return int(env)
-    if mp.current_process().daemon or mp.parent_process() is not None:
-        return 1
-    try:
-        return max(len(os.sched_getaffinity(0)), 1)
-    except AttributeError:                      # not on Linux
-        return max(os.cpu_count() or 1, 1)
 
 
 def resolve_workers(workers: int | None) -> int:

@@ -1,56 +1,12 @@
 """The decision: which effect (or pair, or none, or unexplained) the log supports.
 
-Models: the *null* ``nominal_refit`` (nominal + common rest-length offset),
-each single effect on top of it, and pairs (each of ``PAIR_SEEDS`` seed
-singles + each other effect). Every model is scored on held-out cycles (:mod:`.scoring`). The
-noise floor combines a model-free within-cycle estimate (:mod:`.noise`) with
-the model's own whitened training residual (:func:`combine_scales`).
-
-Rule (constants below; ``m`` candidates tried):
-
-1. *Detected*: a single effect whose per-cycle held-out MSE is lower than the
-   null's in a one-sided paired t-test over cycles at ``ALPHA / m``
-   (Bonferroni: family-wise false-alarm rate at most ``ALPHA`` on an
-   effect-free log), **and** whose systematic improvement
-   ``sqrt(MSE_null - MSE_effect)`` (held-out) is at least ``IMPROVE_MULT``
-   noise floors. Only held-out errors decide, so a non-smooth model
-   (friction) cannot win on training noise the way a linearised F-test lets
-   it; the F-test is still reported.
-2. *Plausible*: its fitted parameters lie inside the effect's prior ranges
-   (:meth:`~csjm_opt.diagnose.effects.base.Effect.default_ranges`,
-   overridable per rig through ``ranges``).
-3. The first effect is the detected, plausible one with the lowest BIC among
-   those that close the gap (rule 4), else among all detected plausible ones
-   (the detected one with the lowest held-out error if none is plausible): a
-   model that explains the gap beats a simpler one that does not.
-   *Pairs*: the seeds are the first effect and the singles with the lowest
-   held-out errors (``PAIR_SEEDS`` in all, the whole vocabulary: every pair is
-   fitted, so no wrong first pick hides the right pair); each seed is paired with every other effect (a
-   variant effect's law chosen again on the pair model), and a pair is
-   detected by the same test against the best of its two singles and the
-   first effect, at ``ALPHA`` over the number of pairs fitted (two wrong
-   effects that together mimic the right one do not beat it).
-4. A model *closes the gap* when it explains at least ``CLOSE_FRACTION`` of
-   the systematic held-out gap, measured against its held-out floor (noise
-   plus its refits' estimation error). Nothing else counts: a named verdict
-   always closes at least that share.
-5. Verdict: the detected, plausible pair that closes the gap with the lowest
-   BIC (``selected`` = its seed, ``secondary`` = the other); else the first
-   effect when it is plausible and closes; ``unexplained`` when something was detected, or
-   the null's residual holds significant structure of at least
-   ``IMPROVE_MULT`` floors, but no plausible single or pair closes the gap;
-   ``none`` otherwise. Pairs whose parameter blocks are not separable on this
-   log (:mod:`.pairs`) are reported as such. A named verdict whose remaining
-   residual still fails the signature test carries a warning that it may
-   stand in for an effect outside the vocabulary; so does one whose model has
-   more effective parameters than ``SHORT_LOG_SHARE`` of the log's cycle-level
-   pose offsets (3 per cycle: such a model can follow any smooth pose error).
-6. *Masked pairs*: when no single effect is detected but the null's residual
-   holds significant structure of at least ``IMPROVE_MULT`` floors, two
-   effects may hide each other: the seeds are the singles with the lowest
-   held-out errors, and a pair is named when it beats the null model at
-   ``ALPHA`` over the number of possible pairs (Bonferroni), is plausible and
-   closes the gap.
+Models: the *null* ``nominal_refit`` (nominal + common rest-length offset), each single effect on
+top of it, and pairs; each is scored on held-out cycles (:mod:`.scoring`) and priced by its
+evidence (:mod:`.evidence`). The rule (detection, plausibility, closing the gap, parsimony, pairs,
+masked pairs, the warnings) is stated in the guide, ``docs/guide/diagnosis.md``, section "The
+decision rule"; its constants are in :mod:`..decision_rule`. :func:`diagnose` builds the verdict
+(:class:`~csjm_opt.diagnose.selection.verdict.Verdict`) in small steps: the singles fitted and tested, the
+first effect, the pairs, the verdict, then the warnings about what the log does not rule out.
 """
 
 from __future__ import annotations
@@ -63,11 +19,13 @@ from threadpoolctl import threadpool_limits
 from ...errors import SolverError
 from ...measurement.instruments import InstrumentNoise
 from ...measurement.logfile import MeasurementLog
+from ...measurement.rig_fit import check_log_rig
 from ...model.rig import Rig
 from ..data.extra import append_log
 from ..data.localisation import localise
 from ..data.noise import systematic
 from ..data.residuals import compute_residuals
+from ..data.trend import time_trend
 from ..decision_rule import (  # noqa: F401 (ALPHA and the thresholds are re-exported)
     ALPHA,
     CLOSE_FRACTION,
@@ -75,6 +33,7 @@ from ..decision_rule import (  # noqa: F401 (ALPHA and the thresholds are re-exp
     HELDOUT_ALPHA,
     IMPROVE_MULT,
     LEAD_NATS,
+    LOOK_ALIKE_SHARE,
     MATERIAL_SHARE,
     PAIR_SEEDS,
     SHORT_LOG_SHARE,
@@ -88,13 +47,15 @@ from .pairs import all_separabilities, secondary_alternatives
 from .result import Diagnosis
 from .rivals import rival_warning, scored_models, unsettled_rivals
 from .scoring import CandidateScore, paired_heldout_test
+from .verdict import Secondary, Verdict
 
 
 def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
              effects: Sequence[str] | None = None, noise: InstrumentNoise | None = None,
              progress: Callable | None = None, secondary: bool = True,
              ranges: Mapping[str, tuple[float, float]] | None = None,
-             extra: MeasurementLog | None = None, workers: int | None = None) -> Diagnosis:
+             extra: MeasurementLog | None = None, workers: int | None = None,
+             check_rig: bool = True) -> Diagnosis:
     """Residuals, noise floor, every candidate and pair scored, the verdict, localisation.
 
     Parameters
@@ -120,8 +81,11 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
         log as later cycles, after checking that they come from this rig.
     workers : int, optional
         Worker processes for the candidates' and pairs' fits (default: ``CSJM_WORKERS``, else the cores
-        this process may use, :func:`csjm_opt.diagnose.fitting.pool.default_workers`; 1: serial). The result does
+        this process may use, :func:`csjm_opt._workers.default_workers`; 1: serial). The result does
         not depend on it.
+    check_rig : bool, optional
+        Refuse a log (``log``, ``test``, ``extra``) that ``rig`` cannot have produced
+        (:func:`csjm_opt.measurement.rig_fit.check_log_rig`).
 
     Returns
     -------
@@ -131,7 +95,9 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     ------
     InvalidInput
         Fewer than two cycles and no test log, an unknown effect name, a malformed log, or an
-        ``extra`` log that does not belong to this rig, or ``workers`` below 1.
+        ``extra`` log that does not belong to this rig, or ``workers`` below 1; a
+        :class:`~csjm_opt.errors.LogRigMismatch` when a log's first rows are out of equilibrium with
+        the rig's cables (``check_rig``).
     SolverError
         The nominal model cannot be evaluated on the log (singular tangents: slack cables).
 
@@ -142,6 +108,10 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
     processes (:mod:`csjm_opt.diagnose.fitting.pool`), each exactly as the serial loop would.
     """
     workers = resolve_workers(workers)
+    if check_rig:
+        for what, one in (("log", log), ("test log", test), ("extra log", extra)):
+            if one is not None:
+                check_log_rig(rig, one, what=one.source or what)
     with threadpool_limits(1), np.errstate(all="ignore"):   # trial steps may overflow; fits guard themselves
         if extra is not None:
             log = append_log(rig, log, extra)
@@ -159,11 +129,46 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
     ctx = _Context(rig, compute_residuals(rig, log, noise),
                    compute_residuals(rig, test, noise) if test is not None else None)
     planned_pairs = _n_pair_fits(min(PAIR_SEEDS, len(names)), len(names)) if secondary else 0
-    total = 1 + len(names) + planned_pairs
-    bar = progress(total=total, desc="diagnose: fitting models") if progress else None
+    bar = progress(total=1 + len(names) + planned_pairs, desc="diagnose: fitting models") if progress else None
     tick = bar.update if bar else (lambda n=1: None)
     baseline = ctx.score([])
     tick(1)
+    singles, failed, options = _fit_singles(ctx, rig, names, ranges, workers, tick)
+    floor0 = _noise_floor(ctx, baseline, singles)
+    tests = _test_singles(ctx, baseline, singles, floor0)
+    n_cycles = len(np.unique(ctx.held.cycle))
+    detected = [n for n in singles if tests[n]["significant"]]
+    first = _first_effect(singles, tests, detected, n_cycles)
+    gap_sig = ctx.signature(baseline)
+    gap_there = bool(gap_sig["significant"]) and systematic(baseline.heldout_rms_rad, floor0) >= IMPROVE_MULT * floor0
+    masked = first is None and gap_there and len(singles) > 1     # two effects may hide each other: rule 6
+    by_error = sorted(singles, key=lambda n: singles[n].heldout_mse)
+    seeds = ([] if first is None and not masked else
+             ([first] if first is not None else []) + [n for n in by_error if n != first])[:PAIR_SEEDS]
+    pairs, pair_scores = _pairs(ctx, rig, names, singles, seeds, secondary, ranges, tick, planned_pairs,
+                                baseline if masked else None, first, options, workers, n_cycles)
+    if bar:
+        bar.close()
+    verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_there, n_cycles)
+    remaining = ctx.signature(verdict.final)
+    _rival_warnings(ctx, verdict, singles, tests, detected, pairs, pair_scores, n_cycles, remaining)
+    _time_trend_warning(ctx, verdict)
+    d = Diagnosis(train=ctx.train, test=ctx.test, baseline=baseline, candidates=singles,
+                  noise_floor_rad=ctx.scale(verdict.final) * ctx.instrument,
+                  noise_estimates=_noise_estimates(ctx, verdict.final, baseline, singles), tests=tests,
+                  verdict=verdict, confounded_with=_confounded(singles, detected, pairs, verdict.selected),
+                  localisation=localise(ctx.held, ctx.held.zeta_rad, verdict.final.heldout_zeta_rad,
+                                        ctx.scale(verdict.final) * ctx.instrument),
+                  remaining=remaining, failed=failed, pairs=pairs, steps=_steps(baseline, singles, verdict, first),
+                  gap_signature=gap_sig, rule=_rule(len(singles)), pair_scores=pair_scores)
+    for s in d.steps:
+        sc = verdict.final if "+" in s["model"] else singles.get(s["model"], baseline)
+        s["fraction_explained"] = d.fraction(sc)
+    return d
+
+
+def _fit_singles(ctx: _Context, rig: Rig, names, ranges, workers: int, tick) -> tuple[dict, dict, dict]:
+    """Every single candidate fitted and scored: ``(scores, failures, variant options)`` by name."""
     singles: dict[str, CandidateScore] = {}
     failed: dict[str, str] = {}
     options: dict[str, dict] = {}
@@ -172,125 +177,227 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
             failed[name] = str(error)
         else:
             options[name], singles[name] = opt, sc
-    m = max(len(singles), 1)
-    # the noise: the smallest of the estimates (a misfit, e.g. friction hysteresis, only inflates one)
+    return singles, failed, options
+
+
+def _noise_floor(ctx: _Context, baseline: CandidateScore, singles: Mapping[str, CandidateScore]) -> float:
+    """The noise floor (rad): the smallest of the estimates (a misfit, e.g. friction hysteresis, only inflates one).
+
+    Sets the context's noise scale, the one every model's evidence is taken at.
+    """
     # (not a set-valued model's: its scale is the largest the held-out rows allow, for its own score only)
     floor0 = min([ctx.noise_floor(baseline)] + [ctx.scale(sc) * baseline.instrument_floor_rad
                                                 for sc in singles.values() if sc.heldout_density is None])
+    ctx.sigma = floor0 / baseline.instrument_floor_rad
+    return floor0
+
+
+def _test_singles(ctx: _Context, baseline: CandidateScore, singles: Mapping[str, CandidateScore],
+                  floor0: float) -> dict[str, dict]:
+    """Each single against the null model (rules 1, 2 and 4 of the guide): its test entry by name."""
+    m = max(len(singles), 1)
     tests = {n: ctx.compare(baseline, sc, ALPHA / m, floor0) for n, sc in singles.items()}
-    ctx.sigma = floor0 / baseline.instrument_floor_rad       # one noise scale for every model's evidence
     for n, sc in singles.items():
         tests[n]["log_evidence"] = ctx.evidence(sc)
-    detected = [n for n in singles if tests[n]["significant"]]
-    for n, sc in singles.items():
         tests[n]["closes_gap"] = ctx.closes(sc)
         tests[n]["residual_signature_p"] = ctx.signature(sc)["p_value"]
+    return tests
+
+
+def flexible(sc: CandidateScore, n_cycles: int) -> bool:
+    """Whether a model has more effective parameters than ``SHORT_LOG_SHARE`` of the log's cycle-level offsets.
+
+    Such a model (36 hole offsets) can follow almost any smooth pose error of a short log.
+
+    Parameters
+    ----------
+    sc : CandidateScore
+    n_cycles : int
+        Held-out cycles of the log.
+
+    Returns
+    -------
+    bool
+    """
+    return bool(sc.fit.p_eff > SHORT_LOG_SHARE * 3 * n_cycles)
+
+
+def parsimonious(scores: Mapping[str, CandidateScore], evidence: Mapping[str, float], n_cycles: int) -> str:
+    """The model to name among ``scores`` (each plausible and closing the gap): parsimony that holds.
+
+    The highest evidence wins, unless it is *flexible* (:func:`flexible`) and a model that is not
+    explains the log as well: the flexible one does not beat it on held-out cycles (one-sided paired
+    test at ``HELDOUT_ALPHA``). A 36-number hole-offset fit then never beats a few-number effect or
+    pair that explains the log as well; among those, the highest evidence.
+
+    Parameters
+    ----------
+    scores : mapping
+        Model name -> score (non-empty).
+    evidence : mapping
+        Model name -> log evidence.
+    n_cycles : int
+
+    Returns
+    -------
+    str
+    """
+    best = max(scores, key=lambda n: evidence[n])
+    if not flexible(scores[best], n_cycles):
+        return best
+    simple = [n for n, sc in scores.items() if not flexible(sc, n_cycles)
+              and paired_heldout_test(sc, scores[best]) >= HELDOUT_ALPHA]
+    return max(simple, key=lambda n: evidence[n]) if simple else best
+
+
+def _first_effect(singles, tests, detected: list[str], n_cycles: int) -> str | None:
+    """The first effect (rule 3): among the detected plausible singles that close the gap, the parsimonious one."""
     plausible = [n for n in detected if tests[n]["plausible"]]
     closers = [n for n in plausible if tests[n]["closes_gap"]]
-    first = (max(closers or plausible, key=lambda n: tests[n]["log_evidence"]) if plausible
-             else min(detected, key=lambda n: singles[n].heldout_mse) if detected else None)
+    if not plausible:
+        return min(detected, key=lambda n: singles[n].heldout_mse) if detected else None
+    pool = closers or plausible
+    return parsimonious({n: singles[n] for n in pool}, {n: tests[n]["log_evidence"] for n in pool}, n_cycles)
 
-    gap_sig = ctx.signature(baseline)
-    gap_there = bool(gap_sig["significant"]) and systematic(baseline.heldout_rms_rad, floor0) >= IMPROVE_MULT * floor0
-    masked = first is None and gap_there and len(singles) > 1     # two effects may hide each other: rule 6
-    by_error = sorted(singles, key=lambda n: singles[n].heldout_mse)
-    seeds = ([] if first is None and not masked else
-             ([first] if first is not None else []) + [n for n in by_error if n != first])[:PAIR_SEEDS]
-    pairs, pair_scores = _pairs(ctx, rig, names, singles, seeds, secondary, ranges, tick, planned_pairs,
-                                baseline if masked else None, first, options, workers)
-    if bar:
-        bar.close()
-    selected, second, final, verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_there)
-    remaining = ctx.signature(final)
-    n_cycles = len(np.unique(ctx.held.cycle))
-    ev_final = ctx.evidence(final)
-    # rivals: other plausible explanations of the gap (a pair that only adds to the named model is none)
-    named = set(final.name.split("+"))
-    rivals = {n: ctx.evidence(sc) for n, sc in singles.items() if sc is not final and tests[n]["plausible"]
-              and tests[n]["closes_gap"] and n not in named}
-    rivals.update({"+".join(k): ctx.evidence(sc) for k, sc in pair_scores.items() if sc is not final
-                   and not named <= set(k)
-                   and next((p["plausible"] and p["closes_gap"] for p in pairs if tuple(p["effects"]) == k), False)})
-    verdict["evidence_margin"] = float(ev_final - max(rivals.values(), default=-np.inf))
-    # a plausible model that closes the gap and is more probable under the priors, not confirmed on held-out
-    # cycles: the verdict is the held-out test's pick, not the only reading of the log
-    verdict["more_probable_rivals"] = sorted((n for n, e in rivals.items() if e > ev_final),
-                                             key=lambda n: -rivals[n])
-    if selected not in ("none", "unexplained") and verdict["more_probable_rivals"]:
-        best_rival = verdict["more_probable_rivals"][0]
-        verdict["warnings"].append(
-            f"{best_rival} also closes the gap and has higher evidence ({rivals[best_rival] - ev_final:.1f} nats) "
-            f"than {final.name}, but did not beat it on held-out cycles: the log does not decide between them")
-    # not waived when the verdict is decisive: a lead over the rivals inside the vocabulary says
-    # nothing about an effect outside it, which a model this flexible can mimic
-    if selected not in ("none", "unexplained") and final.fit.p_eff > SHORT_LOG_SHARE * 3 * n_cycles:
-        verdict["warnings"].append(
-            f"{final.name} has {final.fit.p_eff:.0f} effective parameters against {3 * n_cycles} cycle-level "
-            f"pose offsets in this log ({n_cycles} cycles): flexible enough to stand in for an effect outside the "
-            "vocabulary; confirm with a longer log (more cycles at other poses)")
-    if selected not in ("none", "unexplained") and remaining["significant"] \
-            and remaining["systematic_rad"] >= MATERIAL_SHARE * ctx.floor(final):
-        verdict["warnings"].append(
-            f"the residual left by {final.name} still holds structure within cycles (signature test p = "
-            f"{remaining['p_value']:.1e}): the named effect may be a stand-in for one outside the vocabulary; "
-            "see localisation for where the residual lies")
+
+def _noise_estimates(ctx: _Context, final: CandidateScore, baseline: CandidateScore, singles) -> dict:
+    """The noise floor's parts (``noise_floor_estimates`` of the JSON)."""
     scale = ctx.scale(final)
-    floor = scale * ctx.instrument
-    estimates = {"within_cycle_rad": ctx.local, "within_cycle_dof": ctx.local_dof,
-                 "selected_fit_rad": float(np.sqrt(final.noise_ratio2)) * ctx.instrument,
-                 "instrument_model_rad": ctx.instrument, "noise_scale": scale,
-                 "per_model_rad": {n: scale * c.instrument_floor_rad for n, c in
-                                   [("nominal_refit", baseline), *singles.items()]}}
-    confounded = []
+    return {"within_cycle_rad": ctx.local, "within_cycle_dof": ctx.local_dof,
+            "selected_fit_rad": float(np.sqrt(final.noise_ratio2)) * ctx.instrument,
+            "instrument_model_rad": ctx.instrument, "noise_scale": scale,
+            "per_model_rad": {n: scale * c.instrument_floor_rad for n, c in
+                              [("nominal_refit", baseline), *singles.items()]}}
+
+
+def _confounded(singles, detected: list[str], pairs: list[dict], selected: str) -> list[str]:
+    """Detected singles the log cannot tell from the selected one: not separable, not worse on held-out cycles."""
+    out = []
     if selected in singles:
         for n in detected:
             sep = next((p for p in pairs if set(p["effects"]) == {n, selected}), None)
             if n != selected and paired_heldout_test(singles[n], singles[selected]) >= HELDOUT_ALPHA \
                     and (sep is None or not sep["separable"]):
-                confounded.append(n)
-    # rivals the log cannot tell from the selected: detected, not separable, and not decisively worse
-    alternatives = [n for n in detected if n != selected and selected in singles
-                    and any(set(p["effects"]) == {n, selected} and not p["separable"] for p in pairs)
-                    and tests[n]["log_evidence"] >= tests[selected]["log_evidence"] - LEAD_NATS]
-    verdict["alternatives"] = alternatives
-    if alternatives:
-        verdict["warnings"].append(f"{selected} is not separable on this log from {', '.join(alternatives)} "
-                                   "(detected too; Fisher block correlation above the separability limit)")
-    verdict["secondary_alternatives"] = secondary_alternatives(ctx, pairs, pair_scores, final, selected,
-                                                                second.get("effect", "none"))
-    if verdict["secondary_alternatives"]:
-        verdict["warnings"].append(
-            f"the second effect {second['effect']} is not separable on this log from "
-            f"{', '.join(verdict['secondary_alternatives'])}: {selected} with either closes the gap "
-            f"(evidence within {LEAD_NATS:g} nats, Fisher block correlation above the separability limit)")
-    # every other model the log does not rule out is named (rivals.py); those warned about above are not repeated
-    verdict["unsettled_rivals"] = [] if selected in ("none", "unexplained") else unsettled_rivals(
-        scored_models(ctx.evidence, singles, tests, pairs, pair_scores, noise_scale=ctx.sigma), final.name,
-        [*verdict["more_probable_rivals"], *alternatives,
-         *(f"{selected}+{c}" for c in verdict["secondary_alternatives"])])
-    verdict["warnings"] += [rival_warning(final.name, r) for r in verdict["unsettled_rivals"]]
+                out.append(n)
+    return out
+
+
+def _steps(baseline, singles, verdict: Verdict, first: str | None) -> list[dict]:
+    """The greedy path: null model, the lead single, the pair (``fraction_explained`` added by the caller)."""
     steps = [{"model": "nominal_refit", "heldout_rms_rad": baseline.heldout_rms_rad}]
-    lead = selected if selected in singles else first
+    lead = verdict.selected if verdict.selected in singles else first
     if lead is not None:
         steps.append({"model": lead, "heldout_rms_rad": singles[lead].heldout_rms_rad})
-    if second.get("effect", "none") != "none":
-        steps.append({"model": f"{lead}+{second['effect']}", "heldout_rms_rad": final.heldout_rms_rad})
-    rule = {"alpha": ALPHA, "per_candidate_alpha": ALPHA / m, "improve_mult": IMPROVE_MULT,
+    if verdict.secondary.effect != "none":
+        steps.append({"model": f"{lead}+{verdict.secondary.effect}", "heldout_rms_rad": verdict.final.heldout_rms_rad})
+    return steps
+
+
+def _rule(m: int) -> dict:
+    """The decision rule's constants and tests (``significance`` of the JSON)."""
+    return {"alpha": ALPHA, "per_candidate_alpha": ALPHA / max(m, 1), "improve_mult": IMPROVE_MULT,
             "close_fraction": CLOSE_FRACTION,
             "test": "one-sided paired t-test of per-cycle held-out MSE against nominal_refit (Bonferroni over "
                     "candidates) and systematic improvement sqrt(MSE_null - MSE) >= improve_mult noise floors"}
-    d = Diagnosis(ctx.train, ctx.test, baseline, singles, floor, estimates, tests, selected, confounded,
-                  localise(ctx.held, ctx.held.zeta_rad, final.heldout_zeta_rad, floor),
-                  remaining, second, failed, pairs, steps, verdict, gap_sig, final, rule, pair_scores)
-    for s in d.steps:
-        sc = final if "+" in s["model"] else singles.get(s["model"], baseline)
-        s["fraction_explained"] = d.fraction(sc)
-    return d
+
+
+def _rival_warnings(ctx: _Context, verdict: Verdict, singles, tests, detected, pairs, pair_scores,
+                    n_cycles: int, remaining: dict) -> None:
+    """The warnings of a named verdict: every model the log does not rule out, named (guide, rule 5)."""
+    final, selected = verdict.final, verdict.selected
+    named = set(final.name.split("+"))
+    ev_final = ctx.evidence(final)
+    # rivals: other plausible explanations of the gap (a pair that only adds to the named model is none)
+    rivals = {n: ctx.evidence(sc) for n, sc in singles.items() if sc is not final and tests[n]["plausible"]
+              and tests[n]["closes_gap"] and n not in named}
+    rivals.update({"+".join(k): ctx.evidence(sc) for k, sc in pair_scores.items() if sc is not final
+                   and not named <= set(k)
+                   and next((p["plausible"] and p["closes_gap"] for p in pairs if tuple(p["effects"]) == k), False)})
+    verdict.evidence_margin = float(ev_final - max(rivals.values(), default=-np.inf))
+    if not verdict.named:
+        return
+    # a plausible model that closes the gap and is more probable under the priors, not confirmed on held-out
+    # cycles: the verdict is the held-out test's pick, not the only reading of the log
+    verdict.more_probable_rivals = sorted((n for n, e in rivals.items() if e > ev_final), key=lambda n: -rivals[n])
+    if verdict.more_probable_rivals:
+        best = verdict.more_probable_rivals[0]
+        verdict.warn(f"{best} also closes the gap and has higher evidence ({rivals[best] - ev_final:.1f} nats) "
+                     f"than {final.name}, but did not beat it on held-out cycles: the log does not decide between them")
+    if flexible(final, n_cycles):
+        _look_alike_warning(ctx, verdict, singles, tests, pairs, pair_scores, n_cycles)
+    if remaining["significant"] and remaining["systematic_rad"] >= MATERIAL_SHARE * ctx.floor(final):
+        verdict.warn(f"the residual left by {final.name} still holds structure within cycles (signature test p = "
+                     f"{remaining['p_value']:.1e}): the named effect may be a stand-in for one outside the vocabulary; "
+                     "see localisation for where the residual lies")
+    # rivals the log cannot tell from the selected: detected, not separable, and not decisively worse
+    verdict.alternatives = [n for n in detected if n != selected and selected in singles
+                            and any(set(p["effects"]) == {n, selected} and not p["separable"] for p in pairs)
+                            and tests[n]["log_evidence"] >= tests[selected]["log_evidence"] - LEAD_NATS]
+    if verdict.alternatives:
+        verdict.warn(f"{selected} is not separable on this log from {', '.join(verdict.alternatives)} "
+                     "(detected too; Fisher block correlation above the separability limit)")
+    second = verdict.secondary.effect
+    verdict.secondary_alternatives = secondary_alternatives(ctx, pairs, pair_scores, final, selected, second)
+    if verdict.secondary_alternatives:
+        verdict.warn(f"the second effect {second} is not separable on this log from "
+                     f"{', '.join(verdict.secondary_alternatives)}: {selected} with either closes the gap "
+                     f"(evidence within {LEAD_NATS:g} nats, Fisher block correlation above the separability limit)")
+    # every other model the log does not rule out is named (rivals.py); those warned about above are not repeated
+    verdict.unsettled_rivals = unsettled_rivals(
+        scored_models(ctx.evidence, singles, tests, pairs, pair_scores, noise_scale=ctx.sigma), final.name,
+        [*verdict.more_probable_rivals, *verdict.alternatives, *verdict.look_alikes,
+         *(f"{selected}+{c}" for c in verdict.secondary_alternatives)])
+    for r in verdict.unsettled_rivals:
+        verdict.warn(rival_warning(final.name, r))
+
+
+def _look_alike_warning(ctx: _Context, verdict: Verdict, singles, tests, pairs, pair_scores, n_cycles: int) -> None:
+    """A flexible verdict names the few-number models it does not rule out (and warns only then).
+
+    A few-number model (single or pair, not :func:`flexible`) that is plausible, closes the gap or comes
+    within ``LOOK_ALIKE_SHARE`` of it, and that the flexible verdict does not beat on held-out cycles
+    (paired test at ``HELDOUT_ALPHA``) explains the log as well with far fewer numbers.
+    """
+    final = verdict.final
+    models: dict[str, tuple[CandidateScore, bool]] = {
+        n: (sc, bool(tests[n]["plausible"])) for n, sc in singles.items()}
+    for p in pairs:
+        k = tuple(p["effects"])
+        if p.get("fitted") and k in pair_scores:
+            models["+".join(k)] = (pair_scores[k], bool(p.get("plausible")))
+    look = []
+    for name, (sc, ok) in models.items():
+        if sc is final or not ok or flexible(sc, n_cycles) or ctx.fraction(sc) < LOOK_ALIKE_SHARE * CLOSE_FRACTION:
+            continue
+        p = paired_heldout_test(sc, final)
+        if p >= HELDOUT_ALPHA:
+            look.append((name, p))
+    if not look:
+        return
+    look.sort(key=lambda t: -ctx.evidence(models[t[0]][0]))
+    verdict.look_alikes = [n for n, _ in look]
+    names = ", ".join(f"{n} (held-out p = {p:.2f})" for n, p in look[:3])
+    verdict.warn(f"{final.name} has {final.fit.p_eff:.0f} effective parameters against {3 * n_cycles} cycle-level "
+                 f"pose offsets in this log ({n_cycles} cycles), and {names} explain the log about as well with a "
+                 f"few numbers ({final.name} does not beat them on held-out cycles): the log does not single out "
+                 f"{final.name}; --suggest designs rows that separate them")
+
+
+def _time_trend_warning(ctx: _Context, verdict: Verdict) -> None:
+    """Warn when the final model's training residual trends with the log's time order (creep, a drifting bias)."""
+    final = verdict.final
+    trend = time_trend(final.train_zeta_rad, ctx.train.cycle, ctx.floor(final), ALPHA, MATERIAL_SHARE)
+    verdict.time_trend = trend
+    if trend["trends"] and verdict.selected != "none":
+        verdict.warn(f"the residual of {final.name} trends with time (sample order): its cycle means move by "
+                     f"{1e3 * max(abs(c) for c in trend['change_rad']):.2f} mrad over {trend['cycles']} cycles "
+                     f"(p = {trend['p_value']:.1e}); a time-dependent fault (cable creep, a drifting sensor bias) "
+                     "is outside the vocabulary")
 
 
 def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, tick, planned: int,
            masked_base: CandidateScore | None, first: str | None, options: dict,
-           workers: int = 1) -> tuple[list, dict]:
+           workers: int = 1, n_cycles: int | None = None) -> tuple[list, dict]:
     """Every pair's separability; each seed + each other effect fitted and tested (rule 3 / rule 6).
 
     A pair is tested against the best of its two singles and the first effect (``masked_base``,
@@ -318,13 +425,19 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
             entry["error"] = str(error)
             continue
         scores[(a, b)] = sc
-        rivals = [singles[a], singles[b]] + ([singles[first]] if first is not None else [])
+        # a few-number pair is tested against its own singles, not against a flexible first effect (36 hole
+        # offsets) that can stand in for it; the flexible one must then not beat it on held-out cycles
+        flex = (first is not None and n_cycles is not None and flexible(singles[first], n_cycles)
+                and not flexible(sc, n_cycles) and first not in (a, b))
+        rivals = [singles[a], singles[b]] + ([singles[first]] if first is not None and not flex else [])
         base = masked_base or min(rivals, key=lambda c: c.heldout_mse)
         t = ctx.compare(base, sc, level, ctx.noise_floor(base))
         ev = ctx.evidence(sc)
         gain = ev - max(ctx.evidence(c) for c in ([masked_base] if masked_base is not None else rivals))
         # the evidence route (rule 3b): decisive Bayes factor over every rival, confirmed on held-out cycles
         by_evidence = bool(gain >= EVIDENCE_MIN and t["p_value"] < HELDOUT_ALPHA and t["improvement_rad"] > 0)
+        if flex and paired_heldout_test(sc, singles[first]) < HELDOUT_ALPHA:   # the flexible first does better
+            t["significant"], by_evidence = False, False
         entry.update({"fitted": True, "effects": [a, b], "heldout_rms_rad": sc.heldout_rms_rad,
                       "fraction_explained": ctx.fraction(sc), "bic": sc.fit.bic, "closes_gap": ctx.closes(sc),
                       "log_evidence": ev, "evidence_gain": gain, "supported_by_evidence": by_evidence,
@@ -345,51 +458,49 @@ def _n_pair_fits(n_seeds: int, n: int) -> int:
     return n_seeds * (n - 1) - n_seeds * (n_seeds - 1) // 2
 
 
-def _second(ctx: _Context, singles, first: str, best: dict, sc: CandidateScore) -> dict:
-    """The ``secondary`` entry of a pair verdict."""
-    return {"effect": best["effects"][1], "heldout_rms_rad": sc.heldout_rms_rad,
-            "params": {k: v for k, v in sc.fit.params().items() if k not in singles[first].fit.params()},
-            "fraction_explained": ctx.fraction(sc), "p_value": best["p_value_vs_first"],
-            **{k: best[k] for k in ("improvement_rad", "separable", "max_correlation", "plausible",
-                                    "implausible_params")}}
+def _second(ctx: _Context, singles, first: str, best: dict, sc: CandidateScore) -> Secondary:
+    """The ``secondary`` of a pair verdict."""
+    return Secondary(best["effects"][1], sc.heldout_rms_rad,
+                     {k: v for k, v in sc.fit.params().items() if k not in singles[first].fit.params()},
+                     ctx.fraction(sc), best["p_value_vs_first"],
+                     **{k: best[k] for k in ("improvement_rad", "separable", "max_correlation", "plausible",
+                                             "implausible_params")})
 
 
-def _verdict(ctx: _Context, baseline, singles, tests, first, pairs, pair_scores, gap_there):
-    """``(selected, secondary, final score, verdict dict)`` by rules 5 and 6 of the module doc."""
-    warnings: list[str] = []
-    none2 = {"effect": "none"}
+def _verdict(ctx: _Context, baseline, singles, tests, first, pairs, pair_scores, gap_there,
+             n_cycles: int) -> Verdict:
+    """The verdict by rules 5 and 6 of the guide (warnings about rivals are added afterwards)."""
     ok = [p for p in pairs if p.get("fitted") and p["significant"] and p["plausible"] and p["closes_gap"]]
-    best = max(ok, key=lambda p: p["log_evidence"]) if ok else None
-    if best is not None:                           # a pair (rule 5), or a masked pair (rule 6)
+    if ok:                                         # a pair (rule 5), or a masked pair (rule 6)
+        by_name = {"+".join(p["effects"]): p for p in ok}
+        name = parsimonious({n: pair_scores[tuple(p["effects"])] for n, p in by_name.items()},
+                            {n: p["log_evidence"] for n, p in by_name.items()}, n_cycles)
+        best = by_name[name]
         a, b = best["effects"]
         sc = pair_scores[(a, b)]
-        if not best["separable"]:
-            warnings.append(f"{a} and {b} are not separable on this log "
-                            f"(Fisher block correlation {best['max_correlation']:.3f})")
         reason = (f"{a} and {b} together close the gap on held-out cycles" if first is not None else
                   f"neither alone, but {a} and {b} together close the gap on held-out cycles (each hides the other)")
-        return a, _second(ctx, singles, a, best, sc), sc, {"selected": a, "warnings": warnings, "reason": reason}
+        v = Verdict(a, reason, sc, _second(ctx, singles, a, best, sc))
+        if not best["separable"]:
+            v.warn(f"{a} and {b} are not separable on this log "
+                   f"(Fisher block correlation {best['max_correlation']:.3f})")
+        return v
     if first is None:
         if gap_there:
-            return "unexplained", none2, baseline, {
-                "selected": "unexplained", "warnings": warnings,
-                "reason": "the nominal model's held-out residual holds significant structure but no candidate "
-                          "improves on it significantly; see localisation for where it lies"}
-        return "none", none2, baseline, {"selected": "none", "warnings": warnings,
-                                         "reason": "no candidate improves significantly on held-out cycles"}
+            return Verdict("unexplained", "the nominal model's held-out residual holds significant structure but no "
+                           "candidate improves on it significantly; see localisation for where it lies", baseline)
+        return Verdict("none", "no candidate improves significantly on held-out cycles", baseline)
     t1 = tests[first]
+    warnings = []
     if not t1["plausible"]:
         warnings.append(f"{first} needs implausible parameters: {', '.join(t1['implausible_params'])}")
     if t1["plausible"] and t1["closes_gap"]:
-        return first, none2, singles[first], {"selected": first, "warnings": warnings,
-                                              "reason": f"{first} closes the gap on held-out cycles"}
+        return Verdict(first, f"{first} closes the gap on held-out cycles", singles[first], warnings=warnings)
     tried = [p for p in pairs if p.get("fitted") and p["significant"] and p["plausible"]]
     if tried:
         near = max(tried, key=lambda p: p["fraction_explained"])
         warnings.append(f"best pair {'+'.join(near['effects'])} leaves "
                         f"{1 - near['fraction_explained']:.0%} of the systematic gap")
     warnings.append(f"best single {first} leaves {1 - ctx.fraction(singles[first]):.0%} of the systematic gap")
-    return "unexplained", none2, baseline, {
-        "selected": "unexplained", "warnings": warnings,
-        "reason": "no plausible single effect or pair brings the held-out gap near the noise floor; "
-                  "see localisation for where the residual lies"}
+    return Verdict("unexplained", "no plausible single effect or pair brings the held-out gap near the noise floor; "
+                   "see localisation for where the residual lies", baseline, warnings=warnings)

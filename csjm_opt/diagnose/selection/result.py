@@ -26,7 +26,8 @@
     steps               the greedy path: [{model, heldout_rms_rad, fraction_explained}]
     confounded_with     effects whose single fits are not separable from the selected one
                         and not significantly worse on held-out cycles
-    verdict             {selected, reason, warnings[], alternatives[], secondary_alternatives[]}: why, in
+    verdict             {selected, reason, warnings[], alternatives[], secondary_alternatives[], look_alikes[],
+                        time_trend}: why, in
                         words; alternatives are detected effects not separable from the selected one on
                         this log; secondary_alternatives are effects that, paired with the selected one,
                         close the gap as well (evidence within LEAD_NATS) and are not separable from
@@ -36,7 +37,9 @@
                         unsettled_rivals are every model the log does not rule out (one adding an
                         effect with higher evidence, or one replacing the verdict with higher
                         evidence or within EVIDENCE_MIN nats while the verdict does not beat it
-                        on held-out cycles; rivals.py)
+                        on held-out cycles; rivals.py); look_alikes are few-number models that explain
+                        the log as well as a flexible verdict (hole offsets); time_trend is the trend of
+                        the residual's cycle means over the log's time order (trend.py)
     significance        the decision rule's constants and tests
     gap                 {before_rad, after_rad, fraction_explained, systematic_before_rad,
                          systematic_after_rad, noise_floor_after_rad, fraction_explained_by_nominal_refit,
@@ -56,6 +59,7 @@ import numpy as np
 from ..data.noise import systematic
 from ..data.residuals import ResidualTable
 from .scoring import CandidateScore
+from .verdict import Secondary, Verdict
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -69,19 +73,31 @@ class Diagnosis:
     noise_floor_rad: float
     noise_estimates: dict
     tests: dict[str, dict]
-    selected: str
-    confounded_with: list[str]
-    localisation: dict
-    remaining: dict
-    secondary: dict
+    verdict: Verdict                  # what is named, the model behind it, why, the warnings
+    confounded_with: list[str] = dataclasses.field(default_factory=list)
+    localisation: dict = dataclasses.field(default_factory=dict)
+    remaining: dict = dataclasses.field(default_factory=dict)
     failed: dict = dataclasses.field(default_factory=dict)   # effect -> error message
     pairs: list = dataclasses.field(default_factory=list)
     steps: list = dataclasses.field(default_factory=list)
-    verdict: dict = dataclasses.field(default_factory=dict)
     gap_signature: dict = dataclasses.field(default_factory=dict)
-    final: CandidateScore | None = None    # model behind gap["after_rad"] (selected, or selected + secondary)
     rule: dict = dataclasses.field(default_factory=dict)
     pair_scores: dict = dataclasses.field(default_factory=dict)   # (a, b) -> CandidateScore of fitted pairs
+
+    @property
+    def selected(self) -> str:
+        """The verdict's name: a vocabulary effect, ``none`` or ``unexplained``."""
+        return self.verdict.selected
+
+    @property
+    def secondary(self) -> Secondary:
+        """The second effect of a pair verdict (``effect == "none"`` else)."""
+        return self.verdict.secondary
+
+    @property
+    def final(self) -> CandidateScore:
+        """The model behind ``gap["after_rad"]`` (selected, or selected + secondary; the null model else)."""
+        return self.verdict.final
 
     @property
     def selected_score(self) -> CandidateScore:
@@ -93,9 +109,7 @@ class Diagnosis:
             The final model (selected, or selected + secondary) if set, else the selected candidate,
             else the nominal refit.
         """
-        if self.final is not None:
-            return self.final
-        return self.candidates[self.selected] if self.selected in self.candidates else self.baseline
+        return self.verdict.final
 
     @property
     def heldout_table(self) -> ResidualTable:
@@ -167,7 +181,6 @@ class Diagnosis:
             cands.append({"effect": name, "heldout_rms_rad": None, "params": {}, "bic": None, "significant": False,
                           "plausible": False, "implausible_params": [], "error": msg})
         b = self.baseline
-        sec = {k: v for k, v in self.secondary.items() if k != "score"}
         return {
             "baseline": {"heldout_rms_rad": self.nominal_heldout_rms_rad, "train_rms_rad": self.train.rms_rad,
                          "model": "nominal, rig file as given (no fitted parameters)",
@@ -179,11 +192,11 @@ class Diagnosis:
             "noise_floor_estimates": self.noise_estimates,
             "candidates": cands,
             "selected": self.selected,
-            "secondary": sec,
+            "secondary": self.secondary.as_json(),
             "pairs": self.pairs,
             "steps": self.steps,
             "confounded_with": self.confounded_with,
-            "verdict": self.verdict,
+            "verdict": self.verdict.as_json(),
             "significance": self.rule,
             "heldout": "test file" if self.test is not None else "grouped K-fold by cycle",
             "gap": self.gap,

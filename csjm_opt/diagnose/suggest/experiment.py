@@ -33,7 +33,7 @@ rows within the rig's limits:
   to the others), until ``N`` rows are used; ``sqrt`` of it (noise sd) is reported per
   pair. Pairs no feasible rows of this size separate by ``EQUIVALENT_SD`` are reported
   as equivalent and not targeted. A plain distance
-  between the fitted predictions would be optimistic: 36 hole offsets refitted
+  between the fitted predictions would be optimistic: 6 m hole offsets refitted
   to the new rows mimic much of what they did not predict.
 
 The candidate cycles are in :mod:`.candidates`; the protocol (:mod:`.protocol`) is the log
@@ -79,9 +79,10 @@ RESOLVED_SD = float(stats.norm.isf(ALPHA / len(EFFECTS)) + stats.norm.isf(0.1))
 def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
     """``(purpose, [(name, score), ...])``: why an experiment is needed and which models to separate.
 
-    The leading hypotheses are the selected model, each single of a selected pair, the plausible
-    singles and fitted pairs whose log evidence (:mod:`.evidence`) is within ``LEAD_NATS`` of the
-    best, and the null model last, always (at most ``MAX_HYPOTHESES``).
+    The leading hypotheses are the selected model, each single of a selected pair, every model a
+    warning of the verdict names (look-alikes, unsettled rivals, alternatives: the log does not rule
+    them out), the plausible singles and fitted pairs whose log evidence (:mod:`.evidence`) is within
+    ``LEAD_NATS`` of the best, and the null model last, always (at most ``MAX_HYPOTHESES``).
 
     Parameters
     ----------
@@ -101,7 +102,7 @@ def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
         k = tuple(p["effects"])
         if p.get("fitted") and p.get("plausible") and k in d.pair_scores:
             pool["+".join(k)] = (p["log_evidence"], d.pair_scores[k])
-    sel, sec = d.selected, d.secondary.get("effect", "none")
+    sel, sec = d.selected, d.secondary.effect
     floor = d.noise_floor_rad
     reasons = []
     out: dict[str, CandidateScore] = {}
@@ -123,11 +124,14 @@ def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
         else:
             lead = []
     else:
+        # every model a warning names (look-alikes of a flexible verdict, unsettled rivals, alternatives) leads
+        named = [*d.verdict.look_alikes, *(r["model"] for r in d.verdict.unsettled_rivals), *d.verdict.alternatives]
+        lead = list(dict.fromkeys([*(n for n in named if n in pool or n in d.candidates), *lead]))
         others = [n for n in lead if n not in out and n != f"{sec}+{sel}"]
         if others:
             reasons.append(f"the log cannot tell {next(iter(out))} decisively from {', '.join(others)}")
         if sec != "none":                   # a pair against each of its singles: is the second effect real?
-            if not d.secondary.get("separable", True):
+            if not d.secondary.separable:
                 reasons.append(f"{sel} and {sec} are not separable on this log")
             out.setdefault(sel, d.candidates[sel])
             out.setdefault(sec, d.candidates[sec])
@@ -161,11 +165,12 @@ def _predict(sc: CandidateScore, d: Diagnosis, cands: list[dict], rig: Rig) -> t
     cyc = np.concatenate([np.full(len(c["loads"]), i) for i, c in enumerate(cands)])
     n = len(cyc)
     lengths, _ = kin.cable_terms(R0, np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m))
-    rest = np.zeros((n, 6))
+    m = l.shape[1]
+    rest = np.zeros((n, m))
     first = np.r_[True, cyc[1:] != cyc[:-1]]
     rest[first] = l[first] - train.rows.rest_lengths_m[-1]
-    entry_s = np.full((n, 6), np.nan)
-    entry_l = np.full((n, 6), np.nan)
+    entry_s = np.full((n, m), np.nan)
+    entry_l = np.full((n, m), np.nan)
     if last_state is not None:
         entry_s[first], entry_l[first] = last_state, last_len
 

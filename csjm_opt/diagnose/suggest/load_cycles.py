@@ -46,7 +46,7 @@ def candidate_cycles(rig: Rig, loads: Sequence[Load], rng: np.random.Generator, 
     Returns
     -------
     list of dict
-        Each with ``rest_lengths_m`` (6,), ``loads`` (list), ``R`` (m, 3, 3), ``tau`` (m, 3).
+        Each with ``rest_lengths_m`` (m,), ``loads`` (list), ``R`` (m, 3, 3), ``tau`` (m, 3).
 
     Raises
     ------
@@ -67,7 +67,7 @@ def candidate_cycles(rig: Rig, loads: Sequence[Load], rng: np.random.Generator, 
         R_ref = so3.exp(tilt * np.array([np.cos(az), np.sin(az), 0.0])) @ so3.exp(
             [0, 0, rng.uniform(-MAX_TWIST_RAD, MAX_TWIST_RAD)])
         share = rng.uniform(*PRETENSION_SHARE)
-        t_ref = np.full(6, rig.t_min_N + share * (rig.t_max_N - rig.t_min_N))
+        t_ref = np.full(rig.n_cables, rig.t_min_N + share * (rig.t_max_N - rig.t_min_N))
         seq = by_point[points[rng.integers(len(points))]]
         try:
             plan = plan_tensions(rig, R_ref, np.zeros(3), t_ref_N=t_ref, model=model)

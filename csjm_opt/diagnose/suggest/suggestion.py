@@ -17,7 +17,7 @@ class Suggestion:
     purpose: str
     hypotheses: list[str]
     cycle: np.ndarray              # (n,) cycle ids (after the log's)
-    rest_lengths_m: np.ndarray     # (n, 6)
+    rest_lengths_m: np.ndarray     # (n, m)
     loads: list[Load | None]       # per row (None: no load)
     intended_tau_A_Nm: np.ndarray  # (n, 3) at the planned pose
     planned_R: np.ndarray          # (n, 3, 3) nominal pose

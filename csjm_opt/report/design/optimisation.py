@@ -107,8 +107,8 @@ def geometry_3d_figure(rig: Rig, R: np.ndarray, ax: Any = None, title: str = "")
     ax = ax or plt.figure(figsize=(6, 6)).add_subplot(projection="3d")
     top = (R @ rig.platform_holes_A_m.T).T * 1e3
     bottom = rig.base_holes_B_m * 1e3
-    for i in range(6):
-        ax.plot(*np.c_[top[i], bottom[i]], c=f"C{i}", lw=1.5)
+    for i in range(len(top)):
+        ax.plot(*np.c_[top[i], bottom[i]], c=f"C{i % 10}", lw=1.5)
         ax.text(*top[i], f"A{i + 1}", fontsize=7)
         ax.text(*bottom[i], f"B{i + 1}", fontsize=7)
     ax.plot(*np.vstack([top, top[:1]]).T, c="0.3", lw=0.8)

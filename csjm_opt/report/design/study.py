@@ -125,6 +125,8 @@ def paper_value(name: str) -> float | None:
 
     if name in PAPER_DESIGN:
         return float(PAPER_DESIGN[name])
+    if name == "n_cables":
+        return 6.0                                                         # the paper's six cables
     body = name.split("_", 1)[0]
     if body not in ("platform", "base"):
         return 0.0 if name[:1] in "AB" and name.endswith("_m") else None   # per-hole offsets

@@ -43,7 +43,7 @@ def plant_mjcf(plant: TestbedPlant, rest_lengths_m: np.ndarray, joint_damping_Nm
     ----------
     plant : TestbedPlant
         The true rig and its injected effects.
-    rest_lengths_m : (6,) array
+    rest_lengths_m : (m,) array
         Initial rest lengths (changed at run time through ``tendon_lengthspring``).
     joint_damping_Nms_per_rad : float
         Damping of the ball joint and of the link (settling).

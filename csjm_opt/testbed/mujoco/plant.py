@@ -19,7 +19,7 @@ calls (``respond``, ``measured_moment``, ``measured_pose``). The engine model is
   pose are the tool's;
 * drum slip: rest lengths lengthened after each row (re-homed every cycle);
 * sensor bias, drift and tracker registration: on the readings, as the
-  quasi-static plant. A finite eyelet radius is not available here.
+  quasi-static plant. A finite guide radius is not available here.
 
 Settling a row: the rest lengths and the load move from the previous row's
 to this row's over ``ramp_s`` (``friction_ramp_s`` on a plant with friction; heavy
@@ -58,7 +58,7 @@ from ..static_certificate import FrictionCertificate
 #: The plants a study or ``csjm simulate`` can use.
 PLANTS = ("quasi-static", "mujoco")
 #: Effects of the quasi-static testbed the MuJoCo plant cannot realise.
-MUJOCO_UNSUPPORTED = ("eyelet_radius",)
+MUJOCO_UNSUPPORTED = ("guide_radius",)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -71,7 +71,7 @@ class MujocoRow:
         Pose of the measured body (the tool; the platform without a link).
     R_platform : (3, 3) array
         Pose of the cable platform.
-    tensions_N : (6,) array
+    tensions_N : (m,) array
         Spring tensions (hardening included, friction excluded).
     certificate : FrictionCertificate or None
         The friction LP (``None`` without friction: polished to round-off).
@@ -144,8 +144,8 @@ class MujocoTestbedPlant:
     noslip_tolerance: float = 1e-12
 
     def __post_init__(self) -> None:
-        if self.plant.eyelet_radius_m > 0:
-            raise InvalidInput("the MuJoCo plant has no eyelet radius (quasi-static plant only)", "effect")
+        if self.plant.guide_radius_m > 0:
+            raise InvalidInput("the MuJoCo plant has no guide radius (quasi-static plant only)", "effect")
 
     @property
     def rig(self):
@@ -200,7 +200,7 @@ class MujocoTestbedPlant:
 
         Parameters
         ----------
-        rest_lengths_m : (n, 6) array
+        rest_lengths_m : (n, m) array
         tau_ext_A_Nm : (n, 3) array
         cycle : (n,) int array
         R_init : (n, 3, 3) array
@@ -244,13 +244,15 @@ class MujocoTestbedPlant:
         from .engine import Engine
 
         l_all = np.asarray(rest_lengths_m, float)
+        if self.plant.drive_offsets_m is not None:   # what the drives realise for what was commanded
+            l_all = l_all + np.asarray(self.plant.drive_offsets_m, float)
         tau_all = np.asarray(tau_ext_A_Nm, float)
         cycle = np.asarray(cycle)
         mr_all = (np.zeros((len(cycle), 3)) if load_first_moment_A_kgm is None
                   else np.asarray(load_first_moment_A_kgm, float).reshape(len(cycle), 3))
         engine = Engine(self, l_all[0])
         rows: list[MujocoRow] = []
-        slip = np.zeros(6)
+        slip = np.zeros(self.rig.n_cables)
         for i in range(len(cycle)):
             first = i == 0 or cycle[i] != cycle[i - 1]
             if first:
@@ -287,7 +289,7 @@ def as_mujoco(plant: TestbedPlant, **options) -> MujocoTestbedPlant:
     Raises
     ------
     InvalidInput
-        An effect MuJoCo cannot realise (eyelet radius).
+        An effect MuJoCo cannot realise (guide radius).
     """
     return MujocoTestbedPlant(plant, **options)
 

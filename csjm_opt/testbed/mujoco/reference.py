@@ -15,7 +15,7 @@ round-off; it has settled when that polish stays within 1 mrad and finds a
 stable equilibrium. The damping is heavy (overdamped: the platform
 creeps, like the gradient flow the forward statics follows); with light
 damping a platform released far from equilibrium can overshoot into another
-stable equilibrium (``studies/statics_vs_mujoco.py``, which uses this module
+stable equilibrium (``studies/statics_vs_mujoco/statics_vs_mujoco.py``, which uses this module
 with ``damping`` lowered to show it).
 """
 

@@ -262,3 +262,19 @@ def test_stiffest_end_is_raced_like_the_first_end():
             assert len(scored) == 2
         else:
             assert np.max(np.abs(end.u - np.array([0.15, 0.85]))) < 0.02
+
+
+def test_hypervolume_is_the_area_of_the_union_of_dominated_rectangles():
+    import numpy as np
+
+    from csjm_opt.design.optimisation.front import hypervolume
+
+    rng = np.random.default_rng(5)
+    pts = rng.uniform(0.05, 1.0, (7, 2))
+    grid = (np.arange(400) + 0.5) / 400                     # midpoint rule over [0, 1]^2
+    X, Y = np.meshgrid(grid, grid)
+    covered = np.zeros_like(X, bool)
+    for x, y in pts:
+        covered |= (X <= x) & (Y <= y)
+    assert abs(hypervolume(pts) - covered.mean()) < 0.01
+    assert hypervolume(np.array([[2.0, 1.0], [1.0, 2.0], [-1.0, 5.0]])) == 3.0

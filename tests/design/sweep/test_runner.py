@@ -108,7 +108,7 @@ def test_bad_toml_file(tmp_path):
 
 
 def test_shipped_paper_sweep_parses_and_contains_the_papers_circles():
-    spec = SweepSpec.from_toml(REPO / "studies" / "paper_sweep.toml")
+    spec = SweepSpec.from_toml(REPO / "studies" / "paper_sweep" / "paper_sweep.toml")
     assert len(spec.designs()) >= 50
     assert spec.settings.base["platform_radius_m"] == pytest.approx(0.05795, abs=1e-5)
 
@@ -200,7 +200,8 @@ def test_unreachable_scheduler_is_a_clear_error(tmp_path):
 def test_study_script_makes_figures_and_places_the_paper(tmp_path):
     import importlib.util
 
-    spec = importlib.util.spec_from_file_location("paper_sweep_study", REPO / "studies" / "paper_sweep.py")
+    path = REPO / "studies" / "paper_sweep" / "paper_sweep.py"
+    spec = importlib.util.spec_from_file_location("paper_sweep_study", path)
     study = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(study)
     toml = tmp_path / "s.toml"
@@ -232,6 +233,7 @@ def test_automatic_workers_choose_the_pool_only_when_it_pays(tmp_path, monkeypat
 
     monkeypatch.setattr(sweep_module, "_TIMED_DESIGNS", 2)
     monkeypatch.setattr(sweep_module, "POOL_STARTUP_S", startup_s)
+    monkeypatch.setenv("CSJM_WORKERS", "2")          # the one default (tests set 1: serial everywhere)
     monkeypatch.setattr(sweep_module, "_run_processes", spy)
     spec = _spec()
     auto = run_sweep(spec, tmp_path / "auto.jsonl", progress=False)

@@ -31,7 +31,7 @@ def test_vocabulary():
 
     assert VOCABULARY == ("none", "hole_offsets", "friction", "cable_hardening", "link_compliance",
                           "sensor_bias", "mass_com", "tracker_registration", "stiffness_scale", "guide_radius",
-                          "unexplained")
+                          "drive_offsets", "sensor_gain", "joint_friction", "unexplained")
 
 
 def test_nominal_residuals_vanish_on_noise_free_nominal_data(clean_table):

@@ -138,11 +138,11 @@ def test_guide_axis_is_the_base_plane_normal_towards_the_joint():
 
 def test_radius_recovered_from_the_testbeds_eyelet_plant(rig):
     # injected ground truth: the testbed's eyelet plant (written independently) at 3 mm, noise-free
-    plant = make_plant(rig, "eyelet_radius", 1.0, np.random.default_rng(0))
+    plant = make_plant(rig, "guide_radius", 1.0, np.random.default_rng(0))
     log = simulate_experiment(rig, 3, np.random.default_rng(1), effect=plant, noise=InstrumentNoise.none(), steps=3)
     t = compute_residuals(rig, log)
     fit = fit_model(AugmentedModel(rig, [make_effect("guide_radius", rig)]), t)
-    assert fit.theta[1] == pytest.approx(plant.eyelet_radius_m, rel=1e-6)
+    assert fit.theta[1] == pytest.approx(plant.guide_radius_m, rel=1e-6)
     assert fit.rss < 1e-10 * fit_model(AugmentedModel(rig), t).rss
 
 

@@ -1,7 +1,7 @@
 """Selection: held-out folds, the residual-signature test's level, separability, verdicts on small logs.
 
 Statistics over many logs and random rigs (false-alarm rate, naming rates) are in
-``studies/diagnose_confusion.py``; these tests check the pieces and a few verdicts.
+``studies/diagnose_confusion/diagnose_confusion.py``; these tests check the pieces and a few verdicts.
 """
 
 from __future__ import annotations

@@ -89,7 +89,7 @@ def test_suggestion_separates_lookalikes_within_the_row_budget(rig):
     d = diagnose(rig, log, effects=["sensor_bias", "tracker_registration"], secondary=False)
     s = suggest_experiment(rig, d, 20, seed=1)
     if s is None:           # the log told them apart after all: nothing to suggest
-        assert not d.verdict.get("alternatives")
+        assert not d.verdict.alternatives
         return
     assert len(s.cycle) <= 20 and len(np.unique(s.cycle)) >= 1 and s.cycle.min() > max(log.cycle)
     key = next(iter(s.separation_sd))

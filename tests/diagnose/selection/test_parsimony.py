@@ -1,0 +1,92 @@
+"""Parsimony that holds (a flexible model never beats a few-number one that explains the log as well),
+and the time-trend check for faults outside the vocabulary that drift."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from csjm_opt.diagnose.data.trend import time_trend
+from csjm_opt.diagnose.selection.decision import flexible, parsimonious
+
+
+class _Score(SimpleNamespace):
+    def cycle_mse(self):
+        return dict(enumerate(self.mse))
+
+
+def _score(p_eff, mse):
+    return _Score(fit=SimpleNamespace(p_eff=p_eff), mse=list(mse))
+
+
+def test_flexible_is_measured_against_the_cycles():
+    assert flexible(_score(23, [1.0]), 8)          # 23 > 0.5 * 24
+    assert not flexible(_score(23, [1.0]), 20)
+    assert not flexible(_score(4, [1.0]), 8)
+
+
+def test_a_flexible_model_never_beats_a_few_number_one_that_explains_the_log_as_well():
+    rng = np.random.default_rng(0)
+    base = rng.uniform(1.0, 2.0, 8)
+    holes = _score(23, base * rng.uniform(0.97, 1.03, 8))
+    drive = _score(5, base * rng.uniform(0.97, 1.03, 8))
+    scores = {"hole_offsets": holes, "drive_offsets": drive}
+    # hole offsets ahead on evidence, no better on held-out cycles: the few numbers are named
+    assert parsimonious(scores, {"hole_offsets": -270.0, "drive_offsets": -280.0}, 8) == "drive_offsets"
+    # hole offsets clearly better on every held-out cycle: they are named
+    better = _score(23, base * 0.6)
+    assert parsimonious({"hole_offsets": better, "drive_offsets": drive},
+                        {"hole_offsets": -270.0, "drive_offsets": -280.0}, 8) == "hole_offsets"
+    # two few-number models: the evidence decides
+    assert parsimonious({"a": drive, "b": _score(3, base)}, {"a": -1.0, "b": -2.0}, 8) == "a"
+
+
+def _cycles(C, rows=11):
+    return np.repeat(np.arange(C), rows)
+
+
+def test_time_trend_finds_a_drift_and_not_a_pose_dependent_misfit():
+    rng = np.random.default_rng(1)
+    C = 12
+    cyc = _cycles(C)
+    noise = rng.normal(0, 3e-4, (len(cyc), 3))
+    misfit = rng.normal(0, 1e-3, (C, 3))[cyc]          # a per-cycle misfit in no time order
+    flat = time_trend(noise + misfit, cyc, floor_rad=5e-4)
+    assert not flat["trends"] and flat["p_value"] > 0.01
+    drift = np.outer(np.arange(len(cyc)) / len(cyc), [4e-3, 0.0, -1e-3])   # 4 mrad over the log on x
+    found = time_trend(noise + misfit + drift, cyc, floor_rad=5e-4)
+    assert found["trends"] and found["p_value"] < 1e-3
+    # the fitted change over the log, first cycle to last: the drift's, within the misfit's scatter
+    expected = 4e-3 * (C - 1) / C
+    assert abs(found["change_rad"][0] - expected) < 1.5e-3
+
+
+def test_time_trend_needs_material_size_and_cycles():
+    cyc = _cycles(12)
+    tiny = np.outer(np.arange(len(cyc)), [1e-7, 0, 0])       # a perfect line of 13 urad
+    assert not time_trend(tiny, cyc, floor_rad=5e-4)["trends"]
+    assert time_trend(np.zeros((33, 3)), _cycles(3), 5e-4)["cycles"] == 3
+    assert not time_trend(np.zeros((33, 3)), _cycles(3), 5e-4)["trends"]
+
+
+def test_drive_offsets_are_named_not_hole_offsets():
+    """The issue's failure shape: drive zero offsets (0.6 mm homing errors) came out ``hole_offsets``."""
+    import dataclasses
+
+    import csjm_opt as co
+    from csjm_opt.diagnose import diagnose
+    from csjm_opt.testbed import TestbedPlant
+    from csjm_opt.testbed.simulate import simulate_experiment
+
+    rig = co.paper_rig()
+    rng = np.random.default_rng(11)
+    plant = dataclasses.replace(TestbedPlant.nominal(rig), drive_offsets_m=rng.choice([-1.0, 1.0], 6) * 6e-4)
+    train = simulate_experiment(rig, 10, rng, plant)
+    test = simulate_experiment(rig, 6, rng, plant, first_cycle=20)
+    d = diagnose(rig, train, test, effects=["hole_offsets", "drive_offsets", "sensor_bias"], secondary=False,
+                 workers=1)
+    assert d.selected == "drive_offsets"
+    assert not any("hole_offsets has" in w for w in d.verdict.warnings)
+    j = d.as_json()
+    assert j["verdict"]["selected"] == "drive_offsets" and j["secondary"] == {"effect": "none"}
