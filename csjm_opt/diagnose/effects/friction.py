@@ -307,6 +307,22 @@ class Friction(Effect):
         """
         return np.r_[np.zeros(self.n_cables), 0.5, 0.0][:self.n_params]
 
+    def stick_columns(self, ev) -> tuple[np.ndarray, np.ndarray]:
+        """Generators of the settled variant's stick set in the balance: each cable's moment per newton.
+
+        Parameters
+        ----------
+        ev : Evaluation
+            With ``cable_jacobian`` set.
+
+        Returns
+        -------
+        (numpy.ndarray, numpy.ndarray)
+            ``J^T`` (n, 3, m) (N m per N of friction force along each cable) and the band parameter of
+            each column (cable j: band j).
+        """
+        return np.swapaxes(np.asarray(ev.cable_jacobian), 1, 2).copy(), np.arange(self.n_cables)
+
     def adjust_tension(self, ev, stretch_m, T_N, p):
         """Platform-side tensions with dry friction, ``T exp(mu_beta_i s_i)`` or ``max(T + F_i s_i, 0)``.
 

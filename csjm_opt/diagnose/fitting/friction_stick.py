@@ -53,8 +53,6 @@ import numpy as np
 from numba import njit
 from scipy.optimize import minimize
 
-from ...model import kinematics as kin
-
 #: Iterations of the accelerated projected gradient per row (bounded least squares, 3 x m).
 MAX_ITER = 400
 #: Stop when the squared step (in N^2, relative to the band) falls below this.
@@ -175,48 +173,126 @@ def expected_sq_distance(meas: ZonotopeMeasures, F: np.ndarray, s: float) -> np.
     return (A * s ** 3 * SQRT_HALF_PI + 4.0 * M * s ** 4 + 3.0 * GAUSS3 * s ** 5) / Z
 
 
-def stick_design(model, table, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(a, B)``: whitened linearised residuals (n, 3) of ``model`` at ``theta`` and the friction map (n, 3, m).
+def stick_layout(model) -> tuple[np.ndarray, np.ndarray, list]:
+    """``(lin, band, stick)``: indices of ``model``'s point parameters, of its band parameters, its stick effects.
+
+    A *stick effect* (settled cable friction, settled joint friction) has ``settled`` set and
+    ``stick_columns``; its parameters are bands. Every other parameter (the nuisance, a partner effect's)
+    is a point parameter, linearised about a centre (:class:`StickDesign`).
+    """
+    offs = np.cumsum([0, model.n_params - sum(e.n_params for e in model.effects)]
+                     + [e.n_params for e in model.effects])
+    stick, band = [], []
+    for i, e in enumerate(model.effects):
+        if getattr(e, "settled", False) and hasattr(e, "stick_columns"):
+            stick.append(i)
+            band.extend(range(offs[i + 1], offs[i + 2]))
+    lin = np.setdiff1d(np.arange(model.n_params), band)
+    return lin, np.asarray(band, int), stick
+
+
+def stick_design(model, table, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(a, B, tie)``: whitened linearised residuals, stick-set generators, the band of each generator.
+
+    ``a`` (n, 3) of ``model`` at ``theta``, ``B`` (n, 3, c) the generators of its stick sets and ``tie`` (c,)
+    the band parameter of each generator (indices into the band parameters).
 
     The tangent is the table's (nominal, at the measured pose), the same for every band.
     """
-    g = model.balance(table.R_meas, table.rows, theta)
+    _, band, stick = stick_layout(model)
+    g, ev = model.evaluate(table.R_meas, table.rows, theta)
     WGinv = table.whiten @ np.linalg.inv(table.G)
-    _, ev = model.evaluate(table.R_meas, table.rows, theta)
-    _, J = kin.cable_terms(ev.R_cable, ev.A_m, ev.B_m)                      # (n, m, 3)
-    return np.einsum("nij,nj->ni", WGinv, g), np.einsum("nij,nkj->nik", WGinv, J)
+    cols, ties, first = [], [], 0
+    for i in stick:
+        c, t = model.effects[i].stick_columns(ev)
+        cols.append(c)
+        ties.append(first + np.asarray(t, int))
+        first += model.effects[i].n_params
+    C = np.concatenate(cols, axis=2) if cols else np.zeros((len(g), 3, 0))
+    tie = np.concatenate(ties) if ties else np.zeros(0, int)
+    return np.einsum("nij,nj->ni", WGinv, g), np.einsum("nij,njk->nik", WGinv, C), tie
+
+
+class StickDesign:
+    """A model's stick problem on a table, linearised in its point parameters about ``centre``.
+
+    ``a(x_lin) = a0 + D (x_lin - centre_lin)`` (whitened residual), generators ``B`` (n, 3, c), and
+    ``tie`` (c,): the band parameter of each generator.
+    """
+
+    def __init__(self, model, table, centre: np.ndarray):
+        self.lin, self.band, _ = stick_layout(model)
+        self.centre = np.asarray(centre, float).copy()
+        self.a0, self.B, self.tie = stick_design(model, table, self.centre)
+        self.D = np.empty((len(self.a0), 3, len(self.lin)))
+        h = 1e-3 * np.asarray(model.scales, float)[self.lin]
+        for j, (k, hj) in enumerate(zip(self.lin, h)):
+            th = self.centre.copy()
+            th[k] += hj
+            self.D[:, :, j] = (stick_design(model, table, th)[0] - self.a0) / hj
+
+    def take(self, idx: np.ndarray) -> "StickDesign":
+        """The design of rows ``idx``."""
+        out = object.__new__(StickDesign)
+        out.lin, out.band, out.centre, out.tie = self.lin, self.band, self.centre, self.tie
+        out.a0, out.B, out.D = self.a0[idx], self.B[idx], self.D[idx]
+        return out
 
 
 class StickFit:
-    """Maximum-likelihood band ``F`` (m,), noise scale ``s`` and common offset of the stick model."""
+    """Maximum-likelihood bands, noise scale and point parameters of the stick model.
 
-    def __init__(self, a0: np.ndarray, da: np.ndarray, B: np.ndarray):
-        self.a0, self.da, self.B = np.asarray(a0, float), np.asarray(da, float), np.asarray(B, float)
+    ``x = (point parameters (k), bands (b), log s)``; the residual is ``a0 + D x_point``, the generator
+    ``j`` of row ``i`` is ``B_ij`` with band ``x_band[tie_j]``.
+
+    Parameters
+    ----------
+    a0 : numpy.ndarray
+        (n, 3) residuals at zero point parameters.
+    da : numpy.ndarray
+        (n, 3) or (n, 3, k): their change per unit point parameter.
+    B : numpy.ndarray
+        (n, 3, c) generators.
+    tie : numpy.ndarray, optional
+        (c,) band of each generator (default: one band per generator).
+    """
+
+    def __init__(self, a0: np.ndarray, da: np.ndarray, B: np.ndarray, tie: np.ndarray | None = None):
+        self.a0, self.B = np.asarray(a0, float), np.asarray(B, float)
+        D = np.asarray(da, float)
+        self.D = D[..., None] if D.ndim == 2 else D
+        self.tie = np.arange(self.B.shape[2]) if tie is None else np.asarray(tie, int)
+        self.k = self.D.shape[2]
+        self.nb = int(self.tie.max(initial=-1)) + 1
         self.meas = ZonotopeMeasures(self.B)
         self.f = np.zeros((len(self.a0), self.B.shape[2]))
 
+    def _lognorm(self, bands: np.ndarray, s: float) -> np.ndarray:
+        return log_normaliser(self.meas, bands[self.tie], s)
+
     def neg_log_lik(self, x: np.ndarray) -> tuple[float, np.ndarray]:
-        """``-log L`` and its gradient in ``x = (offset, F_1..F_m, log s)``."""
-        m = self.B.shape[2]
-        dl, F, s = x[0], np.maximum(x[1:1 + m], 0.0), float(np.exp(x[-1]))
-        r, self.f = stick_residual(self.a0 + dl * self.da, self.B, F, self.f)
+        """``-log L`` and its gradient in ``x = (point parameters, bands, log s)``."""
+        k, nb = self.k, self.nb
+        lin, bands, s = x[:k], np.maximum(x[k:k + nb], 0.0), float(np.exp(x[-1]))
+        F = bands[self.tie]
+        r, self.f = stick_residual(self.a0 + np.einsum("nij,j->ni", self.D, lin), self.B, F, self.f)
         d2 = np.sum(r ** 2, axis=1)
-        lz = log_normaliser(self.meas, F, s)
+        lz = self._lognorm(bands, s)
         val = 0.5 * float(np.sum(d2)) / s ** 2 + float(np.sum(lz))
         grad = np.empty_like(x)
-        grad[0] = float(np.sum(r * self.da)) / s ** 2
+        grad[:k] = np.einsum("ni,nij->j", r, self.D) / s ** 2
         # d(d^2)/dF_j = 2 r . b_j f*_j / F_j (Danskin: the optimal forces scale with the band)
         rb = np.einsum("ni,nij->nj", r, self.B)
         tj = np.divide(self.f, F, out=np.zeros_like(self.f), where=F > 0)
-        grad[1:1 + m] = np.sum(rb * tj, axis=0) / s ** 2
+        grad[k:k + nb] = np.bincount(self.tie, np.sum(rb * tj, axis=0), minlength=nb) / s ** 2
         h = 1e-6
-        for j in range(m):
-            Fp, Fm = F.copy(), F.copy()
-            Fp[j] += h
-            Fm[j] = max(F[j] - h, 0.0)
-            dz = log_normaliser(self.meas, Fp, s) - log_normaliser(self.meas, Fm, s)
-            grad[1 + j] += float(np.sum(dz)) / (Fp[j] - Fm[j])
-        dz = log_normaliser(self.meas, F, s * np.exp(h)) - log_normaliser(self.meas, F, s * np.exp(-h))
+        for j in range(nb):
+            bp, bm = bands.copy(), bands.copy()
+            bp[j] += h
+            bm[j] = max(bands[j] - h, 0.0)
+            dz = self._lognorm(bp, s) - self._lognorm(bm, s)
+            grad[k + j] += float(np.sum(dz)) / (bp[j] - bm[j])
+        dz = self._lognorm(bands, s * np.exp(h)) - self._lognorm(bands, s * np.exp(-h))
         grad[-1] = -float(np.sum(d2)) / s ** 2 + float(np.sum(dz)) / (2 * h)
         # d(log Z0)/d(log s) = 3 per row is in the Gaussian constant of every model: counted here explicitly
         val += 3.0 * len(d2) * float(np.log(s))
@@ -224,20 +300,20 @@ class StickFit:
         return val, grad
 
     def fit(self, F_max: float, starts: tuple = (0.0, 0.3, 1.0), s: float | None = None) -> tuple[np.ndarray, float]:
-        """``(x, -log L)`` of the best start; ``F_max`` bounds each band (N); ``s``: a fixed noise scale.
+        """``(x, -log L)`` of the best start; ``F_max`` bounds each band; ``s``: a fixed noise scale.
 
         With the noise scale free, the likelihood of a few hundred rows tends to a band that holds
         every row and a scale near zero (a set-valued model's degeneracy); the diagnosis fixes the
         scale and chooses it on held-out rows (:func:`settled_score`).
         """
-        m = self.B.shape[2]
+        k, nb = self.k, self.nb
         s0 = float(np.sqrt(np.mean(np.sum(self.a0 ** 2, axis=1)) / 3.0))
         best = None
         for share in starts:
             self.f = np.zeros_like(self.f)
-            x0 = np.r_[0.0, np.full(m, share * F_max * 0.1), np.log(max(s0 * (1 - share) + 0.3 * share, 1e-3))]
-            bounds = [(None, None)] + [(0.0, F_max)] * m + [(np.log(1e-3), np.log(1e3)) if s is None
-                                                              else (np.log(s), np.log(s))]
+            x0 = np.r_[np.zeros(k), np.full(nb, share * F_max * 0.1), np.log(max(s0 * (1 - share) + 0.3 * share, 1e-3))]
+            bounds = [(None, None)] * k + [(0.0, F_max)] * nb + [(np.log(1e-3), np.log(1e3)) if s is None
+                                                                 else (np.log(s), np.log(s))]
             if s is not None:
                 x0[-1] = np.log(s)
             res = minimize(self.neg_log_lik, x0, jac=True, method="L-BFGS-B", bounds=bounds,
@@ -250,86 +326,111 @@ class StickFit:
 
 #: 95 % quantile of chi^2 with one degree of freedom (held-out likelihood ratio of the noise scale).
 CHI2_1_95 = 3.84
-#: Half-normal prior sd of a band as a share of the plausible range (evidence, as :mod:`.evidence` does).
-PRIOR_SD_SHARE = 0.5
 
 
 class SettledModel:
-    """The stick model fitted on a table: bands, offset, and what it says of other rows.
+    """The stick model fitted on a table: point parameters, bands, and what it says of other rows.
 
     Parameters
     ----------
     model : AugmentedModel
-        Nominal model plus a :class:`~csjm_opt.diagnose.effects.friction.Friction` effect with
-        ``memory="settled"`` (its parameters: the bands ``F_i_N``; the rest unused here).
-    table : ResidualTable
-        Training rows.
+        Nominal model plus effects of which at least one is settled (a stick effect,
+        :func:`stick_layout`); the others' parameters (and the nuisance) are point parameters.
+    design : StickDesign
+        The model's stick problem on the training rows.
     s : float
-        Noise scale (whitened units) the band is fitted at.
-    F_max_N : float
-        Upper bound of each band.
+        Noise scale (whitened units) the bands are fitted at.
+    start : SettledModel, optional
+        A fit at another noise scale: its parameters and forces start this one.
     """
 
-    def __init__(self, model, table, s: float, F_max_N: float, fit: bool = True, start=None):
-        self.model, self.s, self.F_max = model, float(s), float(F_max_N)
-        th = model.x0()
-        a0, B = stick_design(model, table, th)
-        th[0] = 1e-5
-        a1, _ = stick_design(model, table, th)
-        self.a0, self.da, self.B = a0, (a1 - a0) / 1e-5, B
-        self.m = B.shape[2]
-        self._f = np.zeros((len(a0), self.m))
-        self.x = np.zeros(1 + self.m)
-        if start is not None:                      # a fit at another noise scale: its band and forces
+    def __init__(self, model, design: StickDesign, s: float, start: "SettledModel | None" = None,
+                 fit: bool = True):
+        self.model, self.design, self.s = model, design, float(s)
+        self.k, self.nb = len(design.lin), len(design.band)
+        self.m = self.nb
+        lo, hi = np.asarray(model.lower_bounds, float), np.asarray(model.upper_bounds, float)
+        rng_hi = np.array([_range_top(model, j) for j in design.band])
+        c0 = design.centre[design.lin]
+        self.bounds = ([(None if not np.isfinite(a) else a - c, None if not np.isfinite(b) else b - c)
+                        for a, b, c in zip(lo[design.lin], hi[design.lin], c0)]
+                       + [(0.0, float(t)) for t in rng_hi])
+        prior = np.asarray(model.prior_sd, float)[design.lin]
+        self.ridge = np.where(np.isfinite(prior), prior, np.inf)       # a partner's proper prior (hole offsets)
+        self._f = np.zeros((len(design.a0), design.B.shape[2]))
+        self.x = np.r_[np.zeros(self.k), np.full(self.nb, 0.0)]
+        if start is not None:
             self.x, self._f = start.x.copy(), start._f.copy()
         if fit:
-            self.fit_on(np.arange(len(a0)), warm=start is not None)
+            self.fit_on(np.arange(len(design.a0)), warm=start is not None)
+
+    def theta(self, x: np.ndarray | None = None) -> np.ndarray:
+        """The full parameter vector of ``model`` for ``x`` (point parameters about the design's centre)."""
+        x = self.x if x is None else x
+        th = self.design.centre.copy()
+        th[self.design.lin] += x[:self.k]
+        th[self.design.band] = x[self.k:]
+        return th
 
     def _nll(self, idx: np.ndarray, x: np.ndarray, s: float) -> tuple[float, np.ndarray]:
-        sf = StickFit(self.a0[idx], self.da[idx], self.B[idx])
+        d = self.design
+        sf = StickFit(d.a0[idx], d.D[idx], d.B[idx], d.tie)
         sf.f = self._f[idx]
         val, grad = sf.neg_log_lik(np.r_[x, np.log(s)])
         self._f[idx] = sf.f
         n = len(idx)
-        return val - 3.0 * n * np.log(s), grad[:-1]
+        lin = x[:self.k]
+        val += 0.5 * float(np.sum((lin / self.ridge) ** 2))
+        g = grad[:-1]
+        g[:self.k] += lin / self.ridge ** 2
+        return val - 3.0 * n * np.log(s), g
 
     def fit_on(self, idx: np.ndarray, warm: bool = True) -> np.ndarray:
-        """Fit ``(offset, F)`` by maximum likelihood at the fixed noise scale on rows ``idx``.
+        """Fit ``x`` by maximum likelihood at the fixed noise scale on rows ``idx``.
 
-        ``warm``: start from the current band and forces (else from a small band).
+        ``warm``: start from the current parameters and forces (else from small bands).
         """
-        best = None
-        for share in (0.05,):
-            x0 = self.x.copy() if warm else np.r_[0.0, np.full(self.m, share * self.F_max)]
-            if not warm:
-                self._f = np.zeros((len(self.a0), self.m))
-            res = minimize(lambda x: self._nll(idx, x, self.s), x0, jac=True, method="L-BFGS-B",
-                           bounds=[(None, None)] + [(0.0, self.F_max)] * self.m,
-                           options={"maxiter": 150, "ftol": 1e-9, "gtol": 1e-6})
-            if best is None or res.fun < best.fun:
-                best = res
-        assert best is not None
-        self.x = best.x
+        if warm:
+            x0 = self.x.copy()
+        else:
+            x0 = np.r_[np.zeros(self.k), [0.05 * b[1] for b in self.bounds[self.k:]]]
+            self._f = np.zeros_like(self._f)
+        res = minimize(lambda x: self._nll(idx, x, self.s), x0, jac=True, method="L-BFGS-B",
+                       bounds=self.bounds, options={"maxiter": 150, "ftol": 1e-9, "gtol": 1e-6})
+        self.x = res.x
         return self.x
 
-    def row_terms(self, idx: np.ndarray, x: np.ndarray | None = None,
+    def row_terms(self, design: StickDesign, idx: np.ndarray, x: np.ndarray | None = None,
                   s: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(r, pen, e_d2)``: whitened distance vectors, band price ``2 s^2 log(Z/Z0)``, ``E[d^2]``."""
+        """``(r, pen, e_d2)`` on rows ``idx`` of ``design``.
+
+        Whitened distance vectors, band price ``2 s^2 log(Z/Z0)``, ``E[d^2]``.
+        """
         x = self.x if x is None else x
         s = self.s if s is None else s
-        F = np.maximum(x[1:], 0.0)
-        r, _ = stick_residual(self.a0[idx] + x[0] * self.da[idx], self.B[idx], F)
-        meas = ZonotopeMeasures(self.B[idx])
+        F = np.maximum(x[self.k:], 0.0)[design.tie]
+        lin = x[:self.k] + self.design.centre[design.lin] - design.centre[design.lin]
+        a = design.a0[idx] + np.einsum("nij,j->ni", design.D[idx], lin)
+        r, _ = stick_residual(a, design.B[idx], F)
+        meas = ZonotopeMeasures(design.B[idx])
         return r, 2.0 * s ** 2 * log_normaliser(meas, F, s), expected_sq_distance(meas, F, s)
 
-    def log_evidence(self, noise_scale: float, prior_sd_F: float, prior_sd_dl: float) -> float:
-        """Laplace log evidence at ``noise_scale`` (convention of :func:`.evidence.log_evidence`)."""
-        idx = np.arange(len(self.a0))
+    def log_evidence(self, noise_scale: float) -> float:
+        """Laplace log evidence at ``noise_scale`` (convention of :func:`.evidence.log_evidence`).
+
+        Priors as every model's (:func:`.evidence.prior_of`): half-normal bands, Gaussian point parameters.
+        """
+        from .evidence import _prior
+        idx = np.arange(len(self.design.a0))
         s = float(noise_scale)
         x = self.x
-        self._f = np.zeros((len(self.a0), self.m))
+        self._f = np.zeros_like(self._f)
         val, g0 = self._nll(idx, x, s)
-        sd = np.r_[prior_sd_dl, np.full(self.m, prior_sd_F)]
+        val -= 0.5 * float(np.sum((x[:self.k] / self.ridge) ** 2))      # the prior is counted once, below
+        mean_all, sd_all, side_all = _prior(_ModelOnly(self.model))
+        order = np.r_[self.design.lin, self.design.band]
+        mean = mean_all[order] - np.r_[self.design.centre[self.design.lin], np.zeros(self.nb)]
+        sd, side = sd_all[order], side_all[order]
         H = np.empty((len(x), len(x)))
         for j in range(len(x)):
             h = 1e-4 * sd[j]
@@ -337,26 +438,44 @@ class SettledModel:
             xp[j] += h
             H[:, j] = (self._nll(idx, xp, s)[1] - g0) / h
         H = 0.5 * (H + H.T)
-        quad = float(np.sum((x / sd) ** 2))
+        H[:self.k, :self.k] -= np.diag(np.where(np.isfinite(self.ridge), 1.0 / self.ridge ** 2, 0.0))
+        quad = float(np.sum(((x - mean) / sd) ** 2))
         _, logdet = np.linalg.slogdet(np.eye(len(x)) + sd[:, None] * H * sd[None, :])
-        return float(-val - 0.5 * quad - 0.5 * logdet + self.m * np.log(2.0))
+        return float(-val - 0.5 * quad - 0.5 * logdet + np.count_nonzero(side) * np.log(2.0))
+
+
+class _ModelOnly:
+    """A stand-in with the one attribute :func:`.evidence._prior` reads (``model``)."""
+
+    def __init__(self, model):
+        self.model = model
+
+
+def _range_top(model, j: int) -> float:
+    """Upper end of parameter ``j``'s plausible range (a band's bound in the fit)."""
+    names = model.param_names
+    for e in model.effects:
+        rng = e.ranges()
+        if names[j] in rng:
+            return float(rng[names[j]][1])
+    return float("inf")
 
 
 class _Evidence:
     """``noise_scale -> log evidence`` of a fitted stick model (picklable: fits travel back from workers)."""
 
-    def __init__(self, sm: SettledModel, prior_sd_F: float, prior_sd_dl: float):
-        self.sm, self.prior_sd_F, self.prior_sd_dl = sm, prior_sd_F, prior_sd_dl
+    def __init__(self, sm: SettledModel):
+        self.sm = sm
         self._memo: dict[float, float] = {}
 
     def __call__(self, noise_scale: float) -> float:
         key = float(noise_scale)
         if key not in self._memo:
-            self._memo[key] = self.sm.log_evidence(key, self.prior_sd_F, self.prior_sd_dl)
+            self._memo[key] = self.sm.log_evidence(key)
         return self._memo[key]
 
 
-def settled_score(model, train, test, folds, scales: Sequence[float], F_max_N: float, prior_sd_dl: float):
+def settled_score(model, train, test, folds, scales: Sequence[float]):
     """The stick model scored like every other model: fitted on training rows, held-out residuals.
 
     The held-out "residual" of a row is its distance to the stick set in rad (``L_i r_i``,
@@ -368,20 +487,19 @@ def settled_score(model, train, test, folds, scales: Sequence[float], F_max_N: f
     leaves held-out rows outside, at a scale too large it takes stick positions for noise): the
     stick model's noise estimate, which friction does not inflate.
 
+    A partner effect's parameters (a pair: settled friction and a sensor bias) are point parameters,
+    linearised about the nominal values and, once fitted, about the fit (one relinearisation).
+
     Parameters
     ----------
     model : AugmentedModel
-        Nominal model + settled friction.
+        Nominal model + at least one settled effect (+ point effects).
     train, test : ResidualTable
         Training and held-out tables (``test`` None: the folds of ``train``).
     folds : list of numpy.ndarray or None
         Held-out row sets of ``train`` when there is no test table.
     scales : sequence of float
         Candidate noise scales (whitened units).
-    F_max_N : float
-        Upper bound of a band.
-    prior_sd_dl : float
-        Prior sd of the common offset (m), for the evidence.
 
     Returns
     -------
@@ -397,24 +515,28 @@ def settled_score(model, train, test, folds, scales: Sequence[float], F_max_N: f
         q = (np.sum(r ** 2, axis=1) + pen) / s ** 2
         return np.einsum("nij,nj->ni", L, r), q, (e_d2 + pen) / s ** 2, var
 
+    scales = sorted(scales)
+    design = StickDesign(model, train, model.x0())
+    if len(design.lin) > 1:         # a partner effect: relinearised about its fit at the middle scale
+        first = SettledModel(model, design, scales[len(scales) // 2])
+        design = StickDesign(model, train, first.theta())
     all_rows = np.arange(len(train))
-    sm_t = None if test is None else SettledModel(model, test, 1.0, F_max_N, fit=False)
+    d_test = None if test is None else StickDesign(model, test, design.centre)
     prev = None
     tried: list[tuple] = []
-    for s in sorted(scales):
-        sm = SettledModel(model, train, s, F_max_N, start=prev)
+    for s in scales:
+        sm = SettledModel(model, design, s, start=prev)
         prev = sm
-        if test is not None:
-            assert sm_t is not None
+        if d_test is not None:
             idx = np.arange(len(test))
-            r, pen, e = sm_t.row_terms(idx, sm.x, s)
+            r, pen, e = sm.row_terms(d_test, idx, sm.x, s)
             zeta, q, eq, var = to_rad(test, idx, r, pen, e)
             cyc = test.cycle
         else:
             zeta, q, eq, var = np.empty((len(train), 3)), *np.empty((3, len(train)))
             for h in folds or []:
                 x = sm.fit_on(np.setdiff1d(all_rows, h))
-                r, pen, e = sm.row_terms(h, x)
+                r, pen, e = sm.row_terms(design, h, x)
                 zeta[h], q[h], eq[h], var[h] = to_rad(train, h, r, pen, e)
             sm.fit_on(all_rows)
             cyc = train.cycle
@@ -425,20 +547,17 @@ def settled_score(model, train, test, folds, scales: Sequence[float], F_max_N: f
     top = min(t[0] for t in tried)
     _, sm, zeta, q, eq, var, cyc = max((t for t in tried if t[0] <= top + CHI2_1_95), key=lambda t: t[1].s)
     s = sm.s
-    r_tr, pen_tr, _ = sm.row_terms(all_rows)
+    r_tr, pen_tr, _ = sm.row_terms(design, all_rows)
     zeta_tr = to_rad(train, all_rows, r_tr, pen_tr, pen_tr)[0]
-    theta = model.x0()
-    theta[0] = sm.x[0]
-    theta[1:1 + sm.m] = sm.x[1:]
-    prior_sd_F = PRIOR_SD_SHARE * F_max_N
+    theta = sm.theta()
     n = len(train)
     rss = float(np.sum(r_tr ** 2) + np.sum(pen_tr))
     free = np.zeros(model.n_params, bool)
-    free[0] = True
-    free[1:1 + sm.m] = sm.x[1:] > 1e-9
+    free[design.lin] = True
+    free[design.band] = sm.x[sm.k:] > 1e-9
     fit = FitResult(model, theta, np.zeros((model.n_params, model.n_params)), rss, 3 * n, float(free.sum()),
                     int(free.sum()), 1.0, zeta_tr, None, None, free, train.rows,
-                    evidence_fn=_Evidence(sm, prior_sd_F, prior_sd_dl))
+                    evidence_fn=_Evidence(sm))
     floor = float(np.sqrt(equivalent_mse(eq, var, s))) / s    # per unit noise scale, as the other models'
     return CandidateScore(model.name, fit, zeta, cyc, zeta_tr, 0, train.instrument_floor_rad,
                           float(s ** 2), floor, (), heldout_density=(q, var, s))

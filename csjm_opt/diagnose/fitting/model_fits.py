@@ -19,7 +19,7 @@ from ..decision_rule import _Context
 from ..effects import make_effect
 from ..selection.scoring import CandidateScore, score
 from .augmented import AugmentedModel
-from .evidence import NUISANCE_SD_M, log_evidence
+from .evidence import log_evidence
 from .friction_stick import settled_score
 from .gauss_newton import FitResult, fit_model
 
@@ -81,21 +81,38 @@ def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (
     return options[best], fits[best]
 
 
-#: The variant of friction that needs no loading path (:mod:`csjm_opt.diagnose.fitting.friction_stick`).
-SETTLED = {"law": "coulomb", "memory": "settled"}
+#: The variants that need no loading path (:mod:`csjm_opt.diagnose.fitting.friction_stick`): the rest pose is any
+#: static equilibrium with the friction forces (cable) or moment (joint) within their bounds.
+SETTLED_VARIANTS: dict[str, dict] = {"friction": {"law": "coulomb", "memory": "settled"},
+                                     "joint_friction": {"memory": "settled"}}
+SETTLED = SETTLED_VARIANTS["friction"]
 #: Noise scales tried for the stick model, as shares of the within-cycle estimate (which friction inflates).
 SETTLED_SCALES = (0.25, 0.35, 0.5, 0.7, 1.0)
 
 
-def _settled(ctx: _Context, rig: Rig, ranges: Mapping | None) -> CandidateScore | None:
-    """Friction as a stick condition per row, scored on the diagnosis's rows (None without a noise scale)."""
-    effect = make_effect("friction", rig, ranges, **SETTLED)
+def is_settled(name: str, options: Mapping) -> bool:
+    """Whether ``options`` are the settled variant of effect ``name``."""
+    return name in SETTLED_VARIANTS and dict(options) == SETTLED_VARIANTS[name]
+
+
+def settled_scales(ctx: _Context) -> list[float] | None:
+    """The noise scales a stick model is scored at (None without a within-cycle noise estimate)."""
     scale = ctx.local / ctx.instrument if np.isfinite(ctx.local) and ctx.instrument > 0 else float("nan")
     if not np.isfinite(scale) or scale <= 0:
         return None
-    top = max(hi for lo, hi in effect.ranges().values())
-    return settled_score(AugmentedModel(rig, [effect]), ctx.train, ctx.test, ctx.folds,
-                         [scale * f for f in SETTLED_SCALES], top, NUISANCE_SD_M)
+    return [scale * f for f in SETTLED_SCALES]
+
+
+def _settled(ctx: _Context, rig: Rig, ranges: Mapping | None, effects: Sequence,
+             scales: Sequence[float] | None = None) -> CandidateScore | None:
+    """A model with a settled effect (a stick condition per row) scored on the diagnosis's rows.
+
+    ``scales``: the noise scales to choose from (default :func:`settled_scales`).
+    """
+    scales = settled_scales(ctx) if scales is None else list(scales)
+    if scales is None:
+        return None
+    return settled_score(AugmentedModel(rig, list(effects)), ctx.train, ctx.test, ctx.folds, scales)
 
 
 def _prefer_settled(ctx: _Context, settled: CandidateScore, path: CandidateScore) -> bool:
@@ -133,20 +150,24 @@ def fit_single(ctx: _Context, rig: Rig, ranges: Mapping | None,
     try:
         opt, fit = variant_fit(ctx, rig, name, ranges)
         sc = score_with(ctx, AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), fit)
-        if name == "friction":           # the stick condition beside the path: the better held-out score
-            settled = _settled(ctx, rig, ranges)
+        if name in SETTLED_VARIANTS:      # the stick condition beside the path: the better held-out score
+            settled = _settled(ctx, rig, ranges, [make_effect(name, rig, ranges, **SETTLED_VARIANTS[name])])
             if settled is not None and _prefer_settled(ctx, settled, sc):
-                return SETTLED, settled, None
+                return SETTLED_VARIANTS[name], settled, None
         return opt, sc, None
     except FIT_ERRORS as exc:
         return {}, None, f"fit failed: {exc}"
 
 
 def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
+             stick_scales: Mapping[str, float] | None,
              pair: tuple[str, str]) -> tuple[CandidateScore | None, str | None]:
     """Pair ``(a, b)`` scored, a variant chosen on the pair model: ``(score, None)`` or ``(None, message)``.
 
-    ``options`` are the singles' variants (kept for an effect without variants in this pair).
+    ``options`` are the singles' variants (kept for an effect without variants in this pair). A pair with a
+    settled single (the stick condition) is scored at the noise scale that single's held-out rows chose
+    (``stick_scales``; the largest of two): a set-valued model's held-out error is taken at its noise
+    scale, and the pair is compared with its single at the same one.
 
     Parameters
     ----------
@@ -162,6 +183,13 @@ def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[s
     """
     a, b = pair
     try:
+        if is_settled(a, options.get(a, {})) or is_settled(b, options.get(b, {})):
+            # a settled single: the pair is the stick condition with the partner's parameters as point parameters
+            effects = [make_effect(e, rig, ranges, **options.get(e, {})) for e in (a, b)]
+            known = [stick_scales[e] for e in (a, b) if stick_scales and e in stick_scales]
+            sc = _settled(ctx, rig, ranges, effects, [max(known)] if known else None)
+            if sc is not None:
+                return sc, None
         # an effect's variant (friction's law and memory) is chosen on the model being fitted: a single
         # fit that had to absorb the partner effect may prefer another law than the pair does
         fit: FitResult | None = None
