@@ -182,7 +182,8 @@ def stick_layout(model) -> tuple[np.ndarray, np.ndarray, list]:
     """
     offs = np.cumsum([0, model.n_params - sum(e.n_params for e in model.effects)]
                      + [e.n_params for e in model.effects])
-    stick, band = [], []
+    stick: list[int] = []
+    band: list[int] = []
     for i, e in enumerate(model.effects):
         if getattr(e, "settled", False) and hasattr(e, "stick_columns"):
             stick.append(i)
@@ -393,7 +394,7 @@ class SettledModel:
         if warm:
             x0 = self.x.copy()
         else:
-            x0 = np.r_[np.zeros(self.k), [0.05 * b[1] for b in self.bounds[self.k:]]]
+            x0 = np.r_[np.zeros(self.k), [0.05 * float(b[1] or 0.0) for b in self.bounds[self.k:]]]
             self._f = np.zeros_like(self._f)
         res = minimize(lambda x: self._nll(idx, x, self.s), x0, jac=True, method="L-BFGS-B",
                        bounds=self.bounds, options={"maxiter": 150, "ftol": 1e-9, "gtol": 1e-6})
@@ -427,7 +428,7 @@ class SettledModel:
         self._f = np.zeros_like(self._f)
         val, g0 = self._nll(idx, x, s)
         val -= 0.5 * float(np.sum((x[:self.k] / self.ridge) ** 2))      # the prior is counted once, below
-        mean_all, sd_all, side_all = _prior(_ModelOnly(self.model))
+        mean_all, sd_all, side_all = _prior(_ModelOnly(self.model))  # type: ignore[arg-type]
         order = np.r_[self.design.lin, self.design.band]
         mean = mean_all[order] - np.r_[self.design.centre[self.design.lin], np.zeros(self.nb)]
         sd, side = sd_all[order], side_all[order]

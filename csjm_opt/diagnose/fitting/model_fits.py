@@ -164,10 +164,10 @@ def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[s
              pair: tuple[str, str]) -> tuple[CandidateScore | None, str | None]:
     """Pair ``(a, b)`` scored, a variant chosen on the pair model: ``(score, None)`` or ``(None, message)``.
 
-    ``options`` are the singles' variants (kept for an effect without variants in this pair). A pair with a
-    settled single (the stick condition) is scored at the noise scale that single's held-out rows chose
-    (``stick_scales``; the largest of two): a set-valued model's held-out error is taken at its noise
-    scale, and the pair is compared with its single at the same one.
+    ``options`` are the singles' variants (kept for an effect without variants in this pair). A pair with the
+    lead single settled (the stick condition; ``stick_scales`` holds it) is scored at the noise scale that
+    single's held-out rows chose: a set-valued model's held-out error is taken at its noise scale, and the
+    pair is compared with its single at the same one. Any other settled single joins as its path variant.
 
     Parameters
     ----------
@@ -183,13 +183,17 @@ def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[s
     """
     a, b = pair
     try:
-        if is_settled(a, options.get(a, {})) or is_settled(b, options.get(b, {})):
-            # a settled single: the pair is the stick condition with the partner's parameters as point parameters
+        known = [stick_scales[e] for e in (a, b) if stick_scales and e in stick_scales]
+        if known:
+            # the lead single is settled: the pair is the stick condition with the partner's parameters as point
+            # parameters, at the lead's noise scale
             effects = [make_effect(e, rig, ranges, **options.get(e, {})) for e in (a, b)]
-            known = [stick_scales[e] for e in (a, b) if stick_scales and e in stick_scales]
-            sc = _settled(ctx, rig, ranges, effects, [max(known)] if known else None)
+            sc = _settled(ctx, rig, ranges, effects, [max(known)])
             if sc is not None:
                 return sc, None
+        # a settled effect that is not the lead joins a point model as its path variant: a stick set scored at
+        # a noise scale of its own would absorb the lead's misfit at a price no point model pays
+        options = {e: ({} if is_settled(e, o) else o) for e, o in options.items()}
         # an effect's variant (friction's law and memory) is chosen on the model being fitted: a single
         # fit that had to absorb the partner effect may prefer another law than the pair does
         fit: FitResult | None = None

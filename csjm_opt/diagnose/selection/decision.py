@@ -478,8 +478,9 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
     m = len(singles)
     level = ALPHA / max(m * (m - 1) // 2 if masked_base is not None else len(todo), 1)
     # the pairs are independent fits: on ``workers`` processes, results in the order of ``todo``
-    # a settled single's noise scale (set-valued models are compared at one scale: its pairs are scored at it)
-    stick = {n: sc.heldout_density[2] for n, sc in singles.items() if sc.heldout_density is not None}
+    # a settled lead's noise scale (set-valued models are compared at one scale: its pairs are scored at it)
+    lead = singles.get(first) if first is not None else None
+    stick = {first: lead.heldout_density[2]} if lead is not None and lead.heldout_density is not None else {}
     for (a, b), (sc, error) in zip(todo, map_ordered(fit_pair, (ctx, rig, ranges, options, stick), todo, workers,
                                                      tick)):
         entry = next(p for p in pairs if set(p["effects"]) == {a, b})
