@@ -144,8 +144,8 @@ def test_point_parameters_recovered_beside_the_bands():
     # rows at rest anywhere in the stick set, shifted by a known linear term D theta: the fit finds theta
     rng = np.random.default_rng(9)
     F_true, s_true, theta = np.array([1.0, 1.5, 0.8, 1.2]), 0.2, np.array([0.7, -0.4])
-    a, B = _stick_rows(rng, 150, F_true, s_true)
-    D = rng.normal(size=(150, 3, 2))
+    a, B = _stick_rows(rng, 60, F_true, s_true)
+    D = rng.normal(size=(60, 3, 2))
     x, _ = StickFit(a - np.einsum("nij,j->ni", D, theta), D, B).fit(10.0, starts=(0.3,), s=s_true)
     np.testing.assert_allclose(x[:2], theta, atol=0.1)
 
