@@ -216,3 +216,34 @@ def workers_of(args: argparse.Namespace) -> int:
     from .._workers import default_workers
 
     return args.workers if args.workers is not None else default_workers()
+
+
+def pose_option(required: bool = False) -> argparse.ArgumentParser:
+    """A parent parser with ``--rotvec RX RY RZ`` and ``--tau TX TY TZ``, the same in every command.
+
+    Parameters
+    ----------
+    required : bool
+        Whether the command needs a pose (else the default is the identity, upright).
+    """
+    p = argparse.ArgumentParser(add_help=False)
+    p.add_argument("--rotvec", nargs=3, type=rotvec_component, required=required,
+                   default=None if required else (0.0, 0.0, 0.0), metavar=("RX", "RY", "RZ"),
+                   help="orientation of {A} in {B} as a rotation vector (rad)"
+                   + ("" if required else "; default identity"))
+    p.add_argument("--tau", nargs=3, type=quantity("moment_Nm"), default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
+                   help="external moment about O in {A} (N m), platform weight excluded; default 0")
+    return p
+
+
+def pose_of(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray]:
+    """``--rotvec`` and ``--tau`` of :func:`pose_option` as checked (3,) arrays (rad, N m).
+
+    Raises
+    ------
+    InvalidInput
+        A rotation vector of norm above pi.
+    """
+    from .._validate import as_vector3
+
+    return as_vector3(check_rotvec(args.rotvec), "--rotvec"), as_vector3(args.tau, "--tau")

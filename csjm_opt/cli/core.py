@@ -9,28 +9,19 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._fileio import atomic_write_json
-from ._options import check_outputs, check_rotvec, json_option, quantity, rig_option, rotvec_component
+from ._options import check_outputs, json_option, pose_of, pose_option, quantity, rig_option
 from .commands import command_help
 
 if TYPE_CHECKING:
-    from ..model.numeric import Model
+    from ..model.rig import Rig
     from ..planning.plans import TensionPlan
 
 
-def add_pose_load(p: argparse.ArgumentParser) -> None:
-    """``--rotvec`` and ``--tau``: shared by commands that take a pose and a load."""
-    p.add_argument("--rotvec", nargs=3, type=rotvec_component, required=True, metavar=("RX", "RY", "RZ"),
-                   help="orientation of {A} in {B} as a rotation vector (rad)")
-    p.add_argument("--tau", nargs=3, type=quantity("moment_Nm"), default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
-                   help="external moment about O in {A} (N m), platform weight excluded")
+def add_plan_arguments(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``plan`` and ``stiffness`` besides the shared ones: reference tension, solver.
 
-
-def add_pose_arguments(p: argparse.ArgumentParser) -> None:
-    """Arguments of ``plan`` and ``stiffness``: pose, load, reference tension, solver.
-
-    ``--rig`` and ``--json`` come from the shared parent parsers.
+    ``--rig``, ``--json``, ``--rotvec`` and ``--tau`` come from the shared parent parsers.
     """
-    add_pose_load(p)
     p.add_argument("--t-ref", type=quantity("tension_N"), default=None,
                    help="reference tension of the objective (N; default mid-range)")
     p.add_argument("--solver", default="active_set",
@@ -47,33 +38,42 @@ def register(sub: argparse._SubParsersAction) -> None:
         The ``csjm`` subparsers the command is added to.
     """
     p = sub.add_parser(
-        "plan", help=command_help("plan"), parents=[rig_option(), json_option()],
-                       description="Plan the six cable tensions (QP, t_min <= t <= t_max) that hold "
+        "plan", help=command_help("plan"), parents=[rig_option(), pose_option(required=True), json_option()],
+                       description="Plan the cable tensions (QP, t_min <= t <= t_max) that hold "
                        "the platform at a pose under an external moment plus its own weight.")
-    add_pose_arguments(p)
+    add_plan_arguments(p)
     p.set_defaults(func=run_plan)
     p = sub.add_parser(
-        "stiffness", help=command_help("stiffness"), parents=[rig_option(), json_option()],
+        "stiffness", help=command_help("stiffness"),
+        parents=[rig_option(), pose_option(required=True), json_option()],
                        description="Plan tensions for the pose and load, then the stiffness K "
                        "(N m/rad; Levi-Civita Hessian of the cable energy, convention of docs/conventions.md).")
-    add_pose_arguments(p)
+    add_plan_arguments(p)
     p.set_defaults(func=run_stiffness)
 
 
-def _plan(args: argparse.Namespace) -> tuple[TensionPlan, Model, np.ndarray, np.ndarray]:
+def _plan(args: argparse.Namespace) -> tuple[TensionPlan, Rig, np.ndarray, np.ndarray]:
+    """The plan at the command's pose and load.
+
+    The default solver plans without the compiled kernels
+    (:func:`csjm_opt.planning.one_shot.plan_tensions_uncompiled`, the same answer
+    to round-off): loading numba would cost a second for a 50 us job.
+    """
     from .. import so3
-    from .._validate import as_vector3
-    from ..model.numeric import Model
     from ..model.rig import load_rig
-    from ..planning.planner import plan_tensions
 
     check_outputs([args.rig], {"--json": args.json})
     rig = load_rig(args.rig)
-    model = Model(rig)
-    rotvec = as_vector3(check_rotvec(args.rotvec), "--rotvec")
-    tau = as_vector3(args.tau, "--tau")
-    plan = plan_tensions(rig, so3.exp(rotvec), tau, t_ref_N=args.t_ref, solver=args.solver, model=model)
-    return plan, model, rotvec, tau
+    rotvec, tau = pose_of(args)
+    if args.solver == "active_set":
+        from ..planning.one_shot import plan_tensions_uncompiled
+
+        plan = plan_tensions_uncompiled(rig, so3.exp(rotvec), tau, t_ref_N=args.t_ref)
+    else:
+        from ..planning.planner import plan_tensions
+
+        plan = plan_tensions(rig, so3.exp(rotvec), tau, t_ref_N=args.t_ref, solver=args.solver)
+    return plan, rig, rotvec, tau
 
 
 def _plan_json(plan: TensionPlan, rotvec: np.ndarray, tau: np.ndarray) -> dict:
@@ -145,8 +145,8 @@ def run_stiffness(args: argparse.Namespace) -> int:
     """
     from ..model.joint_stiffness import stiffness
 
-    plan, model, rotvec, tau = _plan(args)
-    K = stiffness(model.rig, plan.R, plan.tensions_N, model=model, tau_ext_A_Nm=tau)
+    plan, rig, rotvec, tau = _plan(args)
+    K = stiffness(rig, plan.R, plan.tensions_N, tau_ext_A_Nm=tau)
     eig = np.linalg.eigvalsh(K)
     stable = bool(eig[0] > 0)
     if args.json:

@@ -9,13 +9,12 @@ import numpy as np
 from .._fileio import atomic_write_json, atomic_write_text
 from ._options import (
     check_outputs,
-    check_rotvec,
     float_in,
     json_option,
     out_option,
-    quantity,
+    pose_of,
+    pose_option,
     rig_option,
-    rotvec_component,
 )
 from .commands import MJCF_ACTUATIONS, command_help
 
@@ -30,15 +29,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     """
     p = sub.add_parser(
         "export-mjcf", help=command_help("export-mjcf"),
-        parents=[rig_option(), out_option("FILE.xml", "MJCF file to write"), json_option("a summary")],
-                       description="Write a MuJoCo model of the rig: ball joint at O, six pull-only tendon "
-                       "springs with rest lengths planned for the pose and load, the platform's mass and "
+        parents=[rig_option(), pose_option(), out_option("FILE.xml", "MJCF file to write"), json_option("a summary")],
+                       description="Write a MuJoCo model of the rig: ball joint at O, one pull-only tendon "
+                       "spring per cable with rest lengths planned for the pose and load, the platform's mass and "
                        "inertia, base sites fixed, load motors in {A}. Frames: world = {B}, body "
                        "'platform' = {A}; the ball joint's qpos is R as (w, x, y, z).")
-    p.add_argument("--rotvec", nargs=3, type=rotvec_component, default=(0.0, 0.0, 0.0),
-                   metavar=("RX", "RY", "RZ"), help="pose of {A} in {B} as a rotation vector (rad; default identity)")
-    p.add_argument("--tau", nargs=3, type=quantity("moment_Nm"), default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
-                   help="external moment about O in {A} (N m), platform weight excluded")
     p.add_argument("--actuation", choices=MJCF_ACTUATIONS, default="spring",
                    help="cables as pull-only springs (default), winch actuators (ctrl = rest length) "
                    "or tension motors (ctrl = tension)")
@@ -70,13 +65,12 @@ def run(args: argparse.Namespace) -> int:
         No tensions within the bounds hold the pose under the load.
     """
     from .. import so3
-    from .._validate import as_vector3
     from ..model.rig import load_rig
     from ..planning.mjcf_export import export_mjcf
 
     check_outputs([args.rig], {"-o/--out": args.out, "--json": args.json})
     rig = load_rig(args.rig)
-    rotvec, tau = as_vector3(check_rotvec(args.rotvec), "--rotvec"), as_vector3(args.tau, "--tau")
+    rotvec, tau = pose_of(args)
     xml = export_mjcf(rig, so3.exp(rotvec), tau, actuation=args.actuation, timestep_s=args.timestep,
                       integrator=args.integrator)
     path = atomic_write_text(args.out, xml)

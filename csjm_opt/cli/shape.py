@@ -9,9 +9,16 @@ import numpy as np
 
 from .._fileio import atomic_write_json
 from ..errors import InvalidInput
-from ._options import check_outputs, check_rotvec, finite_float, json_option, quantity, rig_option
+from ._options import (
+    check_outputs,
+    finite_float,
+    json_option,
+    pose_of,
+    pose_option,
+    quantity,
+    rig_option,
+)
 from .commands import SHAPING_OBJECTIVES, command_help
-from .core import add_pose_load
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -23,13 +30,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         The ``csjm`` subparsers the command is added to.
     """
     p = sub.add_parser(
-        "shape", help=command_help("shape"), parents=[rig_option(), json_option()],
-                       description="Choose the six cable tensions (t_min <= t <= t_max) that hold the pose "
+        "shape", help=command_help("shape"), parents=[rig_option(), pose_option(required=True), json_option()],
+                       description="Choose the cable tensions (t_min <= t <= t_max) that hold the pose "
                        "under the load and bring the stiffness K (N m/rad, docs/conventions.md) closest to "
                        "a target: weighted Frobenius (default), principal ('eigen') or directional objective. "
                        "Reports the achieved K, the residual, whether the target is reached and the active "
                        "bounds; --reachable adds the reachable range of each eigenvalue of K.")
-    add_pose_load(p)
     p.add_argument("--target", nargs=9, type=quantity("stiffness_Nm_per_rad"), required=True, metavar="K",
                    help="target K row by row: K11 K12 K13 K21 ... K33 (N m/rad; symmetrised)")
     p.add_argument("--weights", nargs="+", type=quantity("weight"), default=None, metavar="W",
@@ -66,7 +72,6 @@ def run(args: argparse.Namespace) -> int:
         No tensions within the bounds hold the pose under the load.
     """
     from .. import so3
-    from .._validate import as_vector3
     from ..model.numeric import Model
     from ..model.rig import load_rig
     from ..shaping.shaper import shape_stiffness
@@ -77,8 +82,7 @@ def run(args: argparse.Namespace) -> int:
             raise InvalidInput(f"--direction: expected a non-zero direction of moderate length, got {d}",
                                "--direction")
     rig = load_rig(args.rig)
-    rotvec = as_vector3(check_rotvec(args.rotvec), "--rotvec")
-    tau = as_vector3(args.tau, "--tau")
+    rotvec, tau = pose_of(args)
     K_target = np.array(args.target, float).reshape(3, 3)
     weights = None
     if args.weights is not None:

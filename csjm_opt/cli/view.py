@@ -6,13 +6,12 @@ import argparse
 
 from ._options import (
     check_outputs,
-    check_rotvec,
     int_in,
     json_option,
     out_option,
-    quantity,
+    pose_of,
+    pose_option,
     rig_option,
-    rotvec_component,
 )
 from .commands import command_help
 
@@ -27,16 +26,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     """
     p = sub.add_parser(
         "view", help=command_help("view"),
-        parents=[rig_option(), out_option("VIEW.html", "HTML page to write"), json_option("the numbers shown")],
+        parents=[rig_option(), pose_option(), out_option("VIEW.html", "HTML page to write"),
+                 json_option("the numbers shown")],
         description="Write one self-contained HTML page (works offline, no network fetches) showing the rig "
         "in 3-D: base, platform at the pose, joint centre O, holes numbered as in the rig file, cables "
         "coloured by planned tension, the load moment, and the compliance ellipsoid of K. A slider moves "
         "along the straight path from upright and unloaded to the pose and load (or through a log's cycles "
         "with --log). A pose the rig cannot hold still renders and names the cables at their bounds.")
-    p.add_argument("--rotvec", nargs=3, type=rotvec_component, default=(0.0, 0.0, 0.0), metavar=("RX", "RY", "RZ"),
-                   help="orientation of {A} in {B} as a rotation vector (rad; default identity)")
-    p.add_argument("--tau", nargs=3, type=quantity("moment_Nm"), default=(0.0, 0.0, 0.0), metavar=("TX", "TY", "TZ"),
-                   help="external moment about O in {A} (N m), platform weight excluded")
     p.add_argument("--steps", type=int_in(1, 50), default=5,
                    help="frames on the path from upright to the pose (default 5)")
     p.add_argument("--log", metavar="DATA.csv", default=None,
@@ -63,13 +59,12 @@ def run(args: argparse.Namespace) -> int:
         Unreadable rig or log, an output that cannot be written, a rotation vector outside the principal ball.
     """
     from .._fileio import atomic_write_json
-    from .._validate import as_vector3
     from ..model.rig import load_rig
     from ..view import log_view, pose_view
 
     check_outputs([args.rig, args.log], {"-o/--out": args.out, "--json": args.json})
     rig = load_rig(args.rig)
-    rotvec, tau = as_vector3(check_rotvec(args.rotvec), "--rotvec"), as_vector3(args.tau, "--tau")
+    rotvec, tau = pose_of(args)
     if args.log:
         from ..measurement.logfile import MeasurementLog
 

@@ -40,14 +40,6 @@ def test_no_help_imports_a_numerical_library():
     assert loaded == {" ".join(a): [] for a in argvs}
 
 
-def test_csjm_plan_loads_neither_casadi_nor_qpsolvers():
-    code = ("import sys; from csjm_opt.cli import main; assert main(['plan', '--rotvec', '0.1', '-0.05', '0']) == 0; "
-            "print(sorted({m.split('.')[0] for m in sys.modules} & {'casadi', 'qpsolvers', 'matplotlib', 'mujoco', "
-            "'dask'}), sorted(m for m in sys.modules if m.startswith('scipy.optimize') or m == 'scipy.sparse'))")
-    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)
-    assert res.stdout.strip().splitlines()[-1] == "[] []"
-
-
 def test_the_parsers_choices_are_the_owners():
     from csjm_opt.cli import commands as c
     from csjm_opt.design._value_checks import MAX_DESIGNS
