@@ -230,7 +230,8 @@ def parsimonious(scores: Mapping[str, CandidateScore], evidence: Mapping[str, fl
 
     The highest evidence wins, unless it is *flexible* (:func:`flexible`) and a model that is not
     explains the log as well: the flexible one does not beat it on held-out cycles (one-sided paired
-    test at ``HELDOUT_ALPHA``). A 36-number hole-offset fit then never beats a few-number effect or
+    test at ``HELDOUT_ALPHA``), nor, for a set-valued model (settled friction), by a decisive Bayes
+    factor (``EVIDENCE_MIN`` nats). A 36-number hole-offset fit then never beats a few-number effect or
     pair that explains the log as well; among those, the highest evidence.
 
     Parameters
@@ -248,8 +249,12 @@ def parsimonious(scores: Mapping[str, CandidateScore], evidence: Mapping[str, fl
     best = max(scores, key=lambda n: evidence[n])
     if not flexible(scores[best], n_cycles):
         return best
+    # a set-valued model (settled friction) is a stick set that can hold almost any pose: its held-out rows
+    # alone cannot rule it out, so it explains the log as well only if it is not decisively less probable
+    # either (the flexible model's evidence has paid its Occam factor)
     simple = [n for n, sc in scores.items() if not flexible(sc, n_cycles)
-              and paired_heldout_test(sc, scores[best]) >= HELDOUT_ALPHA]
+              and paired_heldout_test(sc, scores[best]) >= HELDOUT_ALPHA
+              and (getattr(sc, "heldout_density", None) is None or evidence[n] >= evidence[best] - EVIDENCE_MIN)]
     return max(simple, key=lambda n: evidence[n]) if simple else best
 
 

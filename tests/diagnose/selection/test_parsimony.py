@@ -38,6 +38,15 @@ def test_a_flexible_model_never_beats_a_few_number_one_that_explains_the_log_as_
     better = _score(23, base * 0.6)
     assert parsimonious({"hole_offsets": better, "drive_offsets": drive},
                         {"hole_offsets": -270.0, "drive_offsets": -280.0}, 8) == "hole_offsets"
+    # a set-valued few-number model (settled friction: a stick set holds almost any pose, so held-out rows
+    # cannot rule it out) decisively less probable than the flexible one (Bayes factor e^-1000) is no rival
+    stick = _score(7, base * rng.uniform(0.97, 1.03, 8))
+    stick.heldout_density = ("q", "var", 1.0)
+    assert parsimonious({"hole_offsets": holes, "friction": stick},
+                        {"hole_offsets": -270.0, "friction": -1270.0}, 8) == "hole_offsets"
+    # ... but within a few nats (not decisive) it is named
+    assert parsimonious({"hole_offsets": holes, "friction": stick},
+                        {"hole_offsets": -270.0, "friction": -273.0}, 8) == "friction"
     # two few-number models: the evidence decides
     assert parsimonious({"a": drive, "b": _score(3, base)}, {"a": -1.0, "b": -2.0}, 8) == "a"
 
