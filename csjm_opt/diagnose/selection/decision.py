@@ -365,7 +365,8 @@ def _look_alike_warning(ctx: _Context, verdict: Verdict, singles, tests, pairs, 
 
     A few-number model (single or pair, not :func:`flexible`) that is plausible, closes the gap or comes
     within ``LOOK_ALIKE_SHARE`` of it, and that the flexible verdict does not beat on held-out cycles
-    (paired test at ``HELDOUT_ALPHA``) explains the log as well with far fewer numbers.
+    (paired test at ``HELDOUT_ALPHA``) explains the log as well with far fewer numbers; a set-valued one
+    (settled friction) only if it is not decisively less probable either (as in :func:`parsimonious`).
     """
     final = verdict.final
     models: dict[str, tuple[CandidateScore, bool]] = {
@@ -375,9 +376,12 @@ def _look_alike_warning(ctx: _Context, verdict: Verdict, singles, tests, pairs, 
         if p.get("fitted") and k in pair_scores:
             models["+".join(k)] = (pair_scores[k], bool(p.get("plausible")))
     look = []
+    ev_final = ctx.evidence(final)
     for name, (sc, ok) in models.items():
         if sc is final or not ok or flexible(sc, n_cycles) or ctx.fraction(sc) < LOOK_ALIKE_SHARE * CLOSE_FRACTION:
             continue
+        if sc.heldout_density is not None and ctx.evidence(sc) < ev_final - EVIDENCE_MIN:
+            continue                # a stick set decisively less probable: held-out rows alone do not make it a rival
         p = paired_heldout_test(sc, final)
         if p >= HELDOUT_ALPHA:
             look.append((name, p))
