@@ -57,7 +57,8 @@ def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] |
     ranges : mapping, optional
         Prior-range overrides, parameter name or fnmatch pattern -> ``(lo, hi)``.
     **options
-        Variant of the effect (``friction``: ``law``, ``memory``; ``sensor_gain``: ``axes``).
+        Variant of the effect (``friction``: ``law``, ``memory``; ``joint_friction``: ``memory``;
+        ``sensor_gain``: ``axes``).
 
     Returns
     -------
@@ -83,6 +84,8 @@ def make_effect(name: str, rig=None, ranges: Mapping[str, tuple[float, float]] |
         effect = Friction(t_max_N=rig.t_max_N if rig is not None else 100.0, n_cables=m, **options)
     elif cls is SensorGain:
         effect = SensorGain(n_cables=m, **options)
+    elif cls is JointFriction:
+        effect = JointFriction(n_cables=m, **options)
     else:
         effect = cls(n_cables=m)
     return effect.with_ranges(ranges)

@@ -65,7 +65,7 @@ CORNER = 0.02
 SOFTPLUS_LINEAR = 40.0
 #: Friction laws and memory modes.
 LAWS = ("capstan", "coulomb")
-MEMORIES = ("carried", "reset")
+MEMORIES = ("carried", "reset", "settled")
 #: Band positions kept per effect (a fit's Jacobian and pose tangent re-evaluate the log at the same stick
 #: travels: every column of a parameter the travel does not depend on, every pose step under the Coulomb law).
 BAND_MEMO = 16
@@ -184,7 +184,6 @@ class Friction(Effect):
     """Dry cable friction: m band sizes (one per cable), the stick travel factor, the first state."""
 
     name = "friction"
-    path_dependent = True
     description = ("dry cable friction with memory: T_platform = T exp(mu_beta_i s_i) (capstan) or "
                    "T + F_i s_i (Coulomb), s_i a play operator of the cable's motion carried over the log")
 
@@ -192,9 +191,18 @@ class Friction(Effect):
                  n_cables: int = 6):
         if law not in LAWS or memory not in MEMORIES:
             raise ValueError(f"law must be one of {LAWS} and memory one of {MEMORIES}")
+        if memory == "settled" and law != "coulomb":
+            raise ValueError("settled friction is a Coulomb band (law='coulomb')")
         self.law, self.memory, self.t_max_N = law, memory, float(t_max_N)
         self.n_cables = int(n_cables)
+        # settled: the rest pose is any static Coulomb equilibrium (:mod:`..fitting.friction_stick`), no path
+        self.settled = memory == "settled"
         self._memo: dict = {}
+
+    @property
+    def path_dependent(self) -> bool:  # type: ignore[override]
+        """Whether the state follows the loading path (not for settled friction: any static equilibrium)."""
+        return not self.settled
 
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
@@ -235,8 +243,8 @@ class Friction(Effect):
             then ``stick_travel_factor`` and ``first_row_state``.
         """
         unit = "" if self.law == "capstan" else "_N"
-        return (tuple(f"{self._band}_{i + 1}{unit}" for i in range(self.n_cables))
-                + ("stick_travel_factor", "first_row_state"))
+        bands = tuple(f"{self._band}_{i + 1}{unit}" for i in range(self.n_cables))
+        return bands if self.memory == "settled" else bands + ("stick_travel_factor", "first_row_state")
 
     @property
     def scales(self):
@@ -248,7 +256,7 @@ class Friction(Effect):
             Band scale (0.03, or 2 % of ``t_max_N`` in N) for the m bands, 0.5 for the other two.
         """
         band = 0.03 if self.law == "capstan" else 0.02 * self.t_max_N
-        return np.r_[np.full(self.n_cables, band), 0.5, 0.5]
+        return np.r_[np.full(self.n_cables, band), 0.5, 0.5][:self.n_params]
 
     @property
     def lower_bounds(self):
@@ -259,7 +267,7 @@ class Friction(Effect):
         numpy.ndarray
             Zero for the bands and the stick factor; -1 for the first state.
         """
-        return np.r_[np.zeros(self.n_cables + 1), -1.0]
+        return np.r_[np.zeros(self.n_cables + 1), -1.0][:self.n_params]
 
     @property
     def upper_bounds(self):
@@ -270,7 +278,7 @@ class Friction(Effect):
         numpy.ndarray
             Unbounded for the bands and the stick factor; 1 for the first state.
         """
-        return np.r_[np.full(self.n_cables + 1, np.inf), 1.0]
+        return np.r_[np.full(self.n_cables + 1, np.inf), 1.0][:self.n_params]
 
     def default_ranges(self):
         """Plausible ranges of the friction parameters.
@@ -284,8 +292,10 @@ class Friction(Effect):
             Parameter name -> ``(lo, hi)``.
         """
         top = 0.3 if self.law == "capstan" else 0.1 * self.t_max_N
-        return {**{n: (0.0, top) for n in self.param_names[:self.n_cables]},
-                "stick_travel_factor": (0.0, 2.0), "first_row_state": (-1.0, 1.0)}
+        out = {n: (0.0, top) for n in self.param_names[:self.n_cables]}
+        if self.memory != "settled":
+            out.update({"stick_travel_factor": (0.0, 2.0), "first_row_state": (-1.0, 1.0)})
+        return out
 
     def x0(self) -> np.ndarray:
         """Starting values: no friction, stick factor 0.5, first state 0.
@@ -295,7 +305,23 @@ class Friction(Effect):
         numpy.ndarray
             The m + 2 starting values.
         """
-        return np.r_[np.zeros(self.n_cables), 0.5, 0.0]
+        return np.r_[np.zeros(self.n_cables), 0.5, 0.0][:self.n_params]
+
+    def stick_columns(self, ev) -> tuple[np.ndarray, np.ndarray]:
+        """Generators of the settled variant's stick set in the balance: each cable's moment per newton.
+
+        Parameters
+        ----------
+        ev : Evaluation
+            With ``cable_jacobian`` set.
+
+        Returns
+        -------
+        (numpy.ndarray, numpy.ndarray)
+            ``J^T`` (n, 3, m) (N m per N of friction force along each cable) and the band parameter of
+            each column (cable j: band j).
+        """
+        return np.swapaxes(np.asarray(ev.cable_jacobian), 1, 2).copy(), np.arange(self.n_cables)
 
     def adjust_tension(self, ev, stretch_m, T_N, p):
         """Platform-side tensions with dry friction, ``T exp(mu_beta_i s_i)`` or ``max(T + F_i s_i, 0)``.
@@ -319,6 +345,8 @@ class Friction(Effect):
         numpy.ndarray
             The changed tensions (N), shape (n, m).
         """
+        if self.memory == "settled":              # friction forces are latent per row: no mean tension change
+            return T_N
         m = self.n_cables
         band, factor, s0 = p[:m], p[m], p[m + 1]
         w = factor                                   # one compliance split weighs both sides

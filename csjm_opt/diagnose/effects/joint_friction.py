@@ -19,6 +19,13 @@ with memory of its own: an axis that stops moving between two rows is taken as u
 friction instead of holding the moment it had. On logs of load steps (every row moves) the two
 agree; on logs with rows that repeat a pose they do not.
 
+Settled variant (``memory="settled"``): where each load is hung at once and the platform comes to
+rest under its own dynamics, the joint sticks wherever the motion dies out, anywhere its moment
+stays in the box; the row is explained when *some* moment in the box balances it (no direction of
+motion needed): the stick condition of :mod:`csjm_opt.diagnose.fitting.friction_stick`, with three
+generators ``M e_k`` (the box's axes, the same for every cable geometry) where cable friction has
+one generator per cable, ``F_j J_j`` (shaped by the cables' Jacobian at each pose).
+
 Prior: half-normal on ``M >= 0`` over ``(0, RANGE_NM)``.
 """
 
@@ -58,9 +65,38 @@ class JointFriction(Effect):
     """Coulomb friction moment of the ball joint, ``|tau_f,j| <= M`` per axis of {A}."""
 
     name = "joint_friction"
-    path_dependent = True
     description = ("Coulomb friction in the spherical joint: a moment |tau_f,j| <= M per axis of {A} "
                    "opposing the platform's rotation")
+    #: Variants: ``"step"`` (the moment opposes each row's rotation) or ``"settled"`` (any moment in the box).
+    MEMORIES = ("step", "settled")
+
+    def __init__(self, n_cables: int = 6, memory: str = "step"):
+        super().__init__(n_cables=n_cables)
+        if memory not in self.MEMORIES:
+            raise ValueError(f"memory must be one of {self.MEMORIES}")
+        self.memory = memory
+        self.settled = memory == "settled"
+
+    @property
+    def path_dependent(self) -> bool:  # type: ignore[override]
+        """Whether the moment follows the rows' motion (not for the settled variant)."""
+        return not self.settled
+
+    def stick_columns(self, ev) -> tuple[np.ndarray, np.ndarray]:
+        """Generators of the settled variant's stick set in the balance: the box's axes.
+
+        Parameters
+        ----------
+        ev : Evaluation
+
+        Returns
+        -------
+        (numpy.ndarray, numpy.ndarray)
+            ``(n, 3, 3)`` moments (N m) per unit of the bound, and the parameter each column's bound
+            is (all three: ``M``).
+        """
+        n = len(ev.rows)
+        return np.broadcast_to(np.eye(3), (n, 3, 3)).copy(), np.zeros(3, int)
 
     @property
     def param_names(self):
@@ -133,6 +169,8 @@ class JointFriction(Effect):
         -------
         numpy.ndarray
         """
+        if self.settled:                 # the moment is latent per row (:meth:`stick_columns`)
+            return g_Nm
         return g_Nm - p[0] * self.slide_direction(ev)
 
     def describe(self, p):

@@ -361,7 +361,7 @@ def with_entry(model: "AugmentedModel", rows: Rows, R_meas: np.ndarray, theta: n
     first row gets the state and cable lengths of the log's previous row. Predicting a cycle
     then uses the measured past, never the cycle's own measurements.
     """
-    if not model.path_dependent or any(getattr(e, "memory", "carried") != "carried" for e in model.effects):
+    if not model.path_dependent or any(getattr(e, "memory", "carried") in ("reset", "settled") for e in model.effects):
         return rows
     _, ev = model.evaluate(R_meas, rows, theta)
     n, m = np.shape(rows.rest_lengths_m)

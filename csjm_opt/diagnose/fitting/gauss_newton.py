@@ -15,6 +15,7 @@ number of parameters, the rank and condition of its Jacobian, and its BIC.
 from __future__ import annotations
 
 import dataclasses
+from typing import Callable
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -45,6 +46,9 @@ class FitResult:
     res_x: np.ndarray | None = None   # (3 n + priors,) its residuals
     free: np.ndarray | None = None    # (p,) parameters not at a bound
     rows: Rows | None = None          # the rows fitted (path-dependent models: the path their state followed)
+    # a model whose likelihood is not a sum of squares (settled friction, :mod:`.friction_stick`): its own
+    # Laplace log evidence at a noise scale, used by :func:`csjm_opt.diagnose.evidence.log_evidence`
+    evidence_fn: Callable[[float], float] | None = None
 
     def refit_rows(self, keep: np.ndarray) -> np.ndarray:
         """Parameters fitted to rows ``keep`` only: one Gauss-Newton step from this fit.

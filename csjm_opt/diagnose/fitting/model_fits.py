@@ -20,6 +20,7 @@ from ..effects import make_effect
 from ..selection.scoring import CandidateScore, score
 from .augmented import AugmentedModel
 from .evidence import log_evidence
+from .friction_stick import settled_score
 from .gauss_newton import FitResult, fit_model
 
 #: Variants of an effect the data choose between: the highest Laplace evidence of the training fit wins, at one
@@ -80,6 +81,52 @@ def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (
     return options[best], fits[best]
 
 
+#: The variants that need no loading path (:mod:`csjm_opt.diagnose.fitting.friction_stick`): the rest pose is any
+#: static equilibrium with the friction forces (cable) or moment (joint) within their bounds.
+SETTLED_VARIANTS: dict[str, dict] = {"friction": {"law": "coulomb", "memory": "settled"},
+                                     "joint_friction": {"memory": "settled"}}
+SETTLED = SETTLED_VARIANTS["friction"]
+#: Noise scales tried for the stick model, as shares of the within-cycle estimate (which friction inflates).
+SETTLED_SCALES = (0.25, 0.35, 0.5, 0.7, 1.0)
+
+
+def is_settled(name: str, options: Mapping) -> bool:
+    """Whether ``options`` are the settled variant of effect ``name``."""
+    return name in SETTLED_VARIANTS and dict(options) == SETTLED_VARIANTS[name]
+
+
+def settled_scales(ctx: _Context) -> list[float] | None:
+    """The noise scales a stick model is scored at (None without a within-cycle noise estimate)."""
+    scale = ctx.local / ctx.instrument if np.isfinite(ctx.local) and ctx.instrument > 0 else float("nan")
+    if not np.isfinite(scale) or scale <= 0:
+        return None
+    return [scale * f for f in SETTLED_SCALES]
+
+
+def _settled(ctx: _Context, rig: Rig, ranges: Mapping | None, effects: Sequence,
+             scales: Sequence[float] | None = None) -> CandidateScore | None:
+    """A model with a settled effect (a stick condition per row) scored on the diagnosis's rows.
+
+    ``scales``: the noise scales to choose from (default :func:`settled_scales`).
+    """
+    scales = settled_scales(ctx) if scales is None else list(scales)
+    if scales is None:
+        return None
+    return settled_score(AugmentedModel(rig, list(effects)), ctx.train, ctx.test, ctx.folds, scales)
+
+
+def _prefer_settled(ctx: _Context, settled: CandidateScore, path: CandidateScore) -> bool:
+    """Whether the stick condition explains the log better than the path model.
+
+    A model that closes the held-out gap (its held-out errors at its own floor) beats one that does not
+    (selection rule 3): a path model is the more informative where the rig followed it (a slow ramp: it
+    predicts a point, the stick condition only a set), and leaves a gap where the rig came to rest by its
+    own dynamics. Between two models that both close or both fail, the lower held-out error wins.
+    """
+    a, b = ctx.closes(settled), ctx.closes(path)
+    return a and not b if a != b else settled.heldout_mse < path.heldout_mse
+
+
 def score_with(ctx: _Context, model: AugmentedModel, fit: FitResult | None = None) -> CandidateScore:
     """``model`` scored on the diagnosis's rows and folds (``fit``: its plain training fit, if known)."""
     return score(model, ctx.train, ctx.test, ctx.folds, fit)
@@ -102,16 +149,25 @@ def fit_single(ctx: _Context, rig: Rig, ranges: Mapping | None,
     """
     try:
         opt, fit = variant_fit(ctx, rig, name, ranges)
-        return opt, score_with(ctx, AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), fit), None
+        sc = score_with(ctx, AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), fit)
+        if name in SETTLED_VARIANTS:      # the stick condition beside the path: the better held-out score
+            settled = _settled(ctx, rig, ranges, [make_effect(name, rig, ranges, **SETTLED_VARIANTS[name])])
+            if settled is not None and _prefer_settled(ctx, settled, sc):
+                return SETTLED_VARIANTS[name], settled, None
+        return opt, sc, None
     except FIT_ERRORS as exc:
         return {}, None, f"fit failed: {exc}"
 
 
 def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
+             stick_scales: Mapping[str, float] | None,
              pair: tuple[str, str]) -> tuple[CandidateScore | None, str | None]:
     """Pair ``(a, b)`` scored, a variant chosen on the pair model: ``(score, None)`` or ``(None, message)``.
 
-    ``options`` are the singles' variants (kept for an effect without variants in this pair).
+    ``options`` are the singles' variants (kept for an effect without variants in this pair). A pair with the
+    lead single settled (the stick condition; ``stick_scales`` holds it) is scored at the noise scale that
+    single's held-out rows chose: a set-valued model's held-out error is taken at its noise scale, and the
+    pair is compared with its single at the same one. Any other settled single joins as its path variant.
 
     Parameters
     ----------
@@ -127,6 +183,17 @@ def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[s
     """
     a, b = pair
     try:
+        known = [stick_scales[e] for e in (a, b) if stick_scales and e in stick_scales]
+        if known:
+            # the lead single is settled: the pair is the stick condition with the partner's parameters as point
+            # parameters, at the lead's noise scale
+            effects = [make_effect(e, rig, ranges, **options.get(e, {})) for e in (a, b)]
+            sc = _settled(ctx, rig, ranges, effects, [max(known)])
+            if sc is not None:
+                return sc, None
+        # a settled effect that is not the lead joins a point model as its path variant: a stick set scored at
+        # a noise scale of its own would absorb the lead's misfit at a price no point model pays
+        options = {e: ({} if is_settled(e, o) else o) for e, o in options.items()}
         # an effect's variant (friction's law and memory) is chosen on the model being fitted: a single
         # fit that had to absorb the partner effect may prefer another law than the pair does
         fit: FitResult | None = None

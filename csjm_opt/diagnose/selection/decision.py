@@ -14,6 +14,7 @@ from __future__ import annotations
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
+from scipy import stats
 from threadpoolctl import threadpool_limits
 
 from ...errors import SolverError
@@ -41,6 +42,8 @@ from ..decision_rule import (  # noqa: F401 (ALPHA and the thresholds are re-exp
     combine_scales,
 )
 from ..effects import EFFECTS, make_effect
+from ..effects.base import PLAUSIBLE_Z
+from ..fitting.augmented import N_NUISANCE
 from ..fitting.model_fits import VARIANTS, fit_pair, fit_single, variant_fit  # noqa: F401 (VARIANTS re-exported)
 from ..fitting.pool import map_ordered, resolve_workers
 from .pairs import all_separabilities, secondary_alternatives
@@ -185,8 +188,9 @@ def _noise_floor(ctx: _Context, baseline: CandidateScore, singles: Mapping[str, 
 
     Sets the context's noise scale, the one every model's evidence is taken at.
     """
+    # (not a set-valued model's: its scale is the largest the held-out rows allow, for its own score only)
     floor0 = min([ctx.noise_floor(baseline)] + [ctx.scale(sc) * baseline.instrument_floor_rad
-                                                for sc in singles.values()])
+                                                for sc in singles.values() if sc.heldout_density is None])
     ctx.sigma = floor0 / baseline.instrument_floor_rad
     return floor0
 
@@ -226,7 +230,8 @@ def parsimonious(scores: Mapping[str, CandidateScore], evidence: Mapping[str, fl
 
     The highest evidence wins, unless it is *flexible* (:func:`flexible`) and a model that is not
     explains the log as well: the flexible one does not beat it on held-out cycles (one-sided paired
-    test at ``HELDOUT_ALPHA``). A 36-number hole-offset fit then never beats a few-number effect or
+    test at ``HELDOUT_ALPHA``), nor, for a set-valued model (settled friction), by a decisive Bayes
+    factor (``EVIDENCE_MIN`` nats). A 36-number hole-offset fit then never beats a few-number effect or
     pair that explains the log as well; among those, the highest evidence.
 
     Parameters
@@ -244,8 +249,12 @@ def parsimonious(scores: Mapping[str, CandidateScore], evidence: Mapping[str, fl
     best = max(scores, key=lambda n: evidence[n])
     if not flexible(scores[best], n_cycles):
         return best
+    # a set-valued model (settled friction) is a stick set that can hold almost any pose: its held-out rows
+    # alone cannot rule it out, so it explains the log as well only if it is not decisively less probable
+    # either (the flexible model's evidence has paid its Occam factor)
     simple = [n for n, sc in scores.items() if not flexible(sc, n_cycles)
-              and paired_heldout_test(sc, scores[best]) >= HELDOUT_ALPHA]
+              and paired_heldout_test(sc, scores[best]) >= HELDOUT_ALPHA
+              and (getattr(sc, "heldout_density", None) is None or evidence[n] >= evidence[best] - EVIDENCE_MIN)]
     return max(simple, key=lambda n: evidence[n]) if simple else best
 
 
@@ -324,6 +333,7 @@ def _rival_warnings(ctx: _Context, verdict: Verdict, singles, tests, detected, p
                      f"than {final.name}, but did not beat it on held-out cycles: the log does not decide between them")
     if flexible(final, n_cycles):
         _look_alike_warning(ctx, verdict, singles, tests, pairs, pair_scores, n_cycles)
+        _stand_in_warning(ctx, verdict, singles, pairs, pair_scores)
     if remaining["significant"] and remaining["systematic_rad"] >= MATERIAL_SHARE * ctx.floor(final):
         verdict.warn(f"the residual left by {final.name} still holds structure within cycles (signature test p = "
                      f"{remaining['p_value']:.1e}): the named effect may be a stand-in for one outside the vocabulary; "
@@ -355,7 +365,8 @@ def _look_alike_warning(ctx: _Context, verdict: Verdict, singles, tests, pairs, 
 
     A few-number model (single or pair, not :func:`flexible`) that is plausible, closes the gap or comes
     within ``LOOK_ALIKE_SHARE`` of it, and that the flexible verdict does not beat on held-out cycles
-    (paired test at ``HELDOUT_ALPHA``) explains the log as well with far fewer numbers.
+    (paired test at ``HELDOUT_ALPHA``) explains the log as well with far fewer numbers; a set-valued one
+    (settled friction) only if it is not decisively less probable either (as in :func:`parsimonious`).
     """
     final = verdict.final
     models: dict[str, tuple[CandidateScore, bool]] = {
@@ -365,9 +376,12 @@ def _look_alike_warning(ctx: _Context, verdict: Verdict, singles, tests, pairs, 
         if p.get("fitted") and k in pair_scores:
             models["+".join(k)] = (pair_scores[k], bool(p.get("plausible")))
     look = []
+    ev_final = ctx.evidence(final)
     for name, (sc, ok) in models.items():
         if sc is final or not ok or flexible(sc, n_cycles) or ctx.fraction(sc) < LOOK_ALIKE_SHARE * CLOSE_FRACTION:
             continue
+        if sc.heldout_density is not None and ctx.evidence(sc) < ev_final - EVIDENCE_MIN:
+            continue                # a stick set decisively less probable: held-out rows alone do not make it a rival
         p = paired_heldout_test(sc, final)
         if p >= HELDOUT_ALPHA:
             look.append((name, p))
@@ -380,6 +394,61 @@ def _look_alike_warning(ctx: _Context, verdict: Verdict, singles, tests, pairs, 
                  f"pose offsets in this log ({n_cycles} cycles), and {names} explain the log about as well with a "
                  f"few numbers ({final.name} does not beat them on held-out cycles): the log does not single out "
                  f"{final.name}; --suggest designs rows that separate them")
+
+
+def stand_ins(ctx: _Context, final: CandidateScore, selected: str, pairs, pair_scores) -> list[tuple[str, float]]:
+    """Effects a flexible single verdict may be standing in for: ``(effect, z)``, the largest z first.
+
+    ``X`` qualifies when the pair ``selected + X`` is fitted, plausible and closes the gap; the log cannot
+    tell ``X`` from ``selected`` (not separable: the flexible effect can mimic it); the pair is not
+    decisively less probable (evidence within ``EVIDENCE_MIN`` nats) and the verdict does not beat it on
+    held-out cycles; and, in the pair, ``X``'s parameters are away from their nominal values by more than
+    ``PLAUSIBLE_Z`` standard errors as a block (Wald test at that level with the pair's own covariance, the
+    flexible effect's prior included; ``z = sqrt(Wald statistic)``): the
+    log then carries ``X`` as well as the flexible effect's version of it. On a log of the flexible effect
+    alone ``X`` fits to within its errors of nominal, and nothing is named.
+    """
+    ev = ctx.evidence(final)
+    out = []
+    for p in pairs:
+        k = tuple(p["effects"])
+        if (not p.get("fitted") or selected not in k or k not in pair_scores or p.get("separable", True)
+                or not (p.get("plausible") and p.get("closes_gap"))):
+            continue
+        sc = pair_scores[k]
+        if ctx.evidence(sc) < ev - EVIDENCE_MIN or paired_heldout_test(sc, final) < HELDOUT_ALPHA:
+            continue
+        other = k[1] if k[0] == selected else k[0]
+        j = k.index(other)
+        model = sc.fit.model
+        start = N_NUISANCE + sum(e.n_params for e in model.effects[:j])
+        idx = np.arange(start, start + model.effects[j].n_params)
+        delta = sc.fit.theta[idx] - model.effects[j].x0()
+        C = sc.fit.cov[np.ix_(idx, idx)]
+        if not np.all(np.isfinite(C)) or not np.any(C):
+            continue
+        rank = int(np.linalg.matrix_rank(C, hermitian=True))
+        wald = float(delta @ np.linalg.pinv(C, hermitian=True) @ delta) if rank else 0.0
+        # the block's Wald statistic against its chi^2 at the PLAUSIBLE_Z two-sided level (95 % for z = 2)
+        if rank and stats.chi2.sf(wald, rank) < 2.0 * stats.norm.sf(PLAUSIBLE_Z):
+            out.append((other, float(np.sqrt(wald))))
+    return sorted(out, key=lambda t: -t[1])
+
+
+def _stand_in_warning(ctx: _Context, verdict: Verdict, singles, pairs, pair_scores) -> None:
+    """A flexible single verdict names the effects it may be standing in for (:func:`stand_ins`)."""
+    if verdict.selected not in singles or verdict.secondary.effect != "none":
+        return
+    named = set(verdict.look_alikes) | set(verdict.alternatives)
+    found = [(x, z) for x, z in stand_ins(ctx, verdict.final, verdict.selected, pairs, pair_scores) if x not in named]
+    if not found:
+        return
+    verdict.stand_ins = [x for x, _ in found]
+    sel = verdict.selected
+    listed = ", ".join(f"{x} (its parameters away from nominal in {sel}+{x}: Wald z = {z:.1f})" for x, z in found[:3])
+    verdict.warn(f"{sel} can stand in for {listed} on this log (not separable from {sel}; the pair is as probable "
+                 f"and {sel} alone does not beat it on held-out cycles): these may be present too; --suggest "
+                 "designs rows that separate them")
 
 
 def _time_trend_warning(ctx: _Context, verdict: Verdict) -> None:
@@ -418,7 +487,11 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
     m = len(singles)
     level = ALPHA / max(m * (m - 1) // 2 if masked_base is not None else len(todo), 1)
     # the pairs are independent fits: on ``workers`` processes, results in the order of ``todo``
-    for (a, b), (sc, error) in zip(todo, map_ordered(fit_pair, (ctx, rig, ranges, options), todo, workers, tick)):
+    # a settled lead's noise scale (set-valued models are compared at one scale: its pairs are scored at it)
+    lead = singles.get(first) if first is not None else None
+    stick = {first: lead.heldout_density[2]} if lead is not None and lead.heldout_density is not None else {}
+    for (a, b), (sc, error) in zip(todo, map_ordered(fit_pair, (ctx, rig, ranges, options, stick), todo, workers,
+                                                     tick)):
         entry = next(p for p in pairs if set(p["effects"]) == {a, b})
         if sc is None:
             entry["error"] = str(error)

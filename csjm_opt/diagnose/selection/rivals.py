@@ -116,7 +116,10 @@ def unsettled_rivals(models: Mapping[str, Mapping], verdict: str, skip: Collecti
         if not (m.get("closes_gap") or tied):
             continue
         adds = sorted(eff - named) if named < eff else []
-        better = bool(m.get("closes_gap")) and p_better < HELDOUT_ALPHA / n_closing
+        # a set-valued rival (settled friction: a stick set holds almost any held-out pose) is not confirmed by
+        # its held-out errors alone when it is decisively less probable
+        better = (bool(m.get("closes_gap")) and p_better < HELDOUT_ALPHA / n_closing
+                  and not (m.get("set_valued") and nats <= -EVIDENCE_MIN))
         if nats > 0.0 or better or (not adds and nats > -EVIDENCE_MIN and tied):
             out.append({"model": name, "nats": nats, "nats_linearised": float(m["log_evidence"]) - lin_v,
                         "heldout_p": p, "adds": adds,
@@ -194,7 +197,8 @@ def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mappin
         return None if noise_scale is None or fit is None else log_evidence(fit, float(noise_scale), at_fit=True)
 
     out = {n: {"log_evidence": evidence(sc), "log_evidence_at_fit": at_fit(sc), "cycle_mse": sc.cycle_mse(),
-               "plausible": bool(tests[n].get("plausible")), "closes_gap": bool(tests[n].get("closes_gap"))}
+               "plausible": bool(tests[n].get("plausible")), "closes_gap": bool(tests[n].get("closes_gap")),
+               "set_valued": getattr(sc, "heldout_density", None) is not None}
            for n, sc in singles.items()}
     for p in pairs:
         key = tuple(p["effects"])
@@ -202,5 +206,6 @@ def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mappin
             sc = pair_scores[key]
             out["+".join(key)] = {"log_evidence": evidence(sc), "log_evidence_at_fit": at_fit(sc),
                                   "cycle_mse": sc.cycle_mse(),
+                                  "set_valued": getattr(sc, "heldout_density", None) is not None,
                                   "plausible": bool(p.get("plausible")), "closes_gap": bool(p.get("closes_gap"))}
     return out

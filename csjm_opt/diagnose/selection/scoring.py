@@ -44,6 +44,17 @@ class CandidateScore:
     heldout_floor_rad: float = float("nan")   # RMS held-out error of this model if it were right: noise
                                     # plus its parameters' estimation error (per unit noise scale)
     heldout_blocks: tuple = ()      # ((held-out row indices, whitened prediction covariance), ...) per fold
+    # a set-valued model (settled friction, :mod:`..fitting.friction_stick`): per held-out row its -2 log density in
+    # whitened units less the Gaussian constant at its own noise scale s (``d^2 / s^2 + 2 log(Z / Z0)``), the
+    # row's mean noise variance per axis (rad^2), and s; its squared errors are then -2 s^2 log p less the
+    # Gaussian's constant, as a point model's at s (:func:`equivalent_mse`). None: a point model
+    heldout_density: tuple[np.ndarray, np.ndarray, float] | None = None
+
+    def _mse(self, mask: np.ndarray) -> float:
+        if self.heldout_density is None:
+            return float(np.mean(np.sum(self.heldout_zeta_rad[mask] ** 2, axis=1)))
+        q, var, s = self.heldout_density
+        return equivalent_mse(q[mask], var[mask], s)
 
     @property
     def heldout_rms_rad(self) -> float:
@@ -54,7 +65,7 @@ class CandidateScore:
         float
             ``sqrt(mean ||zeta_i||^2)`` (rad).
         """
-        return rms(self.heldout_zeta_rad)
+        return float(np.sqrt(self.heldout_mse))
 
     @property
     def heldout_mse(self) -> float:
@@ -65,7 +76,7 @@ class CandidateScore:
         float
             ``mean ||zeta_i||^2`` (rad^2).
         """
-        return float(np.mean(np.sum(self.heldout_zeta_rad ** 2, axis=1)))
+        return self._mse(np.ones(len(self.heldout_cycle), bool))
 
     @property
     def train_rms_rad(self) -> float:
@@ -80,8 +91,7 @@ class CandidateScore:
 
     def cycle_mse(self) -> dict[int, float]:
         """Held-out mean ``||zeta||^2`` of each cycle."""
-        sq = np.sum(self.heldout_zeta_rad ** 2, axis=1)
-        return {int(c): float(sq[self.heldout_cycle == c].mean()) for c in np.unique(self.heldout_cycle)}
+        return {int(c): self._mse(self.heldout_cycle == c) for c in np.unique(self.heldout_cycle)}
 
     def implausible(self) -> list[str]:
         """Names of fitted effect parameters outside their prior ranges by more than their uncertainty.
@@ -95,6 +105,30 @@ class CandidateScore:
             sd_all[self.fit.free & (sd_all <= 0)] = np.inf
         return [n for e, p, sd in zip(m.effects, m.effect_params(self.fit.theta), m.effect_params(sd_all))
                 for n in e.implausible(p, sd)]
+
+
+def equivalent_mse(q: np.ndarray, var_rad2: np.ndarray, s: float) -> float:
+    """Mean squared error that ranks a held-out density with the point models' squared errors (rad^2).
+
+    For rows with ``-2 log p_i = q_i + 3 log(2 pi s^2)`` (whitened units, noise scale ``s``), ``s^2 q_i``
+    is what a point model's squared (whitened) error is at the same noise scale: ``-2 s^2 log p`` less
+    the Gaussian's constant. Scaled by each row's mean noise variance it is in rad^2, and equals a point
+    model's MSE for ``q = |r|^2 / s^2``.
+
+    Parameters
+    ----------
+    q : numpy.ndarray
+        Per-row ``-2 log p`` less the Gaussian constant (whitened).
+    var_rad2 : numpy.ndarray
+        Each row's mean noise variance per axis (rad^2 per whitened unit^2).
+    s : float
+        The noise scale (whitened) both are taken at.
+
+    Returns
+    -------
+    float
+    """
+    return float(np.mean(var_rad2 * q) * s ** 2)
 
 
 def folds_by_cycle(cycle: np.ndarray, k: int = 5) -> list[np.ndarray]:

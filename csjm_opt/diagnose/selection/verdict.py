@@ -57,6 +57,8 @@ class Verdict:
     unsettled_rivals: list[dict] = dataclasses.field(default_factory=list)
     #: few-number models that explain the log as well as a flexible verdict (named in its warning)
     look_alikes: list[str] = dataclasses.field(default_factory=list)
+    #: effects a flexible verdict may stand in for (named in its warning; ``selection.decision.stand_ins``)
+    stand_ins: list[str] = dataclasses.field(default_factory=list)
     #: the residual's trend over the log's time order (sample order), when it has one
     time_trend: dict | None = None
 
@@ -91,4 +93,4 @@ class Verdict:
                 "evidence_margin": self.evidence_margin, "more_probable_rivals": list(self.more_probable_rivals),
                 "alternatives": list(self.alternatives), "secondary_alternatives": list(self.secondary_alternatives),
                 "unsettled_rivals": list(self.unsettled_rivals), "look_alikes": list(self.look_alikes),
-                "time_trend": self.time_trend}
+                "stand_ins": list(self.stand_ins), "time_trend": self.time_trend}

@@ -125,7 +125,8 @@ def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
             lead = []
     else:
         # every model a warning names (look-alikes of a flexible verdict, unsettled rivals, alternatives) leads
-        named = [*d.verdict.look_alikes, *(r["model"] for r in d.verdict.unsettled_rivals), *d.verdict.alternatives]
+        named = [*d.verdict.look_alikes, *(r["model"] for r in d.verdict.unsettled_rivals), *d.verdict.alternatives,
+                 *(f"{sel}+{x}" for x in d.verdict.stand_ins)]
         lead = list(dict.fromkeys([*(n for n in named if n in pool or n in d.candidates), *lead]))
         others = [n for n in lead if n not in out and n != f"{sec}+{sel}"]
         if others:

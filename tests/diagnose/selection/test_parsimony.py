@@ -38,6 +38,15 @@ def test_a_flexible_model_never_beats_a_few_number_one_that_explains_the_log_as_
     better = _score(23, base * 0.6)
     assert parsimonious({"hole_offsets": better, "drive_offsets": drive},
                         {"hole_offsets": -270.0, "drive_offsets": -280.0}, 8) == "hole_offsets"
+    # a set-valued few-number model (settled friction: a stick set holds almost any pose, so held-out rows
+    # cannot rule it out) decisively less probable than the flexible one (Bayes factor e^-1000) is no rival
+    stick = _score(7, base * rng.uniform(0.97, 1.03, 8))
+    stick.heldout_density = ("q", "var", 1.0)
+    assert parsimonious({"hole_offsets": holes, "friction": stick},
+                        {"hole_offsets": -270.0, "friction": -1270.0}, 8) == "hole_offsets"
+    # ... but within a few nats (not decisive) it is named
+    assert parsimonious({"hole_offsets": holes, "friction": stick},
+                        {"hole_offsets": -270.0, "friction": -273.0}, 8) == "friction"
     # two few-number models: the evidence decides
     assert parsimonious({"a": drive, "b": _score(3, base)}, {"a": -1.0, "b": -2.0}, 8) == "a"
 
@@ -90,3 +99,49 @@ def test_drive_offsets_are_named_not_hole_offsets():
     assert not any("hole_offsets has" in w for w in d.verdict.warnings)
     j = d.as_json()
     assert j["verdict"]["selected"] == "drive_offsets" and j["secondary"] == {"effect": "none"}
+
+
+def _pair_score(rig, delta_mr_kgm, sd_kgm, mse):
+    """A fitted pair hole_offsets + mass_com: the mass block off nominal by ``delta``, standard errors ``sd``."""
+    from csjm_opt.diagnose.effects import make_effect
+    from csjm_opt.diagnose.fitting.augmented import AugmentedModel
+
+    model = AugmentedModel(rig, [make_effect("hole_offsets", rig), make_effect("mass_com", rig)])
+    theta = model.x0()
+    theta[-3:] += delta_mr_kgm
+    cov = np.diag(np.full(model.n_params, 1e-8))
+    cov[-3:, -3:] = np.diag(np.asarray(sd_kgm, float) ** 2)
+    return _Score(name="hole_offsets+mass_com", fit=SimpleNamespace(model=model, theta=theta, cov=cov),
+                  mse=list(mse))
+
+
+class _Ctx:
+    def __init__(self, ev):
+        self.ev = ev
+
+    def evidence(self, sc):
+        return self.ev[sc.name]
+
+
+def test_a_flexible_verdict_names_what_it_may_stand_in_for_by_the_partners_wald_test(rig):
+    from csjm_opt.diagnose.selection.decision import stand_ins
+
+    rng = np.random.default_rng(2)
+    base = rng.uniform(1.0, 2.0, 8)
+    holes = _Score(name="hole_offsets", fit=SimpleNamespace(p_eff=23), mse=list(base))
+    pair_entry = [{"effects": ["hole_offsets", "mass_com"], "fitted": True, "separable": False,
+                   "plausible": True, "closes_gap": True}]
+    ctx = _Ctx({"hole_offsets": -250.0, "hole_offsets+mass_com": -250.5})
+    sd = np.array([2e-3, 2e-3, 4e-3])
+    # the block three standard errors off nominal along x (Wald z = 3, chi^2_3 p = 0.03 < 0.046): named
+    far = _pair_score(rig, np.array([6e-3, 0.0, 0.0]), sd, base * rng.uniform(0.97, 1.03, 8))
+    got = stand_ins(ctx, holes, "hole_offsets", pair_entry, {("hole_offsets", "mass_com"): far})
+    assert [x for x, _ in got] == ["mass_com"] and abs(got[0][1] - 3.0) < 1e-9
+    # within its errors of nominal (a log of hole offsets alone): nothing is named
+    near = _pair_score(rig, np.array([2e-3, -1e-3, 2e-3]), sd, far.mse)
+    assert stand_ins(ctx, holes, "hole_offsets", pair_entry, {("hole_offsets", "mass_com"): near}) == []
+    # separable (the log tells them apart), or decisively less probable: nothing is named
+    sep = [{**pair_entry[0], "separable": True}]
+    assert stand_ins(ctx, holes, "hole_offsets", sep, {("hole_offsets", "mass_com"): far}) == []
+    assert stand_ins(_Ctx({"hole_offsets": -250.0, "hole_offsets+mass_com": -260.0}), holes, "hole_offsets",
+                     pair_entry, {("hole_offsets", "mass_com"): far}) == []

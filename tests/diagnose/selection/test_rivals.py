@@ -192,3 +192,16 @@ def test_held_out_ties_to_round_off_are_not_improvements():
     d = np.log(other / mse)
     assert np.isclose(paired_heldout_test(_Cycles(other), _Cycles(mse)),
                       stats.ttest_1samp(d, 0.0, alternative="greater").pvalue)
+
+
+def test_a_set_valued_rival_is_not_confirmed_by_held_out_errors_alone():
+    """Lower held-out errors on every cycle (p ~ 0) list a point rival however improbable, but not a stick set
+    (settled friction) decisively less probable than the verdict; within EVIDENCE_MIN nats it is listed."""
+    one = np.ones(N_CYCLES)
+    lower = 0.5 * one * np.exp(np.random.default_rng(4).normal(0.0, 0.05, N_CYCLES))
+    point = {"V": _model(0.0, one), "R": _model(-500.0, lower)}
+    assert [r["model"] for r in unsettled_rivals(point, "V")] == ["R"]
+    stick = {"V": _model(0.0, one), "R": {**_model(-500.0, lower), "set_valued": True}}
+    assert unsettled_rivals(stick, "V") == []
+    close = {"V": _model(0.0, one), "R": {**_model(-EVIDENCE_MIN / 2, lower), "set_valued": True}}
+    assert [r["model"] for r in unsettled_rivals(close, "V")] == ["R"]

@@ -1,0 +1,564 @@
+"""Friction however the rig came to rest: the stick condition per row, without a loading path.
+
+A rig whose cables rub at their guides comes to rest wherever the motion stops: a load hung at
+once swings the platform past the place a slow ramp would leave it, and the cables stick where
+the swing dies out. The rest pose is then a *static Coulomb equilibrium*: the friction force
+``f_j`` of every cable lies within its band ``|f_j| <= F_j`` and, with the elastic tensions, the
+load and the weight, balances the platform::
+
+    g_i(R) + J_i(R)^T f = 0,   |f_j| <= F_j                              (stick condition)
+
+Which equilibrium of that set the rig took depends on its dynamics (inertia, damping, the order
+in which cables stick), not on anything a log records; the play operator of
+:mod:`csjm_opt.diagnose.effects.friction` predicts the one a slow ramp reaches.
+
+Linearised at the measured pose (whitened pose residual ``a_i = W_i G_i^-1 g_i``, the
+diagnosis's residual, :mod:`csjm_opt.diagnose.fitting.gauss_newton`), the poses that satisfy the stick condition
+form a zonotope ``S_i = {a : a = -B_i f, |f| <= F}`` with generators ``F_j b_ij``
+(``B_i = W_i G_i^-1 J_i^T``, 3 x m): the measured pose is explained when it lies within the
+noise of ``S_i``. The residual of a row is its distance to the set,
+``d_i = min_{|f| <= F} |a_i + B_i f|`` (a bounded least-squares problem per row,
+:func:`stick_residual`).
+
+Noise and friction are told apart by a likelihood, not by the distance alone (a band wide
+enough holds every row, noise included): the rest pose is anywhere in ``S_i``, the measurement
+adds noise of scale ``s``, and the density of the whitened residual is::
+
+    p(a_i) = exp(-d_i^2 / (2 s^2)) / Z_i,   Z_i = V + A s sqrt(pi/2) + 2 M s^2 + (2 pi)^(3/2) s^3
+
+``Z_i`` integrates the numerator over space exactly (Steiner's formula for the parallel body of
+a convex set; :func:`log_normaliser`): ``V``, ``A`` and ``M / pi`` are the volume, surface
+area and summed edge lengths of ``S_i``. With ``F = 0`` this is the Gaussian of every other
+model; a wider band explains more rows but pays ``log Z_i`` on every row, so the band and the
+noise scale are both estimated by maximum likelihood (:func:`fit_stick`), and the noise scale
+is not inflated by friction (the within-cycle regression of :mod:`csjm_opt.diagnose.data.noise`
+takes the scatter of stick positions for noise).
+
+The noise scale, though, is not identified where the band is much wider than the noise (noise
+inside the band looks like a stick position): the likelihood is flat below the true scale, and a
+joint fit drifts to a band that holds every row and no noise. The diagnosis therefore fits the band
+at a few noise scales and keeps the largest one the *held-out* rows do not reject
+(:func:`settled_score`). Models are compared on held-out rows by their densities at that noise
+scale: ``-2 s^2 log p`` per row less the Gaussian's constant, the squared distance plus the band's
+price ``2 s^2 log(Z_i / Z0_i)``, which is a point model's squared error
+(:func:`csjm_opt.diagnose.selection.scoring.equivalent_mse`).
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Sequence
+
+import numpy as np
+from numba import njit
+from scipy.optimize import minimize
+
+#: Iterations of the accelerated projected gradient per row (bounded least squares, 3 x m).
+MAX_ITER = 400
+#: Stop when the squared step (in N^2, relative to the band) falls below this.
+STEP_TOL = 1e-12
+SQRT_HALF_PI = float(np.sqrt(np.pi / 2.0))
+GAUSS3 = float((2.0 * np.pi) ** 1.5)
+
+
+@njit(cache=True)
+def _bounded_lsq(a: np.ndarray, B: np.ndarray, F: np.ndarray, f0: np.ndarray,
+                 max_iter: int, tol: float) -> np.ndarray:   # pragma: no cover (compiled)
+    """``argmin_{|f_j| <= F_j} |a_i + B_i f|`` per row (FISTA with restarts), from ``f0``."""
+    n, _, m = B.shape
+    out = np.empty((n, m))
+    for i in range(n):
+        H = B[i].T @ B[i]
+        q = B[i].T @ a[i]
+        v = np.ones(m)
+        L = 0.0
+        for _ in range(30):                      # largest eigenvalue of H (power iteration)
+            w = H @ v
+            nw = np.sqrt(np.dot(w, w))
+            if nw <= 0.0:
+                break
+            L = nw / np.sqrt(np.dot(v, v))
+            v = w / nw
+        L *= 1.05
+        f = np.minimum(np.maximum(f0[i], -F), F)
+        if L <= 0.0:
+            out[i] = f
+            continue
+        y = f.copy()
+        t = 1.0
+        for _ in range(max_iter):
+            grad = H @ y + q
+            fn = np.minimum(np.maximum(y - grad / L, -F), F)
+            step = fn - f
+            if np.dot(step, H @ step) > 0 and np.dot(H @ fn + q, step) > 0:   # restart on a rise
+                t = 1.0
+                y = f.copy()
+                continue
+            tn = 0.5 * (1.0 + np.sqrt(1.0 + 4.0 * t * t))
+            y = fn + ((t - 1.0) / tn) * step
+            f, t = fn, tn
+            if np.dot(step, step) <= tol * (1.0 + np.dot(F, F)):
+                break
+        out[i] = f
+    return out
+
+
+def stick_residual(a: np.ndarray, B: np.ndarray, F: np.ndarray,
+                   f0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Distance vector of each row to its stick set, and the friction forces that leave it.
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        Residuals (n, 3) without friction (whitened pose, or any linear image of the balance).
+    B : numpy.ndarray
+        Effect (n, 3, m) of a unit friction force on each cable on the residual.
+    F : numpy.ndarray
+        Band (m,) of each cable (N, >= 0).
+    f0 : numpy.ndarray, optional
+        Starting forces (n, m) (a previous solution).
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        ``r = a + B f*`` (n, 3) (zero where friction within the band balances the row) and ``f*``
+        (n, m), ``|f*_j| <= F_j``.
+    """
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    B = np.ascontiguousarray(B, dtype=np.float64)
+    F = np.ascontiguousarray(np.maximum(np.asarray(F, float), 0.0))
+    f0 = np.zeros((len(a), B.shape[2])) if f0 is None else np.ascontiguousarray(f0, dtype=np.float64)
+    f = _bounded_lsq(a, B, F, f0, MAX_ITER, STEP_TOL)
+    return a + np.einsum("nij,nj->ni", B, f), f
+
+
+class ZonotopeMeasures:
+    """Per-row pieces of the volume, area and edge length of the stick sets ``{B_i f : |f| <= F}``.
+
+    The volume is ``8 sum_{j<k<l} F_j F_k F_l |det(b_j, b_k, b_l)|``, the surface area
+    ``8 sum_{j<k} F_j F_k |b_j x b_k|`` and the summed edge length ``M / pi = 2 sum_j F_j |b_j|``
+    (a zonotope is a sum of segments ``[-F_j b_j, F_j b_j]``).
+    """
+
+    def __init__(self, B: np.ndarray):
+        B = np.asarray(B, float)
+        m = B.shape[2]
+        self.triples = np.array(list(itertools.combinations(range(m), 3)), int).reshape(-1, 3)
+        self.pairs = np.array(list(itertools.combinations(range(m), 2)), int).reshape(-1, 2)
+        cols = np.swapaxes(B, 1, 2)                                            # (n, m, 3)
+        self.det = (np.abs(np.linalg.det(cols[:, self.triples]))               # (n, T)
+                    if len(self.triples) else np.zeros((len(B), 0)))
+        self.cross = np.linalg.norm(np.cross(cols[:, self.pairs[:, 0]], cols[:, self.pairs[:, 1]]), axis=-1)
+        self.norm = np.linalg.norm(cols, axis=-1)                              # (n, m)
+
+    def parts(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(V, A, M)`` per row for bands ``F``."""
+        F = np.asarray(F, float)
+        V = 8.0 * (self.det @ np.prod(F[self.triples], axis=1)) if len(self.triples) else 0.0 * self.norm[:, 0]
+        A = 8.0 * (self.cross @ np.prod(F[self.pairs], axis=1))
+        M = 2.0 * np.pi * (self.norm @ F)
+        return V, A, M
+
+
+def log_normaliser(meas: ZonotopeMeasures, F: np.ndarray, s: float) -> np.ndarray:
+    """``log(Z_i / Z0_i)`` per row: the price of the band (0 for ``F = 0``); see the module doc."""
+    V, A, M = meas.parts(F)
+    return np.log1p((V + A * s * SQRT_HALF_PI + 2.0 * M * s ** 2) / (GAUSS3 * s ** 3))
+
+
+def expected_sq_distance(meas: ZonotopeMeasures, F: np.ndarray, s: float) -> np.ndarray:
+    """``E[d_i^2]`` per row under the density of the module doc (``3 s^2`` for ``F = 0``)."""
+    V, A, M = meas.parts(F)
+    Z = V + A * s * SQRT_HALF_PI + 2.0 * M * s ** 2 + GAUSS3 * s ** 3
+    return (A * s ** 3 * SQRT_HALF_PI + 4.0 * M * s ** 4 + 3.0 * GAUSS3 * s ** 5) / Z
+
+
+def stick_layout(model) -> tuple[np.ndarray, np.ndarray, list]:
+    """``(lin, band, stick)``: indices of ``model``'s point parameters, of its band parameters, its stick effects.
+
+    A *stick effect* (settled cable friction, settled joint friction) has ``settled`` set and
+    ``stick_columns``; its parameters are bands. Every other parameter (the nuisance, a partner effect's)
+    is a point parameter, linearised about a centre (:class:`StickDesign`).
+    """
+    offs = np.cumsum([0, model.n_params - sum(e.n_params for e in model.effects)]
+                     + [e.n_params for e in model.effects])
+    stick: list[int] = []
+    band: list[int] = []
+    for i, e in enumerate(model.effects):
+        if getattr(e, "settled", False) and hasattr(e, "stick_columns"):
+            stick.append(i)
+            band.extend(range(offs[i + 1], offs[i + 2]))
+    lin = np.setdiff1d(np.arange(model.n_params), band)
+    return lin, np.asarray(band, int), stick
+
+
+def stick_design(model, table, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(a, B, tie)``: whitened linearised residuals, stick-set generators, the band of each generator.
+
+    ``a`` (n, 3) of ``model`` at ``theta``, ``B`` (n, 3, c) the generators of its stick sets and ``tie`` (c,)
+    the band parameter of each generator (indices into the band parameters).
+
+    The tangent is the table's (nominal, at the measured pose), the same for every band.
+    """
+    _, band, stick = stick_layout(model)
+    g, ev = model.evaluate(table.R_meas, table.rows, theta)
+    WGinv = table.whiten @ np.linalg.inv(table.G)
+    cols, ties, first = [], [], 0
+    for i in stick:
+        c, t = model.effects[i].stick_columns(ev)
+        cols.append(c)
+        ties.append(first + np.asarray(t, int))
+        first += model.effects[i].n_params
+    C = np.concatenate(cols, axis=2) if cols else np.zeros((len(g), 3, 0))
+    tie = np.concatenate(ties) if ties else np.zeros(0, int)
+    return np.einsum("nij,nj->ni", WGinv, g), np.einsum("nij,njk->nik", WGinv, C), tie
+
+
+class StickDesign:
+    """A model's stick problem on a table, linearised in its point parameters about ``centre``.
+
+    ``a(x_lin) = a0 + D (x_lin - centre_lin)`` (whitened residual), generators ``B`` (n, 3, c), and
+    ``tie`` (c,): the band parameter of each generator.
+    """
+
+    def __init__(self, model, table, centre: np.ndarray):
+        self.lin, self.band, _ = stick_layout(model)
+        self.centre = np.asarray(centre, float).copy()
+        self.a0, self.B, self.tie = stick_design(model, table, self.centre)
+        self.D = np.empty((len(self.a0), 3, len(self.lin)))
+        h = 1e-3 * np.asarray(model.scales, float)[self.lin]
+        for j, (k, hj) in enumerate(zip(self.lin, h)):
+            th = self.centre.copy()
+            th[k] += hj
+            self.D[:, :, j] = (stick_design(model, table, th)[0] - self.a0) / hj
+
+    def take(self, idx: np.ndarray) -> "StickDesign":
+        """The design of rows ``idx``."""
+        out = object.__new__(StickDesign)
+        out.lin, out.band, out.centre, out.tie = self.lin, self.band, self.centre, self.tie
+        out.a0, out.B, out.D = self.a0[idx], self.B[idx], self.D[idx]
+        return out
+
+
+class StickFit:
+    """Maximum-likelihood bands, noise scale and point parameters of the stick model.
+
+    ``x = (point parameters (k), bands (b), log s)``; the residual is ``a0 + D x_point``, the generator
+    ``j`` of row ``i`` is ``B_ij`` with band ``x_band[tie_j]``.
+
+    Parameters
+    ----------
+    a0 : numpy.ndarray
+        (n, 3) residuals at zero point parameters.
+    da : numpy.ndarray
+        (n, 3) or (n, 3, k): their change per unit point parameter.
+    B : numpy.ndarray
+        (n, 3, c) generators.
+    tie : numpy.ndarray, optional
+        (c,) band of each generator (default: one band per generator).
+    """
+
+    def __init__(self, a0: np.ndarray, da: np.ndarray, B: np.ndarray, tie: np.ndarray | None = None):
+        self.a0, self.B = np.asarray(a0, float), np.asarray(B, float)
+        D = np.asarray(da, float)
+        self.D = D[..., None] if D.ndim == 2 else D
+        self.tie = np.arange(self.B.shape[2]) if tie is None else np.asarray(tie, int)
+        self.k = self.D.shape[2]
+        self.nb = int(self.tie.max(initial=-1)) + 1
+        self.meas = ZonotopeMeasures(self.B)
+        self.f = np.zeros((len(self.a0), self.B.shape[2]))
+
+    def _lognorm(self, bands: np.ndarray, s: float) -> np.ndarray:
+        return log_normaliser(self.meas, bands[self.tie], s)
+
+    def neg_log_lik(self, x: np.ndarray) -> tuple[float, np.ndarray]:
+        """``-log L`` and its gradient in ``x = (point parameters, bands, log s)``."""
+        k, nb = self.k, self.nb
+        lin, bands, s = x[:k], np.maximum(x[k:k + nb], 0.0), float(np.exp(x[-1]))
+        F = bands[self.tie]
+        r, self.f = stick_residual(self.a0 + np.einsum("nij,j->ni", self.D, lin), self.B, F, self.f)
+        d2 = np.sum(r ** 2, axis=1)
+        lz = self._lognorm(bands, s)
+        val = 0.5 * float(np.sum(d2)) / s ** 2 + float(np.sum(lz))
+        grad = np.empty_like(x)
+        grad[:k] = np.einsum("ni,nij->j", r, self.D) / s ** 2
+        # d(d^2)/dF_j = 2 r . b_j f*_j / F_j (Danskin: the optimal forces scale with the band)
+        rb = np.einsum("ni,nij->nj", r, self.B)
+        tj = np.divide(self.f, F, out=np.zeros_like(self.f), where=F > 0)
+        grad[k:k + nb] = np.bincount(self.tie, np.sum(rb * tj, axis=0), minlength=nb) / s ** 2
+        h = 1e-6
+        for j in range(nb):
+            bp, bm = bands.copy(), bands.copy()
+            bp[j] += h
+            bm[j] = max(bands[j] - h, 0.0)
+            dz = self._lognorm(bp, s) - self._lognorm(bm, s)
+            grad[k + j] += float(np.sum(dz)) / (bp[j] - bm[j])
+        dz = self._lognorm(bands, s * np.exp(h)) - self._lognorm(bands, s * np.exp(-h))
+        grad[-1] = -float(np.sum(d2)) / s ** 2 + float(np.sum(dz)) / (2 * h)
+        # d(log Z0)/d(log s) = 3 per row is in the Gaussian constant of every model: counted here explicitly
+        val += 3.0 * len(d2) * float(np.log(s))
+        grad[-1] += 3.0 * len(d2)
+        return val, grad
+
+    def fit(self, F_max: float, starts: tuple = (0.0, 0.3, 1.0), s: float | None = None) -> tuple[np.ndarray, float]:
+        """``(x, -log L)`` of the best start; ``F_max`` bounds each band; ``s``: a fixed noise scale.
+
+        With the noise scale free, the likelihood of a few hundred rows tends to a band that holds
+        every row and a scale near zero (a set-valued model's degeneracy); the diagnosis fixes the
+        scale and chooses it on held-out rows (:func:`settled_score`).
+        """
+        k, nb = self.k, self.nb
+        s0 = float(np.sqrt(np.mean(np.sum(self.a0 ** 2, axis=1)) / 3.0))
+        best = None
+        for share in starts:
+            self.f = np.zeros_like(self.f)
+            x0 = np.r_[np.zeros(k), np.full(nb, share * F_max * 0.1), np.log(max(s0 * (1 - share) + 0.3 * share, 1e-3))]
+            bounds = [(None, None)] * k + [(0.0, F_max)] * nb + [(np.log(1e-3), np.log(1e3)) if s is None
+                                                                 else (np.log(s), np.log(s))]
+            if s is not None:
+                x0[-1] = np.log(s)
+            res = minimize(self.neg_log_lik, x0, jac=True, method="L-BFGS-B", bounds=bounds,
+                           options={"maxiter": 400, "ftol": 1e-12, "gtol": 1e-8})
+            if best is None or res.fun < best.fun:
+                best = res
+        assert best is not None
+        return best.x, float(best.fun)
+
+
+#: 95 % quantile of chi^2 with one degree of freedom (held-out likelihood ratio of the noise scale).
+CHI2_1_95 = 3.84
+
+
+class SettledModel:
+    """The stick model fitted on a table: point parameters, bands, and what it says of other rows.
+
+    Parameters
+    ----------
+    model : AugmentedModel
+        Nominal model plus effects of which at least one is settled (a stick effect,
+        :func:`stick_layout`); the others' parameters (and the nuisance) are point parameters.
+    design : StickDesign
+        The model's stick problem on the training rows.
+    s : float
+        Noise scale (whitened units) the bands are fitted at.
+    start : SettledModel, optional
+        A fit at another noise scale: its parameters and forces start this one.
+    """
+
+    def __init__(self, model, design: StickDesign, s: float, start: "SettledModel | None" = None,
+                 fit: bool = True):
+        self.model, self.design, self.s = model, design, float(s)
+        self.k, self.nb = len(design.lin), len(design.band)
+        self.m = self.nb
+        lo, hi = np.asarray(model.lower_bounds, float), np.asarray(model.upper_bounds, float)
+        rng_hi = np.array([_range_top(model, j) for j in design.band])
+        c0 = design.centre[design.lin]
+        self.bounds = ([(None if not np.isfinite(a) else a - c, None if not np.isfinite(b) else b - c)
+                        for a, b, c in zip(lo[design.lin], hi[design.lin], c0)]
+                       + [(0.0, float(t)) for t in rng_hi])
+        prior = np.asarray(model.prior_sd, float)[design.lin]
+        self.ridge = np.where(np.isfinite(prior), prior, np.inf)       # a partner's proper prior (hole offsets)
+        self._f = np.zeros((len(design.a0), design.B.shape[2]))
+        self.x = np.r_[np.zeros(self.k), np.full(self.nb, 0.0)]
+        if start is not None:
+            self.x, self._f = start.x.copy(), start._f.copy()
+        if fit:
+            self.fit_on(np.arange(len(design.a0)), warm=start is not None)
+
+    def theta(self, x: np.ndarray | None = None) -> np.ndarray:
+        """The full parameter vector of ``model`` for ``x`` (point parameters about the design's centre)."""
+        x = self.x if x is None else x
+        th = self.design.centre.copy()
+        th[self.design.lin] += x[:self.k]
+        th[self.design.band] = x[self.k:]
+        return th
+
+    def _nll(self, idx: np.ndarray, x: np.ndarray, s: float) -> tuple[float, np.ndarray]:
+        d = self.design
+        sf = StickFit(d.a0[idx], d.D[idx], d.B[idx], d.tie)
+        sf.f = self._f[idx]
+        val, grad = sf.neg_log_lik(np.r_[x, np.log(s)])
+        self._f[idx] = sf.f
+        n = len(idx)
+        lin = x[:self.k]
+        val += 0.5 * float(np.sum((lin / self.ridge) ** 2))
+        g = grad[:-1]
+        g[:self.k] += lin / self.ridge ** 2
+        return val - 3.0 * n * np.log(s), g
+
+    def fit_on(self, idx: np.ndarray, warm: bool = True) -> np.ndarray:
+        """Fit ``x`` by maximum likelihood at the fixed noise scale on rows ``idx``.
+
+        ``warm``: start from the current parameters and forces (else from small bands).
+        """
+        if warm:
+            x0 = self.x.copy()
+        else:
+            x0 = np.r_[np.zeros(self.k), [0.05 * float(b[1] or 0.0) for b in self.bounds[self.k:]]]
+            self._f = np.zeros_like(self._f)
+        res = minimize(lambda x: self._nll(idx, x, self.s), x0, jac=True, method="L-BFGS-B",
+                       bounds=self.bounds, options={"maxiter": 150, "ftol": 1e-9, "gtol": 1e-6})
+        self.x = res.x
+        return self.x
+
+    def row_terms(self, design: StickDesign, idx: np.ndarray, x: np.ndarray | None = None,
+                  s: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(r, pen, e_d2)`` on rows ``idx`` of ``design``.
+
+        Whitened distance vectors, band price ``2 s^2 log(Z/Z0)``, ``E[d^2]``.
+        """
+        x = self.x if x is None else x
+        s = self.s if s is None else s
+        F = np.maximum(x[self.k:], 0.0)[design.tie]
+        lin = x[:self.k] + self.design.centre[design.lin] - design.centre[design.lin]
+        a = design.a0[idx] + np.einsum("nij,j->ni", design.D[idx], lin)
+        r, _ = stick_residual(a, design.B[idx], F)
+        meas = ZonotopeMeasures(design.B[idx])
+        return r, 2.0 * s ** 2 * log_normaliser(meas, F, s), expected_sq_distance(meas, F, s)
+
+    def log_evidence(self, noise_scale: float) -> float:
+        """Laplace log evidence at ``noise_scale`` (convention of :func:`.evidence.log_evidence`).
+
+        Priors as every model's (:func:`.evidence.prior_of`): half-normal bands, Gaussian point parameters.
+        """
+        from .evidence import _prior
+        idx = np.arange(len(self.design.a0))
+        s = float(noise_scale)
+        x = self.x
+        self._f = np.zeros_like(self._f)
+        val, g0 = self._nll(idx, x, s)
+        val -= 0.5 * float(np.sum((x[:self.k] / self.ridge) ** 2))      # the prior is counted once, below
+        mean_all, sd_all, side_all = _prior(_ModelOnly(self.model))  # type: ignore[arg-type]
+        order = np.r_[self.design.lin, self.design.band]
+        mean = mean_all[order] - np.r_[self.design.centre[self.design.lin], np.zeros(self.nb)]
+        sd, side = sd_all[order], side_all[order]
+        H = np.empty((len(x), len(x)))
+        for j in range(len(x)):
+            h = 1e-4 * sd[j]
+            xp = x.copy()
+            xp[j] += h
+            H[:, j] = (self._nll(idx, xp, s)[1] - g0) / h
+        H = 0.5 * (H + H.T)
+        H[:self.k, :self.k] -= np.diag(np.where(np.isfinite(self.ridge), 1.0 / self.ridge ** 2, 0.0))
+        quad = float(np.sum(((x - mean) / sd) ** 2))
+        _, logdet = np.linalg.slogdet(np.eye(len(x)) + sd[:, None] * H * sd[None, :])
+        return float(-val - 0.5 * quad - 0.5 * logdet + np.count_nonzero(side) * np.log(2.0))
+
+
+class _ModelOnly:
+    """A stand-in with the one attribute :func:`.evidence._prior` reads (``model``)."""
+
+    def __init__(self, model):
+        self.model = model
+
+
+def _range_top(model, j: int) -> float:
+    """Upper end of parameter ``j``'s plausible range (a band's bound in the fit)."""
+    names = model.param_names
+    for e in model.effects:
+        rng = e.ranges()
+        if names[j] in rng:
+            return float(rng[names[j]][1])
+    return float("inf")
+
+
+class _Evidence:
+    """``noise_scale -> log evidence`` of a fitted stick model (picklable: fits travel back from workers)."""
+
+    def __init__(self, sm: SettledModel):
+        self.sm = sm
+        self._memo: dict[float, float] = {}
+
+    def __call__(self, noise_scale: float) -> float:
+        key = float(noise_scale)
+        if key not in self._memo:
+            self._memo[key] = self.sm.log_evidence(key)
+        return self._memo[key]
+
+
+def settled_score(model, train, test, folds, scales: Sequence[float]):
+    """The stick model scored like every other model: fitted on training rows, held-out residuals.
+
+    The held-out "residual" of a row is its distance to the stick set in rad (``L_i r_i``,
+    ``L_i = W_i^-1``); the band's price per row (``2 s^2 log(Z_i / Z0_i)``, in rad^2 through the
+    row's mean noise variance) enters its squared error (:attr:`CandidateScore.heldout_penalty_rad2`),
+    so that held-out errors compare ``-2 s^2 log p`` with the other models' squared errors at the
+    model's own noise scale. That scale is the one of ``scales`` under which the held-out rows are
+    most probable (a band fitted to the training rows at a scale too small holds them all and
+    leaves held-out rows outside, at a scale too large it takes stick positions for noise): the
+    stick model's noise estimate, which friction does not inflate.
+
+    A partner effect's parameters (a pair: settled friction and a sensor bias) are point parameters,
+    linearised about the nominal values and, once fitted, about the fit (one relinearisation).
+
+    Parameters
+    ----------
+    model : AugmentedModel
+        Nominal model + at least one settled effect (+ point effects).
+    train, test : ResidualTable
+        Training and held-out tables (``test`` None: the folds of ``train``).
+    folds : list of numpy.ndarray or None
+        Held-out row sets of ``train`` when there is no test table.
+    scales : sequence of float
+        Candidate noise scales (whitened units).
+
+    Returns
+    -------
+    CandidateScore
+    """
+    from ..selection.scoring import CandidateScore, equivalent_mse
+    from .gauss_newton import FitResult
+
+    def to_rad(table, idx, r, pen, e_d2):
+        """Distance vectors (rad), ``q = d^2 / s^2 + 2 log(Z / Z0)``, ``E[q]``, mean noise variance (rad^2)."""
+        L = np.linalg.inv(table.whiten[idx])
+        var = np.sum(L ** 2, axis=(1, 2)) / 3.0
+        q = (np.sum(r ** 2, axis=1) + pen) / s ** 2
+        return np.einsum("nij,nj->ni", L, r), q, (e_d2 + pen) / s ** 2, var
+
+    scales = sorted(scales)
+    design = StickDesign(model, train, model.x0())
+    if len(design.lin) > 1:         # a partner effect: relinearised about its fit at the middle scale
+        first = SettledModel(model, design, scales[len(scales) // 2])
+        design = StickDesign(model, train, first.theta())
+    all_rows = np.arange(len(train))
+    d_test = None if test is None else StickDesign(model, test, design.centre)
+    prev = None
+    tried: list[tuple] = []
+    for s in scales:
+        sm = SettledModel(model, design, s, start=prev)
+        prev = sm
+        if d_test is not None:
+            idx = np.arange(len(test))
+            r, pen, e = sm.row_terms(d_test, idx, sm.x, s)
+            zeta, q, eq, var = to_rad(test, idx, r, pen, e)
+            cyc = test.cycle
+        else:
+            zeta, q, eq, var = np.empty((len(train), 3)), *np.empty((3, len(train)))
+            for h in folds or []:
+                x = sm.fit_on(np.setdiff1d(all_rows, h))
+                r, pen, e = sm.row_terms(design, h, x)
+                zeta[h], q[h], eq[h], var[h] = to_rad(train, h, r, pen, e)
+            sm.fit_on(all_rows)
+            cyc = train.cycle
+        nll = float(np.sum(q) + 6 * len(q) * np.log(s))        # held-out -2 log p (whitened, less a constant)
+        tried.append((nll, sm, zeta, q, eq, var, cyc))
+    # the largest scale the held-out rows do not reject (likelihood ratio, one parameter, 95 %): below the
+    # scale of the noise the likelihood is flat (noise inside the band looks like a stick position)
+    top = min(t[0] for t in tried)
+    _, sm, zeta, q, eq, var, cyc = max((t for t in tried if t[0] <= top + CHI2_1_95), key=lambda t: t[1].s)
+    s = sm.s
+    r_tr, pen_tr, _ = sm.row_terms(design, all_rows)
+    zeta_tr = to_rad(train, all_rows, r_tr, pen_tr, pen_tr)[0]
+    theta = sm.theta()
+    n = len(train)
+    rss = float(np.sum(r_tr ** 2) + np.sum(pen_tr))
+    free = np.zeros(model.n_params, bool)
+    free[design.lin] = True
+    free[design.band] = sm.x[sm.k:] > 1e-9
+    fit = FitResult(model, theta, np.zeros((model.n_params, model.n_params)), rss, 3 * n, float(free.sum()),
+                    int(free.sum()), 1.0, zeta_tr, None, None, free, train.rows,
+                    evidence_fn=_Evidence(sm))
+    floor = float(np.sqrt(equivalent_mse(eq, var, s))) / s    # per unit noise scale, as the other models'
+    return CandidateScore(model.name, fit, zeta, cyc, zeta_tr, 0, train.instrument_floor_rad,
+                          float(s ** 2), floor, (), heldout_density=(q, var, s))
