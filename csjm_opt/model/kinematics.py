@@ -16,6 +16,7 @@ and a backtracking line search per row.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from typing import Callable
 
 import numpy as np
@@ -44,14 +45,25 @@ def weight_moment(R: np.ndarray, first_moment_A_kgm: np.ndarray, gravity_B: np.n
     return _reference.weight_moment(R, first_moment_A_kgm, gravity_B)
 
 
+@functools.lru_cache(maxsize=16)
+def _basis_rotations(h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``exp(h e_j)`` for the three axes (read-only): the tangent's steps, computed once per ``h``."""
+    out = []
+    for j in range(3):
+        step = np.zeros(3)
+        step[j] = h
+        E = so3.exp(step)
+        E.setflags(write=False)
+        out.append(E)
+    return out[0], out[1], out[2]
+
+
 def tangent(g: Residual, R: np.ndarray, g0: np.ndarray | None = None, h: float = 1e-7) -> np.ndarray:
     """Finite-difference ``dg/dzeta`` (n, 3, 3) under ``R exp(hat(zeta))``."""
     g0 = g(R) if g0 is None else g0
     G = np.empty(g0.shape + (3,))
-    for j in range(3):
-        step = np.zeros(3)
-        step[j] = h
-        G[..., j] = (g(R @ so3.exp(step)) - g0) / h
+    for j, E in enumerate(_basis_rotations(float(h))):
+        G[..., j] = (g(R @ E) - g0) / h
     return G
 
 

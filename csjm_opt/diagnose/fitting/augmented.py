@@ -133,10 +133,12 @@ class AugmentedModel:
         sizes = [len(NUISANCE_NAMES)] + [e.n_params for e in self.effects]
         self._offsets = np.cumsum([0] + sizes)
         self._geometry: tuple | None = None     # the last cable terms: (R, A, B, lengths, J)
+        self._weight: tuple | None = None       # the last weight moment: (R, first moment, moment)
+        self._eye: np.ndarray | None = None     # identity link rotations (n, 3, 3), read-only
 
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
-        state["_geometry"] = None                # a cache, not state: not pickled to the workers
+        state["_geometry"] = state["_weight"] = None   # caches, not state: not pickled to the workers
         return state
 
     def cable_terms(self, R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -157,6 +159,27 @@ class AugmentedModel:
         J.setflags(write=False)
         self._geometry = (np.array(R, float), np.array(A_m, float), np.array(B_m, float), lengths, J)
         return lengths, J
+
+    def weight_moment(self, R: np.ndarray, first_moment_A_kgm: np.ndarray) -> np.ndarray:
+        """The weight's moment (:func:`csjm_opt.model.kinematics.weight_moment`), the last one remembered.
+
+        As :meth:`cable_terms`: the last result (read-only) when the poses and the first moment are equal
+        to the last ones, value for value.
+        """
+        last = self._weight
+        if (last is not None and last[0].shape == np.shape(R) and last[1].shape == np.shape(first_moment_A_kgm)
+                and np.array_equal(last[0], R) and np.array_equal(last[1], first_moment_A_kgm)):
+            return last[2]
+        tau = kin.weight_moment(R, first_moment_A_kgm, self._g)
+        tau.setflags(write=False)
+        self._weight = (np.array(R, float), np.array(first_moment_A_kgm, float), tau)
+        return tau
+
+    def _identity(self, n: int) -> np.ndarray:
+        """Identity rotations (n, 3, 3), read-only, the same object for the same ``n``."""
+        if self._eye is None or len(self._eye) != n:
+            self._eye = np.broadcast_to(np.eye(3), (n, 3, 3))
+        return self._eye
 
     @property
     def name(self) -> str:
@@ -286,7 +309,7 @@ class AugmentedModel:
         """``(g, evaluation)``; the evaluation holds intermediate quantities (path state, lengths)."""
         theta = np.asarray(theta, float)
         n = len(rows)
-        eye = np.broadcast_to(np.eye(3), (n, 3, 3))
+        eye = self._identity(n)
         ev = Evaluation(self._A, self._B, self._mr, rows.tau_meas_A_Nm, R_m, eye, rows, self._k, R_m)
         params = self.effect_params(theta)
         for e, p in zip(self.effects, params):
@@ -295,7 +318,7 @@ class AugmentedModel:
             e.adjust_frame(ev, p)
         assert ev.R_body is not None   # set by adjust_frame
         ev.R_cable = ev.R_body
-        ev.tau_weight_A_Nm = kin.weight_moment(ev.R_body, ev.first_moment_A_kgm, self._g)
+        ev.tau_weight_A_Nm = self.weight_moment(ev.R_body, ev.first_moment_A_kgm)
         for e, p in zip(self.effects, params):
             e.adjust_pose(ev, p)
         for e, p in zip(self.effects, params):
@@ -310,7 +333,9 @@ class AugmentedModel:
         for e, p in zip(self.effects, params):
             T = e.adjust_tension(ev, stretch, T, p)
         tau_load = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm
-        g = np.einsum("nij,ni->nj", J, T) + np.einsum("nij,nj->ni", ev.link_rotation, tau_load)
+        # the link's rotation is the identity unless an effect set one (then the product is tau_load exactly)
+        g = np.einsum("nij,ni->nj", J, T) + (tau_load if ev.link_rotation is eye else
+                                             np.einsum("nij,nj->ni", ev.link_rotation, tau_load))
         for e, p in zip(self.effects, params):
             g = e.adjust_balance(ev, g, p)
         return g, ev
