@@ -86,6 +86,11 @@ class Rows:
         return c, r
 
     @functools.cached_property
+    def tiled3(self) -> "Rows":
+        """These rows three times over (3 n rows): the poses of a tangent's three steps in one evaluation."""
+        return self.take(np.tile(np.arange(len(self)), 3))
+
+    @functools.cached_property
     def positions(self) -> np.ndarray:
         """Position of each row within its cycle (0 = first row)."""
         first = np.r_[True, self.cycle[1:] != self.cycle[:-1]]
@@ -305,6 +310,36 @@ class AugmentedModel:
         """Moment balance residual ``g`` (n, 3) N m at measured-body poses ``R_m``."""
         return self.evaluate(R_m, rows, theta)[0]
 
+    def rows_independent(self, rows: Rows) -> bool:
+        """Whether each row's balance depends on that row alone (then rows can be evaluated in any batch).
+
+        True for a model without memory, and for a path-dependent one stepped row by row (``rows``
+        carry the previous row's state: a sequential prediction); False where the state runs over
+        the log (a fit at the measured poses), or where an effect says its rows are coupled
+        (``rows_coupled``).
+        """
+        if any(getattr(e, "rows_coupled", False) for e in self.effects):
+            return False
+        return not self.path_dependent or rows.state_prev is not None
+
+    def tangent(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray, g0: np.ndarray | None = None,
+                h: float = 1e-7) -> np.ndarray:
+        """Finite-difference pose tangent ``dg/dzeta`` (n, 3, 3), as :func:`csjm_opt.model.kinematics.tangent`.
+
+        Where the rows are independent (:meth:`rows_independent`) the three steps are one evaluation
+        of the rows three times over (the same numbers, one pass through the effects instead of three).
+        """
+        if not self.rows_independent(rows):
+            return kin.tangent(lambda R: self.balance(R, rows, theta), R_m, g0, h)
+        g0 = self.balance(R_m, rows, theta) if g0 is None else g0
+        n = len(rows)
+        R3 = np.concatenate([R_m @ E for E in kin.basis_rotations(float(h))])
+        g3 = self.balance(R3, rows.tiled3, theta).reshape(3, n, 3)
+        G = np.empty(np.shape(g0) + (3,))
+        for j in range(3):
+            G[..., j] = (g3[j] - g0) / h
+        return G
+
     def evaluate(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray) -> tuple[np.ndarray, Evaluation]:
         """``(g, evaluation)``; the evaluation holds intermediate quantities (path state, lengths)."""
         theta = np.asarray(theta, float)
@@ -350,7 +385,8 @@ class AugmentedModel:
         reached along the ramp of their inputs (:func:`csjm_opt.diagnose.fitting.friction_ramp.predict_ramp`).
         """
         if not self.path_dependent:
-            return kin.solve_poses(lambda R: self.balance(R, rows, theta), R_init)
+            return kin.solve_poses(lambda R: self.balance(R, rows, theta), R_init,
+                                   tangent_fn=lambda R, g0: self.tangent(R, rows, theta, g0))
         if rows.ramp_shape_m is not None:
             from .friction_ramp import predict_ramp
             return predict_ramp(self, rows, theta, R_init)[0]
@@ -370,7 +406,8 @@ class AugmentedModel:
                 s_prev, c_prev = state[prev], lengths[prev]
             sub = dataclasses.replace(rows.take(idx), state_prev=np.nan_to_num(s_prev), lengths_prev_m=c_prev)
             R0 = R_init[idx] if prev is None else R_out[prev]
-            sol = kin.solve_poses(lambda R, sub=sub: self.balance(R, sub, theta), R0)  # type: ignore[misc]
+            sol = kin.solve_poses(lambda R, sub=sub: self.balance(R, sub, theta), R0,  # type: ignore[misc]
+                                  tangent_fn=lambda R, g0, sub=sub: self.tangent(R, sub, theta, g0))
             _, ev = self.evaluate(sol.R, sub, theta)
             R_out[idx], res[idx] = sol.R, sol.residual_Nm
             state[idx] = ev.state_out if ev.state_out is not None else 0.0
