@@ -120,6 +120,9 @@ def validation_case(spec: str, args) -> None:
     files = {k: os.path.join(folder, answers[k]) for k in ("train", "test", "rig")}
     here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     runs: dict[str, list] = {"new 1": [], "new N": [], "old 1": [], "old N": []}
+    for tree in (args.baseline, here):       # warm-up: compiled kernels cached, files read once (not timed)
+        if tree is not None:
+            baseline_run(tree, files, 0, 1)
     for _ in tqdm(range(args.repeat), desc=f"{case}", disable=args.no_progress, file=sys.stderr, leave=False):
         for tag, tree in (("old", args.baseline), ("new", here)):
             if tree is None:
