@@ -407,7 +407,7 @@ class AugmentedModel:
             sub = dataclasses.replace(rows.take(idx), state_prev=np.nan_to_num(s_prev), lengths_prev_m=c_prev)
             R0 = R_init[idx] if prev is None else R_out[prev]
             sol = kin.solve_poses(lambda R, sub=sub: self.balance(R, sub, theta), R0,  # type: ignore[misc]
-                                  tangent_fn=lambda R, g0, sub=sub: self.tangent(R, sub, theta, g0))
+                                  tangent_fn=lambda R, g0, sub=sub: self.tangent(R, sub, theta, g0))  # type: ignore[misc]
             _, ev = self.evaluate(sol.R, sub, theta)
             R_out[idx], res[idx] = sol.R, sol.residual_Nm
             state[idx] = ev.state_out if ev.state_out is not None else 0.0
