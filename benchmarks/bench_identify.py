@@ -15,7 +15,7 @@ from _common import median_time  # noqa: E402
 from scipy.optimize import least_squares
 
 from csjm_opt import paper_rig, so3  # noqa: E402
-from csjm_opt.identification.identify import identify_stiffness  # noqa: E402
+from csjm_opt.identification.identify_pose import identify_stiffness  # noqa: E402
 from csjm_opt.identification.param_fit import fit_parameters  # noqa: E402
 from csjm_opt.measurement.instruments import InstrumentNoise  # noqa: E402
 from csjm_opt.model.numeric import Model  # noqa: E402

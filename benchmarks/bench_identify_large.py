@@ -26,7 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from csjm_opt import cli, paper_rig  # noqa: E402
-from csjm_opt.identification.identify import identify_cycles, identify_stiffness  # noqa: E402
+from csjm_opt.identification.identify_pose import identify_stiffness  # noqa: E402
+from csjm_opt.identification.log_identification import identify_cycles  # noqa: E402
 from csjm_opt.measurement.instruments import InstrumentNoise  # noqa: E402
 from csjm_opt.measurement.logfile import MeasurementLog  # noqa: E402
 from csjm_opt.model.numeric import Model  # noqa: E402

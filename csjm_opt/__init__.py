@@ -37,7 +37,9 @@ from .errors import (
 if TYPE_CHECKING:
     from .diagnose import Diagnosis
     from .diagnose import diagnose as diagnose_log
-    from .identification.identify import StiffnessEstimate, identify_log, identify_stiffness
+    from .identification.estimate import StiffnessEstimate
+    from .identification.identify_pose import identify_stiffness
+    from .identification.log_identification import identify_log
     from .measurement.logfile import MeasurementLog
     from .model.joint_stiffness import stiffness, stiffness_batch
     from .model.numeric import Model
@@ -53,9 +55,9 @@ __version__ = "0.1.0"
 _LAZY: dict[str, tuple[str, str]] = {
     "Diagnosis": (".diagnose", "Diagnosis"),
     "diagnose_log": (".diagnose", "diagnose"),
-    "StiffnessEstimate": (".identification.identify", "StiffnessEstimate"),
-    "identify_log": (".identification.identify", "identify_log"),
-    "identify_stiffness": (".identification.identify", "identify_stiffness"),
+    "StiffnessEstimate": (".identification.estimate", "StiffnessEstimate"),
+    "identify_log": (".identification.log_identification", "identify_log"),
+    "identify_stiffness": (".identification.identify_pose", "identify_stiffness"),
     "MeasurementLog": (".measurement.logfile", "MeasurementLog"),
     "Model": (".model.numeric", "Model"),
     "Rig": (".model.rig", "Rig"),

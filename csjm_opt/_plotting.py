@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._atomic_write import _file_mode
+from ._fileio import _file_mode
 
 
 def figure():

@@ -117,9 +117,9 @@ def run(args: argparse.Namespace) -> int:
     extra = MeasurementLog.from_csv(args.extra).check_cables(rig.n_cables, rig_name) if args.extra else None
     loads = None
     if args.suggest is not None:
-        from ..diagnose.suggest.dead_weights import load_load_set
+        from ..diagnose.suggest.dead_weights import read_dead_weights
 
-        loads = load_load_set(args.loads) if args.loads else None
+        loads = read_dead_weights(args.loads) if args.loads else None
     progress = None
     if not args.no_progress:
         from functools import partial
@@ -132,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
     result = diagnosis.as_json()
     suggestion = None
     if args.suggest is not None:
-        from .._atomic_write import atomic_write_text
+        from .._fileio import atomic_write_text
         from ..diagnose.suggest.experiment import protocol_text, suggest_experiment
 
         suggestion = suggest_experiment(rig, diagnosis, args.suggest, loads, seed=args.seed, progress=progress)
@@ -145,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
     if args.report:
         write_report(diagnosis, args.report, Path(args.data).name, rig=rig)
         if suggestion is not None:
-            from .._atomic_write import atomic_write_text
+            from .._fileio import atomic_write_text
             from ..diagnose.suggest.experiment import suggestion_markdown
 
             atomic_write_text(Path(args.report) / "suggestion.md", suggestion_markdown(suggestion, args.protocol))

@@ -168,7 +168,8 @@ def run_identify(args: argparse.Namespace) -> int:
     from .._plotting import save
     from ..identification.cramer_rao import SYM_NAMES
     from ..identification.figures import convergence_curve, plot_convergence
-    from ..identification.identify import MAX_CONDITION, identify_cycles, identify_log
+    from ..identification.log_identification import identify_cycles, identify_log
+    from ..identification.refusal import MAX_CONDITION
     from ..identification.stiffness_fits import n_parameters
     from ..measurement.instruments import InstrumentNoise
     from ..measurement.logfile import MeasurementLog

@@ -16,7 +16,7 @@ import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
-from .._atomic_write import _file_mode
+from .._fileio import _file_mode
 from ..errors import InvalidInput, SolverError
 
 __all__ = ["CFLAGS", "CORE_SOURCES", "HEADERS", "build_shared", "find_compiler"]

@@ -18,7 +18,7 @@ from .._fileio import atomic_write_json, atomic_write_text
 from .._plotting import save
 from ..errors import CsjmError
 from ..identification.figures import convergence_curve, plot_convergence, plot_verification
-from ..identification.identify import identify_stiffness
+from ..identification.identify_pose import identify_stiffness
 from ..identification.param_fit import check_fit, fit_parameters
 from ..identification.stiffness_fits import n_parameters
 from ..identification.verify import verify_log

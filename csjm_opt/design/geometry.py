@@ -13,10 +13,12 @@ paper's design. Each body (platform {A}, base {B}) is either
 * free coordinates ``platform_holes`` / ``base_holes`` (m [x, y, z] rows, m).
 
 ``n_cables`` (default 6) sets m, the number of cables (4..12; a sweep axis like any
-other). For m != 6 a body's holes form m/2 pairs (m even): pair j centred at
+other). For m != 6 a body's holes form pairs: pair j centred at
 ``theta0 + j * 720/m`` deg, its holes ``gamma`` apart, on the circle of radius
 ``*_radius_m`` (or of chords ``*_d12_m`` within a pair and ``*_d23_m`` between
-pairs); m = 6 is the semi-regular hexagon. Odd m needs free coordinates.
+pairs); m = 6 is the semi-regular hexagon. Odd m continues the rule with a last,
+single hole (:func:`csjm_opt.model.hole_pattern.paired_angles_deg`), the layout of
+a rig file's ``*_pair_angle_deg``.
 
 Per-hole offsets ``A{i}_d{x,y,z}_m`` / ``B{i}_d{x,y,z}_m`` (i = 1..m, m) are
 added to either, so a sweep can move single holes. Rig scalars
@@ -41,6 +43,7 @@ import numpy as np
 from ..errors import DesignError, InvalidInput
 from ..model import hexagon
 from ..model.cable_terms import cable_lengths
+from ..model.hole_pattern import paired_angles_deg
 from ..model.rig import PAPER_CABLE_STIFFNESS_N_PER_M, PAPER_COM_A_M, PAPER_MASS_KG, Rig, paper_rig
 
 _BODIES = {"platform": "A", "base": "B"}
@@ -62,7 +65,7 @@ _SCALARS = {
     "t_max_N": "upper tension bound (N)",
     "platform_mass_kg": "moving platform mass (kg)",
     "com_z_m": "height of the platform's centre of mass above O, in {A} (m)",
-    "n_cables": "number of cables m (4..12; m != 6: holes in m/2 pairs, m even; default 6)",
+    "n_cables": "number of cables m (4..12; m != 6: holes in pairs, odd m one single; default 6)",
 }
 _OFFSETS = {f"{body}{i}_d{axis}_m": f"offset of hole {body}{i} along {axis} (m)"
             for body in "AB" for i in range(1, 13) for axis in "xyz"}
@@ -319,7 +322,7 @@ def pair_circle_from_chords(d12_m: float, d23_m: float, n_cables: int) -> tuple[
     d12_m, d23_m : float
         Chords (m), both > 0.
     n_cables : int
-        m (even).
+        m.
 
     Returns
     -------
@@ -335,9 +338,6 @@ def pair_circle_from_chords(d12_m: float, d23_m: float, n_cables: int) -> tuple[
 
 def _pair_holes(body: str, params: Mapping[str, Any], m: int, z: float, theta0_deg: float) -> np.ndarray:
     """M holes in m/2 pairs on a circle (module docstring), from radius and gamma or from chords."""
-    if m % 2:
-        raise DesignError(f"hole pairs need an even number of cables, got {m}; give platform_holes and "
-                          "base_holes for an odd count", "n_cables")
     spacing = 4.0 * math.pi / m                               # angle between pair centres (rad)
     if f"{body}_radius_m" in params:
         radius, gamma = _number(params, f"{body}_radius_m"), math.radians(_number(params, f"{body}_gamma_deg"))
@@ -346,9 +346,12 @@ def _pair_holes(body: str, params: Mapping[str, Any], m: int, z: float, theta0_d
                               f"got {radius:g}, {math.degrees(gamma):g}", f"{body}_radius_m")
     else:
         radius, gamma = pair_circle_from_chords(*_chords(body, params), m)
-    centres = math.radians(theta0_deg) + spacing * np.arange(m // 2)
-    angles = np.empty(m)
-    angles[0::2], angles[1::2] = centres - gamma / 2, centres + gamma / 2
+    if m % 2:      # the pairs continued, the last one a single hole (hole_pattern.paired_angles_deg)
+        angles = math.radians(theta0_deg) + np.radians(paired_angles_deg(m, math.degrees(gamma)))
+    else:
+        centres = math.radians(theta0_deg) + spacing * np.arange(m // 2)
+        angles = np.empty(m)
+        angles[0::2], angles[1::2] = centres - gamma / 2, centres + gamma / 2
     return np.column_stack([radius * np.cos(angles), radius * np.sin(angles), np.full(m, z)])
 
 

@@ -17,7 +17,7 @@ if TYPE_CHECKING:
     from .fitting.evidence import log_evidence
     from .selection.decision import ALPHA, diagnose
     from .selection.result import Diagnosis
-    from .suggest.dead_weights import Load, default_load_set, load_load_set
+    from .suggest.dead_weights import DeadWeight, default_dead_weights, read_dead_weights
     from .suggest.experiment import Suggestion, protocol_text, suggest_experiment, suggestion_markdown
 
 #: Public name -> (module, attribute): imported on first use (PEP 562), so importing this package is free.
@@ -30,9 +30,9 @@ _LAZY: dict[str, tuple[str, str | None]] = {
     'ALPHA': ('.selection.decision', 'ALPHA'),
     'diagnose': ('.selection.decision', 'diagnose'),
     'Diagnosis': ('.selection.result', 'Diagnosis'),
-    'Load': ('.suggest.dead_weights', 'Load'),
-    'default_load_set': ('.suggest.dead_weights', 'default_load_set'),
-    'load_load_set': ('.suggest.dead_weights', 'load_load_set'),
+    'DeadWeight': ('.suggest.dead_weights', 'DeadWeight'),
+    'default_dead_weights': ('.suggest.dead_weights', 'default_dead_weights'),
+    'read_dead_weights': ('.suggest.dead_weights', 'read_dead_weights'),
     'Suggestion': ('.suggest.experiment', 'Suggestion'),
     'protocol_text': ('.suggest.experiment', 'protocol_text'),
     'suggest_experiment': ('.suggest.experiment', 'suggest_experiment'),
@@ -54,6 +54,6 @@ def __dir__() -> list[str]:
     """Every public name, the lazy ones included."""
     return sorted(set(_dir()) | {"VOCABULARY"})
 
-__all__ = ["ALPHA", "Diagnosis", "EFFECTS", "Effect", "Load", "Suggestion", "VOCABULARY", "append_log",
-           "default_load_set", "diagnose", "load_load_set", "log_evidence", "make_effect",
+__all__ = ["ALPHA", "Diagnosis", "EFFECTS", "Effect", "DeadWeight", "Suggestion", "VOCABULARY", "append_log",
+           "default_dead_weights", "diagnose", "read_dead_weights", "log_evidence", "make_effect",
            "protocol_text", "suggest_experiment", "suggestion_markdown"]

@@ -13,10 +13,12 @@ from .._lazy import lazy_exports
 
 if TYPE_CHECKING:
     from .cramer_rao import SYM_NAMES, crlb
+    from .estimate import StiffnessEstimate
     from .experiment_design import ExperimentPlan, paper_protocol, plan_experiment, predict_bound
     from .experiment_loads import ExperimentLoads
     from .figures import ConvergenceCurve, convergence_curve, plot_convergence, plot_verification
-    from .identify import StiffnessEstimate, identify_log, identify_stiffness
+    from .identify_pose import identify_stiffness
+    from .log_identification import identify_log
     from .ml_estimator import MLFit, fit_ml
     from .paper_tables import paper_report
     from .param_fit import ParameterFit, check_fit, fit_parameters
@@ -42,9 +44,9 @@ _LAZY: dict[str, tuple[str, str | None]] = {
     'convergence_curve': ('.figures', 'convergence_curve'),
     'plot_convergence': ('.figures', 'plot_convergence'),
     'plot_verification': ('.figures', 'plot_verification'),
-    'StiffnessEstimate': ('.identify', 'StiffnessEstimate'),
-    'identify_log': ('.identify', 'identify_log'),
-    'identify_stiffness': ('.identify', 'identify_stiffness'),
+    'StiffnessEstimate': ('.estimate', 'StiffnessEstimate'),
+    'identify_log': ('.log_identification', 'identify_log'),
+    'identify_stiffness': ('.identify_pose', 'identify_stiffness'),
     'MLFit': ('.ml_estimator', 'MLFit'),
     'fit_ml': ('.ml_estimator', 'fit_ml'),
     'paper_report': ('.paper_tables', 'paper_report'),

@@ -12,7 +12,9 @@ D: log det), followed by exchange passes (a chosen unit swapped for a better one
 improves). With ``pairs=True`` (default) a unit is a ``+-`` pair of the same weight and point
 in opposite directions: the pair takes the even (second-order) part of the curvature of the
 moment-rotation relation out of the slope, which makes the estimate less dependent on the rig
-model's curvature (the odd, third-order part remains; docs/guide/identification.md).
+model's curvature (the odd, third-order part remains; docs/guide/identification.md). A pose
+whose share of the budget is below six loads (three pairs, three axes) gets single loads. A
+selection whose information does not determine K (singular, or numerically so) scores ``inf``.
 The best pretension is kept per pose (a grid, then three rounds of bisection around the best
 level); several poses (a K field) share the budget equally.
 
@@ -40,17 +42,33 @@ CRITERIA = ("A", "D")
 EXCHANGE_PASSES = 3
 #: Bisection rounds on the pretension around the best level of the grid.
 REFINE_ROUNDS = 3
+#: Fewest loads of a pose spent in +- pairs: a pair turns the platform along one axis (both ways),
+#: so K needs three pairs; a smaller share is spent on single loads.
+MIN_PAIRED_SHARE = 6
+
+
+#: Smallest eigenvalue, relative to the largest, of an information matrix scaled to unit diagonal
+#: that still determines K: below it the selection is (numerically) singular and its criterion inf.
+RCOND = 1e-10
 
 
 def _criterion(M: np.ndarray, kind: str) -> np.ndarray:
-    """Criterion of information matrices (..., 9, 9): A = trace, D = log det of the entries' bound."""
+    """Criterion of information matrices (..., 9, 9): A = trace, D = log det of the entries' bound.
+
+    ``inf`` for a selection that does not determine K (information singular or numerically so:
+    the inverse would be round-off, and its trace can be any sign).
+    """
     s = np.sqrt(np.maximum(np.einsum("...ii->...i", M), 1e-300))
-    inv = np.linalg.inv(M / (s[..., :, None] * s[..., None, :])) / (s[..., :, None] * s[..., None, :])
+    ss = s[..., :, None] * s[..., None, :]
+    C = M / ss
+    w = np.linalg.eigvalsh(C)
+    ok = w[..., 0] > RCOND * w[..., -1]
+    inv = np.linalg.inv(np.where(ok[..., None, None], C, np.eye(9))) / ss
     B = inv[..., 3:, 3:]
     if kind == "A":
-        return np.einsum("...ii->...", B)
+        return np.where(ok, np.einsum("...ii->...", B), np.inf)
     sign, logdet = np.linalg.slogdet(B)
-    return np.where(sign > 0, logdet, np.inf)
+    return np.where(ok & (sign > 0), logdet, np.inf)
 
 
 def _select(base: np.ndarray, units: np.ndarray, costs: np.ndarray, budget: int, kind: str,
@@ -105,7 +123,8 @@ def plan_experiment(rig: Rig, budget: int, loads: ExperimentLoads | None = None,
         Instrument noise of the bound (the paper's by default).
     criterion : {"A", "D"}
     pairs : bool
-        Spend the budget on +- pairs of loads (the second-order curvature leaves the slope).
+        Spend the budget on +- pairs of loads (the second-order curvature leaves the slope);
+        a pose with fewer than six loads gets single loads.
     model : Model, optional
 
     Returns
@@ -170,6 +189,7 @@ def _design_at(rig: Rig, model: Model, R: np.ndarray, t: float, loads: Experimen
     cyc = cycle_for(rig, model, R, t, loads, noise)
     if cyc is None or len(cyc.info) < 3:
         return None
+    pairs = pairs and share >= MIN_PAIRED_SHARE
     units, costs, members = _units(cyc, pairs)
     if len(units) == 0:
         return None

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import IllConditionedData
 from ..model.numeric import Model
-from .identify import identify_stiffness
+from .identify_pose import identify_stiffness
 from .verify import Verification
 
 if TYPE_CHECKING:

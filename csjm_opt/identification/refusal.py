@@ -1,6 +1,6 @@
 """Whether a load cycle can determine K: excitation of the displacements and the refusal rule's limits.
 
-See :mod:`csjm_opt.identification.identify` for the refusal rule these limits enter.
+See :mod:`csjm_opt.identification.identify_pose` for the refusal rule these limits enter.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Least-squares estimators of the stiffness at a pose (used by :mod:`csjm_opt.identification.identify`).
+"""Least-squares estimators of the stiffness at a pose (used by :mod:`csjm_opt.identification.identify_pose`).
 
 All take ``dzeta`` (n, 3), body-frame displacements from the reference row
 (row 0), and ``tau_load`` (n, 3), total load moments in {A}:

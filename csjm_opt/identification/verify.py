@@ -30,7 +30,7 @@ from .._validate import as_array, as_rotation, as_rotations
 from ..errors import InvalidInput
 from ..measurement.logfile import MeasurementLog
 from ..model.numeric import Model
-from .identify import StiffnessEstimate
+from .estimate import StiffnessEstimate
 
 
 def predict_pose(R0: np.ndarray, K: np.ndarray, dtau_A_Nm: np.ndarray) -> np.ndarray:

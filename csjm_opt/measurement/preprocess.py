@@ -3,7 +3,8 @@
 Raw CSV format (one file, UTF-8, comma separated, SI units: m, rad, N, N m)
 ---------------------------------------------------------------------------
 Header: exactly these columns, in any order (a free-text ``note`` column is
-also allowed)::
+also allowed), with one rest-length column per cable of the rig, ``l1..lm`` (a six-cable
+rig's header below; a raw file whose count differs from the rig's is refused, naming it)::
 
     record,sample,cycle,name,x,y,z,rx,ry,rz,px,py,pz,fx,fy,fz,mx,my,mz,l1,l2,l3,l4,l5,l6
 
@@ -17,7 +18,7 @@ Each row is one record; the cells a record does not use must be empty.
     ``rx,ry,rz`` rotation vector of {S} in {A}.
 ``sample`` (one per static equilibrium, in time order)
     ``sample`` (unique integer id), ``cycle`` (integer; rows of a cycle
-    consecutive, first row = reference), ``l1..l6`` commanded rest lengths;
+    consecutive, first row = reference), ``l1..lm`` commanded rest lengths;
     ``fx,fy,fz,mx,my,mz`` the F/T reading in {S}; and *either* the platform
     pose measured in {L} (``x,y,z`` origin of {A}, ``rx,ry,rz`` rotation
     vector of {A} in {L}) *or* empty pose cells and ``platform_point`` records.
@@ -52,10 +53,10 @@ from ..errors import DataFileError, IllConditionedData, InvalidInput
 from ..model.rig import Rig
 from .frames import fit_rigid_transform, weight_moment_A, wrench_to_A
 from .logfile import MeasurementLog
-from .raw_file import RAW_COLUMNS, parse_raw
+from .raw_file import RAW_COLUMNS, parse_raw, raw_columns
 
 __all__ = ["DEFAULT_ORIGIN_TOL_M", "MAX_ORIGIN_TOL_M", "RAW_COLUMNS", "fit_rigid_transform", "parse_raw",
-           "preprocess_file", "preprocess_text", "weight_moment_A", "wrench_to_A"]
+           "preprocess_file", "preprocess_text", "raw_columns", "weight_moment_A", "wrench_to_A"]
 
 DEFAULT_ORIGIN_TOL_M = 2e-3
 #: Largest accepted ``origin_tol_m`` (m): beyond it (54) checks nothing on a bench-top rig.
@@ -100,7 +101,7 @@ def preprocess_text(text: str, rig: Rig, source: str | None = None, origin_tol_m
             or not 0 < origin_tol_m <= MAX_ORIGIN_TOL_M:
         raise InvalidInput(f"origin_tol_m: expected a number in (0, {MAX_ORIGIN_TOL_M:g}] m, got {origin_tol_m!r}",
                            "origin_tol_m")
-    rec = parse_raw(text, source)
+    rec = parse_raw(text, source, rig.n_cables)
     base = rec["base_point"]
     if len(base) < 3:
         raise DataFileError(f"need at least 3 base_point records, got {len(base)}", source)
@@ -152,7 +153,7 @@ def preprocess_text(text: str, rig: Rig, source: str | None = None, origin_tol_m
     extra = {k: np.array([repr(float(x)) for x in v]) for k, v in extra.items()}
     try:
         log = MeasurementLog.from_arrays([r[1]["cycle"] for r in rows],
-                                         [[r[1][f"l{i}"] for i in range(1, 7)] for r in rows],
+                                         [[r[1][f"l{i}"] for i in range(1, rig.n_cables + 1)] for r in rows],
                                          tau_ext, R_BA, sample=[r[1]["sample"] for r in rows], extra=extra)
     except DataFileError as exc:  # re-anchor row numbers to raw lines
         idx = (exc.line or 2) - 2

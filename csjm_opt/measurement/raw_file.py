@@ -8,6 +8,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import re
 from typing import Any
 
 import numpy as np
@@ -16,25 +17,43 @@ from .._limits import LIMITS, ROTVEC_MAX_NORM_RAD
 from ..errors import DataFileError
 from ._log_checks import parse_number
 
-RAW_COLUMNS = ("record", "sample", "cycle", "name", "x", "y", "z", "rx", "ry", "rz", "px", "py", "pz",
-               "fx", "fy", "fz", "mx", "my", "mz", "l1", "l2", "l3", "l4", "l5", "l6")
-_NUMERIC = RAW_COLUMNS[4:]
+#: The columns of every raw file before the rest lengths ``l1..lm`` (m: the rig's cable count).
+FIXED_COLUMNS = ("record", "sample", "cycle", "name", "x", "y", "z", "rx", "ry", "rz", "px", "py", "pz",
+                 "fx", "fy", "fz", "mx", "my", "mz")
 _POSE = ("x", "y", "z", "rx", "ry", "rz")
-_REQUIRED = {
-    "base_point": ("name", "x", "y", "z", "px", "py", "pz"),
-    "sensor": _POSE,
-    "sample": ("sample", "cycle", "fx", "fy", "fz", "mx", "my", "mz", "l1", "l2", "l3", "l4", "l5", "l6"),
-    "platform_point": ("sample", "name", "x", "y", "z", "px", "py", "pz"),
-}
 _OPTIONAL = {"sample": _POSE}
+_REST = re.compile(r"l[0-9]+")
 
 
-_QUANTITY = {**{c: "position_m" for c in ("x", "y", "z", "px", "py", "pz")},
-             **{c: "force_N" for c in ("fx", "fy", "fz")}, **{c: "moment_Nm" for c in ("mx", "my", "mz")},
-             **{f"l{i}": "rest_length_m" for i in range(1, 7)}}
+def raw_columns(n_cables: int = 6) -> tuple[str, ...]:
+    """The raw header of a rig of ``n_cables`` cables: :data:`FIXED_COLUMNS` then ``l1..lm``."""
+    return FIXED_COLUMNS + tuple(f"l{i}" for i in range(1, n_cables + 1))
 
 
-def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int, dict[str, Any]]]]:
+#: The raw header of a six-cable rig (the paper's).
+RAW_COLUMNS = raw_columns(6)
+
+
+def _required(n_cables: int) -> dict[str, tuple[str, ...]]:
+    return {"base_point": ("name", "x", "y", "z", "px", "py", "pz"),
+            "sensor": _POSE,
+            "sample": ("sample", "cycle", "fx", "fy", "fz", "mx", "my", "mz")
+            + raw_columns(n_cables)[len(FIXED_COLUMNS):],
+            "platform_point": ("sample", "name", "x", "y", "z", "px", "py", "pz")}
+
+
+def _quantity(col: str) -> str:
+    if col in ("x", "y", "z", "px", "py", "pz"):
+        return "position_m"
+    if col in ("fx", "fy", "fz"):
+        return "force_N"
+    if col in ("mx", "my", "mz"):
+        return "moment_Nm"
+    return "rest_length_m" if _REST.fullmatch(col) else ""
+
+
+def parse_raw(text: str, source: str | None = None,
+              n_cables: int = 6) -> dict[str, list[tuple[int, dict[str, Any]]]]:
     """Records of a raw instrument CSV by kind, parsed strictly; errors name the line.
 
     Parameters
@@ -43,6 +62,8 @@ def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int,
         The file's contents (header first).
     source : str, optional
         File name for error messages.
+    n_cables : int, optional
+        The rig's cable count m: the header's rest-length columns must be ``l1..lm``.
 
     Returns
     -------
@@ -53,21 +74,31 @@ def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int,
     Raises
     ------
     DataFileError
-        Empty file, bad header, unknown record kind, a missing, misplaced, non-numeric or
+        Empty file, bad header (rest-length columns other than ``l1..lm``: named with the count
+        the rig needs), unknown record kind, a missing, misplaced, non-numeric or
         out-of-limit value, a rotation vector of norm above pi, or a partial sample pose
         (naming the line and column).
     """
+    columns = raw_columns(n_cables)
+    required = _required(n_cables)
     reader = csv.reader(io.StringIO(text))
     try:
         header = [h.strip() for h in next(reader)]
     except StopIteration:
-        raise DataFileError("empty file: expected the raw header " + ",".join(RAW_COLUMNS), source, 1) from None
-    unknown = [h for h in header if h not in RAW_COLUMNS and h != "note"]
-    missing = [c for c in RAW_COLUMNS if c not in header]
+        raise DataFileError("empty file: expected the raw header " + ",".join(columns), source, 1) from None
+    rest = [h for h in header if _REST.fullmatch(h)]
+    expected = columns[len(FIXED_COLUMNS):]
+    if rest and set(rest) != set(expected):
+        odd = [h for h in rest if h not in expected] or [c for c in expected if c not in rest]
+        raise DataFileError(f"{len(rest)} rest-length columns ({', '.join(rest)}) for a rig of {n_cables} cables: "
+                            f"expected l1..l{n_cables} (the raw file and the rig file do not belong together?)",
+                            source, 1, odd[0])
+    unknown = [h for h in header if h not in columns and h != "note"]
+    missing = [c for c in columns if c not in header]
     if unknown or missing or len(set(header)) != len(header):
-        raise DataFileError(f"raw header must hold the columns {','.join(RAW_COLUMNS)} (any order, "
+        raise DataFileError(f"raw header must hold the columns {','.join(columns)} (any order, "
                             f"plus 'note'); missing {missing}, unknown {unknown}", source, 1)
-    records: dict[str, list] = {k: [] for k in _REQUIRED}
+    records: dict[str, list] = {k: [] for k in required}
     for row in reader:
         line = reader.line_num
         if not row or all(not c.strip() for c in row):
@@ -76,24 +107,24 @@ def parse_raw(text: str, source: str | None = None) -> dict[str, list[tuple[int,
             raise DataFileError(f"expected {len(header)} values, got {len(row)}", source, line)
         cells = {h: c.strip() for h, c in zip(header, row)}
         kind = cells["record"]
-        if kind not in _REQUIRED:
-            raise DataFileError(f"unknown record {kind!r} (expected one of {sorted(_REQUIRED)})",
+        if kind not in required:
+            raise DataFileError(f"unknown record {kind!r} (expected one of {sorted(required)})",
                                 source, line, "record")
-        allowed = set(_REQUIRED[kind]) | set(_OPTIONAL.get(kind, ())) | {"record", "note"}
+        allowed = set(required[kind]) | set(_OPTIONAL.get(kind, ())) | {"record", "note"}
         values: dict[str, Any] = {}
-        for col in RAW_COLUMNS[1:]:
+        for col in columns[1:]:
             cell = cells[col]
             if col not in allowed:
                 if cell:
                     raise DataFileError(f"a {kind} record has no {col!r} value (got {cell!r})", source, line, col)
                 continue
             if not cell:
-                if col in _REQUIRED[kind]:
+                if col in required[kind]:
                     raise DataFileError(f"missing value for a {kind} record", source, line, col)
                 continue
             values[col] = cell if col == "name" else parse_number(cell, col, source, line,
                                                                      integer=col in ("sample", "cycle"))
-            lim = LIMITS.get(_QUANTITY.get(col, ""))
+            lim = LIMITS.get(_quantity(col))
             if lim is not None and not lim.contains(np.array(values[col])):
                 raise DataFileError(f"{values[col]:.6g} outside {lim.describe()} ({lim.why.split(';')[0]})",
                                     source, line, col)

@@ -16,10 +16,10 @@ The keys (docs/guide/input-files.md prints the same list):
 ``platform_angles_deg`` / ``platform_pair_angle_deg`` (optional, at most one)
     Angular positions of the platform holes (deg, counter-clockwise about z
     from x). ``*_angles_deg``: m explicit angles. ``*_pair_angle_deg``: the
-    holes in m/2 pairs (m even), pair j centred at ``j * 720/m`` deg, its two
-    holes at the centre minus and plus half this angle (the paper's
-    semi-regular hexagon is the case m = 6). Neither: evenly spaced, hole i
-    (from 1) at ``(i - 1) * 360/m`` deg.
+    holes in pairs, pair j centred at ``j * 720/m`` deg, its two holes at the
+    centre minus and plus half this angle (the paper's semi-regular hexagon is
+    the case m = 6); odd m ends with a single hole (:func:`paired_angles_deg`).
+    Neither: evenly spaced, hole i (from 1) at ``(i - 1) * 360/m`` deg.
 ``base_angles_deg`` / ``base_pair_angle_deg`` (optional, at most one)
     The same for the base holes.
 ``phase_deg`` (default 0)
@@ -57,9 +57,9 @@ PATTERN_KEYS: dict[str, str] = {
     "platform_height": "z of the platform holes in {A} (m): a number or m numbers",
     "base_height": "z of the base holes in {B} (m): a number or m numbers",
     "platform_angles_deg": "m explicit platform hole angles (deg)",
-    "platform_pair_angle_deg": "platform holes in m/2 pairs this central angle apart (deg)",
+    "platform_pair_angle_deg": "platform holes in pairs this central angle apart (deg; odd m: one single)",
     "base_angles_deg": "m explicit base hole angles (deg)",
-    "base_pair_angle_deg": "base holes in m/2 pairs this central angle apart (deg)",
+    "base_pair_angle_deg": "base holes in pairs this central angle apart (deg; odd m: one single)",
     "phase_deg": "rotation of the whole layout about z (deg), default 0",
     "twist_deg": "extra rotation of the base holes about z (deg), default 0",
     "alternation": "height zig-zag (m): odd holes +a/2, even holes -a/2, default 0",
@@ -94,17 +94,42 @@ def _angles_deg(table: dict[str, Any], body: str, m: int, path: str | None) -> n
         return _per_hole(table[explicit], m, explicit, path)
     if paired in table:
         gamma = _number(table[paired], paired, path)
-        if m % 2:
-            raise RigFileError(f"paired holes need an even count, got count = {m}", path, f"{_KEY}.{paired}")
         if not 0.0 < gamma < 720.0 / m:
             raise RigFileError(f"expected 0 < pair angle < {720.0 / m:g} deg (the pair spacing), got {gamma:g}",
                                path, f"{_KEY}.{paired}")
+        return paired_angles_deg(m, gamma)
+    return np.arange(m) * (360.0 / m)
+
+
+def paired_angles_deg(m: int, gamma_deg: float) -> np.ndarray:
+    """Angles (deg) of m holes in pairs ``gamma_deg`` apart, pair centres ``720/m`` deg apart.
+
+    Even m: pair j centred at ``j 720/m``, its holes at the centre minus and plus ``gamma/2``.
+    Odd m continues the same rule with the last pair incomplete: hole i (from 0) at
+    ``(i - 1/2) 360/m -+ (gamma - 360/m) / 2`` (minus for even i), which for even m is the pair
+    layout again; consecutive holes are ``gamma`` and ``720/m - gamma`` apart in turn, except the
+    last and the first, ``360/m`` apart.
+
+    Parameters
+    ----------
+    m : int
+        Number of holes (4..12).
+    gamma_deg : float
+        Central angle within a pair (deg), ``0 < gamma < 720/m``.
+
+    Returns
+    -------
+    ndarray, shape (m,)
+    """
+    if m % 2 == 0:
         centres = np.arange(m // 2) * (720.0 / m)
         angles = np.empty(m)
-        angles[0::2] = centres - gamma / 2
-        angles[1::2] = centres + gamma / 2
+        angles[0::2] = centres - gamma_deg / 2
+        angles[1::2] = centres + gamma_deg / 2
         return angles
-    return np.arange(m) * (360.0 / m)
+    step = 360.0 / m
+    i = np.arange(m)
+    return (i - 0.5) * step + np.where(i % 2 == 0, -1.0, 1.0) * (gamma_deg - step) / 2
 
 
 def expand_pattern(table: Any, path: str | None = None) -> tuple[np.ndarray, np.ndarray]:

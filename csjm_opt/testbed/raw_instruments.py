@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import so3
-from ..measurement.preprocess import RAW_COLUMNS
+from ..measurement.preprocess import raw_columns
 
 
 def raw_text_from_log(log, rig, R_LB, p_LB, R_AS, p_AS, base_points_B, rng, point_sigma_m=0.0,
@@ -55,10 +55,13 @@ def raw_text_from_log(log, rig, R_LB, p_LB, R_AS, p_AS, base_points_B, rng, poin
             return v
         return str(int(v)) if isinstance(v, (int, np.integer)) else repr(float(v))
 
-    def row(**cells):
-        return ",".join(cell(cells.get(c, "")) for c in RAW_COLUMNS)
+    m = log.rest_lengths_m.shape[1]
+    columns = raw_columns(m)
 
-    lines = [",".join(RAW_COLUMNS)]
+    def row(**cells):
+        return ",".join(cell(cells.get(c, "")) for c in columns)
+
+    lines = [",".join(columns)]
     for j, pb in enumerate(base_points_B):
         pl = R_LB @ pb + p_LB + rng.normal(size=3) * point_sigma_m
         lines.append(row(record="base_point", name=f"H{j + 1}", x=float(pl[0]), y=float(pl[1]), z=float(pl[2]),
@@ -78,7 +81,7 @@ def raw_text_from_log(log, rig, R_LB, p_LB, R_AS, p_AS, base_points_B, rng, poin
         cells = dict(record="sample", sample=int(log.sample[i]), cycle=int(log.cycle[i]),
                      fx=float(f_S[0]), fy=float(f_S[1]), fz=float(f_S[2]),
                      mx=float(tau_S[0]), my=float(tau_S[1]), mz=float(tau_S[2]),
-                     **{f"l{k + 1}": float(log.rest_lengths_m[i, k]) for k in range(6)})
+                     **{f"l{k + 1}": float(log.rest_lengths_m[i, k]) for k in range(m)})
         if platform_points_A is None:
             rvl = so3.log(R_LA)
             cells.update(x=float(p_LB[0]), y=float(p_LB[1]), z=float(p_LB[2]),

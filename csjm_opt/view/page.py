@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import so3
-from .._atomic_write import atomic_write_text
+from .._fileio import atomic_write_text
 from .plotly_js import plotly_js_gzip_base64
 from .state import RigState
 from .traces import PanelScale, panel_scale, state_traces

@@ -80,7 +80,7 @@ def test_demo_step_contract(rig, tmp_path):
     from csjm_opt.demo.diagnose_step import run_demo
 
     out = run_demo(rig, tmp_path / "diagnosis", np.random.default_rng(42), effect="sensor_bias",
-                   severity=1.5, n_cycles=6)
+                   severity=1.5, n_cycles=6, secondary=False)
     json.dumps(out)                                   # JSON-able
     assert out["injected"] == "sensor_bias" and out["selected"] in out["candidates"] | {"none": 0}
     assert (tmp_path / "diagnosis" / out["report"]).exists() and (tmp_path / "diagnosis" / out["log"]).exists()

@@ -43,17 +43,40 @@ def test_hole_pairs_are_the_rig_files_pair_pattern(m):
     np.testing.assert_allclose(B, B_ref, atol=1e-15)
 
 
-@pytest.mark.parametrize("m", [4, 8])
+@pytest.mark.parametrize("m", [4, 5, 7, 8, 11])
 def test_chords_give_the_circle_whose_pair_chords_they_are(m):
     A, _ = design_holes({"n_cables": m, "platform_d12_m": 0.01, "platform_d23_m": 0.05})
     chords = np.linalg.norm(A - np.roll(A, -1, axis=0), axis=1)
-    np.testing.assert_allclose(chords[0::2], 0.01, atol=1e-12)   # within a pair
-    np.testing.assert_allclose(chords[1::2], 0.05, atol=1e-12)   # between pairs
+    pairs = 2 * (m // 2)                                          # odd m: the last hole is single
+    np.testing.assert_allclose(chords[0:pairs:2], 0.01, atol=1e-12)   # within a pair
+    np.testing.assert_allclose(chords[1:pairs - 1:2], 0.05, atol=1e-12)   # between pairs
+    if m % 2:
+        # the single hole: d23 after the last pair, 360/m deg before hole 1 on the same circle
+        radius = np.linalg.norm(A[0, :2])
+        assert np.allclose(np.linalg.norm(A[:, :2], axis=1), radius, rtol=1e-12)
+        assert chords[-1] == pytest.approx(2 * radius * np.sin(np.pi / m), rel=1e-12)
+        np.testing.assert_allclose(chords[pairs - 1], 0.05, atol=1e-12)
+
+
+@pytest.mark.parametrize("m", [5, 7, 9, 11])
+def test_an_odd_count_continues_the_pairs_with_a_single_hole(m):
+    """Odd m: the design's layout, the rig file's pair-angle pattern, and the pair rule written out here agree."""
+    gamma, theta0 = 0.3 * 720 / m, 17.0
+    A, _ = design_holes({"n_cables": m, "platform_radius_m": 0.05, "platform_gamma_deg": gamma,
+                         "platform_theta0_deg": theta0, "oo_a_m": 0.07})
+    angles = np.degrees(np.arctan2(A[:, 1], A[:, 0]))
+    centres = theta0 + np.arange(m) // 2 * 720.0 / m          # pair j = i // 2 centred at theta0 + j 720/m
+    want = centres + np.where(np.arange(m) % 2 == 0, -gamma / 2, gamma / 2)
+    np.testing.assert_allclose(np.angle(np.exp(1j * np.radians(angles - want))), 0.0, atol=1e-12)
+    np.testing.assert_allclose(A[:, 2], 0.07)
+    A_file, _ = expand_pattern({"count": m, "platform_radius": 0.05, "base_radius": 0.07, "platform_height": 0.07,
+                                "base_height": -0.09, "platform_pair_angle_deg": gamma, "phase_deg": theta0})
+    np.testing.assert_allclose(A, A_file, atol=1e-15)
 
 
 def test_bad_cable_counts_name_the_key():
     for params, key in (({"n_cables": 3}, "n_cables"), ({"n_cables": 6.5}, "n_cables"),
-                        ({"n_cables": 5}, "n_cables"), ({"n_cables": 4, "A5_dx_m": 0.001}, "A5_dx_m"),
+                        ({"n_cables": 4, "A5_dx_m": 0.001}, "A5_dx_m"),
                         ({"n_cables": 8, "platform_radius_m": 0.05, "platform_gamma_deg": 95.0},
                          "platform_radius_m")):
         with pytest.raises(DesignError) as exc:

@@ -68,11 +68,12 @@ def test_signature_test_with_prediction_error_holds_its_level(table):
     for f in folds:
         J = np.tile(np.eye(3), (len(f), 1)) @ rng.normal(size=(3, 3))     # an offset common to the fold
         blocks.append((f, J @ J.T))
+    chol = [np.linalg.cholesky(np.eye(3 * len(f)) + P) for f, P in blocks]   # draws e = L z, z ~ N(0, I)
     p_gls, p_ols = [], []
     for _ in range(300):
         e = np.empty((len(t), 3))
-        for f, P in blocks:
-            e[f] = rng.multivariate_normal(np.zeros(3 * len(f)), np.eye(3 * len(f)) + P).reshape(-1, 3)
+        for (f, _P), L_f in zip(blocks, chol):
+            e[f] = (L_f @ rng.normal(size=3 * len(f))).reshape(-1, 3)
         zeta = np.einsum("nij,nj->ni", L, e)
         p_gls.append(remaining_signature(t, zeta, 1.0, 0.1, blocks)["p_value"])
         p_ols.append(remaining_signature(t, zeta, 1.0, 0.1)["p_value"])

@@ -110,3 +110,33 @@ def test_cli_writes_protocol_and_json(tmp_path):
     assert len(Protocol.from_csv(out)) == 10
     assert len(res["planned"]["ci95_half_width"][0]) == 6 and res["narrower_by"] > 1.0
     assert InstrumentNoise.paper().angle_sigma_rad > 0
+
+
+def test_a_selection_that_does_not_determine_k_scores_inf():
+    """Singular or numerically singular information (round-off inverse of any sign) is never the best."""
+    rng = np.random.default_rng(1)
+    X = rng.normal(size=(20, 9))
+    full = X.T @ X
+    low = X[:, :5].T @ X[:, :5]
+    singular = np.zeros((9, 9))
+    singular[:5, :5] = low
+    nearly = X[:4].T @ X[:4] + 1e-14 * np.eye(9)        # rank 4 plus round-off
+    values = _criterion(np.stack([full, singular, nearly]), "A")
+    # the well-posed one: trace of the K block of the inverse, by a linear solve
+    assert values[0] == pytest.approx(np.trace(np.linalg.solve(full, np.eye(9))[3:, 3:]), rel=1e-9)
+    assert np.isinf(values[1]) and values[1] > 0 and np.isinf(values[2]) and values[2] > 0
+    assert np.isinf(_criterion(nearly, "D")) and np.isfinite(_criterion(full, "D"))
+
+
+@pytest.mark.parametrize("budget", [3, 4, 5])
+def test_a_small_budget_is_planned_and_beats_the_paper_protocol(budget):
+    """Fewer than three +- pairs cannot turn the platform about three axes: single loads, a finite bound."""
+    loads = ExperimentLoads.default(RIG)
+    loads = ExperimentLoads(loads.weights_N, loads.points_A_m, sphere_directions(16), (25.0, 60.0), 0.15)
+    plan = plan_experiment(RIG, budget, loads)
+    assert len(plan.protocol) == budget + 1
+    # the bound re-settled from the protocol's loads (not the selection's information)
+    again = predict_bound(RIG, plan.protocol)[0][0]
+    assert np.all(np.linalg.eigvalsh(again) > 0)
+    paper = paper_protocol(RIG, budget, np.random.default_rng(0), loads=loads)
+    assert np.trace(again) < np.trace(paper.crlb6[0])

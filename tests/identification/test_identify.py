@@ -10,7 +10,8 @@ from csjm_opt._plotting import save
 from csjm_opt.cli import main
 from csjm_opt.errors import IllConditionedData
 from csjm_opt.identification.figures import convergence_curve, plot_convergence
-from csjm_opt.identification.identify import identify_log, identify_stiffness
+from csjm_opt.identification.identify_pose import identify_stiffness
+from csjm_opt.identification.log_identification import identify_log
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.testbed.scripted import add_noise, load_directions, simulate_cycle, simulate_log
 

@@ -13,7 +13,7 @@ from csjm_opt.cli.app import main
 from csjm_opt.identification.cramer_rao import crlb, sym_entries
 from csjm_opt.identification.curvature import model_curvature, right_jacobian, weight_slopes
 from csjm_opt.identification.experiment_design import paper_protocol
-from csjm_opt.identification.identify import identify_log
+from csjm_opt.identification.log_identification import identify_log
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.model.numeric import Model
 from csjm_opt.model.rig import paper_rig

@@ -16,7 +16,8 @@ import pytest
 
 from csjm_opt import cli
 from csjm_opt.errors import IllConditionedData
-from csjm_opt.identification.identify import MAX_RELATIVE_HALF_WIDTH, identify_log
+from csjm_opt.identification.log_identification import identify_log
+from csjm_opt.identification.refusal import MAX_RELATIVE_HALF_WIDTH
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.testbed.scripted import add_noise, load_directions, simulate_log
 

@@ -7,7 +7,8 @@ from csjm_opt import so3
 from csjm_opt._plotting import save
 from csjm_opt.errors import InvalidInput
 from csjm_opt.identification.figures import plot_verification
-from csjm_opt.identification.identify import identify_log, identify_stiffness
+from csjm_opt.identification.identify_pose import identify_stiffness
+from csjm_opt.identification.log_identification import identify_log
 from csjm_opt.identification.verify import (
     estimation_error,
     predict_pose,

@@ -150,3 +150,39 @@ def test_rigid_fit_law(rotvec, shift, n_points, seed):
     R_true = so3.exp(np.array(rotvec))
     R, p, rms = fit_rigid_transform(P, P @ R_true.T + np.array(shift))
     assert np.allclose(R, R_true, atol=1e-9) and np.allclose(p, shift, atol=1e-9) and rms < 1e-9
+
+
+@pytest.mark.parametrize("rig_file", ["eight_cable.toml", "four_cable.toml"])
+def test_round_trip_on_an_m_cable_rig(rig_file, tmp_path, capsys):
+    """The raw file of an m-cable rig carries l1..lm and preprocesses back to its log; a 6-cable raw file is refused."""
+    from pathlib import Path
+
+    from csjm_opt.model.rig import Rig
+
+    rig = Rig.from_toml(Path(__file__).resolve().parents[2] / "rigs" / rig_file)
+    m = rig.n_cables
+    rng = np.random.default_rng(8)
+    n = 8
+    R = so3.exp(rng.normal(size=(n, 3)) * 0.2)
+    l = 0.15 + 0.01 * rng.random((n, m))
+    truth = MeasurementLog.from_arrays(np.repeat([0, 1], n // 2), l, rng.normal(size=(n, 3)), R)
+    text = raw_text_from_log(truth, rig, R_LB, P_LB, R_AS, P_AS, BASE_B, np.random.default_rng(4))
+    header = text.splitlines()[0].split(",")
+    assert [h for h in header if h.startswith("l")] == [f"l{i}" for i in range(1, m + 1)]
+    log, _ = preprocess_text(text, rig)
+    np.testing.assert_array_equal(log.rest_lengths_m, truth.rest_lengths_m)
+    np.testing.assert_allclose(log.R, truth.R, atol=1e-12)
+    # the same raw file against a rig of another cable count: one line naming the file, line 1 and a column
+    six = raw_text_from_log(MeasurementLog.from_arrays(truth.cycle, l[:, :6] if m >= 6 else np.c_[l, l][:, :6],
+                                                       truth.tau_ext_A_Nm, R), rig, R_LB, P_LB, R_AS, P_AS, BASE_B,
+                            np.random.default_rng(4))
+    with pytest.raises(DataFileError, match=r"raw\.csv:1.*rest-length columns.*l1\.\.l" + str(m)) as exc:
+        preprocess_text(six, rig, "raw.csv")
+    assert exc.value.column == ("l5" if m == 4 else "l7")      # the first column too many, or the first missing
+    raw = tmp_path / "raw.csv"
+    raw.write_text(six)
+    rig_path = Path(__file__).resolve().parents[2] / "rigs" / rig_file
+    capsys.readouterr()
+    assert main(["preprocess", str(raw), "--rig", str(rig_path), "-o", str(tmp_path / "log.csv")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "raw.csv" in err[0] and f"l1..l{m}" in err[0]

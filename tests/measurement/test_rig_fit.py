@@ -80,7 +80,7 @@ def test_validation_logs_pass_with_their_rig_and_fail_with_the_paper_rig(log_nam
 
 def test_identify_and_diagnose_refuse_a_log_of_another_rig_unless_told():
     from csjm_opt.diagnose import diagnose
-    from csjm_opt.identification.identify import identify_log
+    from csjm_opt.identification.log_identification import identify_log
 
     log = MeasurementLog.from_csv(DATA / "b1_none_first33.csv")
     with pytest.raises(LogRigMismatch):

@@ -88,9 +88,10 @@ def n_cables_sym(p: dict[str, Any]) -> int:
 def holes_sym(p: dict[str, Any]) -> tuple[Any, Any]:
     """Platform and base holes (3 x m, columns) of a design whose parameters may be symbolic.
 
-    Same parametrisation as :func:`csjm_opt.design.geometry.design_holes`: m/2 hole pairs on a
+    Same parametrisation as :func:`csjm_opt.design.geometry.design_holes`: hole pairs on a
     circle of radius r, pair j centred at ``theta0 + j 720/m`` deg, its holes gamma apart (m = 6:
-    the semi-regular hexagon), at height +oo_a / -oo_b; per-hole offsets; or free hole coordinates.
+    the semi-regular hexagon; odd m: the last a single hole), at height +oo_a / -oo_b; per-hole
+    offsets; or free hole coordinates.
     Chords ``*_d12_m`` / ``*_d23_m`` must be numbers here.
 
     Parameters
@@ -108,9 +109,6 @@ def holes_sym(p: dict[str, Any]) -> tuple[Any, Any]:
         if f"{body}_holes" in p:
             xyz = ca.SX(np.asarray(p[f"{body}_holes"], float).T)
         else:
-            if n_cab % 2:
-                raise DesignError(f"hole pairs need an even number of cables, got {n_cab}; give platform_holes "
-                                  "and base_holes for an odd count", "n_cables")
             if f"{body}_radius_m" in p:
                 r, gamma = p[f"{body}_radius_m"], p[f"{body}_gamma_deg"] * math.pi / 180
             else:
@@ -127,11 +125,13 @@ def holes_sym(p: dict[str, Any]) -> tuple[Any, Any]:
             theta0 = p[f"{body}_theta0_deg"] * math.pi / 180
             z = p[height] if body == "platform" else -p[height]
             spacing = 2 * math.pi / 3 if n_cab == 6 else 4 * math.pi / n_cab   # between pair centres
-            cols = []
-            for m in range(n_cab // 2):
-                for sign in (-1, 1):
-                    a = theta0 + spacing * m + sign * gamma / 2
-                    cols.append(ca.vertcat(r * ca.cos(a), r * ca.sin(a), z))
+            if n_cab % 2:      # odd m: the pairs continued, the last a single hole (hole_pattern.paired_angles_deg)
+                step = 2 * math.pi / n_cab
+                angles = [theta0 + (i - 0.5) * step + (-1 if i % 2 == 0 else 1) * (gamma - step) / 2
+                          for i in range(n_cab)]
+            else:
+                angles = [theta0 + spacing * m + sign * gamma / 2 for m in range(n_cab // 2) for sign in (-1, 1)]
+            cols = [ca.vertcat(r * ca.cos(a), r * ca.sin(a), z) for a in angles]
             xyz = ca.horzcat(*cols)
         offsets = ca.vertcat(*[ca.horzcat(*[p.get(f"{letter}{i + 1}_d{ax}_m", 0.0) for i in range(n_cab)])
                                for ax in "xyz"])

@@ -9,7 +9,7 @@ A small TOML file, one table per load::
     point_A_m = [0.05, 0.0, 0.0]
 
 The external moment of a load depends on the pose: ``tau_ext = point x (R^T m g_B)`` (in
-{A}, the weight fixed in {B}). Without a file, :func:`default_load_set` gives masses of
+{A}, the weight fixed in {B}). Without a file, :func:`default_dead_weights` gives masses of
 0.1, 0.2 and 0.5 kg at four points (+-x, +-y) in the platform's hole plane, at 0.8 of the
 holes' radius: what any lab with a set of calibration weights has; ``--suggest`` asks for
 masses that reach the largest moment the log already applied (the lab has shown it can).
@@ -34,7 +34,7 @@ REACH_SHARES = (1 / 3, 2 / 3, 1.0)
 
 
 @dataclasses.dataclass(frozen=True)
-class Load:
+class DeadWeight:
     """A dead weight: ``mass_kg`` hung at ``point_A_m`` (m, in {A})."""
 
     name: str
@@ -59,7 +59,7 @@ class Load:
         return np.cross(np.asarray(self.point_A_m, float), self.mass_kg * g_A)
 
 
-def default_load_set(rig: Rig, reach_Nm: float | None = None) -> list[Load]:
+def default_dead_weights(rig: Rig, reach_Nm: float | None = None) -> list[DeadWeight]:
     """Masses hung at +-x, +-y, radius ``DEFAULT_RADIUS_SHARE`` x the platform holes'.
 
     Without ``reach_Nm`` the masses are ``DEFAULT_MASSES_KG``. With it (the largest external moment
@@ -76,7 +76,7 @@ def default_load_set(rig: Rig, reach_Nm: float | None = None) -> list[Load]:
 
     Returns
     -------
-    list of Load
+    list of DeadWeight
     """
     A = np.asarray(rig.platform_holes_A_m, float)
     r = DEFAULT_RADIUS_SHARE * float(np.mean(np.linalg.norm(A[:, :2], axis=1)))
@@ -86,10 +86,10 @@ def default_load_set(rig: Rig, reach_Nm: float | None = None) -> list[Load]:
     if reach_Nm is not None and np.isfinite(reach_Nm) and reach_Nm > 0:
         top = float(reach_Nm) / (r * float(np.linalg.norm(rig.gravity_B_m_per_s2)))
         masses = tuple(max(top * s, DEFAULT_MASSES_KG[0]) for s in REACH_SHARES)
-    return [Load(f"{1e3 * m:.0f} g at {k}", m, p) for m in masses for k, p in points.items()]
+    return [DeadWeight(f"{1e3 * m:.0f} g at {k}", m, p) for m in masses for k, p in points.items()]
 
 
-def load_load_set(path: str | Path) -> list[Load]:
+def read_dead_weights(path: str | Path) -> list[DeadWeight]:
     """Read a load-set TOML file (format in the module docstring).
 
     Parameters
@@ -98,7 +98,7 @@ def load_load_set(path: str | Path) -> list[Load]:
 
     Returns
     -------
-    list of Load
+    list of DeadWeight
 
     Raises
     ------
@@ -132,5 +132,5 @@ def load_load_set(path: str | Path) -> list[Load]:
             raise InvalidInput(f"{where} key 'point_A_m': expected 3 finite numbers (m, in {{A}}), got {point!r}",
                                "point_A_m")
         x, y, z = (float(v) for v in point)
-        out.append(Load(str(item.get("name", f"load {i + 1}")), float(mass), (x, y, z)))
+        out.append(DeadWeight(str(item.get("name", f"load {i + 1}")), float(mass), (x, y, z)))
     return out

@@ -62,7 +62,7 @@ from ..fitting.friction_path import end_state
 from ..fitting.gauss_newton import data_jacobian
 from ..selection.result import Diagnosis
 from ..selection.scoring import CandidateScore
-from .dead_weights import Load, default_load_set
+from .dead_weights import DeadWeight, default_dead_weights
 from .load_cycles import N_CANDIDATES, candidate_cycles
 from .suggestion import PROTOCOL_COLUMNS, Suggestion, protocol_text, suggestion_markdown
 
@@ -193,7 +193,7 @@ def _row_jacobian(sc: CandidateScore, rows: Rows, R: np.ndarray, sigma: float) -
     J = data_jacobian(sc.fit.model, table, sc.fit.theta)       # type: ignore[arg-type]
     return J.reshape(len(rows), 3, -1)
 
-def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[Load] | None = None,
+def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[DeadWeight] | None = None,
                        seed: int = 0, progress: Callable | None = None) -> Suggestion | None:
     """Up to ``max_rows`` rows that best separate the diagnosis's leading hypotheses (module doc).
 
@@ -204,8 +204,8 @@ def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[Lo
     d : Diagnosis
     max_rows : int
         Largest number of rows.
-    loads : sequence of Load, optional
-        The lab's load set (default :func:`~csjm_opt.diagnose.suggest.dead_weights.default_load_set`).
+    loads : sequence of DeadWeight, optional
+        The lab's load set (default :func:`~csjm_opt.diagnose.suggest.dead_weights.default_dead_weights`).
     seed : int, optional
         Seed of the candidate draw.
     progress : callable, optional
@@ -225,7 +225,7 @@ def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[Lo
         raise InvalidInput(f"--suggest needs at least 3 rows (one load cycle), got {max_rows}", "suggest")
     purpose, hyps = hypotheses(d)
     reach = float(np.max(np.linalg.norm(d.train.rows.tau_meas_A_Nm, axis=1), initial=0.0))
-    loads = list(loads) if loads is not None else default_load_set(rig, reach)
+    loads = list(loads) if loads is not None else default_dead_weights(rig, reach)
     rng = np.random.default_rng(seed)
     bar = progress(total=2 + len(hyps), desc="suggest: designing rows") if progress else None
     cands = [c for c in candidate_cycles(rig, loads, rng) if len(c["loads"]) <= max_rows]

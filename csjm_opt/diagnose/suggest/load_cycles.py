@@ -20,7 +20,7 @@ from ...model.numeric import Model
 from ...model.rig import Rig
 from ...model.statics import rest_lengths_for, solve_equilibrium
 from ...planning.planner import plan_tensions
-from .dead_weights import Load
+from .dead_weights import DeadWeight
 
 MAX_TILT_RAD = 0.5
 MAX_TWIST_RAD = 0.3
@@ -29,14 +29,14 @@ PRETENSION_SHARE = (0.1, 0.9)
 N_CANDIDATES = 40
 
 
-def candidate_cycles(rig: Rig, loads: Sequence[Load], rng: np.random.Generator, n: int = N_CANDIDATES,
+def candidate_cycles(rig: Rig, loads: Sequence[DeadWeight], rng: np.random.Generator, n: int = N_CANDIDATES,
                      max_tries: int | None = None) -> list[dict]:
     """Feasible candidate cycles (nominal model): rest lengths, loads per row, planned poses.
 
     Parameters
     ----------
     rig : Rig
-    loads : sequence of Load
+    loads : sequence of DeadWeight
     rng : numpy.random.Generator
     n : int, optional
         Number of cycles wanted.
@@ -77,7 +77,7 @@ def candidate_cycles(rig: Rig, loads: Sequence[Load], rng: np.random.Generator, 
             continue
         if not _within(rig, eq0.tensions_N):
             continue
-        kept: list[tuple[Load, np.ndarray]] = []
+        kept: list[tuple[DeadWeight, np.ndarray]] = []
         R = eq0.R
         for ld in seq:
             try:
@@ -94,7 +94,7 @@ def candidate_cycles(rig: Rig, loads: Sequence[Load], rng: np.random.Generator, 
         held_any = True
         order = kept + kept[-2::-1]
         rows_R = [eq0.R] + [r for _, r in order] + [eq0.R]
-        rows_load: list[Load | None] = [None] + [ld for ld, _ in order] + [None]
+        rows_load: list[DeadWeight | None] = [None] + [ld for ld, _ in order] + [None]
         tau = np.array([np.zeros(3) if ld is None else ld.moment_A_Nm(r, g) for ld, r in zip(rows_load, rows_R)])
         out.append({"rest_lengths_m": l, "loads": rows_load, "R": np.array(rows_R), "tau": tau})
     if not held_any:

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 
 from ... import so3
-from .dead_weights import Load
+from .dead_weights import DeadWeight
 
 
 @dataclasses.dataclass(frozen=True)
@@ -18,7 +18,7 @@ class Suggestion:
     hypotheses: list[str]
     cycle: np.ndarray              # (n,) cycle ids (after the log's)
     rest_lengths_m: np.ndarray     # (n, m)
-    loads: list[Load | None]       # per row (None: no load)
+    loads: list[DeadWeight | None]       # per row (None: no load)
     intended_tau_A_Nm: np.ndarray  # (n, 3) at the planned pose
     planned_R: np.ndarray          # (n, 3, 3) nominal pose
     separation_sd: dict            # "a vs b" -> expected separation (noise sd)

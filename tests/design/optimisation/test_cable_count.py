@@ -45,7 +45,7 @@ starts = 1
     return text
 
 
-@pytest.mark.parametrize("m", [4, 8, 12])
+@pytest.mark.parametrize("m", [4, 5, 7, 8, 12])
 def test_symbolic_holes_of_m_cables_match_numeric(m):
     params = {"n_cables": m, "platform_radius_m": 0.05, "platform_gamma_deg": 0.3 * 720 / m,
               "platform_theta0_deg": 12.0, "base_gamma_deg": 0.8 * 720 / m, "base_radius_m": 0.07, "oo_a_m": 0.07,

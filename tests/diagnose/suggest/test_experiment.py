@@ -7,7 +7,7 @@ import pytest
 
 from csjm_opt.diagnose import diagnose
 from csjm_opt.diagnose.data.extra import append_log, check_rows_belong
-from csjm_opt.diagnose.suggest.dead_weights import Load, default_load_set, load_load_set
+from csjm_opt.diagnose.suggest.dead_weights import DeadWeight, default_dead_weights, read_dead_weights
 from csjm_opt.diagnose.suggest.experiment import (
     PROTOCOL_COLUMNS,
     candidate_cycles,
@@ -29,22 +29,22 @@ def rig():
 def test_load_set_file_errors_name_the_key(tmp_path):
     p = tmp_path / "loads.toml"
     p.write_text('[[load]]\nname = "a"\nmass_kg = 0.2\npoint_A_m = [0.05, 0.0, 0.0]\n')
-    (ld,) = load_load_set(p)
+    (ld,) = read_dead_weights(p)
     assert ld.mass_kg == 0.2 and ld.point_A_m == (0.05, 0.0, 0.0)
     p.write_text('[[load]]\nmass_kg = -1\npoint_A_m = [0.05, 0.0, 0.0]\n')
     with pytest.raises(InvalidInput, match="mass_kg"):
-        load_load_set(p)
+        read_dead_weights(p)
     p.write_text('[[load]]\nmass_kg = 1\npoint_A_m = [0.05, 0.0]\n')
     with pytest.raises(InvalidInput, match="point_A_m"):
-        load_load_set(p)
+        read_dead_weights(p)
     p.write_text('[[load]]\nmass = 1\n')
     with pytest.raises(InvalidInput, match="unknown key"):
-        load_load_set(p)
+        read_dead_weights(p)
 
 
 def test_load_moment_is_point_cross_weight(rig):
     """tau = p x (R^T m g): checked against the weight moment of a point mass the model computes."""
-    ld = Load("x", 0.3, (0.04, -0.02, 0.01))
+    ld = DeadWeight("x", 0.3, (0.04, -0.02, 0.01))
     R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
     want = kin.weight_moment(R[None], 0.3 * np.array(ld.point_A_m), np.asarray(rig.gravity_B_m_per_s2))[0]
     np.testing.assert_allclose(ld.moment_A_Nm(R, rig.gravity_B_m_per_s2), want, atol=1e-12)
@@ -52,7 +52,7 @@ def test_load_moment_is_point_cross_weight(rig):
 
 def test_candidate_rows_are_equilibria_within_tension_bounds(rig):
     """Every planned row balances (J^T T + tau_ext + tau_w = 0, T = k (c - l)) with tensions in bounds."""
-    cands = candidate_cycles(rig, default_load_set(rig), np.random.default_rng(0), n=4)
+    cands = candidate_cycles(rig, default_dead_weights(rig), np.random.default_rng(0), n=4)
     assert len(cands) == 4
     k = np.asarray(rig.cable_stiffness_N_per_m)
     mr = rig.platform_mass_kg * np.asarray(rig.com_A_m)
@@ -67,7 +67,8 @@ def test_candidate_rows_are_equilibria_within_tension_bounds(rig):
 
 def test_a_load_set_the_rig_cannot_hold_is_refused(rig):
     with pytest.raises(InvalidInput, match="cannot hold"):
-        candidate_cycles(rig, [Load("anvil", 500.0, (0.05, 0.0, 0.0))], np.random.default_rng(0), n=2, max_tries=5)
+        candidate_cycles(rig, [DeadWeight("anvil", 500.0, (0.05, 0.0, 0.0))], np.random.default_rng(0), n=2,
+                         max_tries=5)
 
 
 def test_extra_rows_from_another_rig_are_refused(rig):
@@ -103,11 +104,11 @@ def test_suggestion_separates_lookalikes_within_the_row_budget(rig):
 def test_default_loads_reach_the_moment_the_log_applied(rig):
     """The heaviest default load exerts the given moment with its lever horizontal (|p x m g| = reach)."""
     reach = 2.4
-    loads = default_load_set(rig, reach)
+    loads = default_dead_weights(rig, reach)
     g = np.asarray(rig.gravity_B_m_per_s2)
     top = max(np.linalg.norm(ld.moment_A_Nm(np.eye(3), g)) for ld in loads)
     assert top == pytest.approx(reach, rel=1e-9)
-    assert {ld.mass_kg for ld in default_load_set(rig)} == {0.1, 0.2, 0.5}      # no moment given: the defaults
+    assert {ld.mass_kg for ld in default_dead_weights(rig)} == {0.1, 0.2, 0.5}      # no moment given: the defaults
 
 
 def test_extra_rows_are_cycles_of_their_own_in_time_order(rig):
