@@ -32,7 +32,7 @@ from tqdm import tqdm
 
 from csjm_opt.identification.cramer_rao import sym_entries
 from csjm_opt.identification.experiment_design import paper_protocol, plan_experiment
-from csjm_opt.identification.identify import identify_log
+from csjm_opt.identification.log_identification import identify_log
 from csjm_opt.measurement.instruments import InstrumentNoise
 from csjm_opt.model.rig import Rig
 from csjm_opt.model.statics import solve_equilibrium

@@ -82,12 +82,15 @@ def test_rig_files_of_any_m_read_and_round_trip(rig, tmp_path):
     assert np.array_equal(back.cable_stiffness_N_per_m, rig.cable_stiffness_N_per_m)
 
 
-@pytest.mark.parametrize("name", ["eight_cable.toml", "four_cable.toml", "paper.toml"])
+SHIPPED = {"four_cable.toml": 4, "five_cable.toml": 5, "paper.toml": 6, "eight_cable.toml": 8, "twelve_cable.toml": 12}
+
+
+@pytest.mark.parametrize("name", list(SHIPPED))
 def test_shipped_rigs(name):
     from pathlib import Path
 
     rig = Rig.from_toml(Path(__file__).resolve().parents[2] / "rigs" / name)
-    assert rig.n_cables == {"eight_cable.toml": 8, "four_cable.toml": 4, "paper.toml": 6}[name]
+    assert rig.n_cables == SHIPPED[name]
 
 
 def test_a_rig_without_tension_closure_is_refused():
