@@ -1,8 +1,12 @@
-"""Diagnosis speed: 200-row logs, all eight candidates and the pair search (target: under 30 s on 2 cores),
+"""Diagnosis speed: 200-row logs, the whole vocabulary and the pair search (target: under 5 s on 2 cores),
 and ``--suggest 60`` on an ambiguous log (target: under 60 s).
 
 Run: python benchmarks/bench_diagnose.py [--cycles 22] [--repeat 1] [--workers N] [--baseline DIR]
-[--cases coulomb_friction ...] [--no-progress]
+[--cases coulomb_friction ...] [--validation FOLDER/CASE ...] [--no-progress]
+
+``--validation FOLDER/CASE`` times the standard command's diagnosis of a case of a validation folder
+(``answers.json``: its train and test logs and rig; e.g. ``mujoco_b/b1_tendon_friction``, 132 + 88
+rows), beside the baseline checkout's on the same files when ``--baseline`` is given (verdicts compared).
 
 Prints wall and CPU time (the box may be shared: CPU seconds of this process are what
 a 2-core machine of one's own would spend, wall time what it took here). The full diagnosis
@@ -74,21 +78,69 @@ import csjm_opt as co
 from csjm_opt.diagnose import diagnose
 from csjm_opt.testbed import simulate_experiment
 effect = json.loads(sys.argv[1])
-log = simulate_experiment(co.paper_rig(), int(sys.argv[2]), np.random.default_rng(0), effect=effect)
+if isinstance(effect, dict):     # a validation case: its files
+    from csjm_opt.measurement.logfile import MeasurementLog
+    from csjm_opt.model.rig import load_rig
+    rig = load_rig(effect["rig"])
+    log, test = MeasurementLog.from_csv(effect["train"]), MeasurementLog.from_csv(effect["test"])
+else:
+    rig = co.paper_rig()
+    log = simulate_experiment(rig, int(sys.argv[2]), np.random.default_rng(0), effect=effect)
+    test = None
 t0, c0 = time.perf_counter(), time.process_time()
-d = diagnose(co.paper_rig(), log)
+d = diagnose(rig, log, test, workers=int(sys.argv[3]) if len(sys.argv) > 3 else None)
 j = d.as_json()   # the JSON keys hold across versions (the objects behind them may not)
 print(json.dumps([time.perf_counter() - t0, time.process_time() - c0, j["selected"], j["secondary"]["effect"]]))
 """
 
 
-def baseline_run(tree: str, effect, cycles: int) -> tuple[float, float, str]:
-    """Wall and CPU seconds of the diagnosis of the checkout ``tree`` on the same log, and its verdict."""
+def baseline_run(tree: str, effect, cycles: int, workers: int | None = None) -> tuple[float, float, str]:
+    """Wall and CPU seconds of the diagnosis of the checkout ``tree`` on the same log, and its verdict.
+
+    ``effect``: the injected effect(s) of a simulated log, or a validation case's files
+    (``{"train", "test", "rig"}``); ``workers``: the diagnosis's worker processes (default: the cores).
+    """
     env = {**os.environ, "PYTHONPATH": tree}
-    out = subprocess.run([sys.executable, "-c", BASELINE, json.dumps(effect), str(cycles)], env=env,
+    extra = [] if workers is None else [str(workers)]
+    out = subprocess.run([sys.executable, "-c", BASELINE, json.dumps(effect), str(cycles), *extra], env=env,
                          capture_output=True, text=True, check=True, cwd=tree)
     wall, cpu, sel, sec = json.loads(out.stdout.strip().splitlines()[-1])
     return wall, cpu, f"{sel} + {sec}"
+
+
+def validation_case(spec: str, args) -> None:
+    """Time the diagnosis of one validation case (both logs, its rig) here and in the baseline checkout.
+
+    Each repeat runs the baseline (a subprocess: the checkout's code) and this code (a subprocess of
+    this checkout, the same way) interleaved, on one core (``workers=1``: CPU time is what a quiet core
+    would spend) and on ``--workers`` processes (wall time); medians over the repeats.
+    """
+    folder, case = os.path.split(os.path.abspath(spec))
+    answers = json.load(open(os.path.join(folder, "answers.json")))[case]
+    files = {k: os.path.join(folder, answers[k]) for k in ("train", "test", "rig")}
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    runs: dict[str, list] = {"new 1": [], "new N": [], "old 1": [], "old N": []}
+    for tree in (args.baseline, here):       # warm-up: compiled kernels cached, files read once (not timed)
+        if tree is not None:
+            baseline_run(tree, files, 0, 1)
+    for _ in tqdm(range(args.repeat), desc=f"{case}", disable=args.no_progress, file=sys.stderr, leave=False):
+        for tag, tree in (("old", args.baseline), ("new", here)):
+            if tree is None:
+                continue
+            runs[f"{tag} 1"].append(baseline_run(tree, files, 0, 1))
+            runs[f"{tag} N"].append(baseline_run(tree, files, 0, args.workers))
+    med = {k: np.median([r[:2] for r in v], axis=0) for k, v in runs.items() if v}
+    n_rows = sum(1 for k in ("train", "test") for _ in open(files[k])) - 2
+    print(f"{case} ({n_rows} rows, load average {os.getloadavg()[0]:.1f}): one core {med['new 1'][0]:.1f} s wall / "
+          f"{med['new 1'][1]:.1f} s CPU, on {args.workers or 'all'} cores {med['new N'][0]:.1f} s wall "
+          f"(target < 5 s on 2 cores) -> {runs['new 1'][-1][2]}")
+    if "old 1" in med:
+        same = {r[2] for r in runs["old 1"] + runs["new 1"] + runs["old N"] + runs["new N"]}
+        print(f"  baseline {args.baseline}: one core {med['old 1'][0]:.1f} s wall / {med['old 1'][1]:.1f} s CPU, "
+              f"on {args.workers or 'all'} cores {med['old N'][0]:.1f} s wall -> {runs['old 1'][-1][2]}; "
+              f"ratio old / new {med['old 1'][1] / med['new 1'][1]:.2f}x CPU on one core, "
+              f"{med['old N'][0] / med['new N'][0]:.2f}x wall on all cores; verdicts "
+              f"{'the same' if len(same) == 1 else 'DIFFER: ' + ', '.join(sorted(same))}")
 
 
 def main() -> int:
@@ -97,11 +149,15 @@ def main() -> int:
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--workers", type=int, default=None, help="worker processes (default: the cores)")
     ap.add_argument("--baseline", default=None, help="another checkout of the package to time on the same logs")
-    ap.add_argument("--cases", nargs="+", default=["none", "friction+sensor_bias", "coulomb_friction", "hole_offsets"])
+    ap.add_argument("--cases", nargs="*", default=["none", "friction+sensor_bias", "coulomb_friction", "hole_offsets"])
+    ap.add_argument("--validation", nargs="+", default=[], metavar="FOLDER/CASE",
+                    help="validation cases to time (a folder with answers.json, slash, the case's name)")
     ap.add_argument("--no-progress", action="store_true")
     ap.add_argument("--no-extras", action="store_true", help="only the diagnosis cases (no --suggest, no direct fit)")
     args = ap.parse_args()
     bar = None if args.no_progress else partial(tqdm, file=sys.stderr, leave=False)
+    for spec in args.validation:
+        validation_case(spec, args)
     rig = co.paper_rig()
     for case in args.cases:
         effect = case.split("+") if "+" in case else case

@@ -41,6 +41,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--noise", choices=("paper", "none"), default="paper",
                    help="instrument noise: the paper's F/T and tracker (default) or none")
     p.add_argument("--relaxed", action="store_true", help="start every cycle relaxed (friction state reset)")
+    p.add_argument("--loading", choices=("ramp", "step"), default="ramp",
+                   help="how each row's load reaches the rig (MuJoCo plant): ramped slowly (default) or hung at "
+                        "once and settled by the rig's own dynamics, as a lab hangs a weight")
+    p.add_argument("--static-friction-ratio", type=float, default=1.0, metavar="RATIO",
+                   help="static over sliding friction, >= 1 (MuJoCo plant; default 1: one bound)")
     p.add_argument("--after", metavar="LOG.csv", default=None,
                    help="a log run just before on the same plant (same --effect and --seed): the protocol "
                    "starts from the state where it settled")
@@ -182,7 +187,8 @@ def run(args: argparse.Namespace) -> int:
     rig = load_rig(args.rig)
     proto = read_protocol(args.protocol)
     rng = np.random.default_rng(args.seed)
-    plant = make_plant(rig, None, 1.0, rng, plant=args.plant, persistent=not args.relaxed)
+    plant = make_plant(rig, None, 1.0, rng, plant=args.plant, persistent=not args.relaxed, loading=args.loading,
+                       static_friction_ratio=args.static_friction_ratio)
     for name, severity in effects:
         plant = inject(plant, name, severity, rng)
     noise = InstrumentNoise.paper() if args.noise == "paper" else InstrumentNoise.none()
@@ -201,7 +207,8 @@ def run(args: argparse.Namespace) -> int:
     seconds = time.perf_counter() - t0
     path = atomic_write_text(args.out, log.to_text())
     summary = {"output": str(path), "protocol": str(args.protocol), "rows": len(log), "cycles": len(log.cycle_ids),
-               "plant": args.plant, "persistent": not args.relaxed, "noise": args.noise, "seed": args.seed,
+               "plant": args.plant, "persistent": not args.relaxed, "loading": args.loading,
+               "static_friction_ratio": args.static_friction_ratio, "noise": args.noise, "seed": args.seed,
                "effects": [{"name": n, "severity": s} for n, s in effects], "truth": truth(plant, rig),
                "seconds": seconds}
     if args.json:

@@ -43,10 +43,14 @@ __all__ = ["CableTerms", "cable_lengths", "geometry", "length_hessians", "point_
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross product along the last axis (cheaper than np.cross for small arrays)."""
+    """Cross product along the last axis, the leading axes broadcast (cheaper than np.cross for small arrays)."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=-1)
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a1 * b2 - a2 * b1
+    out[..., 1] = a2 * b0 - a0 * b2
+    out[..., 2] = a0 * b1 - a1 * b0
+    return out
 
 
 def geometry(R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -60,7 +64,7 @@ def geometry(R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> tuple[np.ndarra
     v = np.asarray(B_m) @ R - A_m                       # rows R^T b_i - a_i: cable vectors in {A}
     c = np.sqrt(np.einsum("...ij,...ij->...i", v, v))
     U = v / c[..., None]
-    return c, U, _cross(np.broadcast_to(A_m, U.shape), U)
+    return c, U, _cross(np.asarray(A_m, float), U)
 
 
 def cable_lengths(R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> np.ndarray:
@@ -124,7 +128,7 @@ def stiffness_from_rest(R: np.ndarray, rest_lengths_m: np.ndarray, A_m: np.ndarr
 def weight_moment(R: np.ndarray, first_moment_A_kgm: np.ndarray, gravity_B: np.ndarray) -> np.ndarray:
     """Moment of the weight about O in {A}: ``(m r) x (R^T g)`` (N m), (..., 3)."""
     g_A = np.einsum("...ji,...j->...i", R, gravity_B)
-    return _cross(np.broadcast_to(first_moment_A_kgm, g_A.shape), g_A)
+    return _cross(np.asarray(first_moment_A_kgm, float), g_A)
 
 
 def point_force_terms(R: np.ndarray, F_B: np.ndarray, P_A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

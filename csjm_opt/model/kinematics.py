@@ -16,6 +16,7 @@ and a backtracking line search per row.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from typing import Callable
 
 import numpy as np
@@ -44,14 +45,25 @@ def weight_moment(R: np.ndarray, first_moment_A_kgm: np.ndarray, gravity_B: np.n
     return _reference.weight_moment(R, first_moment_A_kgm, gravity_B)
 
 
+@functools.lru_cache(maxsize=16)
+def basis_rotations(h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``exp(h e_j)`` for the three axes (read-only): the tangent's steps, computed once per ``h``."""
+    out = []
+    for j in range(3):
+        step = np.zeros(3)
+        step[j] = h
+        E = so3.exp(step)
+        E.setflags(write=False)
+        out.append(E)
+    return out[0], out[1], out[2]
+
+
 def tangent(g: Residual, R: np.ndarray, g0: np.ndarray | None = None, h: float = 1e-7) -> np.ndarray:
     """Finite-difference ``dg/dzeta`` (n, 3, 3) under ``R exp(hat(zeta))``."""
     g0 = g(R) if g0 is None else g0
     G = np.empty(g0.shape + (3,))
-    for j in range(3):
-        step = np.zeros(3)
-        step[j] = h
-        G[..., j] = (g(R @ so3.exp(step)) - g0) / h
+    for j, E in enumerate(basis_rotations(float(h))):
+        G[..., j] = (g(R @ E) - g0) / h
     return G
 
 
@@ -80,12 +92,14 @@ class PoseSolution:
 
 
 def solve_poses(g: Residual, R_init: np.ndarray, tol_Nm: float = 1e-10, max_iter: int = 60,
-                max_step_rad: float = 0.2, tangent_step_rad: float = 1e-7) -> PoseSolution:
+                max_step_rad: float = 0.2, tangent_step_rad: float = 1e-7,
+                tangent_fn: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None) -> PoseSolution:
     """Solve ``g(R) = 0`` row-wise by damped Newton on SO(3) (batched).
 
     ``tangent_step_rad`` is the finite-difference step of the tangent (:func:`tangent`); a
     residual that changes steeply over a narrower range of rotation (a stiff, regularised
-    stick-slip law) needs a step below that range.
+    stick-slip law) needs a step below that range. ``tangent_fn(R, g0)``, when given, returns that
+    tangent (the same numbers, computed by the caller's faster route).
     """
     R = np.array(R_init, dtype=float)
     g0 = g(R)
@@ -95,7 +109,7 @@ def solve_poses(g: Residual, R_init: np.ndarray, tol_Nm: float = 1e-10, max_iter
         active = norm > tol_Nm
         if not np.any(active):
             break
-        G = tangent(g, R, g0, tangent_step_rad)
+        G = tangent(g, R, g0, tangent_step_rad) if tangent_fn is None else tangent_fn(R, g0)
         try:
             step = -np.linalg.solve(G, g0[..., None])[..., 0]
         except np.linalg.LinAlgError:

@@ -157,7 +157,8 @@ def inject(plant, effect: str, severity: float, rng: np.random.Generator):
 
 
 def make_plant(rig: Rig, effects: str | Iterable[str] | None, severity: float,
-               rng: np.random.Generator, plant: str = "quasi-static", persistent: bool = True):
+               rng: np.random.Generator, plant: str = "quasi-static", persistent: bool = True,
+               loading: str = "ramp", static_friction_ratio: float = 1.0):
     """The nominal ``rig`` with the named effect(s) injected (``None`` or ``"none"``: nominal).
 
     Parameters
@@ -174,6 +175,11 @@ def make_plant(rig: Rig, effects: str | Iterable[str] | None, severity: float,
         The quasi-static :class:`TestbedPlant` or the :class:`~csjm_opt.testbed.mujoco.plant.MujocoTestbedPlant`.
     persistent : bool, optional
         Cycles start where the previous one settled (default) or relaxed.
+    loading : {"ramp", "step"}, optional
+        How each row's load reaches the rig (MuJoCo plant only;
+        :attr:`~csjm_opt.testbed.mujoco.plant.MujocoTestbedPlant.loading`): ramped (default) or hung at once.
+    static_friction_ratio : float, optional
+        Static over sliding friction (MuJoCo plant only; default 1).
 
     Returns
     -------
@@ -182,7 +188,7 @@ def make_plant(rig: Rig, effects: str | Iterable[str] | None, severity: float,
     Raises
     ------
     InvalidInput
-        Unknown effect or plant name.
+        Unknown effect or plant name; step loading or a static friction ratio on the quasi-static plant.
     """
     if plant not in ("quasi-static", "mujoco"):
         raise InvalidInput(f"unknown plant {plant!r}; expected 'quasi-static' or 'mujoco'", "plant")
@@ -193,5 +199,8 @@ def make_plant(rig: Rig, effects: str | Iterable[str] | None, severity: float,
     if plant == "mujoco":
         from .mujoco.plant import as_mujoco
 
-        return as_mujoco(made)
+        return as_mujoco(made, loading=loading, static_friction_ratio=float(static_friction_ratio))
+    if loading != "ramp" or float(static_friction_ratio) != 1.0:
+        raise InvalidInput("step loading and a static friction ratio are available on the MuJoCo plant only "
+                           "(the quasi-static plant ramps its loads)", "loading")
     return made

@@ -210,3 +210,20 @@ def test_guide_radius_is_the_name_and_eyelet_radius_an_alias_that_warns(proto1, 
     with pytest.warns(DeprecationWarning, match="guide_radius"):
         plant = make_plant(paper_rig(), "eyelet_radius", 1.0, np.random.default_rng(0))
     assert plant.guide_radius_m == 3e-3
+
+
+def test_step_loading_and_static_friction_on_the_mujoco_plant(proto, tmp_path, capsys):
+    """``--loading step --static-friction-ratio``: a MuJoCo log, reported in the summary; refused elsewhere."""
+    out, js = tmp_path / "step.csv", tmp_path / "step.json"
+    assert main(["simulate", str(proto), "--plant", "mujoco", "--effect", "coulomb_friction=3", "--loading", "step",
+                 "--static-friction-ratio", "1.5", "--noise", "none", "-o", str(out), "--json", str(js)]) == 0
+    summary = json.loads(js.read_text())
+    assert summary["loading"] == "step" and summary["static_friction_ratio"] == 1.5
+    assert len(MeasurementLog.from_csv(out)) == len(read_protocol(proto))
+    capsys.readouterr()
+    bad = tmp_path / "bad.csv"
+    assert main(["simulate", str(proto), "--loading", "step", "-o", str(bad)]) == 2
+    assert main(["simulate", str(proto), "--plant", "mujoco", "--static-friction-ratio", "0.5", "-o", str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and "MuJoCo plant only" in err[0] and "static_friction_ratio" in err[1]
+    assert not bad.exists()

@@ -86,6 +86,11 @@ class Rows:
         return c, r
 
     @functools.cached_property
+    def tiled3(self) -> "Rows":
+        """These rows three times over (3 n rows): the poses of a tangent's three steps in one evaluation."""
+        return self.take(np.tile(np.arange(len(self)), 3))
+
+    @functools.cached_property
     def positions(self) -> np.ndarray:
         """Position of each row within its cycle (0 = first row)."""
         first = np.r_[True, self.cycle[1:] != self.cycle[:-1]]
@@ -133,10 +138,12 @@ class AugmentedModel:
         sizes = [len(NUISANCE_NAMES)] + [e.n_params for e in self.effects]
         self._offsets = np.cumsum([0] + sizes)
         self._geometry: tuple | None = None     # the last cable terms: (R, A, B, lengths, J)
+        self._weight: tuple | None = None       # the last weight moment: (R, first moment, moment)
+        self._eye: np.ndarray | None = None     # identity link rotations (n, 3, 3), read-only
 
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
-        state["_geometry"] = None                # a cache, not state: not pickled to the workers
+        state["_geometry"] = state["_weight"] = None   # caches, not state: not pickled to the workers
         return state
 
     def cable_terms(self, R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -157,6 +164,27 @@ class AugmentedModel:
         J.setflags(write=False)
         self._geometry = (np.array(R, float), np.array(A_m, float), np.array(B_m, float), lengths, J)
         return lengths, J
+
+    def weight_moment(self, R: np.ndarray, first_moment_A_kgm: np.ndarray) -> np.ndarray:
+        """The weight's moment (:func:`csjm_opt.model.kinematics.weight_moment`), the last one remembered.
+
+        As :meth:`cable_terms`: the last result (read-only) when the poses and the first moment are equal
+        to the last ones, value for value.
+        """
+        last = self._weight
+        if (last is not None and last[0].shape == np.shape(R) and last[1].shape == np.shape(first_moment_A_kgm)
+                and np.array_equal(last[0], R) and np.array_equal(last[1], first_moment_A_kgm)):
+            return last[2]
+        tau = kin.weight_moment(R, first_moment_A_kgm, self._g)
+        tau.setflags(write=False)
+        self._weight = (np.array(R, float), np.array(first_moment_A_kgm, float), tau)
+        return tau
+
+    def _identity(self, n: int) -> np.ndarray:
+        """Identity rotations (n, 3, 3), read-only, the same object for the same ``n``."""
+        if self._eye is None or len(self._eye) != n:
+            self._eye = np.broadcast_to(np.eye(3), (n, 3, 3))
+        return self._eye
 
     @property
     def name(self) -> str:
@@ -282,11 +310,41 @@ class AugmentedModel:
         """Moment balance residual ``g`` (n, 3) N m at measured-body poses ``R_m``."""
         return self.evaluate(R_m, rows, theta)[0]
 
+    def rows_independent(self, rows: Rows) -> bool:
+        """Whether each row's balance depends on that row alone (then rows can be evaluated in any batch).
+
+        True for a model without memory, and for a path-dependent one stepped row by row (``rows``
+        carry the previous row's state: a sequential prediction); False where the state runs over
+        the log (a fit at the measured poses), or where an effect says its rows are coupled
+        (``rows_coupled``).
+        """
+        if any(getattr(e, "rows_coupled", False) for e in self.effects):
+            return False
+        return not self.path_dependent or rows.state_prev is not None
+
+    def tangent(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray, g0: np.ndarray | None = None,
+                h: float = 1e-7) -> np.ndarray:
+        """Finite-difference pose tangent ``dg/dzeta`` (n, 3, 3), as :func:`csjm_opt.model.kinematics.tangent`.
+
+        Where the rows are independent (:meth:`rows_independent`) the three steps are one evaluation
+        of the rows three times over (the same numbers, one pass through the effects instead of three).
+        """
+        if not self.rows_independent(rows):
+            return kin.tangent(lambda R: self.balance(R, rows, theta), R_m, g0, h)
+        g0 = self.balance(R_m, rows, theta) if g0 is None else g0
+        n = len(rows)
+        R3 = np.concatenate([R_m @ E for E in kin.basis_rotations(float(h))])
+        g3 = self.balance(R3, rows.tiled3, theta).reshape(3, n, 3)
+        G = np.empty(np.shape(g0) + (3,))
+        for j in range(3):
+            G[..., j] = (g3[j] - g0) / h
+        return G
+
     def evaluate(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray) -> tuple[np.ndarray, Evaluation]:
         """``(g, evaluation)``; the evaluation holds intermediate quantities (path state, lengths)."""
         theta = np.asarray(theta, float)
         n = len(rows)
-        eye = np.broadcast_to(np.eye(3), (n, 3, 3))
+        eye = self._identity(n)
         ev = Evaluation(self._A, self._B, self._mr, rows.tau_meas_A_Nm, R_m, eye, rows, self._k, R_m)
         params = self.effect_params(theta)
         for e, p in zip(self.effects, params):
@@ -295,7 +353,7 @@ class AugmentedModel:
             e.adjust_frame(ev, p)
         assert ev.R_body is not None   # set by adjust_frame
         ev.R_cable = ev.R_body
-        ev.tau_weight_A_Nm = kin.weight_moment(ev.R_body, ev.first_moment_A_kgm, self._g)
+        ev.tau_weight_A_Nm = self.weight_moment(ev.R_body, ev.first_moment_A_kgm)
         for e, p in zip(self.effects, params):
             e.adjust_pose(ev, p)
         for e, p in zip(self.effects, params):
@@ -310,7 +368,9 @@ class AugmentedModel:
         for e, p in zip(self.effects, params):
             T = e.adjust_tension(ev, stretch, T, p)
         tau_load = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm
-        g = np.einsum("nij,ni->nj", J, T) + np.einsum("nij,nj->ni", ev.link_rotation, tau_load)
+        # the link's rotation is the identity unless an effect set one (then the product is tau_load exactly)
+        g = np.einsum("nij,ni->nj", J, T) + (tau_load if ev.link_rotation is eye else
+                                             np.einsum("nij,nj->ni", ev.link_rotation, tau_load))
         for e, p in zip(self.effects, params):
             g = e.adjust_balance(ev, g, p)
         return g, ev
@@ -325,7 +385,8 @@ class AugmentedModel:
         reached along the ramp of their inputs (:func:`csjm_opt.diagnose.fitting.friction_ramp.predict_ramp`).
         """
         if not self.path_dependent:
-            return kin.solve_poses(lambda R: self.balance(R, rows, theta), R_init)
+            return kin.solve_poses(lambda R: self.balance(R, rows, theta), R_init,
+                                   tangent_fn=lambda R, g0: self.tangent(R, rows, theta, g0))
         if rows.ramp_shape_m is not None:
             from .friction_ramp import predict_ramp
             return predict_ramp(self, rows, theta, R_init)[0]
@@ -345,7 +406,8 @@ class AugmentedModel:
                 s_prev, c_prev = state[prev], lengths[prev]
             sub = dataclasses.replace(rows.take(idx), state_prev=np.nan_to_num(s_prev), lengths_prev_m=c_prev)
             R0 = R_init[idx] if prev is None else R_out[prev]
-            sol = kin.solve_poses(lambda R, sub=sub: self.balance(R, sub, theta), R0)  # type: ignore[misc]
+            sol = kin.solve_poses(lambda R, sub=sub: self.balance(R, sub, theta), R0,  # type: ignore[misc]
+                                  tangent_fn=lambda R, g0, sub=sub: self.tangent(R, sub, theta, g0))  # type: ignore[misc]
             _, ev = self.evaluate(sol.R, sub, theta)
             R_out[idx], res[idx] = sol.R, sol.residual_Nm
             state[idx] = ev.state_out if ev.state_out is not None else 0.0

@@ -117,7 +117,8 @@ def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray, substeps: i
             guess = R_q @ so3.exp(so3.log(np.swapaxes(R_last, 1, 2) @ R_q)) if q > every else R_q
             R_last = R_q
             sol = kin.solve_poses(lambda R, sub=sub: model.balance(R, sub, theta), guess,  # type: ignore[misc]
-                                  tol_Nm=1e-10 if q == substeps else INNER_TOL_NM)
+                                  tol_Nm=1e-10 if q == substeps else INNER_TOL_NM,
+                                  tangent_fn=lambda R, g0, sub=sub: model.tangent(R, sub, theta, g0))  # type: ignore[misc]
             _, ev = model.evaluate(sol.R, sub, theta)
             ok[idx] &= sol.converged(1e-6)
             R_q = sol.R

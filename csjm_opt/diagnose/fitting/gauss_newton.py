@@ -21,7 +21,6 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ...errors import SolverError
-from ...model import kinematics as kin
 from ..data.residuals import ResidualTable
 from .augmented import N_NUISANCE, AugmentedModel, Rows
 
@@ -288,7 +287,7 @@ def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray
         return model.balance(R, rows, th)
 
     g0, G = (g(R_meas), None) if at is None else at
-    WGinv = table.whiten @ _safe_inv(kin.tangent(g, R_meas, g0, h=1e-6) if G is None else G)
+    WGinv = table.whiten @ _safe_inv(model.tangent(R_meas, rows, theta, g0, h=1e-6) if G is None else G)
     Jd = np.empty((g0.size, len(x)))
     for j in range(len(x)):
         step = 1e-6 * max(1.0, abs(x[j]))
@@ -313,7 +312,7 @@ def _linearised(model: AugmentedModel, table: ResidualTable,
         return model.balance(R, table.rows, theta)
 
     g0 = g(table.R_meas)
-    G = kin.tangent(g, table.R_meas, g0, h=1e-6)
+    G = model.tangent(table.R_meas, table.rows, theta, g0, h=1e-6)
     zeta = np.einsum("nij,nj->ni", _safe_inv(G), g0)
     # a parameter trial that leaves a row without a tangent (all cables slack) costs 1 rad, not a crash
     return np.where(np.isfinite(zeta), np.clip(zeta, -1.0, 1.0), 1.0), g0, G

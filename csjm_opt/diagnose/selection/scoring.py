@@ -19,7 +19,6 @@ import numpy as np
 from scipy import stats
 
 from ...errors import InvalidInput
-from ...model import kinematics as kin
 from ..data.residuals import ResidualTable, pose_noise_cov, pose_residuals, rms
 from ..fitting.augmented import AugmentedModel, with_entry
 from ..fitting.friction_path import on_predicted_path
@@ -206,10 +205,7 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
             blocks.append((held, full.prediction_cov(keep, full.held_rows_jacobian(held))))
 
     # the model's own noise propagation: a softer model turns the same moment noise into more pose noise
-    def g(R: np.ndarray) -> np.ndarray:
-        return model.balance(R, train.rows, full.theta)
-
-    cov = pose_noise_cov(kin.tangent(g, train.R_meas, h=1e-6), train.noise)
+    cov = pose_noise_cov(model.tangent(train.R_meas, train.rows, full.theta, h=1e-6), train.noise)
     instrument = float(np.sqrt(np.mean(np.trace(cov, axis1=1, axis2=2))))
     r = np.linalg.solve(np.linalg.cholesky(cov), train_zeta[..., None])[..., 0]
     ratio2 = float(np.sum(r ** 2) / max(r.size - full.p_eff, 1.0))

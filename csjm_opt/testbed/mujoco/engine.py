@@ -35,6 +35,10 @@ NEWTON_HANDOVER_RAD = 0.02
 HANDOVER_CHECK_SPEED = 0.1
 #: Waits of ``max_settle_s`` a frictionless row may take before it is refused (it needs no history: only CPU).
 FRICTIONLESS_WAITS = 4
+#: Below this tendon speed (m/s) a cable's friction holds up to the static bound (static over sliding ratio).
+STICK_SPEED_M_PER_S = 1e-4
+#: Below this joint speed (rad/s, per axis) the ball joint's friction holds up to its static bound.
+STICK_SPEED_RAD_PER_S = 1e-3
 
 
 def _rotation(q: np.ndarray) -> np.ndarray:
@@ -80,7 +84,9 @@ class Engine(NetForceStatics):
         self.F0 = np.array(self.m.tendon_frictionloss, float)
         self.M0 = np.array(self.m.dof_frictionloss, float)
         self.frictional = bool(self.capstan or np.any(self.F0 > 0) or np.any(self.M0 > 0))
-        self.busy_always = self.link or self.h != 0      # forces to update every step
+        self.ratio = float(getattr(mp, "static_friction_ratio", 1.0))
+        self.stick_slip = self.frictional and self.ratio != 1.0
+        self.busy_always = self.link or self.h != 0 or self.stick_slip    # forces to update every step
         self.busy = self.busy_always
         self.g_B = np.asarray(rig.gravity_B_m_per_s2, float)
         self.l = np.asarray(l0, float).copy()
@@ -150,6 +156,8 @@ class Engine(NetForceStatics):
         if self.capstan and self.frictional:
             e = np.maximum(np.asarray(d.ten_length) - self.l, 0.0)
             m.tendon_frictionloss[:] = self.F0 + self.mu * (self.k * e * (1.0 + self.h * e))
+        if self.stick_slip:
+            self._slide_bounds = np.array(m.tendon_frictionloss, float) if self.capstan else self.F0
         if not self.busy:
             d.qfrc_applied[:] = 0.0
             d.qfrc_applied[self.tool] = self.tau
@@ -158,8 +166,24 @@ class Engine(NetForceStatics):
             for _ in range(int(steps)):
                 mujoco.mj_step1(m, d)
                 d.qfrc_applied[:] = self.applied()[0]
+                if self.stick_slip:
+                    self._stick_or_slide()
                 mujoco.mj_step2(m, d)
         self.t += steps * m.opt.timestep
+
+    def _stick_or_slide(self) -> None:
+        """Friction bounds of this step: static (ratio x sliding) where an element is still, sliding where it moves."""
+        m, d = self.m, self.d
+        still = np.abs(np.asarray(d.ten_velocity)) < STICK_SPEED_M_PER_S
+        m.tendon_frictionloss[:] = self._slide_bounds * np.where(still, self.ratio, 1.0)
+        if np.any(self.M0 > 0):
+            w = np.abs(np.asarray(d.qvel[:3]))
+            m.dof_frictionloss[:3] = self.M0[:3] * np.where(w < STICK_SPEED_RAD_PER_S, self.ratio, 1.0)
+
+    def static_bounds(self, T: np.ndarray) -> np.ndarray:
+        """Largest friction forces that can hold a row at rest: cables' (m,) then the joint's axes (3,)."""
+        F = self.F0 + self.mu * T if self.capstan else self.F0
+        return np.r_[F, self.M0[:3]] * self.ratio
 
     def ramp(self, l: np.ndarray, tau: np.ndarray, mr: np.ndarray, seconds: float | None = None) -> None:
         """Move the inputs to ``(l, tau, mr)`` over ``seconds`` (default the plant's ``ramp_s``)."""
@@ -181,17 +205,17 @@ class Engine(NetForceStatics):
             d.qpos[4] = 1.0
         d.qvel[:] = 0.0
         self.set_inputs(l, tau, mr)
-        F, M, fr = self.F0.copy(), self.M0.copy(), self.frictional
+        F, M, fr, ss = self.F0.copy(), self.M0.copy(), self.frictional, self.stick_slip
         self.m.tendon_frictionloss[:] = 0.0
         self.m.dof_frictionloss[:] = 0.0
-        self.frictional = False
+        self.frictional = self.stick_slip = False
         try:
             self._wait()
             self.polish(np.arange(self.nv))
         finally:
             self.m.tendon_frictionloss[:] = F
             self.m.dof_frictionloss[:] = M
-            self.frictional = fr
+            self.frictional, self.stick_slip = fr, ss
         mujoco.mj_forward(self.m, self.d)
 
     def _wait(self) -> bool:
@@ -264,9 +288,8 @@ class Engine(NetForceStatics):
             q = self.d.qpos.copy()
             net = self.net(q) - np.asarray(self.m.dof_damping, float) * v
             _, T = self.applied()
-            F = self.F0 + self.mu * T if self.capstan else self.F0
             A = np.column_stack([tendon_jacobian(self.m, self.d).T, np.eye(self.nv)[:, :3]])
-            cert = certify_static(net, A, np.r_[F, self.M0[:3]] * (1.0 + BOUND_SLACK))
+            cert = certify_static(net, A, self.static_bounds(T) * (1.0 + BOUND_SLACK))
             self.d.qpos[:] = q
             if not cert.certified:
                 raise NoEquilibrium(f"MuJoCo plant: row {row} is not held by friction within its bounds "

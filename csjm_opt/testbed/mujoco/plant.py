@@ -59,6 +59,8 @@ from ..static_certificate import FrictionCertificate
 PLANTS = ("quasi-static", "mujoco")
 #: Effects of the quasi-static testbed the MuJoCo plant cannot realise.
 MUJOCO_UNSUPPORTED = ("guide_radius",)
+#: How a row's load reaches the rig (:attr:`MujocoTestbedPlant.loading`).
+LOADINGS = ("ramp", "step")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -131,6 +133,20 @@ class MujocoTestbedPlant:
         MuJoCo's noslip solver iterations (0: soft friction creeps).
     noslip_tolerance : float
         Its tolerance (MuJoCo's default 1e-6 leaves a stuck tendon creeping at ~2e-6 rad/s).
+    loading : {"ramp", "step"}
+        How a row's load reaches the rig. ``"ramp"`` (default): the inputs move over
+        ``friction_ramp_s`` (quasi-static, the friction state follows a play operator). ``"step"``:
+        as a lab hangs a weight, the row's load (and any change of its rest lengths within a
+        cycle) is applied at once and the rig comes to rest under its own dynamics (the joints'
+        damping of :func:`critical_damping`, friction sliding then sticking wherever the motion
+        stops); the rest lengths of a new cycle still move over ``cycle_ramp_s`` (the drives),
+        under the previous row's load, before the new load is hung.
+    static_friction_ratio : float
+        Static over sliding friction (>= 1; default 1: one bound). A friction element (a cable's
+        tendon, the ball joint's axes) that moves slower than ``STICK_SPEED_M_PER_S`` (tendon) or
+        ``STICK_SPEED_RAD_PER_S`` (joint) holds up to this times its sliding bound; once it breaks
+        loose it slides at its sliding bound until it slows down again (updated every engine step).
+        A settled row is certified against the static bounds.
     """
 
     plant: TestbedPlant
@@ -142,10 +158,17 @@ class MujocoTestbedPlant:
     friction_ramp_s: float = 10.0
     noslip_iterations: int = 1000
     noslip_tolerance: float = 1e-12
+    loading: str = "ramp"
+    static_friction_ratio: float = 1.0
 
     def __post_init__(self) -> None:
         if self.plant.guide_radius_m > 0:
             raise InvalidInput("the MuJoCo plant has no guide radius (quasi-static plant only)", "effect")
+        if self.loading not in LOADINGS:
+            raise InvalidInput(f"unknown loading {self.loading!r}; expected one of {', '.join(LOADINGS)}", "loading")
+        if not (np.isfinite(self.static_friction_ratio) and self.static_friction_ratio >= 1.0):
+            raise InvalidInput(f"static_friction_ratio must be a number >= 1 (got {self.static_friction_ratio})",
+                               "static_friction_ratio")
 
     @property
     def rig(self):
@@ -259,6 +282,11 @@ class MujocoTestbedPlant:
                 slip[:] = 0.0
             if i == 0 or (first and not self.persistent):
                 engine.relaxed_start(np.asarray(R_init[i], float), l_all[i], tau_all[i], mr_all[i])
+            elif self.loading == "step":
+                if first:      # the drives move to the new cycle's rest lengths under the load hung before
+                    engine.ramp(l_all[i] + slip, engine.tau, engine.mr,
+                                self.cycle_ramp_s if self.frictional_plant else None)
+                engine.set_inputs(l_all[i] + slip, tau_all[i], mr_all[i])    # the load hung at once
             else:
                 seconds = (self.cycle_ramp_s if first else self.friction_ramp_s) if self.frictional_plant else None
                 engine.ramp(l_all[i] + slip, tau_all[i], mr_all[i], seconds)
