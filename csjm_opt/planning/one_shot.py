@@ -98,15 +98,12 @@ def plan_tensions_uncompiled(rig: Rig, R: np.ndarray, tau_ext_A_Nm: ArrayLike = 
         tau_w = cable_terms.weight_moment(R_arr, rig.platform_mass_kg * np.asarray(rig.com_A_m, float),
                                           np.asarray(rig.gravity_B_m_per_s2, float))
         T = solve_active_set(J, -(tau_ext + tau_w), t_ref, rig.t_min_N, rig.t_max_N)
-        if T is not None and _holds(J, -(tau_ext + tau_w), T, rig.t_min_N, rig.t_max_N):
-            l = c - T / rig.cable_stiffness_N_per_m
-            return TensionPlan(T, R_arr, tau_ext, tau_w, J, rig.t_min_N, rig.t_max_N,
-                               np.array(t_ref, float), "active_set", c, l)
+        if T is not None:
+            plan = TensionPlan(T, R_arr, tau_ext, tau_w, J, rig.t_min_N, rig.t_max_N, np.array(t_ref, float),
+                               "active_set", c, c - T / rig.cable_stiffness_N_per_m)
+            if plan.is_valid():   # the compiled planner's own check: equilibrium to 1e-8 N m, bounds to 1e-9 N
+                return plan
     from .planner import plan_tensions  # the compiled planner: validation, fallbacks, infeasibility
 
     return plan_tensions(rig, R, tau_ext_A_Nm, None if t_ref_N is None else np.asarray(t_ref_N, float))
 
-
-def _holds(J: np.ndarray, b: np.ndarray, T: np.ndarray, lo: float, hi: float) -> bool:
-    """The compiled planner's own check: equilibrium to 1e-8 N m, bounds to 1e-9 N."""
-    return bool(np.linalg.norm(J.T @ T - b) <= 1e-8 and T.min() >= lo - 1e-9 and T.max() <= hi + 1e-9)
