@@ -148,6 +148,22 @@ def _solve3(M, rhs, transpose):
 
 
 @njit(cache=True)
+def _basis_matrix(J, n, bases, b, M):
+    """``M[p, k] = J[n, bases[b, k], p]`` (J_B^T); False when the basis is singular relative to its rows' lengths."""
+    scale = 1.0
+    for k in range(3):
+        i = bases[b, k]
+        scale *= np.sqrt(J[n, i, 0] ** 2 + J[n, i, 1] ** 2 + J[n, i, 2] ** 2)
+    for p in range(3):
+        for k in range(3):
+            M[p, k] = J[n, bases[b, k], p]
+    det = (M[0, 0] * (M[1, 1] * M[2, 2] - M[1, 2] * M[2, 1])
+           - M[0, 1] * (M[1, 0] * M[2, 2] - M[1, 2] * M[2, 0])
+           + M[0, 2] * (M[1, 0] * M[2, 1] - M[1, 1] * M[2, 0]))
+    return abs(det) > 1e-10 * max(scale, 1e-300)
+
+
+@njit(cache=True)
 def _range_kernel_dual(J, w, t_min, t_max, tol, bases, c0, ci, lo, hi):
     """Per pose, basis, direction and sense: the dual-feasible basic solution; min/max over the primal-feasible ones.
 
@@ -168,17 +184,7 @@ def _range_kernel_dual(J, w, t_min, t_max, tol, bases, c0, ci, lo, hi):
             lo[n, d] = np.inf
             hi[n, d] = -np.inf
         for b in range(bases.shape[0]):
-            scale = 1.0
-            for k in range(3):
-                i = bases[b, k]
-                scale *= np.sqrt(J[n, i, 0] ** 2 + J[n, i, 1] ** 2 + J[n, i, 2] ** 2)
-            for p in range(3):
-                for k in range(3):
-                    M[p, k] = J[n, bases[b, k], p]
-            det = (M[0, 0] * (M[1, 1] * M[2, 2] - M[1, 2] * M[2, 1])
-                   - M[0, 1] * (M[1, 0] * M[2, 2] - M[1, 2] * M[2, 0])
-                   + M[0, 2] * (M[1, 0] * M[2, 1] - M[1, 1] * M[2, 0]))
-            if not abs(det) > 1e-10 * max(scale, 1e-300):
+            if not _basis_matrix(J, n, bases, b, M):
                 continue
             for k in range(3):
                 in_basis[bases[b, k]] = True
@@ -235,17 +241,7 @@ def _range_kernel(J, w, t_min, t_max, tol, bases, nonbasic, patterns, c0, ci, lo
             hi[n, d] = -np.inf
         found = False
         for b in range(bases.shape[0]):
-            scale = 1.0
-            for k in range(3):
-                i = bases[b, k]
-                scale *= np.sqrt(J[n, i, 0] ** 2 + J[n, i, 1] ** 2 + J[n, i, 2] ** 2)
-            for p in range(3):
-                for k in range(3):
-                    M[p, k] = J[n, bases[b, k], p]
-            det = (M[0, 0] * (M[1, 1] * M[2, 2] - M[1, 2] * M[2, 1])
-                   - M[0, 1] * (M[1, 0] * M[2, 2] - M[1, 2] * M[2, 0])
-                   + M[0, 2] * (M[1, 0] * M[2, 1] - M[1, 1] * M[2, 0]))
-            if not abs(det) > 1e-10 * max(scale, 1e-300):
+            if not _basis_matrix(J, n, bases, b, M):
                 continue
             for q in range(patterns.shape[0]):
                 for p in range(3):
