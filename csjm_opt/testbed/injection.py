@@ -176,10 +176,10 @@ def make_plant(rig: Rig, effects: str | Iterable[str] | None, severity: float,
     persistent : bool, optional
         Cycles start where the previous one settled (default) or relaxed.
     loading : {"ramp", "step"}, optional
-        How each row's load reaches the rig (MuJoCo plant only;
+        How each row's load reaches the rig (:attr:`TestbedPlant.loading`,
         :attr:`~csjm_opt.testbed.mujoco.plant.MujocoTestbedPlant.loading`): ramped (default) or hung at once.
     static_friction_ratio : float, optional
-        Static over sliding friction (MuJoCo plant only; default 1).
+        Static over sliding friction (default 1; above 1 on the quasi-static plant with step loading only).
 
     Returns
     -------
@@ -188,7 +188,8 @@ def make_plant(rig: Rig, effects: str | Iterable[str] | None, severity: float,
     Raises
     ------
     InvalidInput
-        Unknown effect or plant name; step loading or a static friction ratio on the quasi-static plant.
+        Unknown effect, plant or loading name; a static friction ratio below 1 or not finite (or above 1
+        with ramped loads on the quasi-static plant).
     """
     if plant not in ("quasi-static", "mujoco"):
         raise InvalidInput(f"unknown plant {plant!r}; expected 'quasi-static' or 'mujoco'", "plant")
@@ -199,8 +200,13 @@ def make_plant(rig: Rig, effects: str | Iterable[str] | None, severity: float,
     if plant == "mujoco":
         from .mujoco.plant import as_mujoco
 
-        return as_mujoco(made, loading=loading, static_friction_ratio=float(static_friction_ratio))
-    if loading != "ramp" or float(static_friction_ratio) != 1.0:
-        raise InvalidInput("step loading and a static friction ratio are available on the MuJoCo plant only "
-                           "(the quasi-static plant ramps its loads)", "loading")
-    return made
+        return as_mujoco(made, loading=loading, static_friction_ratio=_ratio(static_friction_ratio))
+    return dataclasses.replace(made, loading=loading, static_friction_ratio=_ratio(static_friction_ratio))
+
+
+def _ratio(value) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise InvalidInput(f"static_friction_ratio must be a finite number >= 1 (got {value!r})",
+                           "static_friction_ratio") from None

@@ -36,6 +36,19 @@ Physics (independent of the diagnosis's fitting models where it can be):
   moment needed reaches ``M`` on an axis, then slips (a play operator, with
   memory like the cable friction).
 
+How a row's load reaches the rig (:attr:`TestbedPlant.loading`): ``"ramp"`` (default) moves
+the load (and the rest lengths) from one row's to the next in small quasi-static steps, the
+friction state following the play operators above. ``"step"`` hangs each row's load at once,
+as a lab hangs a weight: from the pose where the previous row settled, the platform moves along
+an overdamped path under sliding friction and stops at the first point where friction within the
+*static* bounds (``static_friction_ratio`` times the sliding ones) holds it
+(:mod:`csjm_opt.testbed.step_settling`). There the friction elements are those of MuJoCo's
+model (:meth:`TestbedPlant.frictionless_net`): each cable's friction force ``|f_i| <= F_i + mu_beta_i T_i``
+acts on the tension the platform feels (a rigid platform-side segment, ``rho`` not used), the ball
+joint's ``|tau_f,j| <= M`` on each axis of {A}; a new cycle's rest lengths still move in
+``SUBSTEPS_NEW_CYCLE`` increments (the drives, each increment settled the same way) under the
+previous row's load before the new load is hung.
+
 Effects outside the diagnosis's vocabulary (to test that it says so):
 
 * finite guide radius (``guide_radius``, an eyelet): each base guide is a ring of radius ``r`` in the base
@@ -61,6 +74,7 @@ from .. import so3
 from ..errors import InvalidInput, NoEquilibrium
 from ..model import kinematics as kin
 from ..model.rig import Rig
+from .step_settling import settle_after_step
 
 #: Width (N) of the rounding of the play operator's corners (keeps Newton's method happy).
 SMOOTH_N = 0.002
@@ -96,6 +110,8 @@ VARIANT_NAMES = {"coulomb_friction": "friction"}
 OUTSIDE_NAMES = ("guide_radius", "sensor_drift", "drum_slip")
 #: Old effect names still accepted (with a DeprecationWarning) -> their name now.
 DEPRECATED_NAMES = {"eyelet_radius": "guide_radius"}
+#: How a row's load reaches the rig (:attr:`TestbedPlant.loading`; the MuJoCo plant's too).
+LOADINGS = ("ramp", "step")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -123,8 +139,19 @@ class TestbedPlant:
     drum_slip_compliance_m_per_N: float = 0.0
     effects: tuple[str, ...] = ()
     persistent: bool = True                    # cycles start where the previous one settled
+    loading: str = "ramp"                      # "ramp" (quasi-static play operators) or "step" (hung at once)
+    static_friction_ratio: float = 1.0         # static over sliding friction bounds ("step" loading)
 
     def __post_init__(self) -> None:
+        if self.loading not in LOADINGS:
+            raise InvalidInput(f"unknown loading {self.loading!r}; expected one of {', '.join(LOADINGS)}", "loading")
+        ratio = self.static_friction_ratio
+        if not (isinstance(ratio, (int, float, np.floating, np.integer)) and np.isfinite(ratio) and ratio >= 1.0):
+            raise InvalidInput(f"static_friction_ratio must be a finite number >= 1 (got {ratio!r})",
+                               "static_friction_ratio")
+        if ratio != 1.0 and self.loading != "step":
+            raise InvalidInput("static_friction_ratio above 1 needs step loading on the quasi-static plant (its "
+                               "ramped loads follow one friction band)", "static_friction_ratio")
         m = self.rig.n_cables                   # per-cable effects are sized by the rig
         for name in ("friction_mu_beta", "friction_coulomb_N"):
             value = np.asarray(getattr(self, name), float)
@@ -168,7 +195,10 @@ class TestbedPlant:
         history (each cycle starts where the previous one settled); otherwise
         every cycle starts settled at ``R_init`` of its first row (cycles in
         parallel). Path-independent plants solve each row from ``R_init`` and the
-        previous row of its cycle.
+        previous row of its cycle. With ``loading="step"`` each row's load is hung
+        at once and the platform comes to rest under friction (the module doc);
+        the log's first row (every cycle's without :attr:`persistent`) starts
+        relaxed, at the frictionless equilibrium nearest ``R_init``.
 
         Parameters
         ----------
@@ -203,6 +233,9 @@ class TestbedPlant:
         mr_load = (np.zeros((n, 3)) if load_first_moment_A_kgm is None
                    else np.asarray(load_first_moment_A_kgm, float).reshape(n, 3))
         new_cycle = np.r_[True, cycle[1:] != cycle[:-1]]
+        if self.loading == "step":
+            return self._respond_step(rest_lengths_m, tau_ext_A_Nm, new_cycle, np.asarray(R_init, float), mr_load,
+                                      progress)
         path = self.has_friction
         chain_one = self.persistent and path
         starts = np.array([0]) if chain_one else np.flatnonzero(new_cycle)
@@ -295,7 +328,114 @@ class TestbedPlant:
         c, _ = kin.cable_terms(R_m, np.asarray(self.rig.platform_holes_A_m), self._base_holes(R_m))
         return c
 
-    def _balance(self, R_m, l, tau_ext, u, mr_load, smooth_N=SMOOTH_N):
+    def friction_bounds(self, tensions_N: np.ndarray) -> np.ndarray:
+        """Sliding friction bounds of the friction elements: each cable's (N), then the ball joint's axes (N m).
+
+        A cable's is ``F_i + mu_beta_i T_i`` (Coulomb plus the capstan law linearised at the
+        tension, as MuJoCo's tendon ``frictionloss``), the joint's ``M`` on each axis of {A}. The
+        static bounds are :attr:`static_friction_ratio` times these.
+
+        Parameters
+        ----------
+        tensions_N : (..., m) array
+            Cable tensions (elastic, friction excluded).
+
+        Returns
+        -------
+        (..., m + 3) array
+        """
+        T = np.asarray(tensions_N, float)
+        F = np.asarray(self.friction_coulomb_N, float) + np.asarray(self.friction_mu_beta, float) * T
+        return np.concatenate([F, np.full(T.shape[:-1] + (3,), float(self.joint_friction_Nm))], axis=-1)
+
+    def frictionless_net(self, R_m: np.ndarray, rest_lengths_m: np.ndarray, tau_ext_A_Nm: np.ndarray,
+                         load_first_moment_A_kgm: np.ndarray | None = None
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The net moment without friction, the friction elements' moment directions and their sliding bounds.
+
+        The pose ``R_m`` is held under the inputs when friction forces ``f`` within their
+        (static) bounds balance it: ``net + directions @ f = 0``
+        (:func:`~csjm_opt.testbed.static_certificate.certify_static`). The elements are the
+        cables (a unit friction force adds to the tension the platform feels: its column of
+        ``J^T``) and the ball joint's axes of {A} (identity columns); rest lengths are the
+        drives' (drive offsets included by the caller).
+
+        Parameters
+        ----------
+        R_m : (n, 3, 3) array
+            Poses of the measured body.
+        rest_lengths_m : (n, m) or (m,) array
+        tau_ext_A_Nm : (n, 3) or (3,) array
+            External moments in {A} (on the measured body).
+        load_first_moment_A_kgm : (n, 3) or (3,) array, optional
+            Dead weights' ``mass * point`` in {A}.
+
+        Returns
+        -------
+        net : (n, 3) array
+            Frictionless net moment on the cable platform (N m): cable tensions (hardening included),
+            weight, load.
+        directions : (n, 3, m + 3) array
+        bounds : (n, m + 3) array
+            Sliding bounds (:meth:`friction_bounds`).
+        """
+        R_m = np.asarray(R_m, float)
+        n = len(R_m)
+        mr = np.zeros(3) if load_first_moment_A_kgm is None else np.asarray(load_first_moment_A_kgm, float)
+        tau_m, E, _, c, J = self._loaded(R_m, np.broadcast_to(tau_ext_A_Nm, (n, 3)), np.broadcast_to(mr, (n, 3)))
+        k = np.asarray(self.rig.cable_stiffness_N_per_m)
+        e = c - np.asarray(rest_lengths_m, float)
+        T = np.maximum(k * e, 0.0) * (1.0 + self.hardening_per_m * np.maximum(e, 0.0))
+        net = self._moment(J, T, tau_m, E)
+        directions = np.concatenate([np.swapaxes(J, 1, 2), np.broadcast_to(np.eye(3), (n, 3, 3))], axis=2)
+        return net, directions, self.friction_bounds(T)
+
+    def _respond_step(self, rest_lengths_m, tau_ext_A_Nm, new_cycle, R_init, mr_load, progress):
+        """:meth:`respond` with every row's load hung at once (module doc; rest lengths with drive offsets)."""
+        n = len(new_cycle)
+        m = self.rig.n_cables
+        R_out = np.empty((n, 3, 3))
+        k = np.asarray(self.rig.cable_stiffness_N_per_m)
+        slip = np.zeros(m)
+        R = l_prev = tau_prev = mr_prev = None
+        for i in range(n):
+            if new_cycle[i]:
+                slip[:] = 0.0                       # the drives re-home between cycles
+            l = rest_lengths_m[i] + slip
+            if R is None or (new_cycle[i] and not self.persistent):      # relaxed start: nothing stuck
+                def g(Rs, l=l, tau=tau_ext_A_Nm[i], mr=mr_load[i]):
+                    return self.frictionless_net(Rs, l, tau, mr)[0]
+
+                sol = kin.solve_poses(g, R_init[i][None], tol_Nm=1e-10)
+                if not np.all(sol.converged(1e-7)):
+                    raise NoEquilibrium(f"plant has no equilibrium for row {i}", "diverged",
+                                        float(sol.residual_Nm.max()))
+                R = sol.R[0]
+            else:
+                if new_cycle[i]:    # the drives move to the new cycle's rest lengths under the load hung before
+                    for q in range(1, SUBSTEPS_NEW_CYCLE + 1):
+                        R = self._settle(R, l_prev + (l - l_prev) * q / SUBSTEPS_NEW_CYCLE, tau_prev, mr_prev, i)
+                R = self._settle(R, l, tau_ext_A_Nm[i], mr_load[i], i)
+            if self._slipping:       # after this row's rest, over-tensioned cables slip
+                over = np.maximum(k * (self._lengths(R[None])[0] - l) - self.drum_slip_threshold_N, 0.0)
+                slip += over * self.drum_slip_compliance_m_per_N
+            R_out[i] = R
+            l_prev, tau_prev, mr_prev = l, tau_ext_A_Nm[i], mr_load[i]
+            if progress is not None:
+                progress(1)
+        return R_out
+
+    def _settle(self, R, l, tau, mr, row):
+        def net(Rs):
+            return self.frictionless_net(Rs, l, tau, mr)
+
+        try:
+            return settle_after_step(net, R, self.static_friction_ratio).R
+        except NoEquilibrium as exc:
+            raise NoEquilibrium(f"row {row}: {exc}", exc.reason, exc.residual_Nm) from None
+
+    def _loaded(self, R_m, tau_ext, mr_load):
+        """Load moment, link rotation ``E`` (``None``: no link), platform pose, cable lengths and ``J`` at ``R_m``."""
         rig = self.rig
         mr = rig.platform_mass_kg * np.asarray(rig.com_A_m) + mr_load
         tau_m = tau_ext + kin.weight_moment(R_m, mr, np.asarray(rig.gravity_B_m_per_s2))
@@ -305,14 +445,22 @@ class TestbedPlant:
         else:
             E, R_c = None, R_m
         c, J = kin.cable_terms(R_c, np.asarray(rig.platform_holes_A_m), self._base_holes(R_c))
-        k = np.asarray(rig.cable_stiffness_N_per_m)
+        return tau_m, E, R_c, c, J
+
+    def _moment(self, J, T, tau_m, E):
+        """Net moment on the cable platform of tensions ``T`` (platform side) and the load ``tau_m``."""
+        return np.einsum("nij,ni->nj", J, T) + (tau_m if E is None else np.einsum("nij,nj->ni", E, tau_m))
+
+    def _balance(self, R_m, l, tau_ext, u, mr_load, smooth_N=SMOOTH_N):
+        tau_m, E, R_c, c, J = self._loaded(R_m, tau_ext, mr_load)
+        k = np.asarray(self.rig.cable_stiffness_N_per_m)
         e = c - l
-        m = rig.n_cables
+        m = self.rig.n_cables
         T_p = np.maximum(self._friction(c, l, e, k, u[:, :m], smooth_N), 0.0)
         u_new = np.empty_like(u)
         u_new[:, :m] = c - self.friction_platform_fraction * T_p / k
         T = T_p * (1.0 + self.hardening_per_m * np.maximum(e, 0.0))
-        g = np.einsum("nij,ni->nj", J, T) + (tau_m if E is None else np.einsum("nij,nj->ni", E, tau_m))
+        g = self._moment(J, T, tau_m, E)
         if self.joint_friction_Nm > 0:     # per axis of {A}: stuck to an anchor pose, slips at the bound
             a = u[:, m:]
             z = so3.log(np.swapaxes(so3.exp(np.nan_to_num(a)), 1, 2) @ R_c)

@@ -182,8 +182,7 @@ class Engine(NetForceStatics):
 
     def static_bounds(self, T: np.ndarray) -> np.ndarray:
         """Largest friction forces that can hold a row at rest: cables' (m,) then the joint's axes (3,)."""
-        F = self.F0 + self.mu * T if self.capstan else self.F0
-        return np.r_[F, self.M0[:3]] * self.ratio
+        return self.p.friction_bounds(T) * self.ratio
 
     def ramp(self, l: np.ndarray, tau: np.ndarray, mr: np.ndarray, seconds: float | None = None) -> None:
         """Move the inputs to ``(l, tau, mr)`` over ``seconds`` (default the plant's ``ramp_s``)."""

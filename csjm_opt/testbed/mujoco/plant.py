@@ -52,15 +52,13 @@ import numpy as np
 
 from ...errors import InvalidInput
 from ...model.dynamics import rig_dynamics
-from ..plant import TestbedPlant
+from ..plant import LOADINGS, TestbedPlant
 from ..static_certificate import FrictionCertificate
 
 #: The plants a study or ``csjm simulate`` can use.
 PLANTS = ("quasi-static", "mujoco")
 #: Effects of the quasi-static testbed the MuJoCo plant cannot realise.
 MUJOCO_UNSUPPORTED = ("guide_radius",)
-#: How a row's load reaches the rig (:attr:`MujocoTestbedPlant.loading`).
-LOADINGS = ("ramp", "step")
 
 
 @dataclasses.dataclass(frozen=True)
