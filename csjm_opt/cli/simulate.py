@@ -42,10 +42,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="instrument noise: the paper's F/T and tracker (default) or none")
     p.add_argument("--relaxed", action="store_true", help="start every cycle relaxed (friction state reset)")
     p.add_argument("--loading", choices=("ramp", "step"), default="ramp",
-                   help="how each row's load reaches the rig (MuJoCo plant): ramped slowly (default) or hung at "
-                        "once and settled by the rig's own dynamics, as a lab hangs a weight")
+                   help="how each row's load reaches the rig: ramped slowly (default) or hung at once and settled "
+                        "by the rig's own dynamics, as a lab hangs a weight (MuJoCo: its damping; quasi-static: an "
+                        "overdamped path stopped where static friction holds it)")
     p.add_argument("--static-friction-ratio", type=float, default=1.0, metavar="RATIO",
-                   help="static over sliding friction, >= 1 (MuJoCo plant; default 1: one bound)")
+                   help="static over sliding friction, >= 1 (default 1: one bound; above 1 on the quasi-static "
+                        "plant with --loading step)")
     p.add_argument("--after", metavar="LOG.csv", default=None,
                    help="a log run just before on the same plant (same --effect and --seed): the protocol "
                    "starts from the state where it settled")

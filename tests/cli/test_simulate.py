@@ -222,8 +222,34 @@ def test_step_loading_and_static_friction_on_the_mujoco_plant(proto, tmp_path, c
     assert len(MeasurementLog.from_csv(out)) == len(read_protocol(proto))
     capsys.readouterr()
     bad = tmp_path / "bad.csv"
-    assert main(["simulate", str(proto), "--loading", "step", "-o", str(bad)]) == 2
     assert main(["simulate", str(proto), "--plant", "mujoco", "--static-friction-ratio", "0.5", "-o", str(bad)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 2 and "MuJoCo plant only" in err[0] and "static_friction_ratio" in err[1]
+    assert len(err) == 1 and "static_friction_ratio" in err[0]
+    assert not bad.exists()
+
+
+def test_step_loading_and_static_friction_on_the_quasi_static_plant(proto, tmp_path, capsys):
+    """The same options on the quasi-static plant: a log whose rows differ from the ramped one's; bad ratios refused."""
+    logs = {}
+    for loading, ratio in (("ramp", "1"), ("step", "1.5")):
+        out, js = tmp_path / f"{loading}.csv", tmp_path / f"{loading}.json"
+        assert main(["simulate", str(proto), "--effect", "coulomb_friction=3", "--loading", loading,
+                     "--static-friction-ratio", ratio, "--noise", "none", "--no-progress", "-o", str(out),
+                     "--json", str(js)]) == 0
+        summary = json.loads(js.read_text())
+        assert summary["plant"] == "quasi-static" and summary["loading"] == loading
+        assert summary["static_friction_ratio"] == float(ratio)
+        logs[loading] = MeasurementLog.from_csv(out)
+    assert len(logs["step"]) == len(read_protocol(proto))
+    gap = max(so3.angle_between(a, b) for a, b in zip(logs["ramp"].R, logs["step"].R))
+    assert gap > 1e-4                     # the path matters with friction
+    capsys.readouterr()
+    bad = tmp_path / "bad.csv"
+    for extra in (["--loading", "step", "--static-friction-ratio", "0.5"],
+                  ["--loading", "step", "--static-friction-ratio", "nan"],
+                  ["--loading", "step", "--static-friction-ratio", "inf"],
+                  ["--static-friction-ratio", "1.5"]):                 # a ratio on ramped loads
+        assert main(["simulate", str(proto), "--effect", "coulomb_friction", *extra, "-o", str(bad)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "static_friction_ratio" in err[0], err
     assert not bad.exists()
