@@ -49,20 +49,24 @@ OUTSIDE_MULTIPLES = (3.0, 6.0)
 
 
 def jobs(n_rigs: int, none_per_rig: int, cycles: int, pair_rigs: int, plant: str = "quasistatic",
-         first_rig: int = 0) -> list[dict]:
+         first_rig: int = 0, loading: str = "ramp", static_friction_ratio: float = 1.0) -> list[dict]:
     """The study's logs, most informative first (a partial run still answers the main questions).
 
     Rigs ``first_rig, ..., first_rig + n_rigs - 1`` (a check set of rigs not looked at: ``first_rig=10``).
+    ``loading="step"`` hangs every row's load at once on the plant, with static friction
+    ``static_friction_ratio`` times the sliding one (the jobs' ids say so; ramped jobs keep theirs).
     """
     from csjm_opt.testbed import EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES
 
     out: list[dict] = []
     singles = EFFECT_NAMES + tuple(VARIANT_NAMES)
+    step = {} if loading == "ramp" else {"loading": loading, "static_friction_ratio": float(static_friction_ratio)}
+    tag = "" if loading == "ramp" else f":{loading}{float(static_friction_ratio):g}"
 
     def add(kind, effects, mult, rig, rep=0):
-        out.append({"id": f"{plant}:{kind}:{'+'.join(effects) or '-'}:{mult:g}:{rig}:{rep}", "kind": kind,
+        out.append({"id": f"{plant}:{kind}:{'+'.join(effects) or '-'}:{mult:g}:{rig}:{rep}{tag}", "kind": kind,
                     "effects": list(effects), "multiple": mult, "rig": rig, "rep": rep, "cycles": cycles,
-                    "plant": plant})
+                    "plant": plant, **step})
 
     rigs = range(first_rig, first_rig + n_rigs)
     for rig in rigs:
@@ -111,12 +115,18 @@ def truth(job: dict) -> set[str]:
 
 
 def study_plant(job: dict, plant):
-    """The job's plant: the testbed's quasi-static ``plant``, or the MuJoCo plant with the same effects."""
+    """The job's plant: the testbed's quasi-static ``plant``, or the MuJoCo plant with the same effects.
+
+    Loaded as the job says (``loading``, ``static_friction_ratio``; default ramped, one friction bound).
+    """
+    import dataclasses
+
+    loading = {"loading": job.get("loading", "ramp"), "static_friction_ratio": job.get("static_friction_ratio", 1.0)}
     if job.get("plant", "quasistatic") != "mujoco":
-        return plant
+        return dataclasses.replace(plant, **loading) if loading["loading"] != "ramp" else plant
     from csjm_opt.testbed.mujoco.plant import as_mujoco
 
-    return as_mujoco(plant)
+    return as_mujoco(plant, **loading)
 
 
 def build_plant(job: dict):
@@ -421,6 +431,11 @@ def main(argv: list[str] | None = None) -> int:
                     help="only logs injecting all of these effects (e.g. every pair with friction)")
     ap.add_argument("--kinds", nargs="+", default=["none", "single", "pair", "outside"],
                     help="kinds of log to run (several runs may append to the same OUT.jsonl)")
+    ap.add_argument("--loading", choices=["ramp", "step"], default="ramp",
+                    help="how each row's load reaches the plant: ramped (default) or hung at once and settled "
+                         "(csjm simulate --loading)")
+    ap.add_argument("--static-friction-ratio", type=float, default=1.0,
+                    help="static over sliding friction with --loading step (default 1)")
     ap.add_argument("--scatter-mm", type=float, default=0.0,
                     help="random rigs with every hole moved off its hexagon by up to this much (no symmetry)")
     ap.add_argument("--out", default="studies/diagnose_confusion/diagnose_confusion")
@@ -432,7 +447,8 @@ def main(argv: list[str] | None = None) -> int:
     done = read_records(path)
     if not args.summarise:
         todo = [j for plant in args.plants
-                for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs, plant, args.first_rig)
+                for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs, plant, args.first_rig,
+                              args.loading, args.static_friction_ratio)
                 if j["id"] not in done and j["kind"] in args.kinds
                 and (args.multiples is None or j["multiple"] in args.multiples)
                 and (args.only is None or set(j["effects"]) <= set(args.only))
