@@ -220,12 +220,13 @@ def settle_after_step(net: NetFunction, R_start: np.ndarray, static_friction_rat
         G = (net(R @ turns)[0] - q).T / TANGENT_STEP_RAD          # dq/dzeta, columns by axis
         K = -0.5 * (G + G.T)
         lam = np.linalg.eigvalsh(K)
-        h_cap = 0.5 / -lam[0] if lam[0] < 0 else np.inf               # I / h + K positive definite
-        if not finishing and lam[-1] > 0:
-            h_cap = min(h_cap, PATH_H_LAMBDA / lam[-1])
+        lam_min, lam_max = float(lam[0]), float(lam[-1])
+        h_cap = 0.5 / -lam_min if lam_min < 0 else np.inf               # I / h + K positive definite
+        if not finishing and lam_max > 0:
+            h_cap = min(h_cap, PATH_H_LAMBDA / lam_max)
         if step == 1:
-            h = 0.1 * (PATH_H_LAMBDA / lam[-1] if lam[-1] > 0 else MAX_STEP_RAD / max(np.linalg.norm(q), 1e-12))
-        h = min(h, h_cap)
+            h = 0.1 * (PATH_H_LAMBDA / lam_max if lam_max > 0 else MAX_STEP_RAD / max(float(np.linalg.norm(q)), 1e-12))
+        h = float(min(h, h_cap))
         for _ in range(40):
             M = np.eye(3) / h + (K if finishing else 0.5 * K)
             L = np.linalg.cholesky(M)
@@ -236,7 +237,7 @@ def settle_after_step(net: NetFunction, R_start: np.ndarray, static_friction_rat
             if size <= MAX_STEP_RAD * (1.0 + 1e-9):
                 break
             h *= 0.9 * MAX_STEP_RAD / size
-        if not finishing and lam[0] > 0:
+        if not finishing and lam_min > 0:
             finishing = float(np.linalg.norm(np.linalg.solve(K, q + A @ f))) < FINISH_RAD
         R_next = R @ so3.exp(delta)
         if so3.angle_between(R_next, R_start) > FALL_RAD or not np.all(np.isfinite(R_next)):
