@@ -446,10 +446,11 @@ def main(argv: list[str] | None = None) -> int:
     path = out.with_suffix(".jsonl")
     done = read_records(path)
     if not args.summarise:
-        todo = [j for plant in args.plants
-                for j in jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs, plant, args.first_rig,
-                              args.loading, args.static_friction_ratio)
-                if j["id"] not in done and j["kind"] in args.kinds
+        per_plant = [jobs(args.rigs, args.none_per_rig, args.cycles, args.pair_rigs, plant, args.first_rig,
+                          args.loading, args.static_friction_ratio) for plant in args.plants]
+        # the plants' logs interleaved: a partial run answers for every plant
+        todo = [j for group in itertools.zip_longest(*per_plant) for j in group
+                if j is not None and j["id"] not in done and j["kind"] in args.kinds
                 and (args.multiples is None or j["multiple"] in args.multiples)
                 and (args.only is None or set(j["effects"]) <= set(args.only))
                 and (args.including is None or set(args.including) <= set(j["effects"]))]
