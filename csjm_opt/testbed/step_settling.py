@@ -158,17 +158,21 @@ def _utilisation(net: NetFunction, R: np.ndarray, ratio: float) -> FrictionCerti
 def _first_held(net: NetFunction, R0: np.ndarray, delta: np.ndarray, ratio: float,
                 end: FrictionCertificate) -> tuple[np.ndarray, FrictionCertificate]:
     """The first held point of the chord ``R0 exp(s delta)``, ``s in (0, 1]`` (``s = 1`` is held)."""
-    c0 = _utilisation(net, R0, ratio)
-    s_lo, t_lo = 0.0, c0.utilisation
-    s_hi, t_hi, c_hi = 1.0, end.utilisation, end
-    if not np.isfinite(t_lo):                 # no friction forces balance the start: bisect
-        t_lo = t_hi + 1.0
+    q, A, b = (x[0] for x in net(R0[None]))
+    if not np.any(b > 0):                     # no friction: the end is the equilibrium (within the tolerance)
+        return R0 @ so3.exp(delta), end
+    c0 = certify_static(q, A, ratio * b, HOLD_TOL_NM)
+    s_lo, t_lo = 0.0, c0.utilisation          # t > 1 (not held); inf: no forces balance it (then bisect)
+    s_hi, t_hi, c_hi = 1.0, min(end.utilisation, 1.0), end
     side = 0
     for _ in range(60):
-        if s_hi - s_lo < EDGE_TOL or (c_hi.certified and 1.0 - c_hi.utilisation < EDGE_TOL):
+        if s_hi - s_lo < EDGE_TOL or 1.0 - c_hi.utilisation < EDGE_TOL:
             break
-        s = s_lo + (t_lo - 1.0) * (s_hi - s_lo) / (t_lo - t_hi) if t_lo > t_hi else 0.5 * (s_lo + s_hi)
-        s = min(max(s, s_lo + 1e-3 * (s_hi - s_lo)), s_hi - 1e-3 * (s_hi - s_lo))
+        if np.isfinite(t_lo):
+            s = s_lo + (t_lo - 1.0) * (s_hi - s_lo) / (t_lo - t_hi)
+            s = min(max(s, s_lo + 1e-3 * (s_hi - s_lo)), s_hi - 1e-3 * (s_hi - s_lo))
+        else:
+            s = 0.5 * (s_lo + s_hi)
         c = _utilisation(net, R0 @ so3.exp(s * delta), ratio)
         if c.certified:
             s_hi, t_hi, c_hi = s, min(c.utilisation, 1.0), c
@@ -176,7 +180,7 @@ def _first_held(net: NetFunction, R0: np.ndarray, delta: np.ndarray, ratio: floa
                 t_lo = 1.0 + 0.5 * (t_lo - 1.0)
             side = 1
         else:
-            s_lo, t_lo = s, (c.utilisation if np.isfinite(c.utilisation) else t_lo)
+            s_lo, t_lo = s, c.utilisation
             if side == -1:
                 t_hi = 1.0 - 0.5 * (1.0 - t_hi)
             side = -1
