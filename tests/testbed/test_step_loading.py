@@ -18,7 +18,7 @@ from csjm_opt import so3
 from csjm_opt.errors import InvalidInput
 from csjm_opt.model import kinematics as kin
 from csjm_opt.model.statics import solve_equilibrium
-from csjm_opt.testbed import TestbedPlant, certify_static, design_cycles, make_plant
+from csjm_opt.testbed import TestbedPlant, as_mujoco, certify_static, design_cycles, make_plant
 from csjm_opt.testbed.step_settling import settle_after_step
 
 #: Imbalance (N m) the toolkit's statics allow at a held row.
@@ -158,6 +158,9 @@ def test_ratio_above_one_holds_where_ratio_one_slides(rig, log_args, coulomb_row
 def test_step_loading_defaults_and_bad_input(rig, log_args):
     plant = make_plant(rig, "coulomb_friction", 1.0, np.random.default_rng(0))
     assert plant.loading == "ramp" and plant.static_friction_ratio == 1.0
+    step = dataclasses.replace(plant, loading="step", static_friction_ratio=1.4)
+    engine = as_mujoco(step)                      # the same plant realised in MuJoCo, loaded the same way
+    assert engine.loading == "step" and engine.static_friction_ratio == 1.4
     for bad in (0.5, float("nan"), float("inf"), "1.5x", None):
         with pytest.raises(InvalidInput, match="static_friction_ratio"):
             make_plant(rig, "coulomb_friction", 1.0, np.random.default_rng(0), loading="step",

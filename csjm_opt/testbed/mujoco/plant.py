@@ -306,7 +306,8 @@ def as_mujoco(plant: TestbedPlant, **options) -> MujocoTestbedPlant:
     ----------
     plant : TestbedPlant
     **options
-        :class:`MujocoTestbedPlant` settings (``ramp_s``, ``noslip_iterations``, ...).
+        :class:`MujocoTestbedPlant` settings (``ramp_s``, ``noslip_iterations``, ...); ``loading`` and
+        ``static_friction_ratio`` default to the plant's own.
 
     Returns
     -------
@@ -317,6 +318,8 @@ def as_mujoco(plant: TestbedPlant, **options) -> MujocoTestbedPlant:
     InvalidInput
         An effect MuJoCo cannot realise (guide radius).
     """
+    options.setdefault("loading", plant.loading)
+    options.setdefault("static_friction_ratio", plant.static_friction_ratio)
     return MujocoTestbedPlant(plant, **options)
 
 
