@@ -10,7 +10,8 @@ median wall time over ``--repeats`` logs (same designs for both plants) on the
 quasi-static plant (the baseline, measured in the same run) and on the MuJoCo
 plant, and their ratio; and the MuJoCo plant with step loading (each load hung at once and
 settled by the rig's dynamics, static over sliding friction ``--static-friction-ratio``, default
-1.5) in rows per second beside the default ramped loading's (target: 2 rows/s with friction).
+1.5) in rows per second beside the default ramped loading's (target: 2 rows/s with friction);
+and the quasi-static plant with the same step loading (its overdamped path, ``qs step``).
 Timings on a shared machine are noisy: compare the ratios (the load average is printed).
 """
 
@@ -58,16 +59,18 @@ def main(argv: list[str] | None = None) -> int:
     print(f"198-row log, paper rig, median of {args.repeats} (s; rows/s of the MuJoCo plant ramped and step-loaded, "
           f"static friction x{args.static_friction_ratio:g}; load average {os.getloadavg()[0]:.1f}):")
     print(f"  {'effect':<20s} {'quasi-static':>12s} {'mujoco':>10s} {'ratio':>8s} {'step':>10s} {'rows/s':>8s} "
-          f"{'step rows/s':>12s}")
+          f"{'step rows/s':>12s} {'qs step':>8s} {'qs step/ramp':>13s}")
     for effect in args.effects:
         seeds = range(1, args.repeats + 1)
         qs = float(np.median([time_log(rig, effect, "quasi-static", s) for s in seeds]))
         mj = float(np.median([time_log(rig, effect, "mujoco", s) for s in seeds]))
         st = float(np.median([time_log(rig, effect, "mujoco", s, **step) for s in seeds]))
+        qs_st = float(np.median([time_log(rig, effect, "quasi-static", s, **step) for s in seeds]))
         out[effect] = {"quasi_static_s": qs, "mujoco_s": mj, "ratio": mj / qs, "mujoco_step_s": st,
-                       "rows_per_s": 198 / mj, "step_rows_per_s": 198 / st}
-        print(f"  {effect:<20s} {qs:12.2f} {mj:10.2f} {mj / qs:8.1f} {st:10.2f} {198 / mj:8.2f} {198 / st:12.2f}",
-              flush=True)
+                       "rows_per_s": 198 / mj, "step_rows_per_s": 198 / st, "quasi_static_step_s": qs_st,
+                       "quasi_static_step_ratio": qs_st / qs}
+        print(f"  {effect:<20s} {qs:12.2f} {mj:10.2f} {mj / qs:8.1f} {st:10.2f} {198 / mj:8.2f} {198 / st:12.2f} "
+              f"{qs_st:8.2f} {qs_st / qs:13.1f}", flush=True)
     if args.json:
         Path(args.json).write_text(json.dumps(out, indent=2))
     return 0

@@ -198,7 +198,9 @@ class TestbedPlant:
         previous row of its cycle. With ``loading="step"`` each row's load is hung
         at once and the platform comes to rest under friction (the module doc);
         the log's first row (every cycle's without :attr:`persistent`) starts
-        relaxed, at the frictionless equilibrium nearest ``R_init``.
+        relaxed, at the frictionless equilibrium nearest ``R_init``. Without
+        friction a step-loaded row comes to rest at its equilibrium, which is
+        solved for directly (as with ramped loads).
 
         Parameters
         ----------
@@ -233,7 +235,7 @@ class TestbedPlant:
         mr_load = (np.zeros((n, 3)) if load_first_moment_A_kgm is None
                    else np.asarray(load_first_moment_A_kgm, float).reshape(n, 3))
         new_cycle = np.r_[True, cycle[1:] != cycle[:-1]]
-        if self.loading == "step":
+        if self.loading == "step" and self.has_friction:    # without friction the path ends at the equilibrium
             return self._respond_step(rest_lengths_m, tau_ext_A_Nm, new_cycle, np.asarray(R_init, float), mr_load,
                                       progress)
         path = self.has_friction

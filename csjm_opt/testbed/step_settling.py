@@ -99,20 +99,24 @@ class StepRest:
     steps: int
 
 
-def _screen(q: np.ndarray, A: np.ndarray, bounds: np.ndarray, metric_chol: np.ndarray | None = None):
+def _screen(q: np.ndarray, A: np.ndarray, bounds: np.ndarray, metric_chol: np.ndarray | None = None,
+            f_warm: np.ndarray | None = None):
     """Box least squares ``min_{|f| <= bounds} |q + A f|`` (in the metric ``L^-T L^-1`` when ``L`` is given).
 
-    Returns the minimiser ``f`` (elements with a zero bound get 0) and the distance.
+    Returns the minimiser ``f`` (elements with a zero bound get 0) and the distance. ``f_warm``: a
+    guess whose active set is tried first (:func:`_warm`).
     """
-    k = A.shape[1]
-    f = np.zeros(k)
-    live = bounds > 0
+    L = np.eye(len(q)) if metric_chol is None else metric_chol
+    f = None if f_warm is None else _warm(q, A, bounds, L, f_warm)
     if metric_chol is not None:
         q = np.linalg.solve(metric_chol, q)
         A = np.linalg.solve(metric_chol, A)
-    if np.any(live):
-        sol = lsq_linear(A[:, live], -q, bounds=(-bounds[live], bounds[live]), method="bvls")
-        f[live] = np.clip(sol.x, -bounds[live], bounds[live])
+    if f is None:
+        f = np.zeros(A.shape[1])
+        live = bounds > 0
+        if np.any(live):
+            sol = lsq_linear(A[:, live], -q, bounds=(-bounds[live], bounds[live]), method="bvls")
+            f[live] = np.clip(sol.x, -bounds[live], bounds[live])
     return f, float(np.linalg.norm(q + A @ f))
 
 
@@ -141,13 +145,17 @@ def _warm(q: np.ndarray, A: np.ndarray, bounds: np.ndarray, L: np.ndarray, f_pre
     return f
 
 
-def _certificate(q: np.ndarray, A: np.ndarray, b: np.ndarray, ratio: float) -> FrictionCertificate | None:
-    """The static certificate of a pose (net ``q``, directions ``A``, sliding bounds ``b``) when it is held."""
-    _, dist = _screen(q, A, ratio * b)
+def _certificate(q: np.ndarray, A: np.ndarray, b: np.ndarray, ratio: float,
+                 f_warm: np.ndarray | None = None) -> tuple[FrictionCertificate | None, np.ndarray]:
+    """The static certificate of a pose (net ``q``, directions ``A``, sliding bounds ``b``) when it is held.
+
+    Also the screen's friction forces (a warm start for the next pose's screen).
+    """
+    f, dist = _screen(q, A, ratio * b, f_warm=f_warm)
     if dist > SCREEN_FACTOR * HOLD_TOL_NM:
-        return None
+        return None, f
     cert = certify_static(q, A, ratio * b, HOLD_TOL_NM)
-    return cert if cert.certified else None
+    return (cert if cert.certified else None), f
 
 
 def _utilisation(net: NetFunction, R: np.ndarray, ratio: float) -> FrictionCertificate:
@@ -213,7 +221,7 @@ def settle_after_step(net: NetFunction, R_start: np.ndarray, static_friction_rat
     ratio = float(static_friction_ratio)
     R = np.array(R_start, float)
     q, A, b = (x[0] for x in net(R[None]))
-    cert = _certificate(q, A, b, ratio)
+    cert, f_static = _certificate(q, A, b, ratio)
     if cert is not None:
         return StepRest(R, cert, False, 0)
     turns = np.stack(kin.basis_rotations(TANGENT_STEP_RAD))
@@ -234,8 +242,7 @@ def settle_after_step(net: NetFunction, R_start: np.ndarray, static_friction_rat
         for _ in range(40):
             M = np.eye(3) / h + (K if finishing else 0.5 * K)
             L = np.linalg.cholesky(M)
-            warm = _warm(q, A, b, L, f)
-            f = _screen(q, A, b, L)[0] if warm is None else warm
+            f = _screen(q, A, b, L, f_warm=f)[0]
             delta = np.linalg.solve(M, q + A @ f)
             size = float(np.linalg.norm(delta))
             if size <= MAX_STEP_RAD * (1.0 + 1e-9):
@@ -248,7 +255,7 @@ def settle_after_step(net: NetFunction, R_start: np.ndarray, static_friction_rat
             raise NoEquilibrium("the quasi-static plant fell over after a load step (more than 45 deg from the "
                                 "previous row's pose)", "fell", float(np.linalg.norm(q)))
         q_next, A_next, b_next = (x[0] for x in net(R_next[None]))
-        cert = _certificate(q_next, A_next, b_next, ratio)
+        cert, f_static = _certificate(q_next, A_next, b_next, ratio, f_static)
         if cert is not None:
             R_rest, cert = _first_held(net, R, delta, ratio, cert)
             return StepRest(R_rest, cert, True, step)
