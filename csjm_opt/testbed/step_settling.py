@@ -20,8 +20,12 @@ Breakaway and stop are one rule, the static Coulomb condition of
 ``ratio * b`` (the certificate the MuJoCo plant's rows pass): the platform does not move when the
 previous pose is held under the new inputs, and otherwise stops at the *first* point of its path
 where it is held. With ``ratio = 1`` that is the end of the sliding motion (a point on the edge of
-the stick band, approached from outside); with ``ratio > 1`` the motion stops as soon as it enters
-the wider static band, short of where sliding friction alone would leave it.
+the stick band, approached from outside, reached within the certificate's imbalance of
+``HOLD_TOL_NM``); with ``ratio > 1`` the motion stops as soon as it enters the wider static band,
+short of where sliding friction alone would leave it: an overdamped motion is slow, and a slow
+motion sticks as soon as static friction can hold it. (MuJoCo's platform, with inertia, slides on
+nearly to where sliding friction alone stops it; its static ratio mostly decides whether a row
+moves at all.)
 
 Time stepping is linearly implicit: ``(I / h + gamma K) delta = q + A f`` with ``f`` the
 box-constrained minimiser of ``|q + A f|`` in the metric ``(I / h + gamma K)^-1`` (``K`` the
