@@ -232,8 +232,9 @@ def settle_after_step(net: NetFunction, R_start: np.ndarray, static_friction_rat
     h = np.inf
     finishing = False
     f = np.zeros(A.shape[1])
+    q_turned = net(R @ turns)[0]
     for step in range(1, MAX_STEPS + 1):
-        G = (net(R @ turns)[0] - q).T / TANGENT_STEP_RAD          # dq/dzeta, columns by axis
+        G = (q_turned - q).T / TANGENT_STEP_RAD          # dq/dzeta, columns by axis
         K = -0.5 * (G + G.T)
         lam = np.linalg.eigvalsh(K)
         lam_min, lam_max = float(lam[0]), float(lam[-1])
@@ -258,7 +259,8 @@ def settle_after_step(net: NetFunction, R_start: np.ndarray, static_friction_rat
         if so3.angle_between(R_next, R_start) > FALL_RAD or not np.all(np.isfinite(R_next)):
             raise NoEquilibrium("the quasi-static plant fell over after a load step (more than 45 deg from the "
                                 "previous row's pose)", "fell", float(np.linalg.norm(q)))
-        q_next, A_next, b_next = (x[0] for x in net(R_next[None]))
+        Q, AA, BB = net(np.concatenate([R_next[None], R_next @ turns]))    # the pose and its tangent's turns
+        q_next, A_next, b_next, q_turned = Q[0], AA[0], BB[0], Q[1:]
         cert, f_static = _certificate(q_next, A_next, b_next, ratio, f_static)
         if cert is not None:
             R_rest, cert = _first_held(net, R, delta, ratio, cert)
