@@ -48,7 +48,13 @@ from ..fitting.model_fits import VARIANTS, fit_pair, fit_single, variant_fit  # 
 from ..fitting.pool import map_ordered, resolve_workers
 from .pairs import all_separabilities, secondary_alternatives
 from .result import Diagnosis
-from .rivals import rival_warning, scored_models, unsettled_rivals
+from .rivals import (
+    alternatives_warnings,
+    inseparable_alternatives,
+    rival_warning,
+    scored_models,
+    unsettled_rivals,
+)
 from .scoring import CandidateScore, paired_heldout_test
 from .verdict import Secondary, Verdict
 
@@ -338,13 +344,11 @@ def _rival_warnings(ctx: _Context, verdict: Verdict, singles, tests, detected, p
         verdict.warn(f"the residual left by {final.name} still holds structure within cycles (signature test p = "
                      f"{remaining['p_value']:.1e}): the named effect may be a stand-in for one outside the vocabulary; "
                      "see localisation for where the residual lies")
-    # rivals the log cannot tell from the selected: detected, not separable, and not decisively worse
-    verdict.alternatives = [n for n in detected if n != selected and selected in singles
-                            and any(set(p["effects"]) == {n, selected} and not p["separable"] for p in pairs)
-                            and tests[n]["log_evidence"] >= tests[selected]["log_evidence"] - LEAD_NATS]
-    if verdict.alternatives:
-        verdict.warn(f"{selected} is not separable on this log from {', '.join(verdict.alternatives)} "
-                     "(detected too; Fisher block correlation above the separability limit)")
+    # rivals the log cannot tell from the selected: detected, not separable, and not ruled out (rivals.py)
+    found = _look_alikes(ctx, verdict, singles, tests, detected, pairs)
+    verdict.alternatives = [a["model"] for a in found]
+    for text in alternatives_warnings(selected, found):
+        verdict.warn(text)
     second = verdict.secondary.effect
     verdict.secondary_alternatives = secondary_alternatives(ctx, pairs, pair_scores, final, selected, second)
     if verdict.secondary_alternatives:
@@ -358,6 +362,24 @@ def _rival_warnings(ctx: _Context, verdict: Verdict, singles, tests, detected, p
          *(f"{selected}+{c}" for c in verdict.secondary_alternatives)])
     for r in verdict.unsettled_rivals:
         verdict.warn(rival_warning(final.name, r))
+
+
+def _look_alikes(ctx: _Context, verdict: Verdict, singles, tests, detected, pairs) -> list[dict]:
+    """The detected singles the log cannot tell from the selected one (:func:`.rivals.inseparable_alternatives`)."""
+    selected = verdict.selected
+    if selected not in singles:
+        return []
+    s2 = float(ctx.sigma) ** 2
+
+    def entry(n: str) -> dict:
+        sep = next((p for p in pairs if set(p["effects"]) == {n, selected}), None)
+        return {"detected": n in detected, "plausible": bool(tests[n]["plausible"]),
+                "closes_gap": bool(tests[n]["closes_gap"]), "separable": sep is None or bool(sep["separable"]),
+                "log_evidence": tests[n]["log_evidence"], "chi2": singles[n].fit.rss / s2,
+                "cycle_mse": singles[n].cycle_mse()}
+
+    models = {n: entry(n) for n in [selected, *(n for n in detected if n != selected)]}
+    return inseparable_alternatives(models, selected, single_verdict=verdict.final is singles[selected])
 
 
 def _look_alike_warning(ctx: _Context, verdict: Verdict, singles, tests, pairs, pair_scores, n_cycles: int) -> None:
