@@ -345,7 +345,7 @@ def _rival_warnings(ctx: _Context, verdict: Verdict, singles, tests, detected, p
                      f"{remaining['p_value']:.1e}): the named effect may be a stand-in for one outside the vocabulary; "
                      "see localisation for where the residual lies")
     # rivals the log cannot tell from the selected: detected, not separable, and not ruled out (rivals.py)
-    found = _look_alikes(ctx, verdict, singles, tests, detected, pairs)
+    found = _look_alikes(ctx, verdict, singles, tests, detected, pairs, n_cycles)
     verdict.alternatives = [a["model"] for a in found]
     for text in alternatives_warnings(selected, found):
         verdict.warn(text)
@@ -364,7 +364,7 @@ def _rival_warnings(ctx: _Context, verdict: Verdict, singles, tests, detected, p
         verdict.warn(rival_warning(final.name, r))
 
 
-def _look_alikes(ctx: _Context, verdict: Verdict, singles, tests, detected, pairs) -> list[dict]:
+def _look_alikes(ctx: _Context, verdict: Verdict, singles, tests, detected, pairs, n_cycles: int) -> list[dict]:
     """The detected singles the log cannot tell from the selected one (:func:`.rivals.inseparable_alternatives`)."""
     selected = verdict.selected
     if selected not in singles:
@@ -376,7 +376,7 @@ def _look_alikes(ctx: _Context, verdict: Verdict, singles, tests, detected, pair
         return {"detected": n in detected, "plausible": bool(tests[n]["plausible"]),
                 "closes_gap": bool(tests[n]["closes_gap"]), "separable": sep is None or bool(sep["separable"]),
                 "log_evidence": tests[n]["log_evidence"], "chi2": singles[n].fit.rss / s2,
-                "cycle_mse": singles[n].cycle_mse()}
+                "cycle_mse": singles[n].cycle_mse(), "flexible": flexible(singles[n], n_cycles)}
 
     models = {n: entry(n) for n in [selected, *(n for n in detected if n != selected)]}
     return inseparable_alternatives(models, selected, single_verdict=verdict.final is singles[selected])

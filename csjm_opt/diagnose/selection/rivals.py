@@ -136,20 +136,24 @@ def inseparable_alternatives(models: Mapping[str, Mapping], selected: str, singl
     :mod:`csjm_opt.diagnose.selection.pairs`). It is listed (not ruled out) when
 
     * ``"evidence"``: its log evidence is within ``LEAD_NATS`` of ``V``'s (a leading hypothesis), or
-    * ``"fit"`` (``V`` a single): it is plausible, closes the gap, ``V`` does not beat it on held-out
-      cycles (one-sided paired test at ``HELDOUT_ALPHA``), and it fits the log about as well: its
-      misfit ``chi^2`` (whitened training RSS over the diagnosis's noise variance) exceeds ``V``'s by
-      less than ``2 EVIDENCE_MIN`` (a likelihood ratio below ``exp(EVIDENCE_MIN)``, not decisive). Two
-      models the log cannot separate, both fitting it as well, then differ in evidence only by the
-      price of their parameters under the priors (the Occam factor: a 6-number link compliance
-      pays about 10 nats more than a 3-number sensor gain for the same deflections), which the log
-      cannot check; a lab must hear of both.
+    * ``"fit"`` (``V`` a single): it is a few-number model (not *flexible*,
+      :func:`csjm_opt.diagnose.selection.decision.flexible`), plausible, closes the gap, ``V`` does not
+      beat it on held-out cycles (one-sided paired test at ``HELDOUT_ALPHA``), and it fits the log about
+      as well: its misfit ``chi^2`` (whitened training RSS over the diagnosis's noise variance) exceeds
+      ``V``'s by less than ``2 EVIDENCE_MIN`` (a likelihood ratio below ``exp(EVIDENCE_MIN)``, not
+      decisive). Two few-number models the log cannot separate, both fitting it as well, then differ in
+      evidence only by the price of their parameters under the priors (the Occam factor: a 6-number
+      link compliance pays about 10 nats more than a 3-number sensor gain for the same deflections),
+      which the log cannot check; a lab must hear of both. A flexible rival (36 hole offsets, which fit
+      any few-number verdict's log as well) is ruled out by parsimony when ``V`` explains the log as
+      well (the rule's "parsimony that holds"), and is listed only by the evidence route.
 
     Parameters
     ----------
     models : mapping
         Effect name -> ``{"detected", "plausible", "closes_gap", "separable" (from ``selected``; the
-        selected entry's own is ignored), "log_evidence", "chi2", "cycle_mse"}``. Must hold ``selected``.
+        selected entry's own is ignored), "log_evidence", "chi2", "cycle_mse"}`` and optionally
+        ``"flexible"`` (default False). Must hold ``selected``.
     selected : str
     single_verdict : bool, optional
         The verdict is ``selected`` alone (the ``"fit"`` route compares a single with the verdict's
@@ -172,8 +176,8 @@ def inseparable_alternatives(models: Mapping[str, Mapping], selected: str, singl
         p = paired_heldout_test(_Cycles(m["cycle_mse"]), _Cycles(v["cycle_mse"]))   # type: ignore[arg-type]
         if nats >= -LEAD_NATS:
             route = "evidence"
-        elif (single_verdict and m.get("plausible") and m.get("closes_gap") and p >= HELDOUT_ALPHA
-              and excess < 2.0 * EVIDENCE_MIN):
+        elif (single_verdict and not m.get("flexible") and m.get("plausible") and m.get("closes_gap")
+              and p >= HELDOUT_ALPHA and excess < 2.0 * EVIDENCE_MIN):
             route = "fit"
         else:
             continue

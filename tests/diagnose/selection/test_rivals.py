@@ -211,7 +211,8 @@ def test_inseparable_look_alikes_are_listed_when_they_fit_as_well():
     """A detected effect the log cannot separate from the verdict is listed when it is a leading hypothesis (evidence
     within LEAD_NATS), or, for a single verdict, when it closes the gap, is not beaten on held-out cycles and its misfit
     is not decisively worse (chi^2 excess below 2 EVIDENCE_MIN) however many nats its priors cost it; never when it is
-    separable, undetected, decisively worse fitting or beaten on held-out cycles."""
+    separable, undetected, decisively worse fitting, beaten on held-out cycles or flexible (then only as a leading
+    hypothesis)."""
     from csjm_opt.diagnose.decision_rule import LEAD_NATS
     from csjm_opt.diagnose.selection.rivals import alternatives_warnings, inseparable_alternatives
 
@@ -231,7 +232,8 @@ def test_inseparable_look_alikes_are_listed_when_they_fit_as_well():
               "W": m(far, 290.0, worse),                   # beaten on held-out cycles: not
               "U": m(-LEAD_NATS / 2, 330.0, worse),        # a leading hypothesis: listed ("evidence")
               "S": m(far, 290.0, same, detected=False),    # not detected: not
-              "T": m(far, 290.0, same, closes=False)}      # does not close the gap: not
+              "T": m(far, 290.0, same, closes=False),      # does not close the gap: not
+              "F": {**m(far, 290.0, same), "flexible": True}}   # flexible (36 hole offsets): parsimony rules it out
     got = inseparable_alternatives(models, "V")
     assert [(a["model"], a["route"]) for a in got] == [("X", "fit"), ("U", "evidence")]
     assert got[0]["chi2_excess"] == -10.0 and got[0]["nats"] == far
