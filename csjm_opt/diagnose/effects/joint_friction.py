@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Effect
+from .base import Effect, one_hot
 
 #: Plausible friction moment of a ball joint (N m): a dry, preloaded joint of this size stays below it.
 RANGE_NM = 0.3
@@ -172,6 +172,12 @@ class JointFriction(Effect):
         if self.settled:                 # the moment is latent per row (:meth:`stick_columns`)
             return g_Nm
         return g_Nm - p[0] * self.slide_direction(ev)
+
+    def d_adjust_balance(self, ev, d_g, p, cols):
+        """Tangent of :meth:`adjust_balance`: ``-s`` on the moment's column (``s`` depends on the poses only)."""
+        if self.settled:
+            return d_g
+        return d_g - self.slide_direction(ev)[..., None] * one_hot(cols, d_g.shape[-1])[0]
 
     def describe(self, p):
         """Physically readable quantities derived from the fitted parameters.

@@ -87,6 +87,8 @@ class LinkCompliance(Effect):
         # the stiffness scale and C trade off (both soften the joint): also start from a soft link
         return [np.where(_IU[0] == _IU[1], 5e-3, 0.0)]
 
+    reads_load = True          # the twist follows the load: load parameters move the cables too
+
     def adjust_pose(self, ev, p):
         """Twist the cable platform back by ``phi = C (tau_ext + tau_weight)`` and record the link rotation.
 

@@ -28,6 +28,7 @@ import numpy as np
 from ...model import kinematics as kin
 from ...model.rig import Rig
 from ..effects import Effect
+from ..effects.base import EARLY_HOOKS, LATE_HOOKS, one_hot
 
 NUISANCE_NAMES = ("dl_common_m",)
 NUISANCE_SCALES = np.array([2e-4])
@@ -122,6 +123,7 @@ class Evaluation:
     rest_lengths_m: np.ndarray | None = None  # actual rest lengths (n, m): commanded + common offset (adjust_rest)
     cable_jacobian: np.ndarray | None = None  # J (n, m, 3) at R_cable: J^T T is the cables' moment, dc = -J dzeta
     state_out: np.ndarray | None = None       # path state after this row (path-dependent effects)
+    d_g: np.ndarray | None = None             # (n, 3, P) derivative of the balance (AugmentedModel.balance_derivative)
 
 
 class AugmentedModel:
@@ -340,14 +342,59 @@ class AugmentedModel:
             G[..., j] = (g3[j] - g0) / h
         return G
 
-    def evaluate(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray) -> tuple[np.ndarray, Evaluation]:
-        """``(g, evaluation)``; the evaluation holds intermediate quantities (path state, lengths)."""
+    def exact_params(self, rows: Rows) -> np.ndarray:
+        """Which parameters :meth:`balance_derivative` differentiates exactly on ``rows`` (bool, (n_params,)).
+
+        Those that enter after the cables are placed: the common rest-length offset and the parameters of
+        effects whose hooks are all late ones (:data:`~csjm_opt.diagnose.effects.base.LATE_HOOKS`: loads, rest
+        lengths, tension laws, further moments), loads only where no effect reads them to place the cables
+        (link compliance). None where an effect in the model cannot give the tangent of a late hook it
+        overrides on these rows (e.g. friction stepped row by row in a prediction).
+        """
+        mask = np.zeros(self.n_params, bool)
+        if not all(e.tangent_ok(rows) for e in self.effects):
+            return mask
+        mask[:N_NUISANCE] = True
+        reads_load = any(e.reads_load for e in self.effects)
+        for i, e in enumerate(self.effects):
+            hooks = {h for h in LATE_HOOKS + EARLY_HOOKS if getattr(type(e), h) is not getattr(Effect, h)}
+            if hooks & set(EARLY_HOOKS) or (reads_load and "adjust_load" in hooks):
+                continue
+            mask[self._offsets[i + 1]:self._offsets[i + 2]] = True
+        return mask
+
+    def balance_derivative(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray,
+                           cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(g, dg/dtheta[:, :, cols])``: the balance and its exact derivative (forward mode) (n, 3, P).
+
+        ``cols``: parameter indices among :meth:`exact_params` (N m per unit of each parameter).
+        """
+        g, ev = self.evaluate(R_m, rows, theta, np.asarray(cols, int))
+        assert ev.d_g is not None
+        return g, ev.d_g
+
+    def evaluate(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray,
+                 tangent_cols: np.ndarray | None = None) -> tuple[np.ndarray, Evaluation]:
+        """``(g, evaluation)``; the evaluation holds intermediate quantities (path state, lengths).
+
+        ``tangent_cols``: parameters (indices, :meth:`exact_params`) whose derivative of ``g`` is carried
+        alongside (forward mode through the late hooks) into ``evaluation.d_g`` (n, 3, P).
+        """
         theta = np.asarray(theta, float)
         n = len(rows)
         eye = self._identity(n)
         ev = Evaluation(self._A, self._B, self._mr, rows.tau_meas_A_Nm, R_m, eye, rows, self._k, R_m)
         params = self.effect_params(theta)
-        for e, p in zip(self.effects, params):
+        tan = None
+        if tangent_cols is not None:
+            where = np.full(self.n_params, -1)
+            where[tangent_cols] = np.arange(len(tangent_cols))
+            P = len(tangent_cols)
+            tan = {"cols": [where[self._offsets[i + 1]:self._offsets[i + 2]] for i in range(len(self.effects))],
+                   "tau": np.zeros((n, 3, P)), "first": np.zeros((3, P)), "nuisance": where[:N_NUISANCE]}
+        for i, (e, p) in enumerate(zip(self.effects, params)):
+            if tan is not None and type(e).adjust_load is not Effect.adjust_load:
+                tan["tau"], tan["first"] = e.d_adjust_load(ev, p, tan["cols"][i], tan["tau"], tan["first"])
             e.adjust_load(ev, p)
         for e, p in zip(self.effects, params):
             e.adjust_frame(ev, p)
@@ -359,20 +406,40 @@ class AugmentedModel:
         for e, p in zip(self.effects, params):
             e.adjust_geometry(ev, p)
         ev.rest_lengths_m = rows.rest_lengths_m + theta[0]
-        for e, p in zip(self.effects, params):
+        if tan is not None:
+            tan["rest"] = np.zeros(np.shape(ev.rest_lengths_m) + (P,))
+            tan["rest"] += one_hot(tan["nuisance"], P)[0]
+        for i, (e, p) in enumerate(zip(self.effects, params)):
+            if tan is not None and type(e).adjust_rest is not Effect.adjust_rest:
+                tan["rest"] = e.d_adjust_rest(ev, p, tan["cols"][i], tan["rest"])
             e.adjust_rest(ev, p)
         lengths, J = self.cable_terms(ev.R_cable, ev.A_m, ev.B_m)
         ev.lengths_m, ev.cable_jacobian = lengths, J
         stretch = lengths - ev.rest_lengths_m
         T = self._k * np.maximum(stretch, 0.0)
-        for e, p in zip(self.effects, params):
+        if tan is not None:
+            d_stretch = -tan["rest"]
+            d_T = (self._k * (stretch > 0))[..., None] * d_stretch
+        for i, (e, p) in enumerate(zip(self.effects, params)):
+            T_in = T
             T = e.adjust_tension(ev, stretch, T, p)
+            if tan is not None and type(e).adjust_tension is not Effect.adjust_tension:
+                d_T = e.d_adjust_tension(ev, stretch, d_stretch, T_in, d_T, T, p, tan["cols"][i])
         tau_load = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm
         # the link's rotation is the identity unless an effect set one (then the product is tau_load exactly)
         g = np.einsum("nij,ni->nj", J, T) + (tau_load if ev.link_rotation is eye else
                                              np.einsum("nij,nj->ni", ev.link_rotation, tau_load))
-        for e, p in zip(self.effects, params):
+        if tan is not None:
+            # the weight's moment is linear in the first moment: its tangent is the moment of the first moment's
+            d_load = tan["tau"] + np.stack([kin.weight_moment(ev.R_body, tan["first"][:, c], self._g) if
+                                            np.any(tan["first"][:, c]) else np.zeros((n, 3)) for c in range(P)],
+                                           axis=-1).reshape(n, 3, P)
+            ev.d_g = np.einsum("nij,nip->njp", J, d_T) + (d_load if ev.link_rotation is eye else
+                                                            np.einsum("nij,njp->nip", ev.link_rotation, d_load))
+        for i, (e, p) in enumerate(zip(self.effects, params)):
             g = e.adjust_balance(ev, g, p)
+            if tan is not None and type(e).adjust_balance is not Effect.adjust_balance:
+                ev.d_g = e.d_adjust_balance(ev, ev.d_g, p, tan["cols"][i])
         return g, ev
 
     def predict_poses(self, rows: Rows, theta: np.ndarray, R_init: np.ndarray) -> kin.PoseSolution:
