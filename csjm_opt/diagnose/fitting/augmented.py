@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -385,7 +385,7 @@ class AugmentedModel:
         eye = self._identity(n)
         ev = Evaluation(self._A, self._B, self._mr, rows.tau_meas_A_Nm, R_m, eye, rows, self._k, R_m)
         params = self.effect_params(theta)
-        tan = None
+        tan: dict[str, Any] | None = None
         if tangent_cols is not None:
             where = np.full(self.n_params, -1)
             where[tangent_cols] = np.arange(len(tangent_cols))
@@ -438,7 +438,7 @@ class AugmentedModel:
                                                             np.einsum("nij,njp->nip", ev.link_rotation, d_load))
         for i, (e, p) in enumerate(zip(self.effects, params)):
             g = e.adjust_balance(ev, g, p)
-            if tan is not None and type(e).adjust_balance is not Effect.adjust_balance:
+            if tan is not None and ev.d_g is not None and type(e).adjust_balance is not Effect.adjust_balance:
                 ev.d_g = e.d_adjust_balance(ev, ev.d_g, p, tan["cols"][i])
         return g, ev
 
