@@ -194,6 +194,17 @@ class Effect(abc.ABC):
         """Tangents ``(d tau_ext (n, 3, P), d first_moment (3, P))`` after :meth:`adjust_load` (``ev``: its inputs)."""
         raise NotImplementedError
 
+    def d_adjust_pose(self, ev, p: np.ndarray, cols: np.ndarray, d_load: np.ndarray, d_eta: np.ndarray,
+                      d_link: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+        """Tangents after :meth:`adjust_pose`: of the cable platform's pose as a right rotation (n, 3, P) and of
+        the link's rotation matrix (n, 3, 3, P) (None: zero); ``d_load``: of ``tau_ext + tau_weight`` (n, 3, P)."""
+        raise NotImplementedError
+
+    def d_adjust_geometry(self, ev, p: np.ndarray, cols: np.ndarray, d_A: np.ndarray,
+                          d_B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Tangents of the holes (m, 3, P) (or per row) after :meth:`adjust_geometry`."""
+        raise NotImplementedError
+
     def d_adjust_rest(self, ev, p: np.ndarray, cols: np.ndarray, d_rest: np.ndarray) -> np.ndarray:
         """Tangent of the rest lengths (n, m, P) after :meth:`adjust_rest`."""
         raise NotImplementedError

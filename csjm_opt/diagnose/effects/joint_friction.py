@@ -173,11 +173,30 @@ class JointFriction(Effect):
             return g_Nm
         return g_Nm - p[0] * self.slide_direction(ev)
 
+    def tangent_ok(self, rows) -> bool:
+        """The tangent is taken over the whole log at given poses (not a sequential prediction's rows)."""
+        return self.settled or rows.lengths_prev_m is None
+
     def d_adjust_balance(self, ev, d_g, p, cols):
-        """Tangent of :meth:`adjust_balance`: ``-s`` on the moment's column (``s`` depends on the poses only)."""
+        """Tangent of :meth:`adjust_balance`: ``-s`` on the moment's column, ``-M ds`` where J moves (holes, link).
+
+        With ``x = -(J^T J)^-1 J^T dc`` (:func:`rotation_steps`): ``dx = -(J^T J)^-1 (dJ^T dc + d(J^T J) x)``.
+        """
         if self.settled:
             return d_g
-        return d_g - self.slide_direction(ev)[..., None] * one_hot(cols, d_g.shape[-1])[0]
+        s = self.slide_direction(ev)
+        out = d_g - s[..., None] * one_hot(cols, d_g.shape[-1])[0]
+        dJ = ev.d_cable_jacobian
+        if dJ is not None:
+            J = ev.cable_jacobian
+            dc = np.nan_to_num(np.asarray(ev.rows.steps_since_previous[0], float))
+            x = rotation_steps(J, dc)
+            JtJ = np.einsum("nki,nkj->nij", J, J)
+            dJtJ = np.einsum("nkip,nkj->nijp", dJ, J)
+            rhs = np.einsum("nkip,nk->nip", dJ, dc) + np.einsum("nijp,nj->nip", dJtJ + np.swapaxes(dJtJ, 1, 2), x)
+            dx = -np.linalg.solve(JtJ[:, None], np.moveaxis(rhs, 2, 1)[..., None])[..., 0]     # (n, P, 3)
+            out = out - p[0] * (1.0 - s ** 2)[..., None] * np.moveaxis(dx, 1, 2) / SLIP_TRAVEL_RAD
+        return out
 
     def describe(self, p):
         """Physically readable quantities derived from the fitted parameters.

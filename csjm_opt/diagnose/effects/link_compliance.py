@@ -14,9 +14,20 @@ from __future__ import annotations
 import numpy as np
 
 from ... import so3
-from .base import Effect
+from .base import Effect, one_hot
 
 _IU = np.triu_indices(3)
+
+
+def _right_jacobian(phi: np.ndarray) -> np.ndarray:
+    """Right Jacobian of SO(3) (n, 3, 3): ``exp(phi + d) = exp(phi) exp(J_r(phi) d)`` to first order."""
+    th = np.linalg.norm(phi, axis=-1)[..., None, None]
+    small = th < 1e-4
+    ths = np.where(small, 1.0, th)
+    a = np.where(small, 0.5 - th ** 2 / 24.0, (1.0 - np.cos(ths)) / ths ** 2)
+    b = np.where(small, 1.0 / 6.0 - th ** 2 / 120.0, (ths - np.sin(ths)) / ths ** 3)
+    K = so3.hat(phi)
+    return np.eye(3) - a * K + b * (K @ K)
 
 
 def compliance_matrix(p: np.ndarray) -> np.ndarray:
@@ -103,6 +114,28 @@ class LinkCompliance(Effect):
         E = so3.exp(phi)
         ev.R_cable = ev.R_cable @ np.swapaxes(E, 1, 2)
         ev.link_rotation = E @ ev.link_rotation
+
+    def d_adjust_pose(self, ev, p, cols, d_load, d_eta, d_link):
+        """Tangents of :meth:`adjust_pose`: ``E = exp(phi)`` moves by ``E hat(w)``, ``w = J_r(phi) dphi``.
+
+        ``dphi = d(tau) C + tau dC``; the cable platform ``R E^T`` turns by ``E (eta - w)`` (right rotation),
+        the link's rotation ``E L`` by ``E hat(w) L + E dL``.
+        """
+        P = d_load.shape[-1]
+        C = compliance_matrix(p)
+        tau = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm
+        phi = tau @ C
+        hot = one_hot(cols, P)                                   # (6, P)
+        dC = np.stack([compliance_matrix(hot[:, c]) for c in range(P)], axis=-1)     # C is linear in p
+        d_phi = np.einsum("nip,ij->njp", d_load, C) + np.einsum("ni,ijp->njp", tau, dC)
+        w = np.einsum("nij,njp->nip", _right_jacobian(phi), d_phi)
+        E = so3.exp(phi)
+        eta = np.einsum("nij,njp->nip", E, d_eta - w)
+        W = so3.hat(np.moveaxis(w, -1, 1))                      # (n, P, 3, 3)
+        link = np.einsum("nij,npjk,nkl->nilp", E, W, ev.link_rotation)
+        if d_link is not None:
+            link = link + np.einsum("nij,njkp->nikp", E, d_link)
+        return eta, link
 
     def describe(self, p):
         """Physically readable quantities derived from the fitted parameters.

@@ -124,6 +124,8 @@ class Evaluation:
     cable_jacobian: np.ndarray | None = None  # J (n, m, 3) at R_cable: J^T T is the cables' moment, dc = -J dzeta
     state_out: np.ndarray | None = None       # path state after this row (path-dependent effects)
     d_g: np.ndarray | None = None             # (n, 3, P) derivative of the balance (AugmentedModel.balance_derivative)
+    d_lengths_m: np.ndarray | None = None     # (n, m, P) tangents of the cable lengths (pose, hole parameters)
+    d_cable_jacobian: np.ndarray | None = None  # (n, m, 3, P) and of J
 
 
 class AugmentedModel:
@@ -345,20 +347,25 @@ class AugmentedModel:
     def exact_params(self, rows: Rows) -> np.ndarray:
         """Which parameters :meth:`balance_derivative` differentiates exactly on ``rows`` (bool, (n_params,)).
 
-        Those that enter after the cables are placed: the common rest-length offset and the parameters of
-        effects whose hooks are all late ones (:data:`~csjm_opt.diagnose.effects.base.LATE_HOOKS`: loads, rest
-        lengths, tension laws, further moments), loads only where no effect reads them to place the cables
-        (link compliance). None where an effect in the model cannot give the tangent of a late hook it
+        Every parameter whose effect's hooks all carry their tangents (``d_<hook>``): the common rest-length
+        offset, loads, rest lengths, tension laws, further moments, and hole positions and the link's twist
+        where every pose and geometry hook of the model carries its tangent (a guide's exit point does not:
+        then only the parameters that enter after the cables are placed). Registration parameters (the measured
+        body's frame) are left to differences. None where an effect cannot give the tangent of a late hook it
         overrides on these rows (e.g. friction stepped row by row in a prediction).
         """
         mask = np.zeros(self.n_params, bool)
         if not all(e.tangent_ok(rows) for e in self.effects):
             return mask
         mask[:N_NUISANCE] = True
+        placed = ("adjust_pose", "adjust_geometry")
+        geometric = all(_has_tangent(e, h) for e in self.effects for h in placed if _overrides(e, h))
         reads_load = any(e.reads_load for e in self.effects)
         for i, e in enumerate(self.effects):
-            hooks = {h for h in LATE_HOOKS + EARLY_HOOKS if getattr(type(e), h) is not getattr(Effect, h)}
-            if hooks & set(EARLY_HOOKS) or (reads_load and "adjust_load" in hooks):
+            hooks = {h for h in LATE_HOOKS + EARLY_HOOKS if _overrides(e, h)}
+            if "adjust_frame" in hooks or (hooks & set(placed) and not geometric):
+                continue
+            if "adjust_load" in hooks and reads_load and not geometric:
                 continue
             mask[self._offsets[i + 1]:self._offsets[i + 2]] = True
         return mask
@@ -378,7 +385,7 @@ class AugmentedModel:
         """``(g, evaluation)``; the evaluation holds intermediate quantities (path state, lengths).
 
         ``tangent_cols``: parameters (indices, :meth:`exact_params`) whose derivative of ``g`` is carried
-        alongside (forward mode through the late hooks) into ``evaluation.d_g`` (n, 3, P).
+        alongside (forward mode through the hooks) into ``evaluation.d_g`` (n, 3, P).
         """
         theta = np.asarray(theta, float)
         n = len(rows)
@@ -390,10 +397,14 @@ class AugmentedModel:
             where = np.full(self.n_params, -1)
             where[tangent_cols] = np.arange(len(tangent_cols))
             P = len(tangent_cols)
+            # tangents: external moment, first moment, the cable platform's pose (a right rotation), the link's
+            # rotation (None: zero), the holes
             tan = {"cols": [where[self._offsets[i + 1]:self._offsets[i + 2]] for i in range(len(self.effects))],
-                   "tau": np.zeros((n, 3, P)), "first": np.zeros((3, P)), "nuisance": where[:N_NUISANCE]}
+                   "tau": np.zeros((n, 3, P)), "first": np.zeros((3, P)), "nuisance": where[:N_NUISANCE],
+                   "eta": np.zeros((n, 3, P)), "link": None,
+                   "A": np.zeros(np.shape(self._A) + (P,)), "B": np.zeros(np.shape(self._B) + (P,))}
         for i, (e, p) in enumerate(zip(self.effects, params)):
-            if tan is not None and type(e).adjust_load is not Effect.adjust_load:
+            if tan is not None and _has_tangent(e, "adjust_load"):
                 tan["tau"], tan["first"] = e.d_adjust_load(ev, p, tan["cols"][i], tan["tau"], tan["first"])
             e.adjust_load(ev, p)
         for e, p in zip(self.effects, params):
@@ -401,16 +412,26 @@ class AugmentedModel:
         assert ev.R_body is not None   # set by adjust_frame
         ev.R_cable = ev.R_body
         ev.tau_weight_A_Nm = self.weight_moment(ev.R_body, ev.first_moment_A_kgm)
-        for e, p in zip(self.effects, params):
+        if tan is not None:
+            # the weight's moment is linear in the first moment: its tangent is the moment of the first moment's
+            tan["load"] = tan["tau"] + np.stack(
+                [kin.weight_moment(ev.R_body, tan["first"][:, c], self._g) if np.any(tan["first"][:, c])
+                 else np.zeros((n, 3)) for c in range(P)], axis=-1).reshape(n, 3, P)
+        for i, (e, p) in enumerate(zip(self.effects, params)):
+            if tan is not None and _has_tangent(e, "adjust_pose"):
+                tan["eta"], tan["link"] = e.d_adjust_pose(ev, p, tan["cols"][i], tan["load"], tan["eta"],
+                                                          tan["link"])
             e.adjust_pose(ev, p)
-        for e, p in zip(self.effects, params):
+        for i, (e, p) in enumerate(zip(self.effects, params)):
+            if tan is not None and _has_tangent(e, "adjust_geometry"):
+                tan["A"], tan["B"] = e.d_adjust_geometry(ev, p, tan["cols"][i], tan["A"], tan["B"])
             e.adjust_geometry(ev, p)
         ev.rest_lengths_m = rows.rest_lengths_m + theta[0]
         if tan is not None:
             tan["rest"] = np.zeros(np.shape(ev.rest_lengths_m) + (P,))
             tan["rest"] += one_hot(tan["nuisance"], P)[0]
         for i, (e, p) in enumerate(zip(self.effects, params)):
-            if tan is not None and type(e).adjust_rest is not Effect.adjust_rest:
+            if tan is not None and _has_tangent(e, "adjust_rest"):
                 tan["rest"] = e.d_adjust_rest(ev, p, tan["cols"][i], tan["rest"])
             e.adjust_rest(ev, p)
         lengths, J = self.cable_terms(ev.R_cable, ev.A_m, ev.B_m)
@@ -419,26 +440,30 @@ class AugmentedModel:
         T = self._k * np.maximum(stretch, 0.0)
         if tan is not None:
             d_stretch = -tan["rest"]
+            if np.any(tan["eta"]) or np.any(tan["A"]) or np.any(tan["B"]):
+                ev.d_lengths_m, ev.d_cable_jacobian = _cable_tangents(ev, lengths, tan["eta"], tan["A"], tan["B"])
+                d_stretch = d_stretch + ev.d_lengths_m
             d_T = (self._k * (stretch > 0))[..., None] * d_stretch
         for i, (e, p) in enumerate(zip(self.effects, params)):
             T_in = T
             T = e.adjust_tension(ev, stretch, T, p)
-            if tan is not None and type(e).adjust_tension is not Effect.adjust_tension:
+            if tan is not None and _has_tangent(e, "adjust_tension"):
                 d_T = e.d_adjust_tension(ev, stretch, d_stretch, T_in, d_T, T, p, tan["cols"][i])
         tau_load = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm
         # the link's rotation is the identity unless an effect set one (then the product is tau_load exactly)
         g = np.einsum("nij,ni->nj", J, T) + (tau_load if ev.link_rotation is eye else
                                              np.einsum("nij,nj->ni", ev.link_rotation, tau_load))
         if tan is not None:
-            # the weight's moment is linear in the first moment: its tangent is the moment of the first moment's
-            d_load = tan["tau"] + np.stack([kin.weight_moment(ev.R_body, tan["first"][:, c], self._g) if
-                                            np.any(tan["first"][:, c]) else np.zeros((n, 3)) for c in range(P)],
-                                           axis=-1).reshape(n, 3, P)
-            ev.d_g = np.einsum("nij,nip->njp", J, d_T) + (d_load if ev.link_rotation is eye else
-                                                            np.einsum("nij,njp->nip", ev.link_rotation, d_load))
+            d_g = np.einsum("nij,nip->njp", J, d_T) + (tan["load"] if ev.link_rotation is eye else
+                                                        np.einsum("nij,njp->nip", ev.link_rotation, tan["load"]))
+            if ev.d_cable_jacobian is not None:
+                d_g += np.einsum("nijp,ni->njp", ev.d_cable_jacobian, T)
+            if tan["link"] is not None:
+                d_g += np.einsum("nijp,nj->nip", tan["link"], tau_load)
+            ev.d_g = d_g
         for i, (e, p) in enumerate(zip(self.effects, params)):
             g = e.adjust_balance(ev, g, p)
-            if tan is not None and ev.d_g is not None and type(e).adjust_balance is not Effect.adjust_balance:
+            if tan is not None and ev.d_g is not None and _has_tangent(e, "adjust_balance"):
                 ev.d_g = e.d_adjust_balance(ev, ev.d_g, p, tan["cols"][i])
         return g, ev
 
@@ -481,6 +506,38 @@ class AugmentedModel:
             lengths[idx] = ev.lengths_m
             it = max(it, sol.iterations)
         return kin.PoseSolution(R_out, res, it)
+
+
+def _overrides(e: Effect, hook: str) -> bool:
+    """Whether effect ``e`` overrides the hook ``hook`` of :class:`Effect`."""
+    return getattr(type(e), hook) is not getattr(Effect, hook)
+
+
+def _has_tangent(e: Effect, hook: str) -> bool:
+    """Whether ``e`` overrides ``hook`` and gives its tangent (``d_<hook>``)."""
+    return _overrides(e, hook) and _overrides(e, f"d_{hook}")
+
+
+def _cable_tangents(ev: Evaluation, lengths: np.ndarray, eta: np.ndarray, d_A: np.ndarray,
+                    d_B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Tangents of the cable lengths (n, m, P) and of J (n, m, 3, P) for tangents of the cable platform's
+    pose (``eta`` (n, 3, P), ``R exp(hat(eta))``) and of the holes (``d_A``, ``d_B`` (m, 3, P) or per row).
+
+    With ``v_i = R^T b_i - a_i`` (:func:`csjm_opt.model.cable_terms.geometry`), ``c = |v|``, ``u = v / c``,
+    ``j = a x u``: ``dv = R^T db + (R^T b) x eta - da``, ``dc = u . dv``, ``du = (dv - u dc) / c``,
+    ``dj = da x u + a x du``.
+    """
+    R, A, B = ev.R_cable, np.asarray(ev.A_m, float), np.asarray(ev.B_m, float)
+    Rb = B @ R                                              # rows R^T b_i (n, m, 3)
+    u = (Rb - A) / lengths[..., None]
+    dv = np.einsum("nji,...mjp->nmip", R, d_B) - d_A
+    if np.any(eta):
+        dv = dv + np.cross(Rb[..., None], eta[:, None], axisa=2, axisb=2, axisc=2)
+    dc = np.einsum("nmi,nmip->nmp", u, dv)
+    du = (dv - u[..., None] * dc[:, :, None, :]) / lengths[..., None, None]
+    dJ = (np.cross(np.broadcast_to(d_A, du.shape), u[..., None], axisa=-2, axisb=-2, axisc=-2)
+          + np.cross(np.broadcast_to(A, u.shape)[..., None], du, axisa=-2, axisb=-2, axisc=-2))
+    return dc, dJ
 
 
 def with_entry(model: "AugmentedModel", rows: Rows, R_meas: np.ndarray, theta: np.ndarray) -> Rows:
