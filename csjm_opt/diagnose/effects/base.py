@@ -196,8 +196,11 @@ class Effect(abc.ABC):
 
     def d_adjust_pose(self, ev, p: np.ndarray, cols: np.ndarray, d_load: np.ndarray, d_eta: np.ndarray,
                       d_link: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
-        """Tangents after :meth:`adjust_pose`: of the cable platform's pose as a right rotation (n, 3, P) and of
-        the link's rotation matrix (n, 3, 3, P) (None: zero); ``d_load``: of ``tau_ext + tau_weight`` (n, 3, P)."""
+        """Tangents after :meth:`adjust_pose`: the cable platform's pose and the link's rotation.
+
+        The pose's as a right rotation (n, 3, P), the link's rotation matrix's (n, 3, 3, P) (None: zero);
+        ``d_load``: the tangent of ``tau_ext + tau_weight`` (n, 3, P).
+        """
         raise NotImplementedError
 
     def d_adjust_geometry(self, ev, p: np.ndarray, cols: np.ndarray, d_A: np.ndarray,

@@ -520,8 +520,9 @@ def _has_tangent(e: Effect, hook: str) -> bool:
 
 def _cable_tangents(ev: Evaluation, lengths: np.ndarray, eta: np.ndarray, d_A: np.ndarray,
                     d_B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Tangents of the cable lengths (n, m, P) and of J (n, m, 3, P) for tangents of the cable platform's
-    pose (``eta`` (n, 3, P), ``R exp(hat(eta))``) and of the holes (``d_A``, ``d_B`` (m, 3, P) or per row).
+    """Tangents of the cable lengths (n, m, P) and of J (n, m, 3, P) under pose and hole tangents.
+
+    The cable platform's pose ``R exp(hat(eta))`` (``eta`` (n, 3, P)), the holes ``d_A``, ``d_B`` (m, 3, P).
 
     With ``v_i = R^T b_i - a_i`` (:func:`csjm_opt.model.cable_terms.geometry`), ``c = |v|``, ``u = v / c``,
     ``j = a x u``: ``dv = R^T db + (R^T b) x eta - da``, ``dc = u . dv``, ``du = (dv - u dc) / c``,
