@@ -48,6 +48,10 @@ def compliance_matrix(p: np.ndarray) -> np.ndarray:
     return C + np.triu(C, 1).T
 
 
+#: ``compliance_matrix`` of each unit parameter vector (6, 3, 3): C is linear in its parameters.
+_UNIT_C = np.stack([compliance_matrix(e) for e in np.eye(6)])
+
+
 class LinkCompliance(Effect):
     """Symmetric series compliance ``C`` (rad/(N m))."""
 
@@ -125,14 +129,14 @@ class LinkCompliance(Effect):
         C = compliance_matrix(p)
         tau = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm
         phi = tau @ C
-        hot = one_hot(cols, P)                                   # (6, P)
-        dC = np.stack([compliance_matrix(hot[:, c]) for c in range(P)], axis=-1)     # C is linear in p
-        d_phi = np.einsum("nip,ij->njp", d_load, C) + np.einsum("ni,ijp->njp", tau, dC)
-        w = np.einsum("nij,njp->nip", _right_jacobian(phi), d_phi)
+        # C is linear in p: its tangent is C of the unit vectors, on this effect's columns
+        dC = np.tensordot(_UNIT_C, one_hot(cols, P), axes=(0, 0))                # (3, 3, P)
+        d_phi = C @ d_load + np.tensordot(tau, dC, axes=(1, 0))                  # C symmetric
+        w = _right_jacobian(phi) @ d_phi
         E = so3.exp(phi)
-        eta = np.einsum("nij,njp->nip", E, d_eta - w)
-        W = so3.hat(np.moveaxis(w, -1, 1))                      # (n, P, 3, 3)
-        link = np.einsum("nij,npjk,nkl->nilp", E, W, ev.link_rotation)
+        eta = E @ (d_eta - w)
+        link = E[:, None] @ so3.hat(np.moveaxis(w, -1, 1)) @ ev.link_rotation[:, None]     # (n, P, 3, 3)
+        link = np.moveaxis(link, 1, -1)
         if d_link is not None:
             link = link + np.einsum("nij,njkp->nikp", E, d_link)
         return eta, link

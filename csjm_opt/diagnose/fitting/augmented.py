@@ -354,6 +354,13 @@ class AugmentedModel:
         body's frame) are left to differences. None where an effect cannot give the tangent of a late hook it
         overrides on these rows (e.g. friction stepped row by row in a prediction).
         """
+        key = (rows.state_prev is None, rows.lengths_prev_m is None)
+        known = self.__dict__.setdefault("_exact", {})
+        if key not in known:
+            known[key] = self._exact_params(rows)
+        return known[key].copy()
+
+    def _exact_params(self, rows: Rows) -> np.ndarray:
         mask = np.zeros(self.n_params, bool)
         if not all(e.tangent_ok(rows) for e in self.effects):
             return mask
@@ -414,9 +421,10 @@ class AugmentedModel:
         ev.tau_weight_A_Nm = self.weight_moment(ev.R_body, ev.first_moment_A_kgm)
         if tan is not None:
             # the weight's moment is linear in the first moment: its tangent is the moment of the first moment's
-            tan["load"] = tan["tau"] + np.stack(
-                [kin.weight_moment(ev.R_body, tan["first"][:, c], self._g) if np.any(tan["first"][:, c])
-                 else np.zeros((n, 3)) for c in range(P)], axis=-1).reshape(n, 3, P)
+            tan["load"] = tan["tau"]
+            if np.any(tan["first"]):
+                unit = np.stack([kin.weight_moment(ev.R_body, e_k, self._g) for e_k in np.eye(3)], axis=-1)
+                tan["load"] = tan["load"] + unit @ tan["first"]
         for i, (e, p) in enumerate(zip(self.effects, params)):
             if tan is not None and _has_tangent(e, "adjust_pose"):
                 tan["eta"], tan["link"] = e.d_adjust_pose(ev, p, tan["cols"][i], tan["load"], tan["eta"],
@@ -454,12 +462,12 @@ class AugmentedModel:
         g = np.einsum("nij,ni->nj", J, T) + (tau_load if ev.link_rotation is eye else
                                              np.einsum("nij,nj->ni", ev.link_rotation, tau_load))
         if tan is not None:
-            d_g = np.einsum("nij,nip->njp", J, d_T) + (tan["load"] if ev.link_rotation is eye else
-                                                        np.einsum("nij,njp->nip", ev.link_rotation, tan["load"]))
+            d_g = np.swapaxes(J, 1, 2) @ d_T + (tan["load"] if ev.link_rotation is eye else
+                                                 ev.link_rotation @ tan["load"])
             if ev.d_cable_jacobian is not None:
-                d_g += np.einsum("nijp,ni->njp", ev.d_cable_jacobian, T)
+                d_g += (T[:, None, :] @ ev.d_cable_jacobian.reshape(n, T.shape[1], -1)).reshape(n, 3, P)
             if tan["link"] is not None:
-                d_g += np.einsum("nijp,nj->nip", tan["link"], tau_load)
+                d_g += np.swapaxes((np.moveaxis(tan["link"], 3, 1) @ tau_load[:, None, :, None])[..., 0], 1, 2)
             ev.d_g = d_g
         for i, (e, p) in enumerate(zip(self.effects, params)):
             g = e.adjust_balance(ev, g, p)
@@ -529,16 +537,28 @@ def _cable_tangents(ev: Evaluation, lengths: np.ndarray, eta: np.ndarray, d_A: n
     ``dj = da x u + a x du``.
     """
     R, A, B = ev.R_cable, np.asarray(ev.A_m, float), np.asarray(ev.B_m, float)
+    n, m = lengths.shape
+    P = eta.shape[-1]
     Rb = B @ R                                              # rows R^T b_i (n, m, 3)
     u = (Rb - A) / lengths[..., None]
-    dv = np.einsum("nji,...mjp->nmip", R, d_B) - d_A
+    dv = np.broadcast_to(-d_A, (n, m, 3, P)).copy()
+    if np.any(d_B):
+        dv += np.swapaxes(R, 1, 2)[:, None] @ d_B
     if np.any(eta):
-        dv = dv + np.cross(Rb[..., None], eta[:, None], axisa=2, axisb=2, axisc=2)
-    dc = np.einsum("nmi,nmip->nmp", u, dv)
+        dv += _cross2(Rb[..., None], eta[:, None])
+    dc = (u[:, :, None, :] @ dv)[:, :, 0, :]
     du = (dv - u[..., None] * dc[:, :, None, :]) / lengths[..., None, None]
-    dJ = (np.cross(np.broadcast_to(d_A, du.shape), u[..., None], axisa=-2, axisb=-2, axisc=-2)
-          + np.cross(np.broadcast_to(A, u.shape)[..., None], du, axisa=-2, axisb=-2, axisc=-2))
+    dJ = _cross2(np.broadcast_to(A, u.shape)[..., None], du)
+    if np.any(d_A):
+        dJ += _cross2(d_A, u[..., None])
     return dc, dJ
+
+
+def _cross2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product along axis -2 (the vectors' axis; the last axis holds the tangent columns), broadcast."""
+    a0, a1, a2 = a[..., 0, :], a[..., 1, :], a[..., 2, :]
+    b0, b1, b2 = b[..., 0, :], b[..., 1, :], b[..., 2, :]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-2)
 
 
 def with_entry(model: "AugmentedModel", rows: Rows, R_meas: np.ndarray, theta: np.ndarray) -> Rows:

@@ -297,7 +297,7 @@ def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray
     exact = np.flatnonzero(model.exact_params(rows))
     if exact.size:
         dg = model.balance_derivative(R_meas, rows, theta, exact)[1] * scales[exact]
-        Jd[:, exact] = np.einsum("nij,njp->nip", WGinv, dg).reshape(g0.size, exact.size)
+        Jd[:, exact] = (WGinv @ dg).reshape(g0.size, exact.size)
     for j in np.setdiff1d(np.arange(len(x)), exact):
         step = 1e-6 * max(1.0, abs(x[j]))
         th = theta.copy()
