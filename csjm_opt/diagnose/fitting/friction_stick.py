@@ -314,16 +314,19 @@ class StickFit:
         (n, 3, c) generators.
     tie : numpy.ndarray, optional
         (c,) band of each generator (default: one band per generator).
+    meas : ZonotopeMeasures, optional
+        The measures of ``B`` when the caller has them (they depend on ``B`` alone).
     """
 
-    def __init__(self, a0: np.ndarray, da: np.ndarray, B: np.ndarray, tie: np.ndarray | None = None):
+    def __init__(self, a0: np.ndarray, da: np.ndarray, B: np.ndarray, tie: np.ndarray | None = None,
+                 meas: ZonotopeMeasures | None = None):
         self.a0, self.B = np.asarray(a0, float), np.asarray(B, float)
         D = np.asarray(da, float)
         self.D = D[..., None] if D.ndim == 2 else D
         self.tie = np.arange(self.B.shape[2]) if tie is None else np.asarray(tie, int)
         self.k = self.D.shape[2]
         self.nb = int(self.tie.max(initial=-1)) + 1
-        self.meas = ZonotopeMeasures(self.B)
+        self.meas = ZonotopeMeasures(self.B) if meas is None else meas
         self.f = np.zeros((len(self.a0), self.B.shape[2]))
 
     def _lognorm(self, bands: np.ndarray, s: float) -> np.ndarray:
@@ -433,7 +436,11 @@ class SettledModel:
 
     def _nll(self, idx: np.ndarray, x: np.ndarray, s: float) -> tuple[float, np.ndarray]:
         d = self.design
-        sf = StickFit(d.a0[idx], d.D[idx], d.B[idx], d.tie)
+        key = np.asarray(idx).tobytes()
+        meas = self.__dict__.setdefault("_meas", {}).get(key)
+        if meas is None:          # the stick sets' measures depend on the rows alone: once per row set
+            meas = self._meas[key] = ZonotopeMeasures(d.B[idx])
+        sf = StickFit(d.a0[idx], d.D[idx], d.B[idx], d.tie, meas)
         sf.f = self._f[idx]
         val, grad = sf.neg_log_lik(np.r_[x, np.log(s)])
         self._f[idx] = sf.f
