@@ -437,9 +437,10 @@ class SettledModel:
     def _nll(self, idx: np.ndarray, x: np.ndarray, s: float) -> tuple[float, np.ndarray]:
         d = self.design
         key = np.asarray(idx).tobytes()
-        meas = self.__dict__.setdefault("_meas", {}).get(key)
+        known: dict[bytes, ZonotopeMeasures] = self.__dict__.setdefault("_meas", {})
+        meas = known.get(key)
         if meas is None:          # the stick sets' measures depend on the rows alone: once per row set
-            meas = self._meas[key] = ZonotopeMeasures(d.B[idx])
+            meas = known[key] = ZonotopeMeasures(d.B[idx])
         sf = StickFit(d.a0[idx], d.D[idx], d.B[idx], d.tie, meas)
         sf.f = self._f[idx]
         val, grad = sf.neg_log_lik(np.r_[x, np.log(s)])
