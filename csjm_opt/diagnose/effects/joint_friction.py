@@ -147,11 +147,25 @@ class JointFriction(Effect):
         numpy.ndarray
         """
         rows = ev.rows
+        # the direction depends on J, the lengths and the rows alone: the model hands back the same (read-only)
+        # J and lengths while the poses and holes stay (a fit's steps in the other parameters): the last one kept
+        last = self.__dict__.get("_last")
+        if last is not None and last[0] is ev.cable_jacobian and last[1] is ev.lengths_m and last[2] is rows:
+            return last[3]
         if rows.lengths_prev_m is None:          # the whole log at the given poses, in order
             dc, _ = rows.steps_since_previous
         else:                                    # one row of a sequential prediction (NaN: no history)
             dc = ev.lengths_m - rows.lengths_prev_m
-        return np.tanh(rotation_steps(ev.cable_jacobian, dc) / SLIP_TRAVEL_RAD)
+        s = np.tanh(rotation_steps(ev.cable_jacobian, dc) / SLIP_TRAVEL_RAD)
+        if ev.cable_jacobian is not None and not ev.cable_jacobian.flags.writeable:   # a remembered geometry
+            s.setflags(write=False)
+            self._last = (ev.cable_jacobian, ev.lengths_m, rows, s)
+        return s
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state.pop("_last", None)          # a cache, not state: not pickled
+        return state
 
     def adjust_balance(self, ev, g_Nm, p):
         """Add the friction moment ``-M s`` (n, 3) N m on the platform.
