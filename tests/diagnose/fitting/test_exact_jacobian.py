@@ -104,3 +104,19 @@ def test_a_sequential_prediction_falls_back_to_differences(setup):
     seq = dataclasses.replace(rows, state_prev=np.zeros(rows.rest_lengths_m.shape),
                               lengths_prev_m=np.full(rows.rest_lengths_m.shape, np.nan))
     assert not model.exact_params(seq).any() and model.exact_params(rows).all()
+
+
+def test_the_fit_jacobian_agrees_with_its_forward_differences(setup, monkeypatch):
+    """``data_jacobian`` (exact columns where it can) against the forward differences it replaced."""
+    from csjm_opt.diagnose.fitting import gauss_newton as gn
+
+    rig, rows, R, rng = setup
+    model = AugmentedModel(rig, [make_effect("friction", rig), make_effect("hole_offsets", rig)])
+    theta = _theta(model, rng)
+    table = type("Table", (), {"rows": rows, "R_meas": R, "whiten": np.broadcast_to(np.eye(3) * 300.0,
+                                                                                   (len(rows), 3, 3))})()
+    exact = gn.data_jacobian(model, table, theta)                  # type: ignore[arg-type]
+    monkeypatch.setattr(AugmentedModel, "exact_params", lambda self, rows: np.zeros(self.n_params, bool))
+    fd = gn.data_jacobian(model, table, theta)                     # type: ignore[arg-type]
+    scale = np.abs(fd).max(axis=0)
+    assert np.all(np.abs(exact - fd).max(axis=0) <= 1e-4 * scale + 1e-6)
