@@ -151,3 +151,19 @@ def test_the_environment_sets_the_default_workers(monkeypatch):
     monkeypatch.setenv("CSJM_WORKERS", "two")
     with pytest.raises(InvalidInput, match="CSJM_WORKERS"):
         default_workers()
+
+
+def test_remembered_slide_direction_equals_a_fresh_one(rig, coulomb_log):
+    """Joint friction keeps its last slide direction while the model hands back the same geometry."""
+    import pickle
+
+    table = compute_residuals(rig, coulomb_log)
+    model = AugmentedModel(rig, [make_effect("joint_friction", rig)])
+    theta = model.x0() + np.r_[1e-5, 0.02]
+    g1, ev1 = model.evaluate(table.R_meas, table.rows, theta)
+    g2, ev2 = model.evaluate(table.R_meas, table.rows, theta + np.r_[0.0, 0.01])   # same poses: remembered
+    assert ev2.cable_jacobian is ev1.cable_jacobian
+    fresh = AugmentedModel(rig, [make_effect("joint_friction", rig)])
+    np.testing.assert_array_equal(g2, fresh.balance(table.R_meas, table.rows, theta + np.r_[0.0, 0.01]))
+    np.testing.assert_array_equal(g1, fresh.balance(table.R_meas, table.rows, theta))
+    assert "_last" not in pickle.loads(pickle.dumps(model.effects[0])).__dict__

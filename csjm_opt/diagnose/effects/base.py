@@ -176,6 +176,66 @@ class Effect(abc.ABC):
         """Return the balance (n, 3) N m with the moments this effect adds on the cable platform."""
         return g_Nm
 
+    # Tangents (forward mode) of the late hooks: the exact derivative of the balance with respect to the
+    # parameters that enter at the load, rest, tension or balance stage (:meth:`AugmentedModel.balance_derivative`).
+    # ``cols`` holds the column of each of this effect's parameters among the P derivative columns (-1: none);
+    # ``d_*`` arrays carry a trailing axis of P columns. An effect that overrides a late hook and cannot give its
+    # tangent (``tangent_ok`` False) leaves the model's Jacobian to finite differences.
+    #: a pose hook that reads the loads (link compliance): load parameters then move the cables too
+    reads_load: ClassVar[bool] = False
+
+    def tangent_ok(self, rows) -> bool:
+        """Whether this effect's late hooks give their tangents on ``rows`` (default: whichever it overrides)."""
+        return all(getattr(type(self), f"d_{h}") is not getattr(Effect, f"d_{h}")
+                   for h in LATE_HOOKS if getattr(type(self), h) is not getattr(Effect, h))
+
+    def d_adjust_load(self, ev, p: np.ndarray, cols: np.ndarray, d_tau: np.ndarray,
+                      d_first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Tangents ``(d tau_ext (n, 3, P), d first_moment (3, P))`` after :meth:`adjust_load` (``ev``: its inputs)."""
+        raise NotImplementedError
+
+    def d_adjust_pose(self, ev, p: np.ndarray, cols: np.ndarray, d_load: np.ndarray, d_eta: np.ndarray,
+                      d_link: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+        """Tangents after :meth:`adjust_pose`: the cable platform's pose and the link's rotation.
+
+        The pose's as a right rotation (n, 3, P), the link's rotation matrix's (n, 3, 3, P) (None: zero);
+        ``d_load``: the tangent of ``tau_ext + tau_weight`` (n, 3, P).
+        """
+        raise NotImplementedError
+
+    def d_adjust_geometry(self, ev, p: np.ndarray, cols: np.ndarray, d_A: np.ndarray,
+                          d_B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Tangents of the holes (m, 3, P) (or per row) after :meth:`adjust_geometry`."""
+        raise NotImplementedError
+
+    def d_adjust_rest(self, ev, p: np.ndarray, cols: np.ndarray, d_rest: np.ndarray) -> np.ndarray:
+        """Tangent of the rest lengths (n, m, P) after :meth:`adjust_rest`."""
+        raise NotImplementedError
+
+    def d_adjust_tension(self, ev, stretch_m: np.ndarray, d_stretch: np.ndarray, T_N: np.ndarray, d_T: np.ndarray,
+                         T_out_N: np.ndarray, p: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """Tangent of the tensions (n, m, P) after :meth:`adjust_tension` (``T_N`` in, ``T_out_N`` out)."""
+        raise NotImplementedError
+
+    def d_adjust_balance(self, ev, d_g: np.ndarray, p: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """Tangent of the balance (n, 3, P) after :meth:`adjust_balance`."""
+        raise NotImplementedError
+
     def describe(self, p: np.ndarray) -> dict:
         """Derived, physically readable quantities for the report (JSON-able)."""
         return {}
+
+
+#: The hooks after the cables are placed (and the loads, unless a pose hook reads them): their tangents are exact.
+LATE_HOOKS = ("adjust_load", "adjust_rest", "adjust_tension", "adjust_balance")
+#: Hooks that place the measured body, the cable platform or the holes (their parameters: finite differences).
+EARLY_HOOKS = ("adjust_frame", "adjust_pose", "adjust_geometry")
+
+
+def one_hot(cols: np.ndarray, n_cols: int) -> np.ndarray:
+    """``(k, P)``: row ``i`` is the unit vector of column ``cols[i]`` (a zero row where ``cols[i] < 0``)."""
+    cols = np.asarray(cols, int)
+    out = np.zeros((len(cols), n_cols))
+    ok = cols >= 0
+    out[np.flatnonzero(ok), cols[ok]] = 1.0
+    return out

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Effect
+from .base import Effect, one_hot
 
 
 class CableHardening(Effect):
@@ -64,6 +64,12 @@ class CableHardening(Effect):
             The changed tensions (N), shape (n, m).
         """
         return T_N * (1.0 + p[0] * np.maximum(stretch_m, 0.0))
+
+    def d_adjust_tension(self, ev, stretch_m, d_stretch, T_N, d_T, T_out_N, p, cols):
+        """Tangent of :meth:`adjust_tension`: ``dT (1 + h e+) + T h [e > 0] de + T e+ dh``."""
+        e_pos = np.maximum(stretch_m, 0.0)
+        return (d_T * (1.0 + p[0] * e_pos)[..., None] + (T_N * p[0] * (stretch_m > 0))[..., None] * d_stretch
+                + (T_N * e_pos)[..., None] * one_hot(cols, d_T.shape[-1])[0])
 
     def describe(self, p):
         """Physically readable quantities derived from the fitted parameters.

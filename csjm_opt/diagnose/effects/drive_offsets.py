@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Effect
+from .base import Effect, one_hot
 
 #: Plausible homing error of one drive (m): a few tenths of a mm is typical, 2 mm a badly homed drive.
 RANGE_M = 2e-3
@@ -82,6 +82,10 @@ class DriveOffsets(Effect):
             Offsets ``d_i`` (m), shape (m,).
         """
         ev.rest_lengths_m = ev.rest_lengths_m + np.asarray(p)[None, :]
+
+    def d_adjust_rest(self, ev, p, cols, d_rest):
+        """Tangent of :meth:`adjust_rest`: each cable's rest length moves by one on its offset's column."""
+        return d_rest + one_hot(cols, d_rest.shape[-1])[None]
 
     def describe(self, p):
         """Physically readable quantities derived from the fitted parameters.

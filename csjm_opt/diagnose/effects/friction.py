@@ -54,7 +54,7 @@ import numpy as np
 from numba import njit
 
 from ..fitting.friction_ramp import ramp_steps
-from .base import Effect
+from .base import Effect, one_hot
 
 #: Smallest stick travel (m): keeps the play operator continuous in the pose for
 #: forward solves (a pure sign switch has no equilibrium at a reversal).
@@ -117,6 +117,52 @@ def _rows_band(prev: np.ndarray, step: np.ndarray, w: float) -> np.ndarray:   # 
         for j in range(m):
             s[i, j] = _ramp_play(prev[i, j], step, i, j, w)
     return s
+
+
+@njit(cache=True)
+def _soft_clip_slope(x: float, w: float) -> float:   # pragma: no cover (compiled)
+    """Derivative of :func:`_soft_clip` in ``x`` (the logistic of each rounded edge; 1 where it is linear)."""
+    return _softplus_slope((x + 1.0) / w) - _softplus_slope((x - 1.0) / w)
+
+
+@njit(cache=True)
+def _softplus_slope(a: float) -> float:   # pragma: no cover (compiled)
+    """Derivative of :func:`_softplus` (exactly 1 on its linear branch)."""
+    if a > SOFTPLUS_LINEAR:
+        return 1.0
+    return 1.0 / (1.0 + np.exp(-a)) if a > 0 else np.exp(a) / (1.0 + np.exp(a))
+
+
+@njit(cache=True)
+def _band_tangent(step: np.ndarray, d_step: np.ndarray, s0: float, d_s0: np.ndarray, restart: np.ndarray,
+                  w: float) -> tuple[np.ndarray, np.ndarray]:   # pragma: no cover (compiled)
+    """The play operator over the rows in order and its tangent (forward mode).
+
+    ``step`` (n, S, m) and its tangent ``d_step`` (n, S, m, P); rows with ``restart`` start at ``s0`` (tangent
+    ``d_s0`` (P,)), every other row continues from the previous one along its ramp, as :func:`_carried_band`
+    (``restart`` only on the first row) and the reset memory (on every cycle's first row) do.
+    """
+    n, S, m = step.shape
+    P = d_step.shape[3]
+    s = np.empty((n, m))
+    ds = np.empty((n, m, P))
+    dprev = np.empty(P)
+    for j in range(m):
+        prev = s0
+        for i in range(n):
+            if restart[i]:
+                prev = s0
+                dprev[:] = d_s0
+            else:
+                for q in range(S):
+                    x = prev + step[i, q, j]
+                    slope = _soft_clip_slope(x, w / S)
+                    for c in range(P):
+                        dprev[c] = slope * (dprev[c] + d_step[i, q, j, c])
+                    prev = _soft_clip(x, w / S)
+            s[i, j] = prev
+            ds[i, j, :] = dprev
+    return s, ds
 
 
 def ramp_input(dc_m: np.ndarray, dl_m: np.ndarray, shape_m: np.ndarray | None, travel_m: np.ndarray,
@@ -350,9 +396,7 @@ class Friction(Effect):
         m = self.n_cables
         band, factor, s0 = p[:m], p[m], p[m + 1]
         w = factor                                   # one compliance split weighs both sides
-        k = ev.cable_stiffness_N_per_m
-        size = band * np.maximum(T_N, 1e-3) if self.law == "capstan" else band * np.ones_like(T_N)
-        travel = np.maximum(factor * size / k, MIN_TRAVEL_M)
+        travel = self._travel(ev, T_N, p)[0]
         rows = ev.rows
         if rows.state_prev is None:                  # whole log at measured poses
             s = self._band_position(rows, travel, s0, w)
@@ -366,6 +410,55 @@ class Friction(Effect):
         if self.law == "capstan":
             return T_N * np.exp(s * band)
         return np.maximum(T_N + s * band, 0.0)
+
+    def _travel(self, ev, T_N: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Stick travel (n, m) of each row and cable, the band size behind it, and the travel before its floor."""
+        m = self.n_cables
+        band, factor = p[:m], p[m]
+        size = band * np.maximum(T_N, 1e-3) if self.law == "capstan" else band * np.ones_like(T_N)
+        raw = factor * size / ev.cable_stiffness_N_per_m
+        return np.maximum(raw, MIN_TRAVEL_M), size, raw
+
+    def tangent_ok(self, rows) -> bool:
+        """The tangent is taken over the whole log at given poses (not a sequential prediction's rows)."""
+        return self.settled or rows.state_prev is None
+
+    def d_adjust_tension(self, ev, stretch_m, d_stretch, T_N, d_T, T_out_N, p, cols):
+        """Tangent of :meth:`adjust_tension` over the whole log: the play operator differentiated row by row.
+
+        The input steps ``(dc + f dl / S) / travel`` move with the stick travel (the band, the stick factor and,
+        under the capstan law, the tension); the state carries its tangent along the ramps
+        (:func:`_band_tangent`); the first state has its own column.
+        """
+        if self.settled:
+            return d_T
+        m, P = self.n_cables, d_T.shape[-1]
+        band, factor, s0 = p[:m], p[m], p[m + 1]
+        hot = one_hot(cols, P)
+        d_band, d_factor, d_s0 = hot[:m], hot[m], hot[m + 1]                  # (m, P), (P,), (P,)
+        k = ev.cable_stiffness_N_per_m
+        travel, size, raw = self._travel(ev, T_N, p)
+        if self.law == "capstan":
+            d_size = (np.maximum(T_N, 1e-3)[..., None] * d_band[None]
+                      + (band * (T_N > 1e-3))[..., None] * d_T)
+        else:
+            d_size = np.broadcast_to(d_band[None], d_T.shape)
+        d_travel = np.where((raw > MIN_TRAVEL_M)[..., None],
+                            (size[..., None] * d_factor + factor * d_size) / k[:, None], 0.0)
+        rows = ev.rows
+        dc, dl = rows.steps_since_previous
+        step = ramp_input(dc, dl, rows.ramp_shape_m, travel, factor)          # (n, S, m)
+        S = step.shape[1]
+        d_step = ((np.asarray(dl, float)[:, None, :, None] / S) * d_factor / travel[:, None, :, None]
+                  - step[..., None] * (d_travel / travel[..., None])[:, None])
+        restart = (np.arange(len(rows)) == 0) if self.memory == "carried" else rows.positions == 0
+        s, ds = _band_tangent(step, np.ascontiguousarray(d_step), float(s0), np.ascontiguousarray(d_s0),
+                              restart, CORNER)
+        if self.law == "capstan":
+            grow = np.exp(s * band)
+            return d_T * grow[..., None] + (T_N * grow)[..., None] * (ds * band[:, None] + s[..., None] * d_band)
+        slides = (T_N + s * band > 0)[..., None]
+        return np.where(slides, d_T + ds * band[:, None] + s[..., None] * d_band, 0.0)
 
     def describe(self, p):
         """Physically readable quantities derived from the fitted parameters.

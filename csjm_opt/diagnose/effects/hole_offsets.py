@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Effect
+from .base import Effect, one_hot
 
 #: Plausible hole position error per coordinate (m).
 RANGE_M = 4e-3
@@ -79,6 +79,12 @@ class HoleOffsets(Effect):
         m = self.n_cables
         ev.A_m = ev.A_m + p[:3 * m].reshape(m, 3)
         ev.B_m = ev.B_m + p[3 * m:].reshape(m, 3)
+
+    def d_adjust_geometry(self, ev, p, cols, d_A, d_B):
+        """Tangents of :meth:`adjust_geometry`: each coordinate moves by one on its own column."""
+        m, P = self.n_cables, d_A.shape[-1]
+        hot = one_hot(cols, P)
+        return d_A + hot[:3 * m].reshape(m, 3, P), d_B + hot[3 * m:].reshape(m, 3, P)
 
     def describe(self, p):
         """Physically readable quantities derived from the fitted parameters.

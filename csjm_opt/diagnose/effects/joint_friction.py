@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Effect
+from .base import Effect, one_hot
 
 #: Plausible friction moment of a ball joint (N m): a dry, preloaded joint of this size stays below it.
 RANGE_NM = 0.3
@@ -147,11 +147,25 @@ class JointFriction(Effect):
         numpy.ndarray
         """
         rows = ev.rows
+        # the direction depends on J, the lengths and the rows alone: the model hands back the same (read-only)
+        # J and lengths while the poses and holes stay (a fit's steps in the other parameters): the last one kept
+        last = self.__dict__.get("_last")
+        if last is not None and last[0] is ev.cable_jacobian and last[1] is ev.lengths_m and last[2] is rows:
+            return last[3]
         if rows.lengths_prev_m is None:          # the whole log at the given poses, in order
             dc, _ = rows.steps_since_previous
         else:                                    # one row of a sequential prediction (NaN: no history)
             dc = ev.lengths_m - rows.lengths_prev_m
-        return np.tanh(rotation_steps(ev.cable_jacobian, dc) / SLIP_TRAVEL_RAD)
+        s = np.tanh(rotation_steps(ev.cable_jacobian, dc) / SLIP_TRAVEL_RAD)
+        if ev.cable_jacobian is not None and not ev.cable_jacobian.flags.writeable:   # a remembered geometry
+            s.setflags(write=False)
+            self._last = (ev.cable_jacobian, ev.lengths_m, rows, s)
+        return s
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state.pop("_last", None)          # a cache, not state: not pickled
+        return state
 
     def adjust_balance(self, ev, g_Nm, p):
         """Add the friction moment ``-M s`` (n, 3) N m on the platform.
@@ -172,6 +186,31 @@ class JointFriction(Effect):
         if self.settled:                 # the moment is latent per row (:meth:`stick_columns`)
             return g_Nm
         return g_Nm - p[0] * self.slide_direction(ev)
+
+    def tangent_ok(self, rows) -> bool:
+        """The tangent is taken over the whole log at given poses (not a sequential prediction's rows)."""
+        return self.settled or rows.lengths_prev_m is None
+
+    def d_adjust_balance(self, ev, d_g, p, cols):
+        """Tangent of :meth:`adjust_balance`: ``-s`` on the moment's column, ``-M ds`` where J moves (holes, link).
+
+        With ``x = -(J^T J)^-1 J^T dc`` (:func:`rotation_steps`): ``dx = -(J^T J)^-1 (dJ^T dc + d(J^T J) x)``.
+        """
+        if self.settled:
+            return d_g
+        s = self.slide_direction(ev)
+        out = d_g - s[..., None] * one_hot(cols, d_g.shape[-1])[0]
+        dJ = ev.d_cable_jacobian
+        if dJ is not None:
+            J = ev.cable_jacobian
+            dc = np.nan_to_num(np.asarray(ev.rows.steps_since_previous[0], float))
+            x = rotation_steps(J, dc)
+            JtJ = np.einsum("nki,nkj->nij", J, J)
+            dJtJ = np.einsum("nkip,nkj->nijp", dJ, J)
+            rhs = np.einsum("nkip,nk->nip", dJ, dc) + np.einsum("nijp,nj->nip", dJtJ + np.swapaxes(dJtJ, 1, 2), x)
+            dx = -np.linalg.solve(JtJ[:, None], np.moveaxis(rhs, 2, 1)[..., None])[..., 0]     # (n, P, 3)
+            out = out - p[0] * (1.0 - s ** 2)[..., None] * np.moveaxis(dx, 1, 2) / SLIP_TRAVEL_RAD
+        return out
 
     def describe(self, p):
         """Physically readable quantities derived from the fitted parameters.

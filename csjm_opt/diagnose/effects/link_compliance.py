@@ -14,9 +14,20 @@ from __future__ import annotations
 import numpy as np
 
 from ... import so3
-from .base import Effect
+from .base import Effect, one_hot
 
 _IU = np.triu_indices(3)
+
+
+def _right_jacobian(phi: np.ndarray) -> np.ndarray:
+    """Right Jacobian of SO(3) (n, 3, 3): ``exp(phi + d) = exp(phi) exp(J_r(phi) d)`` to first order."""
+    th = np.linalg.norm(phi, axis=-1)[..., None, None]
+    small = th < 1e-4
+    ths = np.where(small, 1.0, th)
+    a = np.where(small, 0.5 - th ** 2 / 24.0, (1.0 - np.cos(ths)) / ths ** 2)
+    b = np.where(small, 1.0 / 6.0 - th ** 2 / 120.0, (ths - np.sin(ths)) / ths ** 3)
+    K = so3.hat(phi)
+    return np.eye(3) - a * K + b * (K @ K)
 
 
 def compliance_matrix(p: np.ndarray) -> np.ndarray:
@@ -35,6 +46,10 @@ def compliance_matrix(p: np.ndarray) -> np.ndarray:
     C = np.zeros((3, 3))
     C[_IU] = p
     return C + np.triu(C, 1).T
+
+
+#: ``compliance_matrix`` of each unit parameter vector (6, 3, 3): C is linear in its parameters.
+_UNIT_C = np.stack([compliance_matrix(e) for e in np.eye(6)])
 
 
 class LinkCompliance(Effect):
@@ -87,6 +102,8 @@ class LinkCompliance(Effect):
         # the stiffness scale and C trade off (both soften the joint): also start from a soft link
         return [np.where(_IU[0] == _IU[1], 5e-3, 0.0)]
 
+    reads_load = True          # the twist follows the load: load parameters move the cables too
+
     def adjust_pose(self, ev, p):
         """Twist the cable platform back by ``phi = C (tau_ext + tau_weight)`` and record the link rotation.
 
@@ -101,6 +118,28 @@ class LinkCompliance(Effect):
         E = so3.exp(phi)
         ev.R_cable = ev.R_cable @ np.swapaxes(E, 1, 2)
         ev.link_rotation = E @ ev.link_rotation
+
+    def d_adjust_pose(self, ev, p, cols, d_load, d_eta, d_link):
+        """Tangents of :meth:`adjust_pose`: ``E = exp(phi)`` moves by ``E hat(w)``, ``w = J_r(phi) dphi``.
+
+        ``dphi = d(tau) C + tau dC``; the cable platform ``R E^T`` turns by ``E (eta - w)`` (right rotation),
+        the link's rotation ``E L`` by ``E hat(w) L + E dL``.
+        """
+        P = d_load.shape[-1]
+        C = compliance_matrix(p)
+        tau = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm
+        phi = tau @ C
+        # C is linear in p: its tangent is C of the unit vectors, on this effect's columns
+        dC = np.tensordot(_UNIT_C, one_hot(cols, P), axes=(0, 0))                # (3, 3, P)
+        d_phi = C @ d_load + np.tensordot(tau, dC, axes=(1, 0))                  # C symmetric
+        w = _right_jacobian(phi) @ d_phi
+        E = so3.exp(phi)
+        eta = E @ (d_eta - w)
+        link = E[:, None] @ so3.hat(np.moveaxis(w, -1, 1)) @ ev.link_rotation[:, None]     # (n, P, 3, 3)
+        link = np.moveaxis(link, 1, -1)
+        if d_link is not None:
+            link = link + np.einsum("nij,njkp->nikp", E, d_link)
+        return eta, link
 
     def describe(self, p):
         """Physically readable quantities derived from the fitted parameters.

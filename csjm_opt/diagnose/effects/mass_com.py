@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Effect
+from .base import Effect, one_hot
 
 
 class MassCom(Effect):
@@ -62,6 +62,10 @@ class MassCom(Effect):
             The first-moment error ``d(m r)`` (kg m, in {A}), shape (3,).
         """
         ev.first_moment_A_kgm = ev.first_moment_A_kgm + p
+
+    def d_adjust_load(self, ev, p, cols, d_tau, d_first):
+        """Tangents of :meth:`adjust_load`: the first moment moves by one on each component's column."""
+        return d_tau, d_first + one_hot(cols, d_first.shape[-1])
 
     def describe(self, p):
         """Physically readable quantities derived from the fitted parameters.

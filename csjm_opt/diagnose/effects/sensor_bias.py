@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Effect
+from .base import Effect, one_hot
 
 
 class SensorBias(Effect):
@@ -50,6 +50,10 @@ class SensorBias(Effect):
             The bias ``b`` (N m, in {A}), shape (3,).
         """
         ev.tau_ext_A_Nm = ev.tau_ext_A_Nm - p
+
+    def d_adjust_load(self, ev, p, cols, d_tau, d_first):
+        """Tangents of :meth:`adjust_load`: ``-1`` on each axis's own column."""
+        return d_tau - one_hot(cols, d_tau.shape[-1])[None], d_first
 
     def describe(self, p):
         """Physically readable quantities derived from the fitted parameters.

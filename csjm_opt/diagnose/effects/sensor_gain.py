@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Effect
+from .base import Effect, one_hot
 
 #: Plausible gain of the moment reading (true moment -> logged moment).
 GAIN_RANGE = (0.6, 1.4)
@@ -113,6 +113,13 @@ class SensorGain(Effect):
             The log gains.
         """
         ev.tau_ext_A_Nm = ev.tau_ext_A_Nm / self.gains(p)
+
+    def d_adjust_load(self, ev, p, cols, d_tau, d_first):
+        """Tangents of :meth:`adjust_load`: ``d(tau / g) = d tau / g - (tau / g) d log g``."""
+        g = self.gains(p)
+        axis_col = np.repeat(cols[:1], 3) if self.axes == "common" else np.asarray(cols)
+        dlog = one_hot(axis_col, d_tau.shape[-1])                              # (3, P)
+        return d_tau / g[None, :, None] - (ev.tau_ext_A_Nm / g)[..., None] * dlog[None], d_first
 
     def describe(self, p):
         """Physically readable quantities derived from the fitted parameters.

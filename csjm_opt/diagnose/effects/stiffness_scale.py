@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Effect
+from .base import Effect, one_hot
 
 
 class StiffnessScale(Effect):
@@ -87,6 +87,10 @@ class StiffnessScale(Effect):
             The changed tensions (N), shape (n, m).
         """
         return T_N * np.exp(p[0])
+
+    def d_adjust_tension(self, ev, stretch_m, d_stretch, T_N, d_T, T_out_N, p, cols):
+        """Tangent of :meth:`adjust_tension`: ``s dT + s T d(log_k_scale)``."""
+        return d_T * np.exp(p[0]) + T_out_N[..., None] * one_hot(cols, d_T.shape[-1])[0]
 
     def describe(self, p):
         """Physically readable quantities derived from the fitted parameters.

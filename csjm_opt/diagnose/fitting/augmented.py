@@ -21,13 +21,14 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
 from ...model import kinematics as kin
 from ...model.rig import Rig
 from ..effects import Effect
+from ..effects.base import EARLY_HOOKS, LATE_HOOKS, one_hot
 
 NUISANCE_NAMES = ("dl_common_m",)
 NUISANCE_SCALES = np.array([2e-4])
@@ -122,6 +123,9 @@ class Evaluation:
     rest_lengths_m: np.ndarray | None = None  # actual rest lengths (n, m): commanded + common offset (adjust_rest)
     cable_jacobian: np.ndarray | None = None  # J (n, m, 3) at R_cable: J^T T is the cables' moment, dc = -J dzeta
     state_out: np.ndarray | None = None       # path state after this row (path-dependent effects)
+    d_g: np.ndarray | None = None             # (n, 3, P) derivative of the balance (AugmentedModel.balance_derivative)
+    d_lengths_m: np.ndarray | None = None     # (n, m, P) tangents of the cable lengths (pose, hole parameters)
+    d_cable_jacobian: np.ndarray | None = None  # (n, m, 3, P) and of J
 
 
 class AugmentedModel:
@@ -340,39 +344,135 @@ class AugmentedModel:
             G[..., j] = (g3[j] - g0) / h
         return G
 
-    def evaluate(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray) -> tuple[np.ndarray, Evaluation]:
-        """``(g, evaluation)``; the evaluation holds intermediate quantities (path state, lengths)."""
+    def exact_params(self, rows: Rows) -> np.ndarray:
+        """Which parameters :meth:`balance_derivative` differentiates exactly on ``rows`` (bool, (n_params,)).
+
+        Every parameter whose effect's hooks all carry their tangents (``d_<hook>``): the common rest-length
+        offset, loads, rest lengths, tension laws, further moments, and hole positions and the link's twist
+        where every pose and geometry hook of the model carries its tangent (a guide's exit point does not:
+        then only the parameters that enter after the cables are placed). Registration parameters (the measured
+        body's frame) are left to differences. None where an effect cannot give the tangent of a late hook it
+        overrides on these rows (e.g. friction stepped row by row in a prediction).
+        """
+        key = (rows.state_prev is None, rows.lengths_prev_m is None)
+        known = self.__dict__.setdefault("_exact", {})
+        if key not in known:
+            known[key] = self._exact_params(rows)
+        return known[key].copy()
+
+    def _exact_params(self, rows: Rows) -> np.ndarray:
+        mask = np.zeros(self.n_params, bool)
+        if not all(e.tangent_ok(rows) for e in self.effects):
+            return mask
+        mask[:N_NUISANCE] = True
+        placed = ("adjust_pose", "adjust_geometry")
+        geometric = all(_has_tangent(e, h) for e in self.effects for h in placed if _overrides(e, h))
+        reads_load = any(e.reads_load for e in self.effects)
+        for i, e in enumerate(self.effects):
+            hooks = {h for h in LATE_HOOKS + EARLY_HOOKS if _overrides(e, h)}
+            if "adjust_frame" in hooks or (hooks & set(placed) and not geometric):
+                continue
+            if "adjust_load" in hooks and reads_load and not geometric:
+                continue
+            mask[self._offsets[i + 1]:self._offsets[i + 2]] = True
+        return mask
+
+    def balance_derivative(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray,
+                           cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(g, dg/dtheta[:, :, cols])``: the balance and its exact derivative (forward mode) (n, 3, P).
+
+        ``cols``: parameter indices among :meth:`exact_params` (N m per unit of each parameter).
+        """
+        g, ev = self.evaluate(R_m, rows, theta, np.asarray(cols, int))
+        assert ev.d_g is not None
+        return g, ev.d_g
+
+    def evaluate(self, R_m: np.ndarray, rows: Rows, theta: np.ndarray,
+                 tangent_cols: np.ndarray | None = None) -> tuple[np.ndarray, Evaluation]:
+        """``(g, evaluation)``; the evaluation holds intermediate quantities (path state, lengths).
+
+        ``tangent_cols``: parameters (indices, :meth:`exact_params`) whose derivative of ``g`` is carried
+        alongside (forward mode through the hooks) into ``evaluation.d_g`` (n, 3, P).
+        """
         theta = np.asarray(theta, float)
         n = len(rows)
         eye = self._identity(n)
         ev = Evaluation(self._A, self._B, self._mr, rows.tau_meas_A_Nm, R_m, eye, rows, self._k, R_m)
         params = self.effect_params(theta)
-        for e, p in zip(self.effects, params):
+        tan: dict[str, Any] | None = None
+        if tangent_cols is not None:
+            where = np.full(self.n_params, -1)
+            where[tangent_cols] = np.arange(len(tangent_cols))
+            P = len(tangent_cols)
+            # tangents: external moment, first moment, the cable platform's pose (a right rotation), the link's
+            # rotation (None: zero), the holes
+            tan = {"cols": [where[self._offsets[i + 1]:self._offsets[i + 2]] for i in range(len(self.effects))],
+                   "tau": np.zeros((n, 3, P)), "first": np.zeros((3, P)), "nuisance": where[:N_NUISANCE],
+                   "eta": np.zeros((n, 3, P)), "link": None,
+                   "A": np.zeros(np.shape(self._A) + (P,)), "B": np.zeros(np.shape(self._B) + (P,))}
+        for i, (e, p) in enumerate(zip(self.effects, params)):
+            if tan is not None and _has_tangent(e, "adjust_load"):
+                tan["tau"], tan["first"] = e.d_adjust_load(ev, p, tan["cols"][i], tan["tau"], tan["first"])
             e.adjust_load(ev, p)
         for e, p in zip(self.effects, params):
             e.adjust_frame(ev, p)
         assert ev.R_body is not None   # set by adjust_frame
         ev.R_cable = ev.R_body
         ev.tau_weight_A_Nm = self.weight_moment(ev.R_body, ev.first_moment_A_kgm)
-        for e, p in zip(self.effects, params):
+        if tan is not None:
+            # the weight's moment is linear in the first moment: its tangent is the moment of the first moment's
+            tan["load"] = tan["tau"]
+            if np.any(tan["first"]):
+                unit = np.stack([kin.weight_moment(ev.R_body, e_k, self._g) for e_k in np.eye(3)], axis=-1)
+                tan["load"] = tan["load"] + unit @ tan["first"]
+        for i, (e, p) in enumerate(zip(self.effects, params)):
+            if tan is not None and _has_tangent(e, "adjust_pose"):
+                tan["eta"], tan["link"] = e.d_adjust_pose(ev, p, tan["cols"][i], tan["load"], tan["eta"],
+                                                          tan["link"])
             e.adjust_pose(ev, p)
-        for e, p in zip(self.effects, params):
+        for i, (e, p) in enumerate(zip(self.effects, params)):
+            if tan is not None and _has_tangent(e, "adjust_geometry"):
+                tan["A"], tan["B"] = e.d_adjust_geometry(ev, p, tan["cols"][i], tan["A"], tan["B"])
             e.adjust_geometry(ev, p)
         ev.rest_lengths_m = rows.rest_lengths_m + theta[0]
-        for e, p in zip(self.effects, params):
+        if tan is not None:
+            tan["rest"] = np.zeros(np.shape(ev.rest_lengths_m) + (P,))
+            tan["rest"] += one_hot(tan["nuisance"], P)[0]
+        for i, (e, p) in enumerate(zip(self.effects, params)):
+            if tan is not None and _has_tangent(e, "adjust_rest"):
+                tan["rest"] = e.d_adjust_rest(ev, p, tan["cols"][i], tan["rest"])
             e.adjust_rest(ev, p)
         lengths, J = self.cable_terms(ev.R_cable, ev.A_m, ev.B_m)
         ev.lengths_m, ev.cable_jacobian = lengths, J
         stretch = lengths - ev.rest_lengths_m
         T = self._k * np.maximum(stretch, 0.0)
-        for e, p in zip(self.effects, params):
+        if tan is not None:
+            d_stretch = -tan["rest"]
+            if np.any(tan["eta"]) or np.any(tan["A"]) or np.any(tan["B"]):
+                ev.d_lengths_m, ev.d_cable_jacobian = _cable_tangents(ev, lengths, tan["eta"], tan["A"], tan["B"])
+                d_stretch = d_stretch + ev.d_lengths_m
+            d_T = (self._k * (stretch > 0))[..., None] * d_stretch
+        for i, (e, p) in enumerate(zip(self.effects, params)):
+            T_in = T
             T = e.adjust_tension(ev, stretch, T, p)
+            if tan is not None and _has_tangent(e, "adjust_tension"):
+                d_T = e.d_adjust_tension(ev, stretch, d_stretch, T_in, d_T, T, p, tan["cols"][i])
         tau_load = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm
         # the link's rotation is the identity unless an effect set one (then the product is tau_load exactly)
         g = np.einsum("nij,ni->nj", J, T) + (tau_load if ev.link_rotation is eye else
                                              np.einsum("nij,nj->ni", ev.link_rotation, tau_load))
-        for e, p in zip(self.effects, params):
+        if tan is not None:
+            d_g = np.swapaxes(J, 1, 2) @ d_T + (tan["load"] if ev.link_rotation is eye else
+                                                 ev.link_rotation @ tan["load"])
+            if ev.d_cable_jacobian is not None:
+                d_g += (T[:, None, :] @ ev.d_cable_jacobian.reshape(n, T.shape[1], -1)).reshape(n, 3, P)
+            if tan["link"] is not None:
+                d_g += np.swapaxes((np.moveaxis(tan["link"], 3, 1) @ tau_load[:, None, :, None])[..., 0], 1, 2)
+            ev.d_g = d_g
+        for i, (e, p) in enumerate(zip(self.effects, params)):
             g = e.adjust_balance(ev, g, p)
+            if tan is not None and ev.d_g is not None and _has_tangent(e, "adjust_balance"):
+                ev.d_g = e.d_adjust_balance(ev, ev.d_g, p, tan["cols"][i])
         return g, ev
 
     def predict_poses(self, rows: Rows, theta: np.ndarray, R_init: np.ndarray) -> kin.PoseSolution:
@@ -414,6 +514,51 @@ class AugmentedModel:
             lengths[idx] = ev.lengths_m
             it = max(it, sol.iterations)
         return kin.PoseSolution(R_out, res, it)
+
+
+def _overrides(e: Effect, hook: str) -> bool:
+    """Whether effect ``e`` overrides the hook ``hook`` of :class:`Effect`."""
+    return getattr(type(e), hook) is not getattr(Effect, hook)
+
+
+def _has_tangent(e: Effect, hook: str) -> bool:
+    """Whether ``e`` overrides ``hook`` and gives its tangent (``d_<hook>``)."""
+    return _overrides(e, hook) and _overrides(e, f"d_{hook}")
+
+
+def _cable_tangents(ev: Evaluation, lengths: np.ndarray, eta: np.ndarray, d_A: np.ndarray,
+                    d_B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Tangents of the cable lengths (n, m, P) and of J (n, m, 3, P) under pose and hole tangents.
+
+    The cable platform's pose ``R exp(hat(eta))`` (``eta`` (n, 3, P)), the holes ``d_A``, ``d_B`` (m, 3, P).
+
+    With ``v_i = R^T b_i - a_i`` (:func:`csjm_opt.model.cable_terms.geometry`), ``c = |v|``, ``u = v / c``,
+    ``j = a x u``: ``dv = R^T db + (R^T b) x eta - da``, ``dc = u . dv``, ``du = (dv - u dc) / c``,
+    ``dj = da x u + a x du``.
+    """
+    R, A, B = ev.R_cable, np.asarray(ev.A_m, float), np.asarray(ev.B_m, float)
+    n, m = lengths.shape
+    P = eta.shape[-1]
+    Rb = B @ R                                              # rows R^T b_i (n, m, 3)
+    u = (Rb - A) / lengths[..., None]
+    dv = np.broadcast_to(-d_A, (n, m, 3, P)).copy()
+    if np.any(d_B):
+        dv += np.swapaxes(R, 1, 2)[:, None] @ d_B
+    if np.any(eta):
+        dv += _cross2(Rb[..., None], eta[:, None])
+    dc = (u[:, :, None, :] @ dv)[:, :, 0, :]
+    du = (dv - u[..., None] * dc[:, :, None, :]) / lengths[..., None, None]
+    dJ = _cross2(np.broadcast_to(A, u.shape)[..., None], du)
+    if np.any(d_A):
+        dJ += _cross2(d_A, u[..., None])
+    return dc, dJ
+
+
+def _cross2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product along axis -2 (the vectors' axis; the last axis holds the tangent columns), broadcast."""
+    a0, a1, a2 = a[..., 0, :], a[..., 1, :], a[..., 2, :]
+    b0, b1, b2 = b[..., 0, :], b[..., 1, :], b[..., 2, :]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-2)
 
 
 def with_entry(model: "AugmentedModel", rows: Rows, R_meas: np.ndarray, theta: np.ndarray) -> Rows:

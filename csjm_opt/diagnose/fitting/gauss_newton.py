@@ -277,6 +277,11 @@ def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray
     Fisher information of the scaled parameters under whitened noise. ``at``: the balance ``g``
     and its pose tangent ``G`` at ``theta`` when the caller has them (from :func:`linearised_zeta`
     at the same ``theta``), else they are evaluated here.
+
+    ``dg/dx`` is exact (forward mode, one evaluation) for the parameters that enter after the cables are
+    placed (:meth:`~.augmented.AugmentedModel.exact_params`: the common offset, loads, rest lengths, tension
+    laws, further moments); the rest (hole positions, registration, link twist) by forward differences,
+    one evaluation each.
     """
     scales = model.scales
     rows, R_meas = table.rows, table.R_meas
@@ -289,7 +294,11 @@ def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray
     g0, G = (g(R_meas), None) if at is None else at
     WGinv = table.whiten @ _safe_inv(model.tangent(R_meas, rows, theta, g0, h=1e-6) if G is None else G)
     Jd = np.empty((g0.size, len(x)))
-    for j in range(len(x)):
+    exact = np.flatnonzero(model.exact_params(rows))
+    if exact.size:
+        dg = model.balance_derivative(R_meas, rows, theta, exact)[1] * scales[exact]
+        Jd[:, exact] = (WGinv @ dg).reshape(g0.size, exact.size)
+    for j in np.setdiff1d(np.arange(len(x)), exact):
         step = 1e-6 * max(1.0, abs(x[j]))
         th = theta.copy()
         th[j] += step * scales[j]

@@ -46,7 +46,7 @@ from typing import Collection, Mapping
 
 import numpy as np
 
-from ..decision_rule import EVIDENCE_MIN, HELDOUT_ALPHA
+from ..decision_rule import EVIDENCE_MIN, HELDOUT_ALPHA, LEAD_NATS
 from ..fitting.evidence import log_evidence
 from .scoring import CandidateScore, paired_heldout_test
 
@@ -126,6 +126,89 @@ def unsettled_rivals(models: Mapping[str, Mapping], verdict: str, skip: Collecti
                         "closes_gap": bool(m.get("closes_gap")), "heldout_better_p": p_better,
                         "heldout_better": better})
     return sorted(out, key=lambda r: -r["nats"])
+
+
+def inseparable_alternatives(models: Mapping[str, Mapping], selected: str, single_verdict: bool = True) -> list[dict]:
+    """Detected effects the log cannot tell from ``selected`` (look-alikes), each with the route that lists it.
+
+    An effect ``X`` is a look-alike of the selected effect ``V`` when it is detected and their parameter
+    blocks are not separable on this log (Fisher block correlation above the limit,
+    :mod:`csjm_opt.diagnose.selection.pairs`). It is listed (not ruled out) when
+
+    * ``"evidence"``: its log evidence is within ``LEAD_NATS`` of ``V``'s (a leading hypothesis), or
+    * ``"fit"`` (``V`` a single): it is a few-number model (not *flexible*,
+      :func:`csjm_opt.diagnose.selection.decision.flexible`), plausible, closes the gap, ``V`` does not
+      beat it on held-out cycles (one-sided paired test at ``HELDOUT_ALPHA``), and it fits the log about
+      as well: its misfit ``chi^2`` (whitened training RSS over the diagnosis's noise variance) exceeds
+      ``V``'s by less than ``2 EVIDENCE_MIN`` (a likelihood ratio below ``exp(EVIDENCE_MIN)``, not
+      decisive). Two few-number models the log cannot separate, both fitting it as well, then differ in
+      evidence only by the price of their parameters under the priors (the Occam factor: a 6-number
+      link compliance pays about 10 nats more than a 3-number sensor gain for the same deflections),
+      which the log cannot check; a lab must hear of both. A flexible rival (36 hole offsets, which fit
+      any few-number verdict's log as well) is ruled out by parsimony when ``V`` explains the log as
+      well (the rule's "parsimony that holds"), and is listed only by the evidence route.
+
+    Parameters
+    ----------
+    models : mapping
+        Effect name -> ``{"detected", "plausible", "closes_gap", "separable" (from ``selected``; the
+        selected entry's own is ignored), "log_evidence", "chi2", "cycle_mse"}`` and optionally
+        ``"flexible"`` (default False). Must hold ``selected``.
+    selected : str
+    single_verdict : bool, optional
+        The verdict is ``selected`` alone (the ``"fit"`` route compares a single with the verdict's
+        model, so it applies only then).
+
+    Returns
+    -------
+    list of dict
+        ``{"model", "route", "nats" (its evidence minus ``V``'s), "chi2_excess" (its chi^2 minus
+        ``V``'s), "heldout_p" (one-sided p that ``V``'s held-out errors are lower)}``, in the order of
+        ``models``.
+    """
+    v = models[selected]
+    out = []
+    for name, m in models.items():
+        if name == selected or not m.get("detected") or m.get("separable", True):
+            continue
+        nats = float(m["log_evidence"]) - float(v["log_evidence"])
+        excess = float(m.get("chi2", np.nan)) - float(v.get("chi2", np.nan))
+        p = paired_heldout_test(_Cycles(m["cycle_mse"]), _Cycles(v["cycle_mse"]))   # type: ignore[arg-type]
+        if nats >= -LEAD_NATS:
+            route = "evidence"
+        elif (single_verdict and not m.get("flexible") and m.get("plausible") and m.get("closes_gap")
+              and p >= HELDOUT_ALPHA and excess < 2.0 * EVIDENCE_MIN):
+            route = "fit"
+        else:
+            continue
+        out.append({"model": name, "route": route, "nats": nats, "chi2_excess": excess, "heldout_p": p})
+    return out
+
+
+def alternatives_warnings(selected: str, found: list[dict]) -> list[str]:
+    """The warnings that name the look-alikes of :func:`inseparable_alternatives` (none when there are none).
+
+    Parameters
+    ----------
+    selected : str
+    found : list of dict
+
+    Returns
+    -------
+    list of str
+    """
+    out = []
+    lead = [a["model"] for a in found if a["route"] == "evidence"]
+    if lead:
+        out.append(f"{selected} is not separable on this log from {', '.join(lead)} "
+                   "(detected too; Fisher block correlation above the separability limit)")
+    for a in (a for a in found if a["route"] == "fit"):
+        out.append(f"{selected} is not separable on this log from {a['model']} (detected too; Fisher block correlation "
+                   f"above the separability limit): {a['model']} fits the log as well (chi^2 {a['chi2_excess']:+.1f} "
+                   f"against {selected}'s, held-out p = {a['heldout_p']:.2f}) and has {-a['nats']:.1f} nats less "
+                   "evidence only as the price of its parameters under their priors, which this log cannot check: "
+                   f"the log does not single out {selected}; --suggest designs rows that separate them")
+    return out
 
 
 def rival_warning(verdict: str, rival: dict) -> str:

@@ -262,3 +262,29 @@ def test_a_pair_chooses_the_friction_law_with_its_partner_fitted(rig):
     ctx = _Context(rig, compute_residuals(rig, log), None)
     chosen = _variant(ctx, rig, "friction", None, [make_effect("mass_com", rig)])
     assert chosen == {"law": "capstan", "memory": "carried"}
+
+
+def test_an_inseparable_look_alike_is_named_however_its_priors_price_it(rig, logs):
+    """A link compliance C = 5 mrad/(N m) I on the paper rig (near-isotropic stiffness): a per-axis sensor gain gives
+    the same deflections under load, and the log cannot separate the two. Whichever is named, the other is listed in
+    ``alternatives`` and named in a warning, even when its 6 parameters cost it more than LEAD_NATS of evidence
+    against the gain's 3 (here about 13 nats: the fits are alike, the difference is the Occam factor). A clearly
+    separated single (a sensor bias) gets no warning from the same vocabulary."""
+    import dataclasses
+
+    from csjm_opt.testbed import TestbedPlant
+
+    few = ["sensor_gain", "link_compliance", "sensor_bias", "tracker_registration"]
+    plant = dataclasses.replace(TestbedPlant.nominal(rig), link_compliance_rad_per_Nm=5e-3 * np.eye(3),
+                                effects=("link_compliance",))
+    log = simulate_experiment(rig, 6, np.random.default_rng(1), effect=plant, steps=3)
+    j = diagnose(rig, log, effects=few, workers=1).as_json()
+    looks = {"sensor_gain", "link_compliance"}
+    assert j["selected"] in looks
+    other = (looks - {j["selected"]}).pop()
+    assert j["verdict"]["alternatives"] == [other]
+    assert any(f"not separable on this log from {other}" in w for w in j["verdict"]["warnings"])
+    ev = {c["effect"]: c["log_evidence"] for c in j["candidates"]}
+    assert ev[other] < ev[j["selected"]] - LEAD_NATS          # the case the evidence alone had ruled out
+    clear = diagnose(rig, logs["sensor_bias"], effects=few, workers=1).as_json()
+    assert clear["selected"] == "sensor_bias" and clear["verdict"]["warnings"] == []

@@ -145,3 +145,19 @@ def test_a_flexible_verdict_names_what_it_may_stand_in_for_by_the_partners_wald_
     assert stand_ins(ctx, holes, "hole_offsets", sep, {("hole_offsets", "mass_com"): far}) == []
     assert stand_ins(_Ctx({"hole_offsets": -250.0, "hole_offsets+mass_com": -260.0}), holes, "hole_offsets",
                      pair_entry, {("hole_offsets", "mass_com"): far}) == []
+
+
+def test_a_pair_is_confirmed_by_evidence_only_when_no_left_out_flexible_first_is_decisively_more_probable():
+    """The evidence route (decisive Bayes factor, confirmed on held-out cycles); a flexible first effect left out of
+    the pair's rivals blocks both routes when it beats the pair on held-out cycles, and the evidence route when it is
+    more probable than the pair by more than EVIDENCE_MIN."""
+    from csjm_opt.diagnose.decision_rule import EVIDENCE_MIN, HELDOUT_ALPHA
+    from csjm_opt.diagnose.selection.decision import pair_confirmed
+
+    good = dict(gain=EVIDENCE_MIN + 2.7, p_value=0.04, improvement_rad=5e-4)
+    assert pair_confirmed(False, **good) == (False, True)
+    assert pair_confirmed(False, EVIDENCE_MIN - 0.1, 0.04, 5e-4) == (False, False)      # not decisive
+    assert pair_confirmed(False, EVIDENCE_MIN + 1, HELDOUT_ALPHA, 5e-4) == (False, False)  # not confirmed held out
+    assert pair_confirmed(True, **good, flexible_first=(-(EVIDENCE_MIN + 1.8), 0.11)) == (True, False)
+    assert pair_confirmed(False, **good, flexible_first=(-(EVIDENCE_MIN - 0.5), 0.11)) == (False, True)
+    assert pair_confirmed(True, **good, flexible_first=(+3.0, HELDOUT_ALPHA / 2)) == (False, False)

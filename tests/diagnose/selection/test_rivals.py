@@ -205,3 +205,40 @@ def test_a_set_valued_rival_is_not_confirmed_by_held_out_errors_alone():
     assert unsettled_rivals(stick, "V") == []
     close = {"V": _model(0.0, one), "R": {**_model(-EVIDENCE_MIN / 2, lower), "set_valued": True}}
     assert [r["model"] for r in unsettled_rivals(close, "V")] == ["R"]
+
+
+def test_inseparable_look_alikes_are_listed_when_they_fit_as_well():
+    """A detected effect the log cannot separate from the verdict is listed when it is a leading hypothesis (evidence
+    within LEAD_NATS), or, for a single verdict, when it closes the gap, is not beaten on held-out cycles and its misfit
+    is not decisively worse (chi^2 excess below 2 EVIDENCE_MIN) however many nats its priors cost it; never when it is
+    separable, undetected, decisively worse fitting, beaten on held-out cycles or flexible (then only as a leading
+    hypothesis)."""
+    from csjm_opt.diagnose.decision_rule import LEAD_NATS
+    from csjm_opt.diagnose.selection.rivals import alternatives_warnings, inseparable_alternatives
+
+    rng = np.random.default_rng(13)
+    same = np.exp(rng.normal(0.0, 0.1, N_CYCLES))
+    worse = 3.0 * np.ones(N_CYCLES)
+
+    def m(ev, chi2, mse, separable=False, detected=True, closes=True):
+        return {"detected": detected, "plausible": True, "closes_gap": closes, "separable": separable,
+                "log_evidence": ev, "chi2": chi2, "cycle_mse": list(mse)}
+
+    far = -2 * LEAD_NATS                                   # decisively less probable by the priors
+    models = {"V": m(0.0, 300.0, np.ones(N_CYCLES)),
+              "X": m(far, 290.0, same),                    # fits as well, held-out tied: listed ("fit")
+              "Y": m(far, 290.0, same, separable=True),    # separable: not
+              "Z": m(far, 300.0 + 2 * EVIDENCE_MIN + 1.0, same),   # fits decisively worse: not
+              "W": m(far, 290.0, worse),                   # beaten on held-out cycles: not
+              "U": m(-LEAD_NATS / 2, 330.0, worse),        # a leading hypothesis: listed ("evidence")
+              "S": m(far, 290.0, same, detected=False),    # not detected: not
+              "T": m(far, 290.0, same, closes=False),      # does not close the gap: not
+              "F": {**m(far, 290.0, same), "flexible": True}}   # flexible (36 hole offsets): parsimony rules it out
+    got = inseparable_alternatives(models, "V")
+    assert [(a["model"], a["route"]) for a in got] == [("X", "fit"), ("U", "evidence")]
+    assert got[0]["chi2_excess"] == -10.0 and got[0]["nats"] == far
+    # a pair verdict: only the evidence route (the fit route compares a single with the verdict's model)
+    assert [a["model"] for a in inseparable_alternatives(models, "V", single_verdict=False)] == ["U"]
+    texts = alternatives_warnings("V", got)
+    assert len(texts) == 2 and "from U " in texts[0] and "from X " in texts[1] and "--suggest" in texts[1]
+    assert alternatives_warnings("V", []) == []
