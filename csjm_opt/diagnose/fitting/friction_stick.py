@@ -64,100 +64,42 @@ GAUSS3 = float((2.0 * np.pi) ** 1.5)
 @njit(cache=True)
 def _bounded_lsq(a: np.ndarray, B: np.ndarray, F: np.ndarray, f0: np.ndarray,
                  max_iter: int, tol: float) -> np.ndarray:   # pragma: no cover (compiled)
-    """``argmin_{|f_j| <= F_j} |a_i + B_i f|`` per row (FISTA with restarts), from ``f0``.
-
-    Written out in loops over preallocated vectors (an m x m problem per row: no temporary arrays, no BLAS
-    call per product): the accelerated projected gradient, restarted where the cost rises.
-    """
+    """``argmin_{|f_j| <= F_j} |a_i + B_i f|`` per row (FISTA with restarts), from ``f0``."""
     n, _, m = B.shape
     out = np.empty((n, m))
-    H = np.empty((m, m))
-    q, v, w = np.empty(m), np.empty(m), np.empty(m)
-    f, y, fn, step, Hs, Hfn = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
-    FF = 0.0
-    for j in range(m):
-        FF += F[j] * F[j]
-    stop = tol * (1.0 + FF)
     for i in range(n):
-        for j in range(m):
-            for k in range(m):
-                acc = 0.0
-                for r in range(3):
-                    acc += B[i, r, j] * B[i, r, k]
-                H[j, k] = acc
-            acc = 0.0
-            for r in range(3):
-                acc += B[i, r, j] * a[i, r]
-            q[j] = acc
-        for j in range(m):
-            v[j] = 1.0
+        H = B[i].T @ B[i]
+        q = B[i].T @ a[i]
+        v = np.ones(m)
         L = 0.0
         for _ in range(30):                      # largest eigenvalue of H (power iteration)
-            nw2 = 0.0
-            for j in range(m):
-                acc = 0.0
-                for k in range(m):
-                    acc += H[j, k] * v[k]
-                w[j] = acc
-                nw2 += acc * acc
-            nw = np.sqrt(nw2)
+            w = H @ v
+            nw = np.sqrt(np.dot(w, w))
             if nw <= 0.0:
                 break
-            nv2 = 0.0
-            for j in range(m):
-                nv2 += v[j] * v[j]
-            L = nw / np.sqrt(nv2)
-            for j in range(m):
-                v[j] = w[j] / nw
+            L = nw / np.sqrt(np.dot(v, v))
+            v = w / nw
         L *= 1.05
-        for j in range(m):
-            f[j] = min(max(f0[i, j], -F[j]), F[j])
+        f = np.minimum(np.maximum(f0[i], -F), F)
         if L <= 0.0:
-            for j in range(m):
-                out[i, j] = f[j]
+            out[i] = f
             continue
-        for j in range(m):
-            y[j] = f[j]
+        y = f.copy()
         t = 1.0
         for _ in range(max_iter):
-            for j in range(m):
-                acc = 0.0
-                for k in range(m):
-                    acc += H[j, k] * y[k]
-                fn[j] = min(max(y[j] - (acc + q[j]) / L, -F[j]), F[j])
-                step[j] = fn[j] - f[j]
-            sHs = 0.0
-            for j in range(m):
-                acc = 0.0
-                for k in range(m):
-                    acc += H[j, k] * step[k]
-                Hs[j] = acc
-                sHs += step[j] * acc
-            if sHs > 0:                          # restart on a rise
-                rise = 0.0
-                for j in range(m):
-                    acc = 0.0
-                    for k in range(m):
-                        acc += H[j, k] * fn[k]
-                    Hfn[j] = acc
-                    rise += (acc + q[j]) * step[j]
-                if rise > 0:
-                    t = 1.0
-                    for j in range(m):
-                        y[j] = f[j]
-                    continue
+            grad = H @ y + q
+            fn = np.minimum(np.maximum(y - grad / L, -F), F)
+            step = fn - f
+            if np.dot(step, H @ step) > 0 and np.dot(H @ fn + q, step) > 0:   # restart on a rise
+                t = 1.0
+                y = f.copy()
+                continue
             tn = 0.5 * (1.0 + np.sqrt(1.0 + 4.0 * t * t))
-            c = (t - 1.0) / tn
-            ss = 0.0
-            for j in range(m):
-                y[j] = fn[j] + c * step[j]
-                f[j] = fn[j]
-                ss += step[j] * step[j]
-            t = tn
-            if ss <= stop:
+            y = fn + ((t - 1.0) / tn) * step
+            f, t = fn, tn
+            if np.dot(step, step) <= tol * (1.0 + np.dot(F, F)):
                 break
-        for j in range(m):
-            out[i, j] = f[j]
+        out[i] = f
     return out
 
 
