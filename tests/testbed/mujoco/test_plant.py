@@ -10,25 +10,13 @@ import pytest
 from csjm_opt import so3
 from csjm_opt.errors import NoEquilibrium
 from csjm_opt.model.statics import solve_equilibrium
-from csjm_opt.testbed import TestbedPlant, as_mujoco, certify_static, design_cycles, make_plant
+from csjm_opt.testbed import TestbedPlant, as_mujoco, certify_static, make_plant
 from csjm_opt.testbed.mujoco.engine import Engine
-
-
-@pytest.fixture(scope="module")
-def cycle(rig):
-    """One designed load cycle on the paper rig (5 rows: up and down)."""
-    return design_cycles(rig, 1, np.random.default_rng(21), steps=2)[0]
-
-
-def _args(c, repeat=1):
-    m = len(c.alphas)
-    n = m * repeat
-    return (np.repeat(c.rest_lengths_m[None], n, 0), np.tile(c.tau_ext_A_Nm, (repeat, 1)),
-            np.repeat(np.arange(repeat), m), np.repeat(c.R_ref[None], n, 0))
+from tests.testbed.mujoco.conftest import rows_args
 
 
 def test_nominal_mujoco_plant_agrees_with_the_toolkit_statics(rig, cycle):
-    args = _args(cycle)
+    args = rows_args(cycle)
     rows = as_mujoco(TestbedPlant.nominal(rig)).respond_rows(*args)
     for i, row in enumerate(rows):
         eq = solve_equilibrium(rig, cycle.rest_lengths_m, cycle.tau_ext_A_Nm[i], R_init=cycle.R_ref)
@@ -58,7 +46,7 @@ def test_small_changes_move_the_pose_by_the_tangent_stiffness(rig, cycle, what):
 
 def test_hole_offsets_hardening_and_link_match_the_quasi_static_plant(rig, cycle):
     """Two independent implementations (MuJoCo's tendons and the toolkit's kinematics) of the same physics."""
-    args = _args(cycle)
+    args = rows_args(cycle)
     for effect, severity in (("hole_offsets", 1.0), ("cable_hardening", 3.0), ("link_compliance", 2.0)):
         plant = make_plant(rig, effect, severity, np.random.default_rng(3))
         R_q = plant.respond(*args)
@@ -71,7 +59,7 @@ def test_hole_offsets_hardening_and_link_match_the_quasi_static_plant(rig, cycle
 
 def test_hardening_with_a_link_matches_the_quasi_static_plant(rig, cycle):
     """Hardening on a plant with a link (six dofs: the tendons span only the platform's three)."""
-    args = _args(cycle)
+    args = rows_args(cycle)
     plant = make_plant(rig, ["cable_hardening", "link_compliance"], 2.0, np.random.default_rng(3))
     R_q = plant.respond(*args)
     rows = as_mujoco(plant).respond_rows(*args)
@@ -118,7 +106,7 @@ def _quat(v):
 def test_link_turns_the_tool_by_the_compliance_times_the_tool_moment(rig, cycle):
     C = np.diag([0.006, 0.004, 0.008])
     plant = dataclasses.replace(TestbedPlant.nominal(rig), link_compliance_rad_per_Nm=C)
-    rows = as_mujoco(plant).respond_rows(*_args(cycle))
+    rows = as_mujoco(plant).respond_rows(*rows_args(cycle))
     g = np.asarray(rig.gravity_B_m_per_s2)
     for i, row in enumerate(rows):
         tau_m = cycle.tau_ext_A_Nm[i] + np.cross(rig.platform_mass_kg * np.asarray(rig.com_A_m), row.R_tool.T @ g)
@@ -177,7 +165,7 @@ def test_coulomb_rows_come_to_rest_with_the_default_noslip(rig, cycle):
     the plant kept creeping at up to 2e-4 rad/s after 6 s of settling; rows then failed to certify.
     """
     plant = make_plant(rig, "coulomb_friction", 3.0, np.random.default_rng(4))
-    rows = as_mujoco(plant).respond_rows(*_args(cycle, repeat=2))
+    rows = as_mujoco(plant).respond_rows(*rows_args(cycle, repeat=2))
     for row in rows:
         assert row.certificate is not None and row.certificate.certified
         assert row.speed_rad_per_s < 1e-5
@@ -192,7 +180,7 @@ def _rot(quat):
 @pytest.mark.parametrize("effect", ["coulomb_friction", "joint_friction"])
 def test_mujoco_hysteresis_and_memory_across_cycles(rig, cycle, effect):
     """Loading then unloading does not return to the start with friction, and the next cycle starts there."""
-    args = _args(cycle, repeat=2)
+    args = rows_args(cycle, repeat=2)
     m = len(cycle.alphas)
     R = as_mujoco(make_plant(rig, effect, 3.0, np.random.default_rng(5))).respond(*args)
     assert so3.angle_between(R[0], R[m - 1]) > 1e-3
@@ -209,7 +197,7 @@ def test_mujoco_hysteresis_and_memory_across_cycles(rig, cycle, effect):
 
 def test_mujoco_friction_agrees_with_the_quasi_static_play_operator(rig, cycle):
     """MuJoCo's tendon friction is the quasi-static Coulomb law with a rigid platform-side segment (rho -> 0)."""
-    args = _args(cycle)
+    args = rows_args(cycle)
     plant = make_plant(rig, "coulomb_friction", 3.0, np.random.default_rng(6))
     R_m = as_mujoco(plant).respond(*args)
     R_q = dataclasses.replace(plant, friction_platform_fraction=0.01).respond(*args)
@@ -222,7 +210,7 @@ def test_mujoco_friction_agrees_with_the_quasi_static_play_operator(rig, cycle):
 
 def test_joint_friction_agrees_between_the_plants(rig, cycle):
     """Ball-joint friction: MuJoCo's per-axis frictionloss and the quasi-static per-axis play operator."""
-    args = _args(cycle)
+    args = rows_args(cycle)
     plant = make_plant(rig, "joint_friction", 3.0, np.random.default_rng(7))
     R_m = as_mujoco(plant).respond(*args)
     R_q = plant.respond(*args)
@@ -255,7 +243,7 @@ def test_remaining_travel_is_the_distance_left_to_the_equilibrium(rig, cycle):
 def test_frictionless_rows_settle_when_the_move_outlasts_one_wait(rig, cycle):
     """A wait far shorter than the move (as a long move on a soft rig): further waits, then Newton's method,
     reach the toolkit's stable equilibrium."""
-    args = _args(cycle)
+    args = rows_args(cycle)
     rows = as_mujoco(TestbedPlant.nominal(rig), max_settle_s=0.05, ramp_s=0.01).respond_rows(*args)
     for i, row in enumerate(rows):
         eq = solve_equilibrium(rig, cycle.rest_lengths_m, cycle.tau_ext_A_Nm[i], R_init=cycle.R_ref)

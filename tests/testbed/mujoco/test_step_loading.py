@@ -15,26 +15,15 @@ from csjm_opt import so3
 from csjm_opt.errors import InvalidInput
 from csjm_opt.model import kinematics as kin
 from csjm_opt.model.statics import solve_equilibrium
-from csjm_opt.testbed import TestbedPlant, as_mujoco, certify_static, design_cycles, make_plant
+from csjm_opt.testbed import TestbedPlant, as_mujoco, certify_static, make_plant
+from tests.testbed.mujoco.conftest import rows_args
 
 #: Balance the toolkit's statics must find at a settled row (N m).
 HOLD_TOL_NM = 1e-6
 
 
-@pytest.fixture(scope="module")
-def cycle(rig):
-    return design_cycles(rig, 1, np.random.default_rng(21), steps=2)[0]
-
-
-def _args(c, repeat=1):
-    m = len(c.alphas)
-    n = m * repeat
-    return (np.repeat(c.rest_lengths_m[None], n, 0), np.tile(c.tau_ext_A_Nm, (repeat, 1)),
-            np.repeat(np.arange(repeat), m), np.repeat(c.R_ref[None], n, 0))
-
-
 def test_frictionless_step_rows_are_the_toolkit_equilibria(rig, cycle):
-    rows = as_mujoco(TestbedPlant.nominal(rig), loading="step").respond_rows(*_args(cycle))
+    rows = as_mujoco(TestbedPlant.nominal(rig), loading="step").respond_rows(*rows_args(cycle))
     for i, row in enumerate(rows):
         eq = solve_equilibrium(rig, cycle.rest_lengths_m, cycle.tau_ext_A_Nm[i], R_init=cycle.R_ref)
         assert so3.angle_between(row.R_tool, eq.R) < 1e-9
@@ -55,7 +44,7 @@ def test_step_rows_are_held_by_static_friction_within_its_bounds(rig, cycle):
     ratio = 1.5
     plant = make_plant(rig, "coulomb_friction", 3.0, np.random.default_rng(4), plant="mujoco", loading="step",
                        static_friction_ratio=ratio)
-    args = _args(cycle, repeat=2)
+    args = rows_args(cycle, repeat=2)
     rows = plant.respond_rows(*args)
     beyond_sliding = 0
     for i, row in enumerate(rows):
@@ -71,7 +60,7 @@ def test_step_loading_moves_differently_from_a_slow_ramp(rig, cycle):
     poses = {}
     for loading in ("ramp", "step"):
         plant = make_plant(rig, "coulomb_friction", 3.0, np.random.default_rng(4), plant="mujoco", loading=loading)
-        poses[loading] = np.stack([r.R_tool for r in plant.respond_rows(*_args(cycle))])
+        poses[loading] = np.stack([r.R_tool for r in plant.respond_rows(*rows_args(cycle))])
     assert max(so3.angle_between(a, b) for a, b in zip(poses["ramp"], poses["step"])) > 1e-4
 
 
@@ -92,7 +81,7 @@ def test_the_two_plants_settle_a_step_loaded_log_within_the_band(rig, cycle):
     so do the stops, by a few per cent of how far friction moves the rows (measured: 0.04-0.5 mrad
     against 10-13 mrad on this log).
     """
-    args = _args(cycle)
+    args = rows_args(cycle)
     poses = {name: make_plant(rig, "coulomb_friction", 3.0, np.random.default_rng(4), plant=name, loading="step"
                               ).respond(*args) for name in ("quasi-static", "mujoco")}
     free = make_plant(rig, None, 1.0, np.random.default_rng(4)).respond(*args)
