@@ -184,10 +184,17 @@ class Effect(abc.ABC):
     #: a pose hook that reads the loads (link compliance): load parameters then move the cables too
     reads_load: ClassVar[bool] = False
 
+    def overrides(self, hook: str) -> bool:
+        """Whether this effect's class overrides the hook ``hook`` (a method name) of :class:`Effect`."""
+        return getattr(type(self), hook) is not getattr(Effect, hook)
+
+    def has_tangent(self, hook: str) -> bool:
+        """Whether this effect overrides ``hook`` and gives its tangent (``d_<hook>``)."""
+        return self.overrides(hook) and self.overrides(f"d_{hook}")
+
     def tangent_ok(self, rows) -> bool:
         """Whether this effect's late hooks give their tangents on ``rows`` (default: whichever it overrides)."""
-        return all(getattr(type(self), f"d_{h}") is not getattr(Effect, f"d_{h}")
-                   for h in LATE_HOOKS if getattr(type(self), h) is not getattr(Effect, h))
+        return all(self.has_tangent(h) for h in LATE_HOOKS if self.overrides(h))
 
     def d_adjust_load(self, ev, p: np.ndarray, cols: np.ndarray, d_tau: np.ndarray,
                       d_first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

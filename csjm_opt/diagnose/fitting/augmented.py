@@ -366,10 +366,10 @@ class AugmentedModel:
             return mask
         mask[:N_NUISANCE] = True
         placed = ("adjust_pose", "adjust_geometry")
-        geometric = all(_has_tangent(e, h) for e in self.effects for h in placed if _overrides(e, h))
+        geometric = all(e.has_tangent(h) for e in self.effects for h in placed if e.overrides(h))
         reads_load = any(e.reads_load for e in self.effects)
         for i, e in enumerate(self.effects):
-            hooks = {h for h in LATE_HOOKS + EARLY_HOOKS if _overrides(e, h)}
+            hooks = {h for h in LATE_HOOKS + EARLY_HOOKS if e.overrides(h)}
             if "adjust_frame" in hooks or (hooks & set(placed) and not geometric):
                 continue
             if "adjust_load" in hooks and reads_load and not geometric:
@@ -411,7 +411,7 @@ class AugmentedModel:
                    "eta": np.zeros((n, 3, P)), "link": None,
                    "A": np.zeros(np.shape(self._A) + (P,)), "B": np.zeros(np.shape(self._B) + (P,))}
         for i, (e, p) in enumerate(zip(self.effects, params)):
-            if tan is not None and _has_tangent(e, "adjust_load"):
+            if tan is not None and e.has_tangent("adjust_load"):
                 tan["tau"], tan["first"] = e.d_adjust_load(ev, p, tan["cols"][i], tan["tau"], tan["first"])
             e.adjust_load(ev, p)
         for e, p in zip(self.effects, params):
@@ -426,12 +426,12 @@ class AugmentedModel:
                 unit = np.stack([kin.weight_moment(ev.R_body, e_k, self._g) for e_k in np.eye(3)], axis=-1)
                 tan["load"] = tan["load"] + unit @ tan["first"]
         for i, (e, p) in enumerate(zip(self.effects, params)):
-            if tan is not None and _has_tangent(e, "adjust_pose"):
+            if tan is not None and e.has_tangent("adjust_pose"):
                 tan["eta"], tan["link"] = e.d_adjust_pose(ev, p, tan["cols"][i], tan["load"], tan["eta"],
                                                           tan["link"])
             e.adjust_pose(ev, p)
         for i, (e, p) in enumerate(zip(self.effects, params)):
-            if tan is not None and _has_tangent(e, "adjust_geometry"):
+            if tan is not None and e.has_tangent("adjust_geometry"):
                 tan["A"], tan["B"] = e.d_adjust_geometry(ev, p, tan["cols"][i], tan["A"], tan["B"])
             e.adjust_geometry(ev, p)
         ev.rest_lengths_m = rows.rest_lengths_m + theta[0]
@@ -439,7 +439,7 @@ class AugmentedModel:
             tan["rest"] = np.zeros(np.shape(ev.rest_lengths_m) + (P,))
             tan["rest"] += one_hot(tan["nuisance"], P)[0]
         for i, (e, p) in enumerate(zip(self.effects, params)):
-            if tan is not None and _has_tangent(e, "adjust_rest"):
+            if tan is not None and e.has_tangent("adjust_rest"):
                 tan["rest"] = e.d_adjust_rest(ev, p, tan["cols"][i], tan["rest"])
             e.adjust_rest(ev, p)
         lengths, J = self.cable_terms(ev.R_cable, ev.A_m, ev.B_m)
@@ -455,7 +455,7 @@ class AugmentedModel:
         for i, (e, p) in enumerate(zip(self.effects, params)):
             T_in = T
             T = e.adjust_tension(ev, stretch, T, p)
-            if tan is not None and _has_tangent(e, "adjust_tension"):
+            if tan is not None and e.has_tangent("adjust_tension"):
                 d_T = e.d_adjust_tension(ev, stretch, d_stretch, T_in, d_T, T, p, tan["cols"][i])
         tau_load = ev.tau_ext_A_Nm + ev.tau_weight_A_Nm
         # the link's rotation is the identity unless an effect set one (then the product is tau_load exactly)
@@ -471,7 +471,7 @@ class AugmentedModel:
             ev.d_g = d_g
         for i, (e, p) in enumerate(zip(self.effects, params)):
             g = e.adjust_balance(ev, g, p)
-            if tan is not None and ev.d_g is not None and _has_tangent(e, "adjust_balance"):
+            if tan is not None and ev.d_g is not None and e.has_tangent("adjust_balance"):
                 ev.d_g = e.d_adjust_balance(ev, ev.d_g, p, tan["cols"][i])
         return g, ev
 
@@ -514,16 +514,6 @@ class AugmentedModel:
             lengths[idx] = ev.lengths_m
             it = max(it, sol.iterations)
         return kin.PoseSolution(R_out, res, it)
-
-
-def _overrides(e: Effect, hook: str) -> bool:
-    """Whether effect ``e`` overrides the hook ``hook`` of :class:`Effect`."""
-    return getattr(type(e), hook) is not getattr(Effect, hook)
-
-
-def _has_tangent(e: Effect, hook: str) -> bool:
-    """Whether ``e`` overrides ``hook`` and gives its tangent (``d_<hook>``)."""
-    return _overrides(e, hook) and _overrides(e, f"d_{hook}")
 
 
 def _cable_tangents(ev: Evaluation, lengths: np.ndarray, eta: np.ndarray, d_A: np.ndarray,

@@ -278,10 +278,11 @@ def data_jacobian(model: AugmentedModel, table: ResidualTable, theta: np.ndarray
     and its pose tangent ``G`` at ``theta`` when the caller has them (from :func:`linearised_zeta`
     at the same ``theta``), else they are evaluated here.
 
-    ``dg/dx`` is exact (forward mode, one evaluation) for the parameters that enter after the cables are
-    placed (:meth:`~.augmented.AugmentedModel.exact_params`: the common offset, loads, rest lengths, tension
-    laws, further moments); the rest (hole positions, registration, link twist) by forward differences,
-    one evaluation each.
+    ``dg/dx`` is exact (forward mode, one evaluation) for the parameters
+    :meth:`~.augmented.AugmentedModel.exact_params` names (the common offset, loads, rest lengths, tension
+    laws, further moments, and hole positions and the link's twist where every pose and geometry hook
+    carries its tangent); the rest (registration, a guide's exit point) by forward differences, one
+    evaluation each.
     """
     scales = model.scales
     rows, R_meas = table.rows, table.R_meas
