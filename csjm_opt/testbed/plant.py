@@ -387,7 +387,7 @@ class TestbedPlant:
         tau_m, E, _, c, J = self._loaded(R_m, np.broadcast_to(tau_ext_A_Nm, (n, 3)), np.broadcast_to(mr, (n, 3)))
         k = np.asarray(self.rig.cable_stiffness_N_per_m)
         e = c - np.asarray(rest_lengths_m, float)
-        T = np.maximum(k * e, 0.0) * (1.0 + self.hardening_per_m * np.maximum(e, 0.0))
+        T = self._hardened(np.maximum(k * e, 0.0), e)
         net = self._moment(J, T, tau_m, E)
         directions = np.concatenate([np.swapaxes(J, 1, 2), np.broadcast_to(np.eye(3), (n, 3, 3))], axis=2)
         return net, directions, self.friction_bounds(T)
@@ -453,6 +453,10 @@ class TestbedPlant:
         """Net moment on the cable platform of tensions ``T`` (platform side) and the load ``tau_m``."""
         return np.einsum("nij,ni->nj", J, T) + (tau_m if E is None else np.einsum("nij,nj->ni", E, tau_m))
 
+    def _hardened(self, T_N, stretch_m):
+        """Tensions ``T_N`` (N) of a linear cable under the hardening law: ``T (1 + h max(stretch, 0))``."""
+        return T_N * (1.0 + self.hardening_per_m * np.maximum(stretch_m, 0.0))
+
     def _balance(self, R_m, l, tau_ext, u, mr_load, smooth_N=SMOOTH_N):
         tau_m, E, R_c, c, J = self._loaded(R_m, tau_ext, mr_load)
         k = np.asarray(self.rig.cable_stiffness_N_per_m)
@@ -461,7 +465,7 @@ class TestbedPlant:
         T_p = np.maximum(self._friction(c, l, e, k, u[:, :m], smooth_N), 0.0)
         u_new = np.empty_like(u)
         u_new[:, :m] = c - self.friction_platform_fraction * T_p / k
-        T = T_p * (1.0 + self.hardening_per_m * np.maximum(e, 0.0))
+        T = self._hardened(T_p, e)
         g = self._moment(J, T, tau_m, E)
         if self.joint_friction_Nm > 0:     # per axis of {A}: stuck to an anchor pose, slips at the bound
             a = u[:, m:]
