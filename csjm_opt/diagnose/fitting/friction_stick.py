@@ -53,59 +53,241 @@ import numpy as np
 from numba import njit
 from scipy.optimize import minimize
 
-#: Iterations of the accelerated projected gradient per row (bounded least squares, 3 x m).
-MAX_ITER = 400
-#: Stop when the squared step (in N^2, relative to the band) falls below this.
-STEP_TOL = 1e-12
+#: Iterations of the accelerated projected gradient per row (the fallback of :func:`_project_row`).
+MAX_ITER = 5000
+#: The fallback stops when the squared step (in N^2, relative to the band) falls below this.
+STEP_TOL = 1e-24
+#: Relative size below which a generator, a facet normal or a volume counts as degenerate.
+DEGENERATE = 1e-9
 SQRT_HALF_PI = float(np.sqrt(np.pi / 2.0))
 GAUSS3 = float((2.0 * np.pi) ** 1.5)
 
 
 @njit(cache=True)
-def _bounded_lsq(a: np.ndarray, B: np.ndarray, F: np.ndarray, f0: np.ndarray,
-                 max_iter: int, tol: float) -> np.ndarray:   # pragma: no cover (compiled)
-    """``argmin_{|f_j| <= F_j} |a_i + B_i f|`` per row (FISTA with restarts), from ``f0``."""
+def _fista_row(a: np.ndarray, Bi: np.ndarray, F: np.ndarray, f0: np.ndarray,
+               max_iter: int, tol: float) -> np.ndarray:   # pragma: no cover (compiled)
+    """``argmin_{|f_j| <= F_j} |a + B f|`` of one row by FISTA with restarts, from ``f0`` (the fallback)."""
+    m = Bi.shape[1]
+    H = Bi.T @ Bi
+    q = Bi.T @ a
+    v = np.ones(m)
+    L = 0.0
+    for _ in range(30):                      # largest eigenvalue of H (power iteration)
+        w = H @ v
+        nw = np.sqrt(np.dot(w, w))
+        if nw <= 0.0:
+            break
+        L = nw / np.sqrt(np.dot(v, v))
+        v = w / nw
+    L *= 1.05
+    f = np.minimum(np.maximum(f0, -F), F)
+    if L <= 0.0:
+        return f
+    y = f.copy()
+    t = 1.0
+    for _ in range(max_iter):
+        grad = H @ y + q
+        fn = np.minimum(np.maximum(y - grad / L, -F), F)
+        step = fn - f
+        if np.dot(step, H @ step) > 0 and np.dot(H @ fn + q, step) > 0:   # restart on a rise
+            t = 1.0
+            y = f.copy()
+            continue
+        tn = 0.5 * (1.0 + np.sqrt(1.0 + 4.0 * t * t))
+        y = fn + ((t - 1.0) / tn) * step
+        f, t = fn, tn
+        if np.dot(step, step) <= tol * (1.0 + np.dot(F, F)):
+            break
+    return f
+
+
+@njit(cache=True)
+def _box2(d0: float, d1: float, d2: float, G: np.ndarray, j: int, k: int) -> tuple:   # pragma: no cover
+    """``argmin_{|u|, |v| <= 1} |d - u g_j - v g_k|^2`` exactly: ``(squared distance, u, v)`` (rows of ``G``)."""
+    a11 = G[j, 0] * G[j, 0] + G[j, 1] * G[j, 1] + G[j, 2] * G[j, 2]
+    a22 = G[k, 0] * G[k, 0] + G[k, 1] * G[k, 1] + G[k, 2] * G[k, 2]
+    a12 = G[j, 0] * G[k, 0] + G[j, 1] * G[k, 1] + G[j, 2] * G[k, 2]
+    b1 = G[j, 0] * d0 + G[j, 1] * d1 + G[j, 2] * d2
+    b2 = G[k, 0] * d0 + G[k, 1] * d1 + G[k, 2] * d2
+    dd = d0 * d0 + d1 * d1 + d2 * d2
+    det = a11 * a22 - a12 * a12
+    if det > 0.0:
+        u = (a22 * b1 - a12 * b2) / det
+        v = (a11 * b2 - a12 * b1) / det
+        if abs(u) <= 1.0 and abs(v) <= 1.0:
+            return max(dd - 2.0 * (u * b1 + v * b2) + u * u * a11 + 2.0 * u * v * a12 + v * v * a22, 0.0), u, v
+    best, bu, bv = np.inf, 0.0, 0.0
+    for side in (-1.0, 1.0):     # the optimum lies on an edge: one coordinate at a bound, the other clamped
+        u, v = side, 0.0
+        if a22 > 0.0:
+            v = min(max((b2 - u * a12) / a22, -1.0), 1.0)
+        e = dd - 2.0 * (u * b1 + v * b2) + u * u * a11 + 2.0 * u * v * a12 + v * v * a22
+        if e < best:
+            best, bu, bv = e, u, v
+        u, v = 0.0, side
+        if a11 > 0.0:
+            u = min(max((b1 - v * a12) / a11, -1.0), 1.0)
+        e = dd - 2.0 * (u * b1 + v * b2) + u * u * a11 + 2.0 * u * v * a12 + v * v * a22
+        if e < best:
+            best, bu, bv = e, u, v
+    return max(best, 0.0), bu, bv
+
+
+@njit(cache=True)
+def _facet_signs(G: np.ndarray, act: np.ndarray, j: int, k: int, n0: float, n1: float, n2: float,
+                 u: np.ndarray) -> tuple:   # pragma: no cover (compiled)
+    """Set ``u_l = sign(n . g_l)`` for the generators other than ``j, k``; the facet's centre ``sum u_l g_l``."""
+    c0 = c1 = c2 = 0.0
+    for l in act:
+        if l != j and l != k:
+            t = n0 * G[l, 0] + n1 * G[l, 1] + n2 * G[l, 2]
+            sl = 1.0 if t > 0.0 else (-1.0 if t < 0.0 else 0.0)
+            u[l] = sl
+            c0 += sl * G[l, 0]
+            c1 += sl * G[l, 1]
+            c2 += sl * G[l, 2]
+    return c0, c1, c2
+
+
+@njit(cache=True)
+def _project_row(a: np.ndarray, Bi: np.ndarray, F: np.ndarray, f0: np.ndarray) -> np.ndarray:   # pragma: no cover
+    """``argmin_{|f_j| <= F_j} |a + B f|``: the nearest point of the zonotope ``{B f}`` to ``p = -a``, exactly.
+
+    A zonotope in space is bounded by parallelograms: the facet with outward normal ``n = +-(g_j x g_k)``
+    (``g = F b``) is ``sum_{l != j,k} sign(n . g_l) g_l + [-1, 1] g_j + [-1, 1] g_k``, and its support is
+    ``h(n) = sum_l |n . g_l|``. ``p`` is inside when ``n . p <= h(n)`` for every facet (forces within the band
+    then balance the row: the ray from the centre through ``p`` leaves through a facet, whose forces scaled
+    back hold ``p``); outside, the nearest point lies on a facet that ``p`` lies beyond, and on each such facet
+    it is a box-constrained problem in two unknowns (:func:`_box2`). The answer is checked (inside: it
+    balances the row; outside: each force is at its bound towards the residual, or the residual is normal
+    to its generator); a degenerate set (parallel or coplanar generators) that fails the check falls back
+    to FISTA.
+    """
+    m = Bi.shape[1]
+    p0, p1, p2 = -a[0], -a[1], -a[2]
+    G = np.empty((m, 3))
+    norms = np.empty(m)
+    top = 0.0
+    for j in range(m):
+        for r in range(3):
+            G[j, r] = Bi[r, j] * F[j]
+        norms[j] = np.sqrt(G[j, 0] ** 2 + G[j, 1] ** 2 + G[j, 2] ** 2)
+        top = max(top, norms[j])
+    u = np.zeros(m)
+    if top <= 0.0:
+        return u
+    act = np.where(norms > DEGENERATE * top)[0]
+    na = len(act)
+    if na == 1:
+        j = act[0]
+        u[j] = min(max((G[j, 0] * p0 + G[j, 1] * p1 + G[j, 2] * p2) / norms[j] ** 2, -1.0), 1.0)
+        return u * F
+    full = False
+    for x in range(na):
+        for y in range(x + 1, na):
+            j, k = act[x], act[y]
+            n0 = G[j, 1] * G[k, 2] - G[j, 2] * G[k, 1]
+            n1 = G[j, 2] * G[k, 0] - G[j, 0] * G[k, 2]
+            n2 = G[j, 0] * G[k, 1] - G[j, 1] * G[k, 0]
+            for z in range(y + 1, na):
+                l = act[z]
+                if abs(n0 * G[l, 0] + n1 * G[l, 1] + n2 * G[l, 2]) > DEGENERATE * norms[j] * norms[k] * norms[l]:
+                    full = True
+                    break
+            if full:
+                break
+        if full:
+            break
+    inside = full
+    exit_t, ej, ek, e0, e1, e2 = np.inf, -1, -1, 0.0, 0.0, 0.0
+    best, bj, bk, b0, b1, b2, bu, bv = np.inf, -1, -1, 0.0, 0.0, 0.0, 0.0, 0.0
+    for x in range(na):
+        for y in range(x + 1, na):
+            j, k = act[x], act[y]
+            n0 = G[j, 1] * G[k, 2] - G[j, 2] * G[k, 1]
+            n1 = G[j, 2] * G[k, 0] - G[j, 0] * G[k, 2]
+            n2 = G[j, 0] * G[k, 1] - G[j, 1] * G[k, 0]
+            if np.sqrt(n0 * n0 + n1 * n1 + n2 * n2) <= DEGENERATE * norms[j] * norms[k]:
+                continue
+            h = 0.0
+            for l in act:
+                h += abs(n0 * G[l, 0] + n1 * G[l, 1] + n2 * G[l, 2])
+            np_ = n0 * p0 + n1 * p1 + n2 * p2
+            if full and abs(np_) > h:
+                inside = False
+            if full and abs(np_) > 0.0 and h / abs(np_) < exit_t:
+                sg = 1.0 if np_ > 0.0 else -1.0
+                exit_t, ej, ek, e0, e1, e2 = h / abs(np_), j, k, sg * n0, sg * n1, sg * n2
+    for x in range(na):
+        if inside:
+            break
+        for y in range(x + 1, na):
+            j, k = act[x], act[y]
+            n0 = G[j, 1] * G[k, 2] - G[j, 2] * G[k, 1]
+            n1 = G[j, 2] * G[k, 0] - G[j, 0] * G[k, 2]
+            n2 = G[j, 0] * G[k, 1] - G[j, 1] * G[k, 0]
+            if np.sqrt(n0 * n0 + n1 * n1 + n2 * n2) <= DEGENERATE * norms[j] * norms[k]:
+                continue
+            h = 0.0
+            for l in act:
+                h += abs(n0 * G[l, 0] + n1 * G[l, 1] + n2 * G[l, 2])
+            np_ = n0 * p0 + n1 * p1 + n2 * p2
+            for sgn in (-1.0, 1.0):
+                if full and sgn * np_ <= h:
+                    continue              # p is not beyond this facet: its nearest point is elsewhere
+                c0, c1, c2 = _facet_signs(G, act, j, k, sgn * n0, sgn * n1, sgn * n2, u)
+                d2, uu, vv = _box2(p0 - c0, p1 - c1, p2 - c2, G, j, k)
+                if d2 < best:
+                    best, bj, bk, b0, b1, b2, bu, bv = d2, j, k, sgn * n0, sgn * n1, sgn * n2, uu, vv
+    if inside:
+        if ej < 0:                         # p at the centre
+            return u
+        c0, c1, c2 = _facet_signs(G, act, ej, ek, e0, e1, e2, u)     # the exit facet's forces, scaled back
+        _, uu, vv = _box2(exit_t * p0 - c0, exit_t * p1 - c1, exit_t * p2 - c2, G, ej, ek)
+        u[ej], u[ek] = uu, vv
+        u /= exit_t
+    elif bj >= 0:
+        _facet_signs(G, act, bj, bk, b0, b1, b2, u)
+        u[bj], u[bk] = bu, bv
+    else:
+        return _fista_row(a, Bi, F, f0, MAX_ITER, STEP_TOL)
+    r0, r1, r2 = p0, p1, p2
+    for l in act:
+        r0 -= u[l] * G[l, 0]
+        r1 -= u[l] * G[l, 1]
+        r2 -= u[l] * G[l, 2]
+    nr = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+    pn = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+    if inside:
+        ok = nr <= 1e-9 * (pn + top)
+    else:
+        ok = True
+        for l in act:                      # optimality: a force short of its bound leaves no pull along it
+            pull = r0 * G[l, 0] + r1 * G[l, 1] + r2 * G[l, 2]
+            tol = 1e-7 * nr * norms[l] + 1e-14 * top * top
+            if (pull > tol and u[l] < 1.0 - 1e-9) or (pull < -tol and u[l] > -1.0 + 1e-9):
+                ok = False
+    if ok:
+        return u * F
+    return _fista_row(a, Bi, F, f0, MAX_ITER, STEP_TOL)
+
+
+@njit(cache=True)
+def _bounded_lsq(a: np.ndarray, B: np.ndarray, F: np.ndarray, f0: np.ndarray) -> np.ndarray:   # pragma: no cover
+    """``argmin_{|f_j| <= F_j} |a_i + B_i f|`` per row (:func:`_project_row`)."""
     n, _, m = B.shape
     out = np.empty((n, m))
     for i in range(n):
-        H = B[i].T @ B[i]
-        q = B[i].T @ a[i]
-        v = np.ones(m)
-        L = 0.0
-        for _ in range(30):                      # largest eigenvalue of H (power iteration)
-            w = H @ v
-            nw = np.sqrt(np.dot(w, w))
-            if nw <= 0.0:
-                break
-            L = nw / np.sqrt(np.dot(v, v))
-            v = w / nw
-        L *= 1.05
-        f = np.minimum(np.maximum(f0[i], -F), F)
-        if L <= 0.0:
-            out[i] = f
-            continue
-        y = f.copy()
-        t = 1.0
-        for _ in range(max_iter):
-            grad = H @ y + q
-            fn = np.minimum(np.maximum(y - grad / L, -F), F)
-            step = fn - f
-            if np.dot(step, H @ step) > 0 and np.dot(H @ fn + q, step) > 0:   # restart on a rise
-                t = 1.0
-                y = f.copy()
-                continue
-            tn = 0.5 * (1.0 + np.sqrt(1.0 + 4.0 * t * t))
-            y = fn + ((t - 1.0) / tn) * step
-            f, t = fn, tn
-            if np.dot(step, step) <= tol * (1.0 + np.dot(F, F)):
-                break
-        out[i] = f
+        out[i] = _project_row(a[i], B[i], F, f0[i])
     return out
 
 
 def stick_residual(a: np.ndarray, B: np.ndarray, F: np.ndarray,
                    f0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Distance vector of each row to its stick set, and the friction forces that leave it.
+
+    The nearest point of each stick set (a zonotope) is found exactly, facet by facet
+    (:func:`_project_row`); where the row lies inside the set the forces are one balancing choice.
 
     Parameters
     ----------
@@ -116,7 +298,7 @@ def stick_residual(a: np.ndarray, B: np.ndarray, F: np.ndarray,
     F : numpy.ndarray
         Band (m,) of each cable (N, >= 0).
     f0 : numpy.ndarray, optional
-        Starting forces (n, m) (a previous solution).
+        Starting forces (n, m) of the fallback iteration (degenerate sets only).
 
     Returns
     -------
@@ -128,7 +310,7 @@ def stick_residual(a: np.ndarray, B: np.ndarray, F: np.ndarray,
     B = np.ascontiguousarray(B, dtype=np.float64)
     F = np.ascontiguousarray(np.maximum(np.asarray(F, float), 0.0))
     f0 = np.zeros((len(a), B.shape[2])) if f0 is None else np.ascontiguousarray(f0, dtype=np.float64)
-    f = _bounded_lsq(a, B, F, f0, MAX_ITER, STEP_TOL)
+    f = _bounded_lsq(a, B, F, f0)
     return a + np.einsum("nij,nj->ni", B, f), f
 
 

@@ -1,6 +1,7 @@
 """The stick condition of settled friction (csjm_opt.diagnose.friction_stick) against independent solutions."""
 
 import numpy as np
+import pytest
 from scipy.optimize import lsq_linear
 
 from csjm_opt.diagnose.fitting.friction_stick import (
@@ -32,9 +33,49 @@ def test_row_balanced_by_forces_within_their_bounds_has_no_residual():
     F = np.full(6, 2.0)
     f_true = rng.uniform(-1.9, 1.9, (20, 6))
     a = -np.einsum("nij,nj->ni", B, f_true)
-    r, _ = stick_residual(a, B, F)
-    # the projected-gradient solve stops at a relative step of 1e-6: far below any noise
-    assert np.max(np.linalg.norm(r, axis=1)) < 1e-4 * np.mean(np.linalg.norm(a, axis=1))
+    r, f = stick_residual(a, B, F)
+    # the facet-by-facet projection is exact: the row is balanced to round-off by forces within the band
+    assert np.max(np.linalg.norm(r, axis=1)) < 1e-12 * np.mean(np.linalg.norm(a, axis=1))
+    assert np.all(np.abs(f) <= F + 1e-12)
+
+
+@pytest.mark.parametrize("m", [2, 3, 4, 6, 8, 12])
+def test_projection_is_exact_against_scipy_bvls_with_bands_off(m):
+    # scipy's bounded-variable least squares (an active-set solver) gives the distance to the zonotope;
+    # a band of zero fixes its force at zero (scipy is given the other cables only)
+    rng = np.random.default_rng(10 + m)
+    for _ in range(60):
+        B = rng.normal(size=(1, 3, m))
+        F = rng.uniform(0.0, 1.0, m) * (rng.uniform(size=m) > 0.25)
+        a = rng.normal(size=(1, 3)) * rng.choice([0.1, 1.0, 3.0])
+        r, f = stick_residual(a, B, F)
+        keep = F > 0
+        ref = np.linalg.norm(a[0])
+        if keep.any():
+            sol = lsq_linear(B[0][:, keep], -a[0], bounds=(-F[keep], F[keep]), method="bvls", tol=1e-15)
+            ref = np.linalg.norm(a[0] + B[0][:, keep] @ sol.x)
+        assert np.all(np.abs(f) <= F + 1e-12) and np.all(f[0][~keep] == 0.0)
+        np.testing.assert_allclose(r[0], a[0] + B[0] @ f[0], atol=1e-12)
+        assert abs(np.linalg.norm(r[0]) - ref) <= 1e-10 * (1.0 + np.linalg.norm(a[0]))
+
+
+@pytest.mark.parametrize("shape", ["parallel", "planar"])
+def test_degenerate_stick_sets_fall_back_and_stay_right(shape):
+    # two cables pulling along one line, or every cable in one plane: the facets are not parallelograms,
+    # the exact answer fails its check and the iteration gives it (against scipy's bvls)
+    rng = np.random.default_rng({"parallel": 21, "planar": 22}[shape])
+    for _ in range(30):
+        B = rng.normal(size=(1, 3, 5))
+        if shape == "parallel":
+            B[0, :, 1] = -0.6 * B[0, :, 0]
+        else:
+            B[0, 2, :] = 0.0
+        F = rng.uniform(0.2, 1.0, 5)
+        a = rng.normal(size=(1, 3))
+        r, f = stick_residual(a, B, F)
+        sol = lsq_linear(B[0], -a[0], bounds=(-F, F), method="bvls", tol=1e-15)
+        assert np.all(np.abs(f) <= F + 1e-12)
+        assert abs(np.linalg.norm(r[0]) - np.linalg.norm(a[0] + B[0] @ sol.x)) <= 1e-8
 
 
 def test_one_cable_distance_is_the_distance_to_a_segment():
