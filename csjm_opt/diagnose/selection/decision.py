@@ -41,10 +41,17 @@ from ..decision_rule import (  # noqa: F401 (ALPHA and the thresholds are re-exp
     _Context,
     combine_scales,
 )
-from ..effects import EFFECTS, make_effect
+from ..effects import EFFECTS, make_effect, n_cables_of
 from ..effects.base import PLAUSIBLE_Z
+from ..effects.cable_creep import CableCreep
 from ..fitting.augmented import N_NUISANCE
-from ..fitting.model_fits import VARIANTS, fit_pair, fit_single, variant_fit  # noqa: F401 (VARIANTS re-exported)
+from ..fitting.model_fits import (  # noqa: F401 (VARIANTS re-exported)
+    FIT_ERRORS,
+    VARIANTS,
+    fit_pair,
+    fit_single,
+    variant_fit,
+)
 from ..fitting.pool import map_ordered, resolve_workers
 from .pairs import all_separabilities, secondary_alternatives
 from .result import Diagnosis
@@ -162,6 +169,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
     remaining = ctx.signature(verdict.final)
     _rival_warnings(ctx, verdict, singles, tests, detected, pairs, pair_scores, n_cycles, remaining)
     _time_trend_warning(ctx, verdict)
+    _creep_warning(ctx, rig, verdict, baseline, floor0)
     d = Diagnosis(train=ctx.train, test=ctx.test, baseline=baseline, candidates=singles,
                   noise_floor_rad=ctx.scale(verdict.final) * ctx.instrument,
                   noise_estimates=_noise_estimates(ctx, verdict.final, baseline, singles), tests=tests,
@@ -483,6 +491,40 @@ def _time_trend_warning(ctx: _Context, verdict: Verdict) -> None:
                      f"{1e3 * max(abs(c) for c in trend['change_rad']):.2f} mrad over {trend['cycles']} cycles "
                      f"(p = {trend['p_value']:.1e}); a time-dependent fault (cable creep, a drifting sensor bias) "
                      "is outside the vocabulary")
+
+
+def _creep_warning(ctx: _Context, rig: Rig, verdict: Verdict, baseline: CandidateScore, floor0: float) -> None:
+    """Warn when linear cable creep, a time-dependent fault outside the vocabulary, explains the log as well.
+
+    The probe (:class:`~csjm_opt.diagnose.effects.cable_creep.CableCreep`, one parameter) is fitted like
+    a single and judged as a rival that replaces the verdict (:mod:`.rivals`): detected against the null
+    model, plausible, closing the gap, and either more probable than the verdict or within
+    ``EVIDENCE_MIN`` nats of it while the verdict does not beat it on held-out cycles. Then the residual
+    trends with time (sample order within each cycle) in a way the verdict only stands in for. With
+    ``none`` nothing is named, and nothing is said.
+    """
+    if verdict.selected == "none":
+        return
+    try:
+        sc = ctx.score([CableCreep(n_cables_of(rig))])
+    except FIT_ERRORS:
+        return
+    t = ctx.compare(baseline, sc, ALPHA, floor0)
+    if not (t["significant"] and t["plausible"] and ctx.closes(sc)):
+        return
+    nats = ctx.evidence(sc) - ctx.evidence(verdict.final)
+    p = paired_heldout_test(sc, verdict.final)           # one-sided: the verdict's held-out errors are lower
+    if verdict.selected != "unexplained" and not (nats > 0.0 or (nats > -EVIDENCE_MIN and p >= HELDOUT_ALPHA)):
+        return
+    rate = 100.0 * float(sc.fit.theta[-1])
+    verdict.creep = {"heldout_rms_rad": sc.heldout_rms_rad, "nats": nats, "heldout_p": p, "percent_per_row": rate}
+    name = verdict.model_name if verdict.selected != "unexplained" else "no model of the vocabulary"
+    verdict.warn(f"the log trends with time (sample order within each cycle): linear cable creep (outside the "
+                 f"vocabulary; tension lost {rate:.2g} % per row) explains it with held-out RMS "
+                 f"{1e3 * sc.heldout_rms_rad:.2f} mrad and {nats:+.1f} nats of evidence against {name} "
+                 f"(held-out p = {p:.2f}): {name} may be standing in for a time-dependent fault (creep, a slipping "
+                 "drive); rows repeated at one constant load separate them (creep keeps moving the pose, "
+                 "friction holds it)")
 
 
 def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, tick, planned: int,

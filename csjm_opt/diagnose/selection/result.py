@@ -27,7 +27,7 @@
     confounded_with     effects whose single fits are not separable from the selected one
                         and not significantly worse on held-out cycles
     verdict             {selected, reason, warnings[], alternatives[], secondary_alternatives[], look_alikes[],
-                        time_trend}: why, in
+                        time_trend, creep}: why, in
                         words; alternatives are detected effects not separable from the selected one on
                         this log; secondary_alternatives are effects that, paired with the selected one,
                         close the gap as well (evidence within LEAD_NATS) and are not separable from
@@ -39,7 +39,10 @@
                         evidence or within EVIDENCE_MIN nats while the verdict does not beat it
                         on held-out cycles; rivals.py); look_alikes are few-number models that explain
                         the log as well as a flexible verdict (hole offsets); time_trend is the trend of
-                        the residual's cycle means over the log's time order (trend.py)
+                        the residual's cycle means over the log's time order (trend.py); creep is
+                        {heldout_rms_rad, nats, heldout_p, percent_per_row} of linear cable creep (a probe
+                        outside the vocabulary, effects/cable_creep.py) when it explains the log as well
+                        as the verdict (else null)
     significance        the decision rule's constants and tests
     gap                 {before_rad, after_rad, fraction_explained, systematic_before_rad,
                          systematic_after_rad, noise_floor_after_rad, fraction_explained_by_nominal_refit,

@@ -61,6 +61,8 @@ class Verdict:
     stand_ins: list[str] = dataclasses.field(default_factory=list)
     #: the residual's trend over the log's time order (sample order), when it has one
     time_trend: dict | None = None
+    #: linear cable creep (outside the vocabulary) when it explains the log as well as the verdict
+    creep: dict | None = None
 
     @property
     def named(self) -> bool:
@@ -93,4 +95,4 @@ class Verdict:
                 "evidence_margin": self.evidence_margin, "more_probable_rivals": list(self.more_probable_rivals),
                 "alternatives": list(self.alternatives), "secondary_alternatives": list(self.secondary_alternatives),
                 "unsettled_rivals": list(self.unsettled_rivals), "look_alikes": list(self.look_alikes),
-                "stand_ins": list(self.stand_ins), "time_trend": self.time_trend}
+                "stand_ins": list(self.stand_ins), "time_trend": self.time_trend, "creep": self.creep}
