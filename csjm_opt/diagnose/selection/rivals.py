@@ -197,14 +197,16 @@ def alternatives_warnings(selected: str, found: list[dict]) -> list[str]:
     -------
     list of str
     """
+    def inseparable(names: str) -> str:
+        return (f"{selected} is not separable on this log from {names} "
+                "(detected too; Fisher block correlation above the separability limit)")
+
     out = []
     lead = [a["model"] for a in found if a["route"] == "evidence"]
     if lead:
-        out.append(f"{selected} is not separable on this log from {', '.join(lead)} "
-                   "(detected too; Fisher block correlation above the separability limit)")
+        out.append(inseparable(", ".join(lead)))
     for a in (a for a in found if a["route"] == "fit"):
-        out.append(f"{selected} is not separable on this log from {a['model']} (detected too; Fisher block correlation "
-                   f"above the separability limit): {a['model']} fits the log as well (chi^2 {a['chi2_excess']:+.1f} "
+        out.append(f"{inseparable(a['model'])}: {a['model']} fits the log as well (chi^2 {a['chi2_excess']:+.1f} "
                    f"against {selected}'s, held-out p = {a['heldout_p']:.2f}) and has {-a['nats']:.1f} nats less "
                    "evidence only as the price of its parameters under their priors, which this log cannot check: "
                    f"the log does not single out {selected}; --suggest designs rows that separate them")
