@@ -175,8 +175,11 @@ def run(args: argparse.Namespace) -> int:
                 print(f"suggest: {sj['rows']} rows in {sj['cycles']} cycles written to {args.protocol}")
                 print(f"  why: {suggestion.purpose}")
                 for k, v in sj["expected_separation_sd"].items():
+                    note = ("; equivalent: no feasible rows of loads through the sensor tell them apart, a "
+                            "measurement of another kind must (e.g. a known mass fixed to the platform, measured "
+                            "cable tensions)" if k in sj["equivalent"] else "")
                     print(f"  {k}: expected separation {v:.1f} noise sd (this log: "
-                          f"{sj['separation_on_log_sd'].get(k, float('nan')):.1f})")
+                          f"{sj['separation_on_log_sd'].get(k, float('nan')):.1f}){note}")
     return 0
 
 
