@@ -207,6 +207,22 @@ def test_a_set_valued_rival_is_not_confirmed_by_held_out_errors_alone():
     assert [r["model"] for r in unsettled_rivals(close, "V")] == ["R"]
 
 
+def test_an_effect_added_to_a_stick_model_must_be_decisively_more_probable():
+    """V + X with the same held-out errors: listed at any positive margin over a point verdict, but over a
+    set-valued one (settled friction, whose Laplace evidence carries several nats) only beyond EVIDENCE_MIN."""
+    rng = np.random.default_rng(6)
+    one = np.ones(N_CYCLES)
+    same = np.exp(rng.normal(0.0, 0.1, N_CYCLES))
+    for margin, listed_on_stick in ((0.5 * EVIDENCE_MIN, False), (1.5 * EVIDENCE_MIN, True)):
+        point = {"V": _model(0.0, one), "V+X": _model(margin, same)}
+        assert [r["model"] for r in unsettled_rivals(point, "V")] == ["V+X"]
+        stick = {"V": {**_model(0.0, one), "set_valued": True}, "V+X": {**_model(margin, same), "set_valued": True}}
+        assert bool(unsettled_rivals(stick, "V")) == listed_on_stick
+    # a replacing rival is judged as before: within EVIDENCE_MIN and tied on held-out cycles, it is listed
+    stick = {"V": {**_model(0.0, one), "set_valued": True}, "Y": _model(-0.5 * EVIDENCE_MIN, same)}
+    assert [r["model"] for r in unsettled_rivals(stick, "V")] == ["Y"]
+
+
 def test_inseparable_look_alikes_are_listed_when_they_fit_as_well():
     """A detected effect the log cannot separate from the verdict is listed when it is a leading hypothesis (evidence
     within LEAD_NATS), or, for a single verdict, when it closes the gap, is not beaten on held-out cycles and its misfit
