@@ -518,13 +518,13 @@ def _creep_warning(ctx: _Context, rig: Rig, verdict: Verdict, baseline: Candidat
         return
     rate = 100.0 * float(sc.fit.theta[-1])
     verdict.creep = {"heldout_rms_rad": sc.heldout_rms_rad, "nats": nats, "heldout_p": p, "percent_per_row": rate}
-    name = verdict.model_name if verdict.selected != "unexplained" else "no model of the vocabulary"
+    name = verdict.model_name
+    what = (f"{name} may be standing in for" if verdict.selected != "unexplained" else "the unexplained gap may be")
     verdict.warn(f"the log trends with time (sample order within each cycle): linear cable creep (outside the "
                  f"vocabulary; tension lost {rate:.2g} % per row) explains it with held-out RMS "
                  f"{1e3 * sc.heldout_rms_rad:.2f} mrad and {nats:+.1f} nats of evidence against {name} "
-                 f"(held-out p = {p:.2f}): {name} may be standing in for a time-dependent fault (creep, a slipping "
-                 "drive); rows repeated at one constant load separate them (creep keeps moving the pose, "
-                 "friction holds it)")
+                 f"(held-out p = {p:.2f}): {what} a time-dependent fault (creep, a slipping drive); rows "
+                 "repeated at one constant load separate them (creep keeps moving the pose, friction holds it)")
 
 
 def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, tick, planned: int,
