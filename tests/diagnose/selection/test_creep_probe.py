@@ -40,7 +40,7 @@ def _creeping_log(rig, lam, n_cycles, seed):
 
 
 def test_a_creeping_rig_is_warned_about_and_its_rate_found(rig):
-    d = diagnose(rig, _creeping_log(rig, CREEP_PER_ROW, 8, 3), secondary=False, workers=1)
+    d = diagnose(rig, _creeping_log(rig, CREEP_PER_ROW, 6, 3), secondary=False, workers=1)
     creep = d.verdict.creep
     assert d.selected != "none" and creep is not None
     assert creep["percent_per_row"] == pytest.approx(100 * CREEP_PER_ROW, rel=0.2)
@@ -48,7 +48,7 @@ def test_a_creeping_rig_is_warned_about_and_its_rate_found(rig):
 
 
 def test_friction_is_not_taken_for_creep(rig):
-    log = simulate_experiment(rig, 8, np.random.default_rng(4), effect="friction", severity=3.0)
+    log = simulate_experiment(rig, 6, np.random.default_rng(4), effect="friction", severity=3.0)
     d = diagnose(rig, log, secondary=False, workers=1)
     assert d.selected == "friction"
     assert d.verdict.creep is None
