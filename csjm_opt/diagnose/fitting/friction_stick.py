@@ -150,7 +150,8 @@ def _facet_signs(G: np.ndarray, act: np.ndarray, j: int, k: int, n0: float, n1: 
 
 
 @njit(cache=True)
-def _project_row(a: np.ndarray, Bi: np.ndarray, F: np.ndarray, f0: np.ndarray) -> np.ndarray:   # pragma: no cover
+def _project_row(a: np.ndarray, Bi: np.ndarray, F: np.ndarray, f0: np.ndarray, pj: np.ndarray, pk: np.ndarray,
+                 pz: np.ndarray, N: np.ndarray, h: np.ndarray) -> np.ndarray:   # pragma: no cover
     """``argmin_{|f_j| <= F_j} |a + B f|``: the nearest point of the zonotope ``{B f}`` to ``p = -a``, exactly.
 
     A zonotope in space is bounded by parallelograms: the facet with outward normal ``n = +-(g_j x g_k)``
@@ -161,7 +162,8 @@ def _project_row(a: np.ndarray, Bi: np.ndarray, F: np.ndarray, f0: np.ndarray) -
     it is a box-constrained problem in two unknowns (:func:`_box2`). The answer is checked (inside: it
     balances the row; outside: each force is at its bound towards the residual, or the residual is normal
     to its generator); a degenerate set (parallel or coplanar generators) that fails the check falls back
-    to FISTA.
+    to FISTA. ``pj, pk, pz`` (integers), ``N`` (., 3) and ``h`` are work space for the ``m (m - 1) / 2``
+    facets (the caller's, reused from row to row).
     """
     m = Bi.shape[1]
     p0, p1, p2 = -a[0], -a[1], -a[2]
@@ -182,63 +184,56 @@ def _project_row(a: np.ndarray, Bi: np.ndarray, F: np.ndarray, f0: np.ndarray) -
         j = act[0]
         u[j] = min(max((G[j, 0] * p0 + G[j, 1] * p1 + G[j, 2] * p2) / norms[j] ** 2, -1.0), 1.0)
         return u * F
-    full = False
+    # the facet normals g_j x g_k of the non-degenerate pairs and their supports h = sum_l |n . g_l|, once
+    nf = 0
     for x in range(na):
         for y in range(x + 1, na):
             j, k = act[x], act[y]
             n0 = G[j, 1] * G[k, 2] - G[j, 2] * G[k, 1]
             n1 = G[j, 2] * G[k, 0] - G[j, 0] * G[k, 2]
             n2 = G[j, 0] * G[k, 1] - G[j, 1] * G[k, 0]
-            for z in range(y + 1, na):
-                l = act[z]
-                if abs(n0 * G[l, 0] + n1 * G[l, 1] + n2 * G[l, 2]) > DEGENERATE * norms[j] * norms[k] * norms[l]:
-                    full = True
-                    break
-            if full:
+            if np.sqrt(n0 * n0 + n1 * n1 + n2 * n2) <= DEGENERATE * norms[j] * norms[k]:
+                continue
+            hq = 0.0
+            for l in act:
+                hq += abs(n0 * G[l, 0] + n1 * G[l, 1] + n2 * G[l, 2])
+            pj[nf], pk[nf], pz[nf], h[nf] = j, k, y + 1, hq
+            N[nf, 0], N[nf, 1], N[nf, 2] = n0, n1, n2
+            nf += 1
+    full = False                          # some triple of generators spans space (a degenerate pair never does)
+    for q in range(nf):
+        j, k = pj[q], pk[q]
+        for z in range(pz[q], na):
+            l = act[z]
+            if abs(N[q, 0] * G[l, 0] + N[q, 1] * G[l, 1] + N[q, 2] * G[l, 2]) > \
+                    DEGENERATE * norms[j] * norms[k] * norms[l]:
+                full = True
                 break
         if full:
             break
     inside = full
     exit_t, ej, ek, e0, e1, e2 = np.inf, -1, -1, 0.0, 0.0, 0.0
     best, bj, bk, b0, b1, b2, bu, bv = np.inf, -1, -1, 0.0, 0.0, 0.0, 0.0, 0.0
-    for x in range(na):
-        for y in range(x + 1, na):
-            j, k = act[x], act[y]
-            n0 = G[j, 1] * G[k, 2] - G[j, 2] * G[k, 1]
-            n1 = G[j, 2] * G[k, 0] - G[j, 0] * G[k, 2]
-            n2 = G[j, 0] * G[k, 1] - G[j, 1] * G[k, 0]
-            if np.sqrt(n0 * n0 + n1 * n1 + n2 * n2) <= DEGENERATE * norms[j] * norms[k]:
-                continue
-            h = 0.0
-            for l in act:
-                h += abs(n0 * G[l, 0] + n1 * G[l, 1] + n2 * G[l, 2])
-            np_ = n0 * p0 + n1 * p1 + n2 * p2
-            if full and abs(np_) > h:
-                inside = False
-            if full and abs(np_) > 0.0 and h / abs(np_) < exit_t:
-                sg = 1.0 if np_ > 0.0 else -1.0
-                exit_t, ej, ek, e0, e1, e2 = h / abs(np_), j, k, sg * n0, sg * n1, sg * n2
-    for x in range(na):
+    for q in range(nf):
+        np_ = N[q, 0] * p0 + N[q, 1] * p1 + N[q, 2] * p2
+        if full and abs(np_) > h[q]:
+            inside = False
+        if full and abs(np_) > 0.0 and h[q] / abs(np_) < exit_t:
+            sg = 1.0 if np_ > 0.0 else -1.0
+            exit_t, ej, ek, e0, e1, e2 = h[q] / abs(np_), pj[q], pk[q], sg * N[q, 0], sg * N[q, 1], sg * N[q, 2]
+    for q in range(nf):
         if inside:
             break
-        for y in range(x + 1, na):
-            j, k = act[x], act[y]
-            n0 = G[j, 1] * G[k, 2] - G[j, 2] * G[k, 1]
-            n1 = G[j, 2] * G[k, 0] - G[j, 0] * G[k, 2]
-            n2 = G[j, 0] * G[k, 1] - G[j, 1] * G[k, 0]
-            if np.sqrt(n0 * n0 + n1 * n1 + n2 * n2) <= DEGENERATE * norms[j] * norms[k]:
-                continue
-            h = 0.0
-            for l in act:
-                h += abs(n0 * G[l, 0] + n1 * G[l, 1] + n2 * G[l, 2])
-            np_ = n0 * p0 + n1 * p1 + n2 * p2
-            for sgn in (-1.0, 1.0):
-                if full and sgn * np_ <= h:
-                    continue              # p is not beyond this facet: its nearest point is elsewhere
-                c0, c1, c2 = _facet_signs(G, act, j, k, sgn * n0, sgn * n1, sgn * n2, u)
-                d2, uu, vv = _box2(p0 - c0, p1 - c1, p2 - c2, G, j, k)
-                if d2 < best:
-                    best, bj, bk, b0, b1, b2, bu, bv = d2, j, k, sgn * n0, sgn * n1, sgn * n2, uu, vv
+        j, k = pj[q], pk[q]
+        np_ = N[q, 0] * p0 + N[q, 1] * p1 + N[q, 2] * p2
+        for sgn in (-1.0, 1.0):
+            if full and sgn * np_ <= h[q]:
+                continue                  # p is not beyond this facet: its nearest point is elsewhere
+            n0, n1, n2 = sgn * N[q, 0], sgn * N[q, 1], sgn * N[q, 2]
+            c0, c1, c2 = _facet_signs(G, act, j, k, n0, n1, n2, u)
+            d2, uu, vv = _box2(p0 - c0, p1 - c1, p2 - c2, G, j, k)
+            if d2 < best:
+                best, bj, bk, b0, b1, b2, bu, bv = d2, j, k, n0, n1, n2, uu, vv
     if inside:
         if ej < 0:                         # p at the centre
             return u
@@ -277,8 +272,11 @@ def _bounded_lsq(a: np.ndarray, B: np.ndarray, F: np.ndarray, f0: np.ndarray) ->
     """``argmin_{|f_j| <= F_j} |a_i + B_i f|`` per row (:func:`_project_row`)."""
     n, _, m = B.shape
     out = np.empty((n, m))
+    P = m * (m - 1) // 2
+    pj, pk, pz = np.empty(P, np.int64), np.empty(P, np.int64), np.empty(P, np.int64)
+    N, h = np.empty((P, 3)), np.empty(P)
     for i in range(n):
-        out[i] = _project_row(a[i], B[i], F, f0[i])
+        out[i] = _project_row(a[i], B[i], F, f0[i], pj, pk, pz, N, h)
     return out
 
 
