@@ -28,15 +28,17 @@ from .base import Effect
 RANGE_PER_ROW = 0.05
 
 
-def within_cycle_sum(cycle: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """The running sum of ``values`` (n, ...) over the rows of each cycle so far (rows of a cycle consecutive)."""
-    cycle = np.asarray(cycle)
+def within_cycle_sum(positions: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """The running sum of ``values`` (n, ...) over the rows of each cycle so far.
+
+    ``positions``: each row's place in its cycle (0 = first row; :attr:`Rows.positions
+    <csjm_opt.diagnose.fitting.augmented.Rows.positions>`).
+    """
     values = np.asarray(values, float)
     total = np.cumsum(values, axis=0)
-    first = np.flatnonzero(np.r_[True, cycle[1:] != cycle[:-1]])
+    start = np.arange(len(values)) - np.asarray(positions, int)   # each row's cycle start
     before = np.zeros_like(values)
-    before[first[1:]] = total[first[1:] - 1]                      # the sum up to each cycle's start
-    start = first[np.searchsorted(first, np.arange(len(cycle)), side="right") - 1]
+    before[1:] = total[:-1]                                       # the sum over the rows before each row
     return total - before[start]
 
 
@@ -70,7 +72,7 @@ class CableCreep(Effect):
 
     def adjust_tension(self, ev, stretch, T, p):
         """Each tension less ``lambda`` times its running sum over the row's cycle (never below zero)."""
-        return np.maximum(T - float(p[0]) * within_cycle_sum(ev.rows.cycle, T), 0.0)
+        return np.maximum(T - float(p[0]) * within_cycle_sum(ev.rows.positions, T), 0.0)
 
     def describe(self, p):
         """``creep_percent_per_row``: the share of a cable's tension lost per row and newton-row (%)."""

@@ -18,8 +18,9 @@ def test_within_cycle_sum_restarts_at_every_cycle():
     for i, v in enumerate(values):                            # a plain loop over the rows
         run = v if i == 0 or cycle[i] != cycle[i - 1] else run + v
         expected.append(run)
-    np.testing.assert_array_equal(within_cycle_sum(cycle, values), expected)
-    both = within_cycle_sum(cycle, np.c_[values, -2 * values])
+    positions = Rows(np.zeros((11, 6)), np.zeros((11, 3)), cycle, np.zeros((11, 6))).positions
+    np.testing.assert_array_equal(within_cycle_sum(positions, values), expected)
+    both = within_cycle_sum(positions, np.c_[values, -2 * values])
     np.testing.assert_array_equal(both[:, 1], -2 * np.asarray(expected))
 
 
