@@ -39,8 +39,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import log_ndtr
 
-from .augmented import N_NUISANCE
-from .gauss_newton import FitResult
+from ..data.residuals import ResidualTable
+from .augmented import N_NUISANCE, AugmentedModel
+from .gauss_newton import FitResult, linearisation
 
 #: Prior sd of a parameter without a finite range, in units of its scale.
 UNBOUNDED_SD_SCALES = 10.0
@@ -107,7 +108,7 @@ def _prior(fit: FitResult) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.concatenate(mean), np.concatenate(sd), np.concatenate(side)
 
 
-def log_evidence(fit: FitResult, noise_scale: float, at_fit: bool = False) -> float:
+def log_evidence(fit: FitResult, noise_scale: float, at_fit: bool = False, trust: bool = True) -> float:
     """Laplace log marginal likelihood of ``fit``'s model (up to a constant shared by all models).
 
     Parameters
@@ -123,6 +124,10 @@ def log_evidence(fit: FitResult, noise_scale: float, at_fit: bool = False) -> fl
         when the fit is at that mode. Where they differ, the difference is misfit that only the
         linearisation promises (a Jacobian that is not the model's exact one, or a fit that stopped
         short): a comparison that must hold for the model as fitted uses this.
+    trust : bool, optional
+        Hold a parameter whose step would exceed ``TRUST_PRIOR_SDS`` prior sds at its value (default). False:
+        the linearised model's evidence wherever its mode lies (a prediction from a point that is not a fit,
+        :func:`predicted_evidence`, must not be held at its start).
 
     Returns
     -------
@@ -149,7 +154,7 @@ def log_evidence(fit: FitResult, noise_scale: float, at_fit: bool = False) -> fl
     # TRUST_PRIOR_SDS prior sds (a flat direction the fit followed far out, where the prior says the
     # value is implausible) keeps its fitted value, and its prior density there is paid
     far = np.abs(dx) > TRUST_PRIOR_SDS * sd
-    if far.any():
+    if trust and far.any():
         near = ~far
         dx = np.zeros_like(dx)
         if near.any():
@@ -166,6 +171,31 @@ def log_evidence(fit: FitResult, noise_scale: float, at_fit: bool = False) -> fl
         post_sd = np.sqrt(np.maximum(np.diag(np.linalg.inv(A))[h], 1e-300))
         trunc = float(np.sum(np.log(2.0) + log_ndtr(side[h] * (x[h] - m[h]) / post_sd)))
     return float(-0.5 * quad - 0.5 * logdet + trunc)
+
+
+def predicted_evidence(model: AugmentedModel, table: ResidualTable, theta: np.ndarray, noise_scale: float) -> float:
+    """Log evidence of ``model`` predicted from ``theta``, a point that is not its fit (a score test).
+
+    The model is linearised at ``theta`` and its linearised evidence taken (:func:`log_evidence`, every
+    parameter free to travel to the linearised mode): what a fit from ``theta`` reaches where the model is
+    linear near it. From a single effect's fit with a second effect at its nominal value, this is Rao's score
+    (Lagrange multiplier) test of adding the second effect, priced by its Occam factor.
+
+    Parameters
+    ----------
+    model : AugmentedModel
+    table : ResidualTable
+        The rows (training rows).
+    theta : numpy.ndarray
+        Full parameter vector (nuisance first), SI units.
+    noise_scale : float
+        Noise standard deviation in whitened units.
+
+    Returns
+    -------
+    float
+    """
+    return log_evidence(linearisation(model, table, theta), noise_scale, trust=False)
 
 
 def effective_parameters(fit: FitResult, noise_scale: float) -> float:

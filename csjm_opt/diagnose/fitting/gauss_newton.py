@@ -242,6 +242,22 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     return FitResult(model, theta, cov, rss, N, p_eff, rank, cond, zeta, Jfull, res(x), free, table.rows)
 
 
+def linearisation(model: AugmentedModel, table: ResidualTable, theta: np.ndarray) -> FitResult:
+    """``model`` linearised at ``theta`` without fitting it: its whitened residuals and Jacobian there.
+
+    A :class:`FitResult` whose fit statistics are those of the point (no covariance), for a
+    prediction of what a fit from ``theta`` would reach (:func:`.evidence.predicted_evidence`).
+    ``theta`` is clipped into the bounds.
+    """
+    theta = np.clip(np.asarray(theta, float), model.lower_bounds, model.upper_bounds)
+    zeta, g0, G = _linearised(model, table, theta)
+    r = np.einsum("nij,nj->ni", table.whiten, zeta).ravel()
+    J = data_jacobian(model, table, theta, (g0, G))
+    p = len(theta)
+    return FitResult(model, theta, np.full((p, p), np.nan), float(r @ r), r.size, float("nan"), 0, float("nan"),
+                     zeta, J, r, np.ones(p, bool), table.rows)
+
+
 def objective(model: AugmentedModel, table: ResidualTable, theta: np.ndarray) -> float:
     """The cost :func:`fit_model` minimises, at ``theta``: whitened linearised residuals plus priors.
 

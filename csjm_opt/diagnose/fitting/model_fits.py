@@ -18,8 +18,8 @@ from ...model.rig import Rig
 from ..decision_rule import _Context
 from ..effects import make_effect
 from ..selection.scoring import CandidateScore, score
-from .augmented import AugmentedModel
-from .evidence import log_evidence
+from .augmented import N_NUISANCE, AugmentedModel
+from .evidence import log_evidence, predicted_evidence
 from .friction_stick import settled_score
 from .gauss_newton import FitResult, fit_model
 
@@ -207,3 +207,67 @@ def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[s
         return score_with(ctx, model, fit), None
     except FIT_ERRORS as exc:
         return None, f"fit failed: {exc}"
+
+
+#: A pair whose evidence, predicted one Gauss-Newton step from its singles' fits
+#: (:func:`predicted_pair_evidence`), is this many nats below the best single's is not fitted: no rule
+#: reads a model that far below (a pair is named, or a rival, within ``LEAD_NATS``), and the margin
+#: stands for what the linearisation misses (measured over the validation logs and the confusion study's,
+#: ``benchmarks/bench_pair_screen.py``).
+SCREEN_NATS = 60.0
+
+
+def predicted_pair_evidence(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
+                            fits: Mapping[str, FitResult], pair: tuple[str, str]) -> float:
+    """The pair's log evidence predicted from each single's fit, the larger (nan: no prediction).
+
+    From the fit of one effect of the pair, the other at its nominal value, the pair model is linearised
+    and its evidence taken (:func:`.evidence.predicted_evidence`, a score test): where a second effect
+    would explain part of what the first leaves, the step finds it; where two effects hide each other
+    (neither single detected), the step from either finds the pair's joint direction. No prediction from a
+    settled single (a stick model's fit is not a point of the pair's path model), and none for a model with
+    a loading path (friction along the path: on ``mujoco_b/b1_tendon_friction`` joint friction + link
+    compliance reached 113 nats more than predicted). Each effect keeps its
+    single's variant (the pair's fit chooses afresh: the margin covers the difference).
+    """
+    effects = [make_effect(e, rig, ranges, **({} if is_settled(e, options.get(e, {})) else options.get(e, {})))
+               for e in pair]
+    model = AugmentedModel(rig, effects)
+    best = float("nan")
+    if model.path_dependent:      # a loading path's state moves far from where it is linearised: no prediction
+        return best
+    for i, name in enumerate(pair):
+        fit = fits.get(name)
+        if fit is None or fit.evidence_fn is not None or is_settled(name, options.get(name, {})):
+            continue
+        parts = [effects[j].x0() for j in range(2)]
+        if len(fit.theta) != N_NUISANCE + len(parts[i]):
+            continue
+        parts[i] = fit.theta[N_NUISANCE:]
+        theta = np.concatenate([fit.theta[:N_NUISANCE], *parts])
+        try:
+            ev = predicted_evidence(model, ctx.train, theta, ctx.sigma)
+        except FIT_ERRORS:
+            continue
+        if np.isfinite(ev):
+            best = ev if not np.isfinite(best) else max(best, ev)
+    return best
+
+
+def screened_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
+                  stick_scales: Mapping[str, float] | None, screen: tuple[Mapping[str, FitResult], float] | None,
+                  pair: tuple[str, str]) -> tuple[CandidateScore | None, str | None, float]:
+    """:func:`fit_pair`, unless its predicted evidence is below ``screen``'s floor: ``(score, message, predicted)``.
+
+    ``screen``: the singles' fits and the evidence below which a pair is not fitted (None: every pair is
+    fitted). A pair with a settled lead (``stick_scales``) is always fitted. ``predicted`` is nan where no
+    prediction was made; a pair not fitted returns ``(None, None, predicted)``.
+    """
+    predicted = float("nan")
+    if screen is not None and not (stick_scales and any(e in stick_scales for e in pair)):
+        fits, floor = screen
+        predicted = predicted_pair_evidence(ctx, rig, ranges, options, fits, pair)
+        if predicted < floor:
+            return None, None, predicted
+    sc, message = fit_pair(ctx, rig, ranges, options, stick_scales, pair)
+    return sc, message, predicted

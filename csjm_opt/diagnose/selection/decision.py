@@ -48,8 +48,9 @@ from ..fitting.augmented import N_NUISANCE
 from ..fitting.model_fits import (  # noqa: F401 (VARIANTS re-exported)
     FIT_ERRORS,
     VARIANTS,
-    fit_pair,
+    SCREEN_NATS,
     fit_single,
+    screened_pair,
     variant_fit,
 )
 from ..fitting.pool import map_ordered, resolve_workers
@@ -554,11 +555,17 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
     # a settled lead's noise scale (set-valued models are compared at one scale: its pairs are scored at it)
     lead = singles.get(first) if first is not None else None
     stick = {first: lead.heldout_density[2]} if lead is not None and lead.heldout_density is not None else {}
-    for (a, b), (sc, error) in zip(todo, map_ordered(fit_pair, (ctx, rig, ranges, options, stick), todo, workers,
-                                                     tick)):
+    # a pair whose evidence, predicted from its singles' fits, lies far below the best single's is not fitted
+    # (:data:`~..fitting.model_fits.SCREEN_NATS`; the Bonferroni level above still counts it)
+    screen = ({n: sc.fit for n, sc in singles.items()},
+              max(ctx.evidence(sc) for sc in singles.values()) - SCREEN_NATS) if singles else None
+    done = map_ordered(screened_pair, (ctx, rig, ranges, options, stick, screen), todo, workers, tick)
+    for (a, b), (sc, error, predicted) in zip(todo, done):
         entry = next(p for p in pairs if set(p["effects"]) == {a, b})
+        entry["predicted_log_evidence"] = predicted
         if sc is None:
-            entry["error"] = str(error)
+            if error is not None:
+                entry["error"] = str(error)
             continue
         scores[(a, b)] = sc
         # a few-number pair is tested against its own singles, not against a flexible first effect (36 hole
