@@ -10,10 +10,10 @@ of nearest measured moment; under noise alone ``E||zeta_up - zeta_down||^2 =
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
 from .noise import systematic
 from .residuals import ResidualTable, rms
+from .tails import chi2_sf, f_sf
 
 AXES = ("x", "y", "z")
 
@@ -54,7 +54,7 @@ def hysteresis(table: ResidualTable, zeta: np.ndarray, floor: float) -> dict:
         return {"pairs": 0}
     d = np.asarray(diffs)
     stat = float(np.sum(d ** 2) / (2 * floor ** 2)) if floor > 0 else float("inf")
-    p = float(stats.chi2.sf(stat, 3 * len(d))) if np.isfinite(stat) else 0.0
+    p = float(chi2_sf(stat, 3 * len(d))) if np.isfinite(stat) else 0.0
     return {"pairs": len(d), "rms_up_minus_down_rad": rms(d), "expected_from_noise_rad": float(np.sqrt(2) * floor),
             "mean_up_minus_down_rad": d.mean(axis=0).tolist(), "p_value": p, "significant": bool(p < 0.01)}
 
@@ -161,5 +161,5 @@ def remaining_signature(table: ResidualTable, zeta: np.ndarray, floor: float, al
     if N - p < 3 or rss1 <= 0:
         return {**out, "p_value": float("nan"), "significant": False, "f_stat": float("nan"), "dof": [p, N - p]}
     F = (rss0 - rss1) / p / (rss1 / (N - p))
-    pv = float(stats.f.sf(F, p, N - p))
+    pv = f_sf(F, p, N - p)
     return {**out, "p_value": pv, "significant": bool(pv < alpha), "f_stat": float(F), "dof": [p, N - p]}

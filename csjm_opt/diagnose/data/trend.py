@@ -15,7 +15,8 @@ significant and *material*: its change over the log is at least ``share`` noise 
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
+
+from .tails import linear_trend
 
 
 def time_trend(zeta_rad: np.ndarray, cycle: np.ndarray, floor_rad: float, alpha: float = 0.01,
@@ -53,9 +54,9 @@ def time_trend(zeta_rad: np.ndarray, cycle: np.ndarray, floor_rad: float, alpha:
     t = np.arange(C, dtype=float)
     p, change = [], []
     for j in range(3):
-        fit = stats.linregress(t, means[:, j])
-        p.append(float(fit.pvalue) if np.isfinite(fit.pvalue) else 1.0)
-        change.append(float(fit.slope * (C - 1)))
+        slope, pv = linear_trend(t, means[:, j])
+        p.append(pv if np.isfinite(pv) else 1.0)
+        change.append(float(slope * (C - 1)))
     p_value = float(min(1.0, 3.0 * min(p)))
     material = float(np.max(np.abs(change))) >= share * float(floor_rad)
     return {"p_value": p_value, "change_rad": change, "cycles": C, "trends": bool(p_value < alpha and material)}

@@ -191,22 +191,30 @@ def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[s
             sc = _settled(ctx, rig, ranges, effects, [max(known)])
             if sc is not None:
                 return sc, None
-        # a settled effect that is not the lead joins a point model as its path variant: a stick set scored at
-        # a noise scale of its own would absorb the lead's misfit at a price no point model pays
-        options = {e: ({} if is_settled(e, o) else o) for e, o in options.items()}
-        # an effect's variant (friction's law and memory) is chosen on the model being fitted: a single
-        # fit that had to absorb the partner effect may prefer another law than the pair does
-        fit: FitResult | None = None
-        opt_a = options.get(a, {})
-        if a in VARIANTS:
-            opt_a, fit = variant_fit(ctx, rig, a, ranges, after=[make_effect(b, rig, ranges, **options.get(b, {}))])
-        opt_b = options.get(b, {})
-        if b in VARIANTS:
-            opt_b, fit = variant_fit(ctx, rig, b, ranges, before=[make_effect(a, rig, ranges, **opt_a)])
-        model = AugmentedModel(rig, [make_effect(a, rig, ranges, **opt_a), make_effect(b, rig, ranges, **opt_b)])
-        return score_with(ctx, model, fit), None
+        return score_with(ctx, *point_pair(ctx, rig, ranges, options, pair)), None
     except FIT_ERRORS as exc:
         return None, f"fit failed: {exc}"
+
+
+def point_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
+               pair: tuple[str, str]) -> tuple[AugmentedModel, FitResult | None]:
+    """The point model of pair ``(a, b)`` (variants chosen on it), and its plain training fit where known.
+
+    A settled effect joins as its path variant: a stick set scored at a noise scale of its own would absorb
+    the other effect's misfit at a price no point model pays. An effect's variant (friction's law and
+    memory) is chosen on the pair's model: a single fit that had to absorb the partner effect may prefer
+    another law than the pair does.
+    """
+    a, b = pair
+    options = {e: ({} if is_settled(e, o) else o) for e, o in options.items()}
+    fit: FitResult | None = None
+    opt_a = options.get(a, {})
+    if a in VARIANTS:
+        opt_a, fit = variant_fit(ctx, rig, a, ranges, after=[make_effect(b, rig, ranges, **options.get(b, {}))])
+    opt_b = options.get(b, {})
+    if b in VARIANTS:
+        opt_b, fit = variant_fit(ctx, rig, b, ranges, before=[make_effect(a, rig, ranges, **opt_a)])
+    return AugmentedModel(rig, [make_effect(a, rig, ranges, **opt_a), make_effect(b, rig, ranges, **opt_b)]), fit
 
 
 #: A pair whose evidence, predicted one Gauss-Newton step from its singles' fits
@@ -226,8 +234,8 @@ def predicted_pair_evidence(ctx: _Context, rig: Rig, ranges: Mapping | None, opt
     would explain part of what the first leaves, the step finds it; where two effects hide each other
     (neither single detected), the step from either finds the pair's joint direction. No prediction from a
     settled single (a stick model's fit is not a point of the pair's path model), and none for a model with
-    a loading path (friction along the path: on ``mujoco_b/b1_tendon_friction`` joint friction + link
-    compliance reached 113 nats more than predicted). Each effect keeps its
+    a loading path (on ``mujoco_b/b1_tendon_friction`` joint friction + link compliance reached 113 nats more
+    than this predicted). Each effect keeps its
     single's variant (the pair's fit chooses afresh: the margin covers the difference).
     """
     effects = [make_effect(e, rig, ranges, **({} if is_settled(e, options.get(e, {})) else options.get(e, {})))
@@ -259,15 +267,21 @@ def screened_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapp
                   pair: tuple[str, str]) -> tuple[CandidateScore | None, str | None, float]:
     """:func:`fit_pair`, unless its predicted evidence is below ``screen``'s floor: ``(score, message, predicted)``.
 
-    ``screen``: the singles' fits and the evidence below which a pair is not fitted (None: every pair is
-    fitted). A pair with a settled lead (``stick_scales``) is always fitted. ``predicted`` is nan where no
-    prediction was made; a pair not fitted returns ``(None, None, predicted)``.
+    ``screen``: the singles' fits and the evidence below which a pair is not scored (None: every pair is
+    scored). A pair with a settled lead (``stick_scales``) is always scored, and so is a pair without a
+    prediction (:func:`predicted_pair_evidence`: friction along a loading path; on
+    ``mujoco_b/b1_tendon_friction`` joint friction + link compliance reached 131 nats more than even its
+    plain training fit, at measured poses, promised: its state along its own path fits far better).
+    ``predicted`` is nan where no prediction was made; a pair not scored returns ``(None, None, predicted)``.
     """
     predicted = float("nan")
-    if screen is not None and not (stick_scales and any(e in stick_scales for e in pair)):
-        fits, floor = screen
+    if screen is None or (stick_scales and any(e in stick_scales for e in pair)):
+        return (*fit_pair(ctx, rig, ranges, options, stick_scales, pair), predicted)
+    fits, floor = screen
+    try:
         predicted = predicted_pair_evidence(ctx, rig, ranges, options, fits, pair)
-        if predicted < floor:
-            return None, None, predicted
-    sc, message = fit_pair(ctx, rig, ranges, options, stick_scales, pair)
-    return sc, message, predicted
+    except FIT_ERRORS:
+        predicted = float("nan")
+    if predicted < floor:
+        return None, None, predicted
+    return (*fit_pair(ctx, rig, ranges, options, stick_scales, pair), predicted)

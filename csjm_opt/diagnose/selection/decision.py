@@ -14,7 +14,6 @@ from __future__ import annotations
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
-from scipy import stats
 from threadpoolctl import threadpool_limits
 
 from ...errors import SolverError
@@ -26,6 +25,7 @@ from ..data.extra import append_log
 from ..data.localisation import localise
 from ..data.noise import systematic
 from ..data.residuals import compute_residuals
+from ..data.tails import chi2_sf, norm_sf
 from ..data.trend import time_trend
 from ..decision_rule import (  # noqa: F401 (ALPHA and the thresholds are re-exported)
     ALPHA,
@@ -47,8 +47,8 @@ from ..effects.cable_creep import CableCreep
 from ..fitting.augmented import N_NUISANCE
 from ..fitting.model_fits import (  # noqa: F401 (VARIANTS re-exported)
     FIT_ERRORS,
-    VARIANTS,
     SCREEN_NATS,
+    VARIANTS,
     fit_single,
     screened_pair,
     variant_fit,
@@ -461,7 +461,7 @@ def stand_ins(ctx: _Context, final: CandidateScore, selected: str, pairs, pair_s
         rank = int(np.linalg.matrix_rank(C, hermitian=True))
         wald = float(delta @ np.linalg.pinv(C, hermitian=True) @ delta) if rank else 0.0
         # the block's Wald statistic against its chi^2 at the PLAUSIBLE_Z two-sided level (95 % for z = 2)
-        if rank and stats.chi2.sf(wald, rank) < 2.0 * stats.norm.sf(PLAUSIBLE_Z):
+        if rank and chi2_sf(wald, rank) < 2.0 * norm_sf(PLAUSIBLE_Z):
             out.append((other, float(np.sqrt(wald))))
     return sorted(out, key=lambda t: -t[1])
 

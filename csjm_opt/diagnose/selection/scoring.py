@@ -16,10 +16,10 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from scipy import stats
 
 from ...errors import InvalidInput
 from ..data.residuals import ResidualTable, pose_noise_cov, pose_residuals, rms
+from ..data.tails import f_sf, t_greater
 from ..fitting.augmented import AugmentedModel, with_entry
 from ..fitting.friction_path import on_predicted_path
 from ..fitting.gauss_newton import FitResult, data_jacobian, fit_model, objective
@@ -249,7 +249,7 @@ def nested_f_test(base: FitResult, cand: FitResult) -> tuple[float, float]:
     dp = max(cand.p_eff - base.p_eff, 1e-9)
     dof = max(cand.n_obs - cand.p_eff, 1.0)
     F = max(base.rss - cand.rss, 0.0) / dp / (cand.rss / dof)
-    return float(F), float(stats.f.sf(F, dp, dof))
+    return float(F), f_sf(F, dp, dof)
 
 
 def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
@@ -267,7 +267,7 @@ def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
     d[np.abs(d) < TIE_LOG_RATIO] = 0.0
     if len(d) < 2 or np.allclose(d, d[0], rtol=0.0, atol=TIE_LOG_RATIO):
         return 0.0 if d.mean() > 0 else 1.0
-    return float(stats.ttest_1samp(d, 0.0, alternative="greater").pvalue)
+    return t_greater(d)
 
 
 def improvement_rad(a: CandidateScore, b: CandidateScore) -> float:

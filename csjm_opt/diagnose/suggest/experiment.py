@@ -48,12 +48,12 @@ from types import SimpleNamespace
 from typing import Callable, Sequence
 
 import numpy as np
-from scipy import stats
 
 from ... import so3
 from ...errors import InvalidInput
 from ...model import kinematics as kin
 from ...model.rig import Rig
+from ..data.tails import norm_isf
 from ..decision_rule import ALPHA, LEAD_NATS
 from ..effects import EFFECTS
 from ..fitting.augmented import Rows, cable_steps, log_steps
@@ -73,7 +73,7 @@ EQUIVALENT_SD = 1.0
 NEAR_FLOOR = 3.0
 #: A pair of hypotheses is resolved at this separation (noise sd): a one-sided test at ``ALPHA`` over the
 #: vocabulary's candidates detects it with power 0.9. Beyond it, rows go to the pairs not yet resolved.
-RESOLVED_SD = float(stats.norm.isf(ALPHA / len(EFFECTS)) + stats.norm.isf(0.1))
+RESOLVED_SD = norm_isf(ALPHA / len(EFFECTS)) + norm_isf(0.1)
 
 
 def hypotheses(d: Diagnosis) -> tuple[str, list[tuple[str, CandidateScore]]]:
