@@ -62,18 +62,26 @@ def summarise(records: list[dict], screen_nats: float, lead_nats: float) -> str:
             if pr is None or fi is None or not math.isfinite(pr):
                 continue
             n_pred += 1
-            short.append((fi - pr, r["id"], "+".join(p["effects"])))
+            gap = r["best_single"] - pr
+            short.append((fi - pr, (fi - pr) / gap if gap > 0 else float("nan"), r["id"], "+".join(p["effects"])))
             if pr < r["best_single"] - screen_nats:
                 dropped += 1
                 near.append((fi - r["best_single"], r["id"], "+".join(p["effects"])))
     short.sort(reverse=True)
     near.sort(reverse=True)
-    lines = [f"{len(records)} logs, {n_all} pairs, {n_pred} with a prediction (no prediction: a settled lead or a "
-             f"loading path); the screen (predicted more than {screen_nats:g} nats below the best single) drops "
+    lines = [f"{len(records)} logs, {n_all} pairs, {n_pred} with a prediction (no prediction: a settled lead, a "
+             f"loading path, link compliance); the screen (predicted more than {screen_nats:g} nats below the best "
+             f"single) drops "
              f"{dropped} ({dropped / max(n_all, 1):.0%} of all pairs).", "",
-             "Largest shortfalls (fitted evidence minus predicted, nats):", "",
-             "| shortfall | log | pair |", "|---|---|---|"]
-    lines += [f"| {s:+.1f} | {i} | {p} |" for s, i, p in short[:8]]
+             "Largest shortfalls (fitted evidence minus predicted, nats; share: of the gap the prediction left to "
+             "the best single):", "",
+             "| shortfall | share of the gap | log | pair |", "|---|---|---|---|"]
+    lines += [f"| {s:+.1f} | {q:.2f} | {i} | {p} |" for s, q, i, p in short[:8]]
+    shares = sorted((q, s, i, p) for s, q, i, p in short if q == q and s > 0 and s / q >= screen_nats)
+    if shares:
+        q, s, i, p = shares[-1]
+        lines += ["", f"Among pairs the screen drops, the largest share of the gap a fit reached beyond its "
+                  f"prediction: **{q:.2f}** ({i}, {p}, {s:+.1f} nats)."]
     lines += ["", f"Dropped pairs nearest the best single (a rule reads pairs within {lead_nats:g} nats):", "",
               "| fitted minus best single | log | pair |", "|---|---|---|"]
     lines += [f"| {s:+.1f} | {i} | {p} |" for s, i, p in near[:8]]

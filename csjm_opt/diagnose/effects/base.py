@@ -44,6 +44,10 @@ class Effect(abc.ABC):
     name: ClassVar[str]
     description: ClassVar[str]
     path_dependent: ClassVar[bool] = False
+    #: Whether a model's evidence may be predicted one Gauss-Newton step from nominal values of this effect
+    #: (the pair screen, :func:`csjm_opt.diagnose.fitting.model_fits.predicted_pair_evidence`): False where the
+    #: effect moves the pose tangent so far that the step misses most of what a fit reaches.
+    linear_from_nominal: ClassVar[bool] = True
     #: per-rig overrides of the prior ranges (name or fnmatch pattern -> (lo, hi))
     range_overrides: Mapping[str, tuple[float, float]] = {}
     #: the rig's cable count m (per-cable parameters are sized by it)

@@ -220,8 +220,9 @@ def point_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping
 #: A pair whose evidence, predicted one Gauss-Newton step from its singles' fits
 #: (:func:`predicted_pair_evidence`), is this many nats below the best single's is not fitted: no rule
 #: reads a model that far below (a pair is named, or a rival, within ``LEAD_NATS``), and the margin
-#: stands for what the linearisation misses (measured over the validation logs and the confusion study's,
-#: ``benchmarks/bench_pair_screen.py``).
+#: stands for what the step misses. Measured on the 47 validation logs (``studies/pair_screen``): a fit
+#: reached at most a quarter of the gap the step predicted, so a pair dropped here lies at least 45 nats
+#: below the best single.
 SCREEN_NATS = 60.0
 
 
@@ -233,17 +234,18 @@ def predicted_pair_evidence(ctx: _Context, rig: Rig, ranges: Mapping | None, opt
     and its evidence taken (:func:`.evidence.predicted_evidence`, a score test): where a second effect
     would explain part of what the first leaves, the step finds it; where two effects hide each other
     (neither single detected), the step from either finds the pair's joint direction. No prediction from a
-    settled single (a stick model's fit is not a point of the pair's path model), and none for a model with
+    settled single (a stick model's fit is not a point of the pair's path model), none for a model with
     a loading path (on ``mujoco_b/b1_tendon_friction`` joint friction + link compliance reached 113 nats more
-    than this predicted). Each effect keeps its
+    than this predicted), and none with an effect that is not linear from its nominal values
+    (:attr:`~csjm_opt.diagnose.effects.base.Effect.linear_from_nominal`). Each effect keeps its
     single's variant (the pair's fit chooses afresh: the margin covers the difference).
     """
     effects = [make_effect(e, rig, ranges, **({} if is_settled(e, options.get(e, {})) else options.get(e, {})))
                for e in pair]
     model = AugmentedModel(rig, effects)
     best = float("nan")
-    if model.path_dependent:      # a loading path's state moves far from where it is linearised: no prediction
-        return best
+    if model.path_dependent or not all(e.linear_from_nominal for e in effects):
+        return best               # a loading path's state, or a tangent, moves far from where it is linearised
     for i, name in enumerate(pair):
         fit = fits.get(name)
         if fit is None or fit.evidence_fn is not None or is_settled(name, options.get(name, {})):
