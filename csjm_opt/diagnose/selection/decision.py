@@ -44,6 +44,7 @@ from ..decision_rule import (  # noqa: F401 (ALPHA and the thresholds are re-exp
 from ..effects import EFFECTS, make_effect, n_cables_of
 from ..effects.base import PLAUSIBLE_Z
 from ..effects.cable_creep import CableCreep
+from ..effects.drum_slip import DrumSlip
 from ..fitting.augmented import N_NUISANCE
 from ..fitting.model_fits import (  # noqa: F401 (VARIANTS re-exported)
     FIT_ERRORS,
@@ -170,7 +171,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
     remaining = ctx.signature(verdict.final)
     _rival_warnings(ctx, verdict, singles, tests, detected, pairs, pair_scores, n_cycles, remaining)
     _time_trend_warning(ctx, verdict)
-    _creep_warning(ctx, rig, verdict, baseline, floor0)
+    _trend_probe_warning(ctx, rig, verdict, baseline, floor0)
     d = Diagnosis(train=ctx.train, test=ctx.test, baseline=baseline, candidates=singles,
                   noise_floor_rad=ctx.scale(verdict.final) * ctx.instrument,
                   noise_estimates=_noise_estimates(ctx, verdict.final, baseline, singles), tests=tests,
@@ -494,38 +495,54 @@ def _time_trend_warning(ctx: _Context, verdict: Verdict) -> None:
                      "is outside the vocabulary")
 
 
-def _creep_warning(ctx: _Context, rig: Rig, verdict: Verdict, baseline: CandidateScore, floor0: float) -> None:
-    """Warn when linear cable creep, a time-dependent fault outside the vocabulary, explains the log as well.
+def _trend_probe_warning(ctx: _Context, rig: Rig, verdict: Verdict, baseline: CandidateScore, floor0: float) -> None:
+    """Warn when a fault that builds up over each cycle, outside the vocabulary, explains the log as well.
 
-    The probe (:class:`~csjm_opt.diagnose.effects.cable_creep.CableCreep`, one parameter) is fitted like
-    a single and judged as a rival that replaces the verdict (:mod:`.rivals`): detected against the null
-    model, plausible, closing the gap, and either more probable than the verdict or within
-    ``EVIDENCE_MIN`` nats of it while the verdict does not beat it on held-out cycles. Then the residual
-    trends with time (sample order within each cycle) in a way the verdict only stands in for. With
-    ``none`` nothing is named, and nothing is said.
+    Two probes: linear cable creep (:class:`~csjm_opt.diagnose.effects.cable_creep.CableCreep`, a share of
+    every tension, row after row) and drum slip (:class:`~csjm_opt.diagnose.effects.drum_slip.DrumSlip`, the
+    excess over a threshold). Each is fitted like a single and judged as a rival that replaces the verdict
+    (:mod:`.rivals`): detected against the null model, plausible, closing the gap, and either more probable
+    than the verdict or within ``EVIDENCE_MIN`` nats of it while the verdict does not beat it on held-out
+    cycles. Each that qualifies is recorded (``verdict.creep``, ``verdict.drum_slip``); the more probable one
+    is named in the warning that the residual trends with time (sample order within each cycle) in a way the
+    verdict only stands in for. With ``none`` nothing is named, and nothing is said.
     """
     if verdict.selected == "none":
         return
-    try:
-        sc = ctx.score([CableCreep(n_cables_of(rig))])
-    except FIT_ERRORS:
+    found = []
+    for probe in (CableCreep(n_cables_of(rig)), DrumSlip(n_cables_of(rig), rig.t_max_N)):
+        try:
+            sc = ctx.score([probe])
+        except FIT_ERRORS:
+            continue
+        t = ctx.compare(baseline, sc, ALPHA, floor0)
+        if not (t["significant"] and t["plausible"] and ctx.closes(sc)):
+            continue
+        nats = ctx.evidence(sc) - ctx.evidence(verdict.final)
+        p = paired_heldout_test(sc, verdict.final)           # one-sided: the verdict's held-out errors are lower
+        if verdict.selected != "unexplained" and not (nats > 0.0 or (nats > -EVIDENCE_MIN and p >= HELDOUT_ALPHA)):
+            continue
+        record = {"heldout_rms_rad": sc.heldout_rms_rad, "nats": nats, "heldout_p": p}
+        params = probe.describe(sc.fit.theta[N_NUISANCE:])
+        if isinstance(probe, CableCreep):
+            verdict.creep = record = {**record, "percent_per_row": params["creep_percent_per_row"]}
+            what = f"linear cable creep (tension lost {record['percent_per_row']:.2g} % per row)"
+        else:
+            verdict.drum_slip = record = {**record, **params}
+            what = (f"cables slipping on their drums above {record['slip_threshold_N']:.0f} N "
+                    f"({record['slip_percent_of_excess']:.2g} % of the excess a row)")
+        found.append((nats, what, sc, p))
+    if not found:
         return
-    t = ctx.compare(baseline, sc, ALPHA, floor0)
-    if not (t["significant"] and t["plausible"] and ctx.closes(sc)):
-        return
-    nats = ctx.evidence(sc) - ctx.evidence(verdict.final)
-    p = paired_heldout_test(sc, verdict.final)           # one-sided: the verdict's held-out errors are lower
-    if verdict.selected != "unexplained" and not (nats > 0.0 or (nats > -EVIDENCE_MIN and p >= HELDOUT_ALPHA)):
-        return
-    rate = 100.0 * float(sc.fit.theta[-1])
-    verdict.creep = {"heldout_rms_rad": sc.heldout_rms_rad, "nats": nats, "heldout_p": p, "percent_per_row": rate}
+    nats, what, sc, p = max(found, key=lambda f: f[0])
     name = verdict.model_name
-    what = (f"{name} may be standing in for" if verdict.selected != "unexplained" else "the unexplained gap may be")
-    verdict.warn(f"the log trends with time (sample order within each cycle): linear cable creep (outside the "
-                 f"vocabulary; tension lost {rate:.2g} % per row) explains it with held-out RMS "
-                 f"{1e3 * sc.heldout_rms_rad:.2f} mrad and {nats:+.1f} nats of evidence against {name} "
-                 f"(held-out p = {p:.2f}): {what} a time-dependent fault (creep, a slipping drive); rows "
-                 "repeated at one constant load separate them (creep keeps moving the pose, friction holds it)")
+    who = (f"{name} may be standing in for" if verdict.selected != "unexplained" else "the unexplained gap may be")
+    verdict.warn(f"the log trends with time (sample order within each cycle): {what}, outside the vocabulary, "
+                 f"explains it with held-out RMS {1e3 * sc.heldout_rms_rad:.2f} mrad and {nats:+.1f} nats of "
+                 f"evidence against {name} (held-out p = {p:.2f}): {who} a fault that builds up over each cycle "
+                 "(creep, a slipping drive); rows repeated at one constant load separate them (creep keeps moving "
+                 "the pose, friction holds it), and so do cycles that return to a light load (slip keeps the "
+                 "lengthened cable, friction gives the pose back)")
 
 
 def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, tick, planned: int,

@@ -27,7 +27,7 @@
     confounded_with     effects whose single fits are not separable from the selected one
                         and not significantly worse on held-out cycles
     verdict             {selected, reason, warnings[], alternatives[], secondary_alternatives[], look_alikes[],
-                        time_trend, creep}: why, in
+                        time_trend, creep, drum_slip}: why, in
                         words; alternatives are detected effects not separable from the selected one on
                         this log; secondary_alternatives are effects that, paired with the selected one,
                         close the gap as well (evidence within LEAD_NATS) and are not separable from
@@ -42,7 +42,9 @@
                         the residual's cycle means over the log's time order (trend.py); creep is
                         {heldout_rms_rad, nats, heldout_p, percent_per_row} of linear cable creep (a probe
                         outside the vocabulary, effects/cable_creep.py) when it explains the log as well
-                        as the verdict (else null)
+                        as the verdict (else null); drum_slip likewise {heldout_rms_rad, nats, heldout_p,
+                        slip_percent_of_excess, slip_threshold_N} of cables slipping on their drums above a
+                        threshold (effects/drum_slip.py)
     significance        the decision rule's constants and tests
     gap                 {before_rad, after_rad, fraction_explained, systematic_before_rad,
                          systematic_after_rad, noise_floor_after_rad, fraction_explained_by_nominal_refit,

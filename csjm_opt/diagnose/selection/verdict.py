@@ -63,6 +63,8 @@ class Verdict:
     time_trend: dict | None = None
     #: linear cable creep (outside the vocabulary) when it explains the log as well as the verdict
     creep: dict | None = None
+    #: drum slip above a threshold (outside the vocabulary) when it explains the log as well as the verdict
+    drum_slip: dict | None = None
 
     @property
     def named(self) -> bool:
@@ -95,4 +97,5 @@ class Verdict:
                 "evidence_margin": self.evidence_margin, "more_probable_rivals": list(self.more_probable_rivals),
                 "alternatives": list(self.alternatives), "secondary_alternatives": list(self.secondary_alternatives),
                 "unsettled_rivals": list(self.unsettled_rivals), "look_alikes": list(self.look_alikes),
-                "stand_ins": list(self.stand_ins), "time_trend": self.time_trend, "creep": self.creep}
+                "stand_ins": list(self.stand_ins), "time_trend": self.time_trend, "creep": self.creep,
+                "drum_slip": self.drum_slip}

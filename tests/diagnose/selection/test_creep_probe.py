@@ -1,8 +1,9 @@
-"""The creep probe's warning on a creeping rig, and its silence on friction (issue 31: time-dependent faults).
+"""The creep and drum-slip probes' warnings on such rigs, and their silence on friction (issue 31).
 
-The creeping log is made by the package's forward statics (``co.solve_equilibrium``), not by the
-diagnosis's model: row by row, each cable's rest length grows by ``lambda / k_i`` times its solved
-tension, restarting every cycle. The friction log comes from the testbed's plant.
+The creeping and slipping logs are made by the package's forward statics (``co.solve_equilibrium``), not
+by the diagnosis's model: row by row, each cable's rest length grows by ``lambda / k_i`` times its solved
+tension (creep), or by ``c_slip`` times its solved tension's excess over a threshold after the row settles
+(slip), restarting every cycle. The friction log comes from the testbed's plant.
 """
 
 from __future__ import annotations
@@ -47,9 +48,37 @@ def test_a_creeping_rig_is_warned_about_and_its_rate_found(rig):
     assert any("trends with time (sample order within each cycle)" in w for w in d.verdict.warnings)
 
 
-def test_friction_is_not_taken_for_creep(rig):
+def _slipping_log(rig, share, quantile, n_cycles, seed):
+    rng = np.random.default_rng(seed)
+    proto = simulate_experiment(rig, n_cycles, rng, noise=InstrumentNoise.none())
+    l, tau, cyc, R0 = proto.rest_lengths_m, proto.tau_ext_A_Nm, np.asarray(proto.cycle), proto.R
+    k = np.asarray(rig.cable_stiffness_N_per_m)
+    T_nominal = np.array([co.solve_equilibrium(rig, li, ti, R_init=Ri).tensions_N for li, ti, Ri in zip(l, tau, R0)])
+    threshold = float(np.quantile(T_nominal, quantile))
+    R = np.empty_like(R0)
+    slipped = np.zeros(l.shape[1])
+    for i in range(len(l)):
+        if i == 0 or cyc[i] != cyc[i - 1]:
+            slipped = np.zeros(l.shape[1])        # the drives re-home between cycles
+        eq = co.solve_equilibrium(rig, l[i] + slipped, tau[i], R_init=R0[i])
+        R[i] = eq.R
+        slipped = slipped + share / k * np.maximum(eq.tensions_N - threshold, 0.0)   # after the row settles
+    tau_m, R_m = InstrumentNoise.paper().sample(tau, R, rng)
+    return MeasurementLog.from_arrays(cyc, l, tau_m, R_m), threshold
+
+
+def test_a_slipping_rig_is_warned_about_and_its_threshold_found(rig):
+    log, threshold = _slipping_log(rig, 0.5, 0.8, 6, 5)
+    d = diagnose(rig, log, secondary=False, workers=1)
+    slip = d.verdict.drum_slip
+    assert d.selected != "none" and slip is not None
+    assert slip["slip_threshold_N"] == pytest.approx(threshold, rel=0.25)
+    assert any("cables slipping on their drums" in w for w in d.verdict.warnings)
+
+
+def test_friction_is_not_taken_for_creep_or_slip(rig):
     log = simulate_experiment(rig, 6, np.random.default_rng(4), effect="friction", severity=3.0)
     d = diagnose(rig, log, secondary=False, workers=1)
     assert d.selected == "friction"
-    assert d.verdict.creep is None
+    assert d.verdict.creep is None and d.verdict.drum_slip is None
     assert not any("sample order within each cycle" in w for w in d.verdict.warnings)
