@@ -572,10 +572,15 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
     # a settled lead's noise scale (set-valued models are compared at one scale: its pairs are scored at it)
     lead = singles.get(first) if first is not None else None
     stick = {first: lead.heldout_density[2]} if lead is not None and lead.heldout_density is not None else {}
-    # a pair whose evidence, predicted from its singles' fits, lies far below the best single's is not fitted
-    # (:data:`~..fitting.model_fits.SCREEN_NATS`; the Bonferroni level above still counts it)
-    screen = ({n: sc.fit for n, sc in singles.items()},
-              max(ctx.evidence(sc) for sc in singles.values()) - SCREEN_NATS) if singles else None
+    # a pair whose evidence, predicted from its singles' fits, lies far below every model a verdict can be
+    # measured against is not fitted (:data:`~..fitting.model_fits.SCREEN_NATS`; the Bonferroni level above still
+    # counts it): the best single, the first effect (a verdict picked on held-out cycles can be far less probable
+    # than the best single, and its rivals are read against it), and the null model when no single leads
+    screen = None
+    if singles:
+        anchors = [max(ctx.evidence(sc) for sc in singles.values())]
+        anchors += [ctx.evidence(sc) for sc in (lead, masked_base) if sc is not None]
+        screen = ({n: sc.fit for n, sc in singles.items()}, min(anchors) - SCREEN_NATS)
     done = map_ordered(screened_pair, (ctx, rig, ranges, options, stick, screen), todo, workers, tick)
     for (a, b), (sc, error, predicted) in zip(todo, done):
         entry = next(p for p in pairs if set(p["effects"]) == {a, b})
