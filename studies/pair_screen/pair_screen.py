@@ -63,7 +63,6 @@ def run_one(job: dict) -> dict:
 
 def summarise(records: list[dict], lead_nats: float) -> str:
     """Markdown: whether the screened diagnosis says what the unscreened one says, and how far below the dropped lie."""
-    import math
     import statistics
 
     same = [r for r in records if r["on"] == r["off"]]
@@ -77,15 +76,17 @@ def summarise(records: list[dict], lead_nats: float) -> str:
                          f"{r['on']['selected']}+{r['on']['secondary']}; warnings lost {len(lost)}, added {len(extra)}"
                          + (f" (first lost: {lost[0][:160]})" if lost else ""))
     n_all = sum(len(r["pairs"]) for r in records)
-    dropped = [(p["fitted"] - max(r["best_single"], r["verdict_evidence"] or -math.inf), r["id"],
+    # a rule reads a pair against the verdict (a rival within EVIDENCE_MIN of it, or above it); without a named
+    # verdict, against the best single
+    dropped = [(p["fitted"] - (r["best_single"] if r["verdict_evidence"] is None else r["verdict_evidence"]), r["id"],
                 "+".join(p["effects"]), p["fitted"] - p["predicted"])
                for r in records for p in r["pairs"] if p["dropped"] and p["fitted"] is not None]
     dropped.sort(reverse=True)
     lines += ["", f"{len(records)} logs, {n_all} pairs; the screen drops {len(dropped)} "
               f"({len(dropped) / max(n_all, 1):.0%}).", "",
-              "Dropped pairs nearest the best single or the verdict (whichever is higher; a rule reads pairs within "
-              f"{lead_nats:g} nats of the verdict):", "",
-              "| fitted minus best single or verdict | log | pair | fitted minus predicted |", "|---|---|---|---|"]
+              "Dropped pairs nearest the verdict's evidence (the best single's without a named verdict; a rule reads "
+              f"pairs within {lead_nats:g} nats of the verdict):", "",
+              "| fitted minus the verdict | log | pair | fitted minus predicted |", "|---|---|---|---|"]
     lines += [f"| {d:+.1f} | {i} | {p} | {s:+.1f} |" for d, i, p, s in dropped[:8]]
     on = [r["seconds_on"] for r in records]
     off = [r["seconds_off"] for r in records]
