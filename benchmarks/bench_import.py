@@ -18,9 +18,14 @@ import numpy as np
 CASES = {
     "python -c pass": [sys.executable, "-c", "pass"],
     "import numpy": [sys.executable, "-c", "import numpy"],
+    "import scipy.stats": [sys.executable, "-c", "import scipy.stats"],
     "import csjm_opt": [sys.executable, "-c", "import csjm_opt"],
     "import csjm_opt; paper_rig()": [sys.executable, "-c", "import csjm_opt; csjm_opt.paper_rig()"],
     "csjm --help": [sys.executable, "-m", "csjm_opt.cli", "--help"],
+    # what `csjm diagnose` imports before its first fit (scipy.stats is not among it: 0.5 s)
+    "import the diagnosis": [sys.executable, "-c", "import csjm_opt.diagnose.selection.decision, "
+                             "csjm_opt.diagnose.suggest.experiment, csjm_opt.measurement.logfile; import sys; "
+                             "assert 'scipy.stats' not in sys.modules"],
 }
 
 
