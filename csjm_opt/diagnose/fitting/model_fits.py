@@ -196,6 +196,11 @@ def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[s
         return None, f"fit failed: {exc}"
 
 
+def point_options(options: Mapping[str, dict]) -> dict[str, dict]:
+    """``options`` with each settled variant replaced by the effect's path variant (a pair's point model)."""
+    return {e: ({} if is_settled(e, o) else o) for e, o in options.items()}
+
+
 def point_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
                pair: tuple[str, str]) -> tuple[AugmentedModel, FitResult | None]:
     """The point model of pair ``(a, b)`` (variants chosen on it), and its plain training fit where known.
@@ -206,7 +211,7 @@ def point_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping
     another law than the pair does.
     """
     a, b = pair
-    options = {e: ({} if is_settled(e, o) else o) for e, o in options.items()}
+    options = point_options(options)
     fit: FitResult | None = None
     opt_a = options.get(a, {})
     if a in VARIANTS:
@@ -240,8 +245,8 @@ def predicted_pair_evidence(ctx: _Context, rig: Rig, ranges: Mapping | None, opt
     (:attr:`~csjm_opt.diagnose.effects.base.Effect.linear_from_nominal`). Each effect keeps its
     single's variant (the pair's fit chooses afresh: the margin covers the difference).
     """
-    effects = [make_effect(e, rig, ranges, **({} if is_settled(e, options.get(e, {})) else options.get(e, {})))
-               for e in pair]
+    point = point_options(options)
+    effects = [make_effect(e, rig, ranges, **point.get(e, {})) for e in pair]
     model = AugmentedModel(rig, effects)
     best = float("nan")
     if model.path_dependent or not all(e.linear_from_nominal for e in effects):

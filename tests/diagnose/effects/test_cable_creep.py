@@ -10,6 +10,8 @@ from csjm_opt.diagnose.effects import EFFECTS
 from csjm_opt.diagnose.effects.cable_creep import CableCreep, within_cycle_sum
 from csjm_opt.diagnose.fitting.augmented import AugmentedModel, Rows
 
+from ._by_hand import tensions_by_hand
+
 
 def test_within_cycle_sum_restarts_at_every_cycle():
     cycle = np.array([0, 0, 0, 1, 1, 2, 2, 2, 2, 0, 0])      # an id that comes back is a new cycle
@@ -24,13 +26,6 @@ def test_within_cycle_sum_restarts_at_every_cycle():
     np.testing.assert_array_equal(both[:, 1], -2 * np.asarray(expected))
 
 
-def _tensions_by_hand(rig, R, rest):
-    A, B = np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m)
-    k = np.asarray(rig.cable_stiffness_N_per_m)
-    return np.array([[ki * max(np.linalg.norm(b - Ri @ a) - l0, 0.0) for a, b, ki, l0 in zip(A, B, k, li)]
-                     for Ri, li in zip(R, rest)])
-
-
 def test_creep_is_a_rest_length_grown_by_the_tension_so_far(rig):
     # lambda = k kappa: each cable's rest length grows by kappa sum_{j <= i} T(j) over its cycle; the model's
     # balance must be the nominal balance at those grown rest lengths, with the tensions found row by row
@@ -42,7 +37,7 @@ def test_creep_is_a_rest_length_grown_by_the_tension_so_far(rig):
     cycle = np.array([0, 0, 0, 0, 1, 1, 1])
     lam = 0.01
     k = np.asarray(rig.cable_stiffness_N_per_m)
-    T = _tensions_by_hand(rig, R, rest)
+    T = tensions_by_hand(rig, R, rest)
     grown = rest.copy()
     for i in range(n):                       # the rest length grown by the tensions of the cycle so far
         start = np.flatnonzero(cycle[:i + 1] != cycle[i]).max(initial=-1) + 1

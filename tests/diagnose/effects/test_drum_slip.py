@@ -9,12 +9,7 @@ from csjm_opt.diagnose.effects import EFFECTS
 from csjm_opt.diagnose.effects.drum_slip import DrumSlip
 from csjm_opt.diagnose.fitting.augmented import AugmentedModel, Rows
 
-
-def _tensions_by_hand(rig, R, rest):
-    A, B = np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m)
-    k = np.asarray(rig.cable_stiffness_N_per_m)
-    return np.array([[ki * max(np.linalg.norm(b - Ri @ a) - l0, 0.0) for a, b, ki, l0 in zip(A, B, k, li)]
-                     for Ri, li in zip(R, rest)])
+from ._by_hand import tensions_by_hand
 
 
 def test_slip_is_a_rest_length_grown_by_the_excess_of_earlier_rows(rig):
@@ -27,7 +22,7 @@ def test_slip_is_a_rest_length_grown_by_the_excess_of_earlier_rows(rig):
     rest = np.stack([co.plan_tensions(rig, Ri, ti).rest_lengths_m for Ri, ti in zip(R, tau)])
     cycle = np.array([0, 0, 0, 0, 0, 1, 1, 1])
     k = np.asarray(rig.cable_stiffness_N_per_m)
-    T = _tensions_by_hand(rig, R, rest)
+    T = tensions_by_hand(rig, R, rest)
     share, threshold = 0.4, float(np.median(T))
     grown = rest.copy()
     for i in range(n):
