@@ -150,37 +150,53 @@ def plan_experiment(rig: Rig, budget: int, loads: ExperimentLoads | None = None,
     rows: list[Protocol] = []
     out: dict[str, list] = {"crlb6": [], "K_model": [], "pretension_N": [], "rotvec_ref": []}
     for c, (rv, share) in enumerate(zip(poses_arr, shares)):
-        tried: dict[float, tuple | None] = {}
-
-        def design_at(t: float, rv=rv, share=share, tried=tried) -> tuple | None:
-            if t not in tried:
-                tried[t] = _design_at(rig, model, so3.exp(rv), t, loads, noise, int(share), criterion, pairs)
-            return tried[t]
-
-        for t in loads.pretensions_N:
-            design_at(float(t))
-        for _ in range(REFINE_ROUNDS):   # bisect the pretension around the best so far
-            levels = sorted(tried)
-            scored = [(v[0], t) for t in levels if (v := tried[t]) is not None]
-            if not scored:
-                break
-            i = levels.index(min(scored)[1])
-            for j in (i - 1, i + 1):
-                if 0 <= j < len(levels):
-                    design_at(0.5 * (levels[i] + levels[j]))
-        found = [v for v in tried.values() if v is not None]
-        best = min(found, key=lambda v: v[0]) if found else None
-        if best is None:
-            raise DesignError(f"the rig cannot identify K at pose {np.round(rv, 4).tolist()} with this load set: "
-                              "fewer than three admissible loads at every pretension (lighter weights, "
-                              "other points or a larger max_rotation_rad)", "loads")
-        _, cyc, picked, t, M = best
+        try:
+            cyc, picked, t, crlb6 = _plan_pose(rig, model, rv, int(share), loads, noise, criterion, pairs)
+        except np.linalg.LinAlgError as exc:      # a selection whose information matrix is singular
+            raise DesignError(f"the loads admissible at pose {np.round(rv, 4).tolist()} cannot determine K with "
+                              f"{budget} loads ({exc}); raise the budget or change the poses or loads",
+                              "budget") from exc
         rows.append(_cycle_protocol(c, cyc, picked))
-        out["crlb6"].append(bound(M))
+        out["crlb6"].append(crlb6)
         out["K_model"].append(cyc.K)
         out["pretension_N"].append(t)
         out["rotvec_ref"].append(so3.log(cyc.R_ref))
     return ExperimentPlan(_concat(rows), budget=int(budget), **out)
+
+
+def _plan_pose(rig: Rig, model: Model, rv: np.ndarray, share: int, loads: ExperimentLoads, noise: InstrumentNoise,
+               criterion: str, pairs: bool) -> tuple:
+    """The best selection of ``share`` loads at pose ``rv``: ``(cycle, picked rows, pretension, its bound)``.
+
+    Raises ``numpy.linalg.LinAlgError`` where the selection's information matrix is singular
+    (:func:`plan_experiment` turns it into a :class:`DesignError`).
+    """
+    tried: dict[float, tuple | None] = {}
+
+    def design_at(t: float) -> tuple | None:
+        if t not in tried:
+            tried[t] = _design_at(rig, model, so3.exp(rv), t, loads, noise, share, criterion, pairs)
+        return tried[t]
+
+    for t in loads.pretensions_N:
+        design_at(float(t))
+    for _ in range(REFINE_ROUNDS):   # bisect the pretension around the best so far
+        levels = sorted(tried)
+        scored = [(v[0], t) for t in levels if (v := tried[t]) is not None]
+        if not scored:
+            break
+        i = levels.index(min(scored)[1])
+        for j in (i - 1, i + 1):
+            if 0 <= j < len(levels):
+                design_at(0.5 * (levels[i] + levels[j]))
+    found = [v for v in tried.values() if v is not None]
+    best = min(found, key=lambda v: v[0]) if found else None
+    if best is None:
+        raise DesignError(f"the rig cannot identify K at pose {np.round(rv, 4).tolist()} with this load set: "
+                          "fewer than three admissible loads at every pretension (lighter weights, "
+                          "other points or a larger max_rotation_rad)", "loads")
+    _, cyc, picked, t, M = best
+    return cyc, picked, t, bound(M)
 
 
 def _design_at(rig: Rig, model: Model, R: np.ndarray, t: float, loads: ExperimentLoads, noise: InstrumentNoise,

@@ -140,3 +140,19 @@ def test_a_small_budget_is_planned_and_beats_the_paper_protocol(budget):
     assert np.all(np.linalg.eigvalsh(again) > 0)
     paper = paper_protocol(RIG, budget, np.random.default_rng(0), loads=loads)
     assert np.trace(again) < np.trace(paper.crlb6[0])
+
+
+def test_a_singular_selection_is_a_design_error(monkeypatch, tmp_path, capsys):
+    """An information matrix numpy cannot invert is the library's DesignError (the CLI: one line, exit 2)."""
+    import csjm_opt.identification.experiment_design as design
+
+    def singular(M):
+        np.linalg.inv(np.zeros((6, 6)))          # numpy's own failure on a singular matrix
+
+    monkeypatch.setattr(design, "bound", singular)
+    with pytest.raises(DesignError, match="cannot determine K"):
+        plan_experiment(RIG, 6)
+    out = tmp_path / "p.csv"
+    assert main(["plan-experiment", "--budget", "6", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cannot determine K" in err[0] and not out.exists()
