@@ -49,6 +49,30 @@ def test_the_stated_rule_on_constructed_models():
     assert unsettled_rivals({"A": _model(0.0, one)}, "A") == []
 
 
+def test_an_addition_needs_the_prior_odds_of_one_among_m():
+    """An effect added to the verdict is listed when its evidence beats the verdict's by ln m, m the number of
+    additions fitted (prior odds 1/m each): with eleven, 2.3 nats is not enough (ln 11 = 2.398) and 2.5 is; with
+    one addition, any lead is. Replacements keep their own rule (more probable, or close and tied)."""
+    rng = np.random.default_rng(2)
+    same = np.exp(rng.normal(0.0, 0.1, N_CYCLES))
+    worse = 3.0 * np.ones(N_CYCLES)
+
+    def eleven(lead):
+        models = {"A": _model(0.0, np.ones(N_CYCLES))}
+        models.update({f"A+X{i}": _model(-3.0, worse) for i in range(10)})
+        models["A+B"] = _model(lead, same)
+        return models
+
+    assert np.log(11) > 2.3
+    assert unsettled_rivals(eleven(2.3), "A") == []
+    assert [r["model"] for r in unsettled_rivals(eleven(2.5), "A")] == ["A+B"]
+    one = {"A": _model(0.0, np.ones(N_CYCLES)), "A+B": _model(0.1, same)}
+    assert [r["model"] for r in unsettled_rivals(one, "A")] == ["A+B"]
+    # a replacement more probable by any margin is listed whatever the number of additions
+    models = {**eleven(2.3), "C": _model(0.1, worse)}
+    assert [r["model"] for r in unsettled_rivals(models, "A")] == ["C"]
+
+
 def test_heldout_part_matches_the_noncentral_t_power():
     """Rival errors with per-cycle log ratios N(delta, s^2) to the verdict's: the rule lists the rival (within
     EVIDENCE_MIN) exactly when the one-sided paired t-test fails at HELDOUT_ALPHA, i.e. with probability
