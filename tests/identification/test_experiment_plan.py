@@ -146,10 +146,10 @@ def test_a_singular_selection_is_a_design_error(monkeypatch, tmp_path, capsys):
     """An information matrix numpy cannot invert is the library's DesignError (the CLI: one line, exit 2)."""
     import csjm_opt.identification.experiment_design as design
 
-    def singular(M):
+    def singular(*args):
         np.linalg.inv(np.zeros((6, 6)))          # numpy's own failure on a singular matrix
 
-    monkeypatch.setattr(design, "bound", singular)
+    monkeypatch.setattr(design, "_design_at", singular)
     with pytest.raises(DesignError, match="cannot determine K"):
         plan_experiment(RIG, 6)
     out = tmp_path / "p.csv"
