@@ -136,11 +136,12 @@ def unsettled_rivals(models: Mapping[str, Mapping], verdict: str, skip: Collecti
         # its held-out errors alone when it is decisively less probable
         better = (bool(m.get("closes_gap")) and p_better < HELDOUT_ALPHA / n_closing
                   and not (m.get("set_valued") and nats <= -EVIDENCE_MIN))
-        # a stick model's Laplace evidence (a likelihood with kinks at every stick set's boundary) carries
-        # several nats of approximation: an effect added to a set-valued model must be decisively more probable
+        # an addition needs the prior odds of one among m; a stick model's Laplace evidence (a likelihood with
+        # kinks at every stick set's boundary) favours the larger model, so it cannot rank an addition at all:
+        # held-out errors only (``better``)
         if not adds:
             more = nats > 0.0
-        else:                     # a stick model's evidence cannot rank an addition: held-out errors only
+        else:
             more = not (v.get("set_valued") or m.get("set_valued")) and nats > addition_nats
         if more or better or (not adds and nats > -EVIDENCE_MIN and tied):
             out.append({"model": name, "nats": nats, "nats_linearised": float(m["log_evidence"]) - lin_v,
