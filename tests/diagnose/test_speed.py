@@ -39,6 +39,22 @@ def test_map_ordered_returns_results_in_item_order_on_workers():
     assert sum(ticks) == len(items)
 
 
+def _started(x: int) -> tuple[int, float]:
+    import time
+    t = time.monotonic()
+    time.sleep(0.2)
+    return x, t
+
+
+def test_map_ordered_starts_the_costliest_calls_first_and_keeps_item_order():
+    """On two workers the two costliest items start before any other; results stay in item order."""
+    items = list(range(6))
+    out = map_ordered(_started, (), items, 2, cost=lambda x: x)
+    assert [x for x, _ in out] == items
+    start = {x: t for x, t in out}
+    assert max(start[4], start[5]) < min(start[x] for x in range(4))
+
+
 def test_workers_below_one_are_refused():
     with pytest.raises(InvalidInput, match="workers"):
         resolve_workers(0)

@@ -53,8 +53,13 @@ def resolve_workers(workers: int | None) -> int:
 
 
 def map_ordered(fn: Callable, shared: tuple, items: Sequence, workers: int,
-                tick: Callable[[int], object] | None = None) -> list:
+                tick: Callable[[int], object] | None = None,
+                cost: Callable[[Any], float] | None = None) -> list:
     """``[fn(*shared, item) for item in items]``, on up to ``workers`` forked processes.
+
+    On workers the calls start in the order of decreasing ``cost`` (the longest first, so that a long fit
+    does not start last while the other workers idle); the results come back in the order of ``items``
+    whatever the order of the calls.
 
     Parameters
     ----------
@@ -68,6 +73,8 @@ def map_ordered(fn: Callable, shared: tuple, items: Sequence, workers: int,
         Worker processes; 1 (or fewer than two items, or no ``fork``) runs the calls here, in order.
     tick : callable, optional
         Called with 1 as each call finishes (a progress bar's ``update``).
+    cost : callable, optional
+        Expected cost of an item's call (any scale; default: the order of ``items``).
 
     Returns
     -------
@@ -83,7 +90,9 @@ def map_ordered(fn: Callable, shared: tuple, items: Sequence, workers: int,
         return out
     with ProcessPoolExecutor(min(workers, len(items)), mp_context=mp.get_context("fork"),
                              initializer=_init, initargs=(fn, shared)) as ex:
-        futures = [ex.submit(_call, item) for item in items]
+        order = sorted(range(len(items)), key=lambda i: -cost(items[i])) if cost is not None else range(len(items))
+        submitted = {i: ex.submit(_call, items[i]) for i in order}
+        futures = [submitted[i] for i in range(len(items))]
         try:
             for f in as_completed(futures):
                 f.result()                  # an error (or Ctrl-C) stops the rest at once

@@ -50,6 +50,7 @@ from ..fitting.model_fits import (  # noqa: F401 (VARIANTS re-exported)
     FIT_ERRORS,
     SCREEN_NATS,
     VARIANTS,
+    fit_cost,
     fit_single,
     screened_pair,
     variant_fit,
@@ -191,7 +192,8 @@ def _fit_singles(ctx: _Context, rig: Rig, names, ranges, workers: int, tick) -> 
     singles: dict[str, CandidateScore] = {}
     failed: dict[str, str] = {}
     options: dict[str, dict] = {}
-    for name, (opt, sc, error) in zip(names, map_ordered(fit_single, (ctx, rig, ranges), names, workers, tick)):
+    done = map_ordered(fit_single, (ctx, rig, ranges), names, workers, tick, fit_cost)
+    for name, (opt, sc, error) in zip(names, done):
         if sc is None:                                          # reported, not fatal
             failed[name] = str(error)
         else:
@@ -581,7 +583,7 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
         anchors = [max(ctx.evidence(sc) for sc in singles.values())]
         anchors += [ctx.evidence(sc) for sc in (lead, masked_base) if sc is not None]
         screen = ({n: sc.fit for n, sc in singles.items()}, min(anchors) - SCREEN_NATS)
-    done = map_ordered(screened_pair, (ctx, rig, ranges, options, stick, screen), todo, workers, tick)
+    done = map_ordered(screened_pair, (ctx, rig, ranges, options, stick, screen), todo, workers, tick, fit_cost)
     for (a, b), (sc, error, predicted) in zip(todo, done):
         entry = next(p for p in pairs if set(p["effects"]) == {a, b})
         entry["predicted_log_evidence"] = predicted
