@@ -593,17 +593,23 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
             continue
         scores[(a, b)] = sc
         # a few-number pair is tested against its own singles, not against a flexible first effect (36 hole
-        # offsets) that can stand in for it; the flexible one must then not beat it on held-out cycles
+        # offsets) that can stand in for it; the flexible one must then not beat it on held-out cycles. Likewise
+        # a pair without a set-valued first effect (settled friction): a stick set holds almost any held-out pose
+        # of a log without friction (on a step-loaded log of cable hardening + tracker registration, settled
+        # friction's held-out error was the true pair's, 674 nats less probable), so the pair must then also be
+        # decisively more probable than it
         flex = (first is not None and n_cycles is not None and flexible(singles[first], n_cycles)
                 and not flexible(sc, n_cycles) and first not in (a, b))
-        rivals = [singles[a], singles[b]] + ([singles[first]] if first is not None and not flex else [])
+        set_first = first is not None and singles[first].heldout_density is not None and first not in (a, b)
+        left = flex or set_first
+        rivals = [singles[a], singles[b]] + ([singles[first]] if first is not None and not left else [])
         base = masked_base or min(rivals, key=lambda c: c.heldout_mse)
         t = ctx.compare(base, sc, level, ctx.noise_floor(base))
         ev = ctx.evidence(sc)
         gain = ev - max(ctx.evidence(c) for c in ([masked_base] if masked_base is not None else rivals))
-        left_out = (ev - ctx.evidence(singles[first]), paired_heldout_test(sc, singles[first])) if flex else None
+        left_out = (ev - ctx.evidence(singles[first]), paired_heldout_test(sc, singles[first])) if left else None
         t["significant"], by_evidence = pair_confirmed(bool(t["significant"]), gain, t["p_value"],
-                                                       t["improvement_rad"], left_out)
+                                                       t["improvement_rad"], left_out, set_valued=set_first)
         entry.update({"fitted": True, "effects": [a, b], "heldout_rms_rad": sc.heldout_rms_rad,
                       "fraction_explained": ctx.fraction(sc), "bic": sc.fit.bic, "closes_gap": ctx.closes(sc),
                       "log_evidence": ev, "evidence_gain": gain, "supported_by_evidence": by_evidence,
@@ -615,7 +621,7 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
 
 
 def pair_confirmed(heldout: bool, gain: float, p_value: float, improvement_rad: float,
-                   flexible_first: tuple[float, float] | None = None) -> tuple[bool, bool]:
+                   flexible_first: tuple[float, float] | None = None, set_valued: bool = False) -> tuple[bool, bool]:
     """Whether a fitted pair is detected: ``(by the held-out route, by the evidence route)``.
 
     The held-out route is ``heldout`` (the pair beat its baseline at the pairs' level by at least a
@@ -628,7 +634,9 @@ def pair_confirmed(heldout: bool, gain: float, p_value: float, improvement_rad: 
     decisively more probable than the pair (``EVIDENCE_MIN``), or the route's decisive Bayes factor over
     the pair's rivals would not hold. (On the 8-cable rig, drive offsets + joint friction replaced hole
     offsets at 3x the floor 6.8 nats more probable: the joint friction stood in for the hole offsets'
-    directions outside the drive offsets' span.)
+    directions outside the drive offsets' span.) A set-valued first effect left out (``set_valued``: settled
+    friction, a stick set that holds almost any held-out pose) is treated as a flexible one, and the pair must
+    moreover be decisively more probable than it (``nats >= EVIDENCE_MIN``) by either route.
 
     Parameters
     ----------
@@ -639,6 +647,8 @@ def pair_confirmed(heldout: bool, gain: float, p_value: float, improvement_rad: 
         One-sided p that the pair's held-out errors are lower than its baseline's.
     improvement_rad : float
     flexible_first : tuple of float, optional
+    set_valued : bool, optional
+        The left-out first effect is set-valued.
 
     Returns
     -------
@@ -648,6 +658,8 @@ def pair_confirmed(heldout: bool, gain: float, p_value: float, improvement_rad: 
     if flexible_first is not None:
         nats, p_flexible_better = flexible_first
         if p_flexible_better < HELDOUT_ALPHA:                 # the flexible first does better on held-out cycles
+            return False, False
+        if set_valued and nats < EVIDENCE_MIN:                # held-out rows cannot rule a stick set out
             return False, False
         by_evidence = by_evidence and nats >= -EVIDENCE_MIN
     return bool(heldout), by_evidence

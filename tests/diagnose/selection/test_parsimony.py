@@ -161,3 +161,17 @@ def test_a_pair_is_confirmed_by_evidence_only_when_no_left_out_flexible_first_is
     assert pair_confirmed(True, **good, flexible_first=(-(EVIDENCE_MIN + 1.8), 0.11)) == (True, False)
     assert pair_confirmed(False, **good, flexible_first=(-(EVIDENCE_MIN - 0.5), 0.11)) == (False, True)
     assert pair_confirmed(True, **good, flexible_first=(+3.0, HELDOUT_ALPHA / 2)) == (False, False)
+
+
+def test_a_pair_without_a_set_valued_first_must_be_decisively_more_probable_than_it():
+    """Settled friction (a stick set) left out of a pair's rivals: its held-out errors cannot rule it out, so the pair
+    is detected by neither route unless EVIDENCE_MIN nats more probable than it (and not beaten on held-out cycles);
+    a flexible (point) first effect left out keeps the weaker bar."""
+    from csjm_opt.diagnose.decision_rule import EVIDENCE_MIN, HELDOUT_ALPHA
+    from csjm_opt.diagnose.selection.decision import pair_confirmed
+
+    good = dict(gain=EVIDENCE_MIN + 2.7, p_value=0.04, improvement_rad=5e-4)
+    assert pair_confirmed(True, **good, flexible_first=(EVIDENCE_MIN - 0.1, 0.54), set_valued=True) == (False, False)
+    assert pair_confirmed(True, **good, flexible_first=(EVIDENCE_MIN + 0.1, 0.54), set_valued=True) == (True, True)
+    assert pair_confirmed(True, **good, flexible_first=(674.0, HELDOUT_ALPHA / 2), set_valued=True) == (False, False)
+    assert pair_confirmed(True, **good, flexible_first=(EVIDENCE_MIN - 0.1, 0.54)) == (True, True)
