@@ -86,6 +86,25 @@ def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (
 SETTLED_VARIANTS: dict[str, dict] = {"friction": {"law": "coulomb", "memory": "settled"},
                                      "joint_friction": {"memory": "settled"}}
 SETTLED = SETTLED_VARIANTS["friction"]
+#: The loading-path variant with a settled variant's parameters (the same law and units): the point model a stick
+#: set came to rest along.
+PATH_TWINS: dict[str, dict] = {"friction": {"law": "coulomb", "memory": "carried"},
+                               "joint_friction": {"memory": "step"}}
+
+
+def path_twin(effect, theta: np.ndarray, rig: Rig) -> tuple:
+    """``(effect, theta)``, or for a settled (set-valued) effect its loading-path twin and the fit's parameters.
+
+    A stick set has no point Jacobian (the pose is any point of the set: its parameters' columns are zero), so
+    what needs one, the separability of two effects, takes the path model the set came to rest along: the
+    same bounds (law, units, ranges), the twin's further parameters (the path's state) at their starting
+    values. ``theta`` is a single's full parameter vector (nuisance first).
+    """
+    if not getattr(effect, "settled", False):
+        return effect, theta
+    twin = make_effect(effect.name, rig, effect.range_overrides, **PATH_TWINS[effect.name])
+    extra = twin.x0()[effect.n_params:]
+    return twin, np.concatenate([np.asarray(theta, float), extra])
 #: Noise scales tried for the stick model, as shares of the within-cycle estimate (which friction inflates).
 SETTLED_SCALES = (0.25, 0.35, 0.5, 0.7, 1.0)
 

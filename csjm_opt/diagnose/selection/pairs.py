@@ -24,6 +24,7 @@ from ..decision_rule import LEAD_NATS
 from ..effects import Effect
 from ..fitting.augmented import N_NUISANCE, AugmentedModel
 from ..fitting.gauss_newton import data_jacobian
+from ..fitting.model_fits import path_twin
 from .scoring import CandidateScore
 
 #: Largest canonical correlation of two effects' parameter blocks for them to count as separable.
@@ -78,14 +79,19 @@ def separability(rig: Rig, table: ResidualTable, e1: Effect, th1: np.ndarray, e2
 
 def all_separabilities(rig: Rig, table: ResidualTable, singles: dict[str, CandidateScore],
                        names: Sequence[str]) -> dict[tuple[str, str], dict]:
-    """Separability of every pair of fitted singles (in vocabulary order)."""
+    """Separability of every pair of fitted singles (in vocabulary order).
+
+    A settled single (a stick set: its parameters have no point Jacobian, and would count as separable from
+    anything) is linearised as its loading-path twin (:func:`~..fitting.model_fits.path_twin`).
+    """
     out = {}
     fitted = [n for n in names if n in singles]
     for i, a in enumerate(fitted):
         for b in fitted[i + 1:]:
             fa, fb = singles[a].fit, singles[b].fit
             try:
-                out[(a, b)] = separability(rig, table, fa.model.effects[0], fa.theta, fb.model.effects[0], fb.theta)
+                out[(a, b)] = separability(rig, table, *path_twin(fa.model.effects[0], fa.theta, rig),
+                                           *path_twin(fb.model.effects[0], fb.theta, rig))
             except (np.linalg.LinAlgError, CsjmError) as exc:      # reported, never guessed
                 out[(a, b)] = {"max_correlation": float("nan"), "separable": False, "error": str(exc)}
     return out
