@@ -600,7 +600,7 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
         # decisively more probable than it
         flex = (first is not None and n_cycles is not None and flexible(singles[first], n_cycles)
                 and not flexible(sc, n_cycles) and first not in (a, b))
-        set_first = first is not None and singles[first].heldout_density is not None and first not in (a, b)
+        set_first = first in stick and first not in (a, b)
         left = flex or set_first
         rivals = [singles[a], singles[b]] + ([singles[first]] if first is not None and not left else [])
         base = masked_base or min(rivals, key=lambda c: c.heldout_mse)
