@@ -86,6 +86,26 @@ def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (
 SETTLED_VARIANTS: dict[str, dict] = {"friction": {"law": "coulomb", "memory": "settled"},
                                      "joint_friction": {"memory": "settled"}}
 SETTLED = SETTLED_VARIANTS["friction"]
+#: Noise scales tried for the stick model, as shares of the within-cycle estimate (which friction inflates).
+SETTLED_SCALES = (0.25, 0.35, 0.5, 0.7, 1.0)
+
+
+def fit_cost(names: str | Sequence[str]) -> float:
+    """Expected cost of fitting the model of effect(s) ``names``, on a relative scale (to order the fits).
+
+    One fit per variant, and an effect with a loading path (an effect with a settled variant) four times a
+    point effect's: its state is carried along every row (on ``mujoco_a/paper_mass_com`` friction pairs took
+    0.5-3 s, joint friction pairs 0.1-0.9 s, most other pairs under 0.1 s).
+    """
+    names = [names] if isinstance(names, str) else list(names)
+    return float(sum(len(VARIANTS.get(n, [{}])) * (4 if n in SETTLED_VARIANTS else 1) for n in names))
+
+
+def is_settled(name: str, options: Mapping) -> bool:
+    """Whether ``options`` are the settled variant of effect ``name``."""
+    return name in SETTLED_VARIANTS and dict(options) == SETTLED_VARIANTS[name]
+
+
 #: The loading-path variant with a settled variant's parameters (the same law and units): the point model a stick
 #: set came to rest along.
 PATH_TWINS: dict[str, dict] = {"friction": {"law": "coulomb", "memory": "carried"},
@@ -105,24 +125,6 @@ def path_twin(effect, theta: np.ndarray, rig: Rig) -> tuple:
     twin = make_effect(effect.name, rig, effect.range_overrides, **PATH_TWINS[effect.name])
     extra = twin.x0()[effect.n_params:]
     return twin, np.concatenate([np.asarray(theta, float), extra])
-#: Noise scales tried for the stick model, as shares of the within-cycle estimate (which friction inflates).
-SETTLED_SCALES = (0.25, 0.35, 0.5, 0.7, 1.0)
-
-
-def fit_cost(names: str | Sequence[str]) -> float:
-    """Expected cost of fitting the model of effect(s) ``names``, on a relative scale (to order the fits).
-
-    One fit per variant, and an effect with a loading path (an effect with a settled variant) four times a
-    point effect's: its state is carried along every row (on ``mujoco_a/paper_mass_com`` friction pairs took
-    0.5-3 s, joint friction pairs 0.1-0.9 s, most other pairs under 0.1 s).
-    """
-    names = [names] if isinstance(names, str) else list(names)
-    return float(sum(len(VARIANTS.get(n, [{}])) * (4 if n in SETTLED_VARIANTS else 1) for n in names))
-
-
-def is_settled(name: str, options: Mapping) -> bool:
-    """Whether ``options`` are the settled variant of effect ``name``."""
-    return name in SETTLED_VARIANTS and dict(options) == SETTLED_VARIANTS[name]
 
 
 def settled_scales(ctx: _Context) -> list[float] | None:
