@@ -34,7 +34,8 @@ FIT_ERRORS = (np.linalg.LinAlgError, CsjmError, FloatingPointError)
 
 
 def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (),
-                after: Sequence = (), known: tuple[dict, FitResult] | None = None) -> tuple[dict, FitResult | None]:
+                after: Sequence = (), known: Sequence[tuple[dict, FitResult | None]] = ()
+                ) -> tuple[dict, FitResult | None]:
     """The variant of ``name`` with the highest evidence on the training rows, and its fit.
 
     The noise scale is the best variant's (whitened RMS): the variants then differ by their fit and by
@@ -55,8 +56,9 @@ def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (
         Prior-range overrides.
     before, after : sequence of Effect, optional
         Effects before and after ``name`` in the model.
-    known : (dict, FitResult), optional
-        A variant's options and the plain training fit of this model in it, already made (not fitted again).
+    known : sequence of (dict, FitResult or None), optional
+        Variants' options and the plain training fits of this model in them, already made (not fitted again;
+        None: the fit failed).
 
     Returns
     -------
@@ -69,8 +71,9 @@ def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (
         return (options[0] if options else {}), None
     fits: list[FitResult | None] = []
     for opt in options:
-        if known is not None and dict(known[0]) == opt:
-            fits.append(known[1])
+        made = [f for o, f in known if dict(o) == opt]
+        if made:
+            fits.append(made[0])
             continue
         try:
             fits.append(fit_model(AugmentedModel(rig, [*before, make_effect(name, rig, ranges, **opt), *after]),
@@ -169,6 +172,17 @@ def score_with(ctx: _Context, model: AugmentedModel, fit: FitResult | None = Non
     return score(model, ctx.train, ctx.test, ctx.folds, fit)
 
 
+def score_effect(ctx: _Context, effect) -> CandidateScore | None:
+    """``effect`` alone scored on the diagnosis's rows (an instance, outside the vocabulary too); None if its fit fails.
+
+    A task of :func:`~csjm_opt.diagnose.fitting.pool.map_ordered`: the trend probes run side by side.
+    """
+    try:
+        return ctx.score([effect])
+    except FIT_ERRORS:
+        return None
+
+
 def fit_single(ctx: _Context, rig: Rig, ranges: Mapping | None,
                name: str) -> tuple[dict, CandidateScore | None, str | None]:
     """One candidate: ``(variant options, score, None)``, or ``({}, None, message)`` when its fit fails.
@@ -198,7 +212,8 @@ def fit_single(ctx: _Context, rig: Rig, ranges: Mapping | None,
 
 def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
              stick_scales: Mapping[str, float] | None, pair: tuple[str, str],
-             probe: FitResult | None = None) -> tuple[CandidateScore | None, str | None]:
+             probe: Sequence[tuple[tuple[dict, dict], FitResult | None]] = ()
+             ) -> tuple[CandidateScore | None, str | None]:
     """Pair ``(a, b)`` scored, a variant chosen on the pair model: ``(score, None)`` or ``(None, message)``.
 
     ``options`` are the singles' variants (kept for an effect without variants in this pair). A pair with the
@@ -213,9 +228,9 @@ def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[s
     ranges : mapping or None
     options : mapping
     pair : (str, str)
-    probe : FitResult, optional
-        The plain training fit of the pair's point model in the singles' variants (:func:`probe_pair`), when
-        made: not fitted again.
+    probe : sequence, optional
+        The plain training fits of the pair's point model in each variant (:func:`probe_pair`), when made: not
+        fitted again.
 
     Returns
     -------
@@ -242,44 +257,61 @@ def point_options(options: Mapping[str, dict]) -> dict[str, dict]:
 
 
 def point_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
-               pair: tuple[str, str], probe: FitResult | None = None) -> tuple[AugmentedModel, FitResult | None]:
+               pair: tuple[str, str], probe: Sequence[tuple[tuple[dict, dict], FitResult | None]] = ()
+               ) -> tuple[AugmentedModel, FitResult | None]:
     """The point model of pair ``(a, b)`` (variants chosen on it), and its plain training fit where known.
 
     A settled effect joins as its path variant: a stick set scored at a noise scale of its own would absorb
     the other effect's misfit at a price no point model pays. An effect's variant (friction's law and
     memory) is chosen on the pair's model: a single fit that had to absorb the partner effect may prefer
-    another law than the pair does. ``probe``: the plain fit of the model in the singles' variants
-    (:func:`probe_pair`), reused where the choice comes to that model.
+    another law than the pair does. ``probe``: the fits of :func:`probe_pair`, ``((options a, options b),
+    fit)``, not made again.
     """
     a, b = pair
     options = point_options(options)
-    fit: FitResult | None = probe
-    opt_a = options.get(a, {})
+    opt_a, opt_b = options.get(a, {}), options.get(b, {})
+    fit = next((f for o, f in probe if o == (opt_a, opt_b)), None)
     if a in VARIANTS:
-        known = None if probe is None else (opt_a, probe)
-        opt_a, fit = variant_fit(ctx, rig, a, ranges, after=[make_effect(b, rig, ranges, **options.get(b, {}))],
-                                 known=known)
-    opt_b = options.get(b, {})
+        opt_a, fit = variant_fit(ctx, rig, a, ranges, after=[make_effect(b, rig, ranges, **opt_b)],
+                                 known=[(o[0], f) for o, f in probe if o[1] == opt_b])
     if b in VARIANTS:
-        known = None if probe is None or opt_a != options.get(a, {}) else (opt_b, probe)
-        opt_b, fit = variant_fit(ctx, rig, b, ranges, before=[make_effect(a, rig, ranges, **opt_a)], known=known)
+        opt_b, fit = variant_fit(ctx, rig, b, ranges, before=[make_effect(a, rig, ranges, **opt_a)],
+                                 known=[(o[1], f) for o, f in probe if o[0] == opt_a])
     return AugmentedModel(rig, [make_effect(a, rig, ranges, **opt_a), make_effect(b, rig, ranges, **opt_b)]), fit
 
 
 def probe_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
-               pair: tuple[str, str]) -> tuple[FitResult, float]:
-    """The plain training fit of pair ``(a, b)``'s point model in the singles' variants, and its log evidence.
+               pair: tuple[str, str]) -> tuple[list[tuple[tuple[dict, dict], FitResult | None]], float] | None:
+    """The plain training fits of pair ``(a, b)`` in every variant, and the largest log evidence among them.
 
-    A pair the screen cannot predict (:func:`predicted_pair_evidence`: a loading path, an effect not linear from
-    its nominal values) is fitted once this way before anything else. For a pair without variants and without
-    a loading path this is the fit its score is made of (the same evidence); otherwise the pair's scored
-    evidence may exceed it, by another variant or by the refit along the model's own path
-    (:data:`PROBE_NATS`).
+    For a pair the screen cannot predict (:func:`predicted_pair_evidence`: link compliance is not linear from
+    its nominal values). Without a loading path a pair is scored on its plain training fit in the variant
+    chosen among these (:func:`point_pair`), so the largest evidence here bounds its scored evidence from
+    above: a screen on it drops nothing a fit would have kept. None for a model with a loading path: its
+    state refitted along its own path reaches far beyond any plain fit (on ``oracle_hard/weak_friction``
+    friction + sensor gain 437 nats, to within 3 nats of the verdict; ``studies/pair_screen``), and such a
+    pair is always fitted.
     """
     point = point_options(options)
-    model = AugmentedModel(rig, [make_effect(e, rig, ranges, **point.get(e, {})) for e in pair])
-    fit = fit_model(model, ctx.train)
-    return fit, log_evidence(fit, ctx.sigma)
+    variants = [VARIANTS.get(e, [point.get(e, {})]) for e in pair]
+    if AugmentedModel(rig, [make_effect(e, rig, ranges, **point.get(e, {})) for e in pair]).path_dependent:
+        return None
+    out: list[tuple[tuple[dict, dict], FitResult | None]] = []
+    best = -np.inf
+    for oa in variants[0]:
+        for ob in variants[1]:
+            model = AugmentedModel(rig, [make_effect(pair[0], rig, ranges, **oa),
+                                         make_effect(pair[1], rig, ranges, **ob)])
+            if model.path_dependent:
+                return None
+            try:
+                fit: FitResult | None = fit_model(model, ctx.train)
+            except FIT_ERRORS:
+                fit = None
+            out.append(((oa, ob), fit))
+            if fit is not None:
+                best = max(best, log_evidence(fit, ctx.sigma))
+    return out, (best if np.isfinite(best) else float("nan"))
 
 
 #: A pair whose evidence, predicted one Gauss-Newton step from its singles' fits
@@ -289,12 +321,6 @@ def probe_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping
 #: (``studies/pair_screen``): every verdict, second effect and warning as with every pair fitted, and the
 #: dropped pair nearest the verdict 54.6 nats below it.
 SCREEN_NATS = 60.0
-#: A pair the screen cannot predict is fitted once in its singles' variants (:func:`probe_pair`); it is not scored
-#: when that fit's evidence lies this many nats below the screen's floor as well. The margin covers what the
-#: pair's other variants and the refit of its state along its own loading path add to that fit: on
-#: ``mujoco_b/b1_tendon_friction`` the path refit of joint friction + link compliance gained 131 nats over its
-#: plain fit, and ``studies/pair_screen`` measures the largest gain over the validation logs.
-PROBE_NATS = 200.0
 
 
 def predicted_pair_evidence(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
@@ -342,12 +368,12 @@ def screened_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapp
 
     ``screen``: the singles' fits and the evidence below which a pair is not scored (None: every pair is
     scored). A pair with a settled lead (``stick_scales``) is always scored. A pair without a prediction
-    (:func:`predicted_pair_evidence`: friction along a loading path, link compliance) is fitted once in its
-    singles' variants (:func:`probe_pair`) and scored unless that fit lies ``PROBE_NATS`` below the floor too:
-    its other variants and its state refitted along its own path can reach far beyond the plain fit (on
-    ``mujoco_b/b1_tendon_friction`` joint friction + link compliance 131 nats). ``predicted`` is the
-    prediction or the probe's evidence (nan where neither was made); a pair not scored returns
-    ``(None, None, predicted)``.
+    (:func:`predicted_pair_evidence`) is fitted plainly in each variant (:func:`probe_pair`, link compliance)
+    and scored unless the best of those fits lies below the floor (it bounds the scored evidence from above),
+    or, with a loading path (friction), always scored: on ``mujoco_b/b1_tendon_friction`` joint friction + link
+    compliance reached 131 nats more than its plain training fit, at measured poses, promised.
+    ``predicted`` is the prediction or the probe's evidence (nan where neither was made); a pair not scored
+    returns ``(None, None, predicted)``.
     """
     predicted = float("nan")
     if screen is None or (stick_scales and any(e in stick_scales for e in pair)):
@@ -359,14 +385,12 @@ def screened_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapp
         predicted = float("nan")
     if predicted < floor:
         return None, None, predicted
-    probe = None
+    probe: list = []
     if not np.isfinite(predicted) and np.isfinite(floor):
-        # no prediction: one plain fit of the pair in its singles' variants stands in for it, with a margin for
-        # what the other variants and the path refit may add
-        try:
-            probe, predicted = probe_pair(ctx, rig, ranges, options, pair)
-        except FIT_ERRORS:
-            probe = None                  # another variant may fit: the pair is fitted in full
-        if predicted < floor - PROBE_NATS:
-            return None, None, predicted
+        # no prediction, no loading path: the pair's plain fits in every variant bound its scored evidence
+        made = probe_pair(ctx, rig, ranges, options, pair)
+        if made is not None:
+            probe, predicted = made
+            if predicted < floor:
+                return None, None, predicted
     return (*fit_pair(ctx, rig, ranges, options, stick_scales, pair, probe), predicted)

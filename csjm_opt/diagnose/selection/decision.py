@@ -52,6 +52,7 @@ from ..fitting.model_fits import (  # noqa: F401 (VARIANTS re-exported)
     VARIANTS,
     fit_cost,
     fit_single,
+    score_effect,
     screened_pair,
     variant_fit,
 )
@@ -172,7 +173,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
     remaining = ctx.signature(verdict.final)
     _rival_warnings(ctx, verdict, singles, tests, detected, pairs, pair_scores, n_cycles, remaining)
     _time_trend_warning(ctx, verdict)
-    _trend_probe_warning(ctx, rig, verdict, baseline, floor0)
+    _trend_probe_warning(ctx, rig, verdict, baseline, floor0, workers)
     d = Diagnosis(train=ctx.train, test=ctx.test, baseline=baseline, candidates=singles,
                   noise_floor_rad=ctx.scale(verdict.final) * ctx.instrument,
                   noise_estimates=_noise_estimates(ctx, verdict.final, baseline, singles), tests=tests,
@@ -497,7 +498,8 @@ def _time_trend_warning(ctx: _Context, verdict: Verdict) -> None:
                      "is outside the vocabulary")
 
 
-def _trend_probe_warning(ctx: _Context, rig: Rig, verdict: Verdict, baseline: CandidateScore, floor0: float) -> None:
+def _trend_probe_warning(ctx: _Context, rig: Rig, verdict: Verdict, baseline: CandidateScore, floor0: float,
+                         workers: int = 1) -> None:
     """Warn when a fault that builds up over each cycle, outside the vocabulary, explains the log as well.
 
     Two probes: linear cable creep (:class:`~csjm_opt.diagnose.effects.cable_creep.CableCreep`, a share of
@@ -512,10 +514,9 @@ def _trend_probe_warning(ctx: _Context, rig: Rig, verdict: Verdict, baseline: Ca
     if verdict.selected == "none":
         return
     found = []
-    for probe in (CableCreep(n_cables_of(rig)), DrumSlip(n_cables_of(rig), rig.t_max_N)):
-        try:
-            sc = ctx.score([probe])
-        except FIT_ERRORS:
+    probes = (CableCreep(n_cables_of(rig)), DrumSlip(n_cables_of(rig), rig.t_max_N))
+    for probe, sc in zip(probes, map_ordered(score_effect, (ctx,), probes, workers)):
+        if sc is None:
             continue
         t = ctx.compare(baseline, sc, ALPHA, floor0)
         if not (t["significant"] and t["plausible"] and ctx.closes(sc)):

@@ -63,3 +63,53 @@ def test_screened_diagnosis_names_what_the_unscreened_one_names(rig, monkeypatch
         twin = next(q for q in full["pairs"] if set(q["effects"]) == set(p["effects"]))
         assert twin["log_evidence"] < best - decision.LEAD_NATS
     assert (screened["selected"], screened["verdict"]["warnings"]) == (full["selected"], full["verdict"]["warnings"])
+
+
+def test_a_probe_bounds_the_scored_pairs_evidence_and_skips_a_loading_path(rig):
+    """A pair without a prediction is probed by its plain fits in every variant: their best evidence bounds the
+    scored pair's from above (it equals it without variants), and a pair with a loading path is not probed.
+
+    The scored pair is made from scratch by :func:`fit_pair` (no probe passed); the plain fit is checked against
+    ``fit_model`` on the pair model built here.
+    """
+    from csjm_opt.diagnose.decision_rule import _Context
+    from csjm_opt.diagnose.fitting import model_fits
+
+    log = simulate_experiment(rig, 4, np.random.default_rng(11), effect="mass_com", severity=2.0, steps=3)
+    ctx = _Context(rig, compute_residuals(rig, log), None)
+    plain = ("mass_com", "link_compliance")
+    fits, ev = model_fits.probe_pair(ctx, rig, None, {}, plain)
+    sc, error = model_fits.fit_pair(ctx, rig, None, {}, None, plain)
+    assert error is None and len(fits) == 1
+    assert ev == pytest.approx(ctx.evidence(sc), abs=1e-6)
+    assert ev == pytest.approx(log_evidence(fit_model(AugmentedModel(
+        rig, [make_effect(e, rig) for e in plain]), ctx.train), ctx.sigma), abs=1e-6)
+    variants = ("sensor_gain", "link_compliance")
+    fits, ev = model_fits.probe_pair(ctx, rig, None, {}, variants)
+    sc, error = model_fits.fit_pair(ctx, rig, None, {}, None, variants)
+    assert error is None and len(fits) == len(model_fits.VARIANTS["sensor_gain"])
+    assert ctx.evidence(sc) <= ev + 1e-6
+    assert model_fits.probe_pair(ctx, rig, None, {}, ("friction", "link_compliance")) is None
+
+
+def test_probed_pairs_dropped_lie_far_below_and_change_nothing(rig, monkeypatch):
+    """With link compliance among the candidates, pairs are probed; those dropped lie far below.
+
+    The same diagnosis with nothing screened (a floor far below every model, the probes still made) is the
+    reference: the verdict and warnings agree, and every pair dropped on its probe was scored there far below
+    the best single.
+    """
+    few = ["mass_com", "sensor_bias", "stiffness_scale", "link_compliance"]
+    log = simulate_experiment(rig, 4, np.random.default_rng(12), effect="mass_com", severity=2.0, steps=3)
+    screened = diagnose(rig, log, effects=few, workers=1).as_json()
+    margin = decision.SCREEN_NATS
+    monkeypatch.setattr(decision, "SCREEN_NATS", 1e12)
+    full = diagnose(rig, log, effects=few, workers=1).as_json()
+    dropped = [p for p in screened["pairs"] if "link_compliance" in p["effects"] and not p["fitted"]
+               and p.get("predicted_log_evidence") is not None and np.isfinite(p["predicted_log_evidence"])]
+    assert dropped, "no pair was dropped on its probe: the test checks nothing"
+    best = max(c["log_evidence"] for c in full["candidates"])
+    for p in dropped:
+        twin = next(q for q in full["pairs"] if set(q["effects"]) == set(p["effects"]))
+        assert twin["log_evidence"] <= p["predicted_log_evidence"] + 1e-6 < best - margin
+    assert (screened["selected"], screened["verdict"]["warnings"]) == (full["selected"], full["verdict"]["warnings"])
