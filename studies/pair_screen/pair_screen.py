@@ -16,7 +16,6 @@ Usage (from the repository root; VALIDATION_DIR holds the folders with ``answers
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import time
 from pathlib import Path
@@ -40,8 +39,7 @@ def run_one(job: dict) -> dict:
     t0 = time.perf_counter()
     on = decision.diagnose(rig, log, test, workers=1).as_json()
     t1 = time.perf_counter()
-    # nothing screened (a floor far below any model); the predictions and the probes are still made
-    decision.SCREEN_NATS = 1e12
+    decision.SCREEN_NATS = float("inf")           # nothing screened; the predictions are still made
     try:
         off = decision.diagnose(rig, log, test, workers=1).as_json()
     finally:
@@ -61,11 +59,6 @@ def run_one(job: dict) -> dict:
             "on": {k: on["verdict"][k] for k in ("selected", "warnings")} | {"secondary": on["secondary"]["effect"]},
             "off": {k: off["verdict"][k] for k in ("selected", "warnings")} | {"secondary": off["secondary"]["effect"]},
             "seconds_on": t1 - t0, "seconds_off": t2 - t1, "pairs": pairs}
-
-
-#: Effects whose pairs get no score-test prediction and are probed by a plain fit instead (a loading path, or not
-#: linear from nominal): ``model_fits.probe_pair``.
-PROBED = frozenset({"friction", "joint_friction", "link_compliance"})
 
 
 def summarise(records: list[dict], lead_nats: float) -> str:
@@ -89,23 +82,12 @@ def summarise(records: list[dict], lead_nats: float) -> str:
                 "+".join(p["effects"]), p["fitted"] - p["predicted"])
                for r in records for p in r["pairs"] if p["dropped"] and p["fitted"] is not None]
     dropped.sort(reverse=True)
-    # a pair without a score-test prediction is probed by one plain fit (model_fits.probe_pair): how far its scored
-    # evidence reaches beyond that fit, over every such pair
-    probed = sorted(((p["fitted"] - p["predicted"], r["id"], "+".join(p["effects"]))
-                     for r in records for p in r["pairs"]
-                     if p["fitted"] is not None and p["predicted"] is not None and math.isfinite(p["predicted"])
-                     and PROBED & set(p["effects"])),
-                    reverse=True)
     lines += ["", f"{len(records)} logs, {n_all} pairs; the screen drops {len(dropped)} "
               f"({len(dropped) / max(n_all, 1):.0%}).", "",
               "Dropped pairs nearest the verdict's evidence (the best single's without a named verdict; a rule reads "
               f"pairs within {lead_nats:g} nats of the verdict):", "",
               "| fitted minus the verdict | log | pair | fitted minus predicted |", "|---|---|---|---|"]
     lines += [f"| {d:+.1f} | {i} | {p} | {s:+.1f} |" for d, i, p, s in dropped[:8]]
-    lines += ["", f"Pairs probed by one plain fit (no score-test prediction: a loading path, link compliance): "
-              f"{len(probed)}. Largest gains of the scored evidence over the probe's:", "",
-              "| scored minus probe | log | pair |", "|---|---|---|"]
-    lines += [f"| {g:+.1f} | {i} | {p} |" for g, i, p in probed[:8]]
     on = [r["seconds_on"] for r in records]
     off = [r["seconds_off"] for r in records]
     ratio = statistics.median(o / n for o, n in zip(off, on))

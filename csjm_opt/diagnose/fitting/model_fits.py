@@ -34,8 +34,7 @@ FIT_ERRORS = (np.linalg.LinAlgError, CsjmError, FloatingPointError)
 
 
 def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (),
-                after: Sequence = (), known: Sequence[tuple[dict, FitResult | None]] = ()
-                ) -> tuple[dict, FitResult | None]:
+                after: Sequence = ()) -> tuple[dict, FitResult | None]:
     """The variant of ``name`` with the highest evidence on the training rows, and its fit.
 
     The noise scale is the best variant's (whitened RMS): the variants then differ by their fit and by
@@ -56,9 +55,6 @@ def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (
         Prior-range overrides.
     before, after : sequence of Effect, optional
         Effects before and after ``name`` in the model.
-    known : sequence of (dict, FitResult or None), optional
-        Variants' options and the plain training fits of this model in them, already made (not fitted again;
-        None: the fit failed).
 
     Returns
     -------
@@ -71,10 +67,6 @@ def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (
         return (options[0] if options else {}), None
     fits: list[FitResult | None] = []
     for opt in options:
-        made = [f for o, f in known if dict(o) == opt]
-        if made:
-            fits.append(made[0])
-            continue
         try:
             fits.append(fit_model(AugmentedModel(rig, [*before, make_effect(name, rig, ranges, **opt), *after]),
                                   ctx.train))
@@ -211,9 +203,8 @@ def fit_single(ctx: _Context, rig: Rig, ranges: Mapping | None,
 
 
 def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
-             stick_scales: Mapping[str, float] | None, pair: tuple[str, str],
-             probe: Sequence[tuple[tuple[dict, dict], FitResult | None]] = ()
-             ) -> tuple[CandidateScore | None, str | None]:
+             stick_scales: Mapping[str, float] | None,
+             pair: tuple[str, str]) -> tuple[CandidateScore | None, str | None]:
     """Pair ``(a, b)`` scored, a variant chosen on the pair model: ``(score, None)`` or ``(None, message)``.
 
     ``options`` are the singles' variants (kept for an effect without variants in this pair). A pair with the
@@ -228,9 +219,6 @@ def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[s
     ranges : mapping or None
     options : mapping
     pair : (str, str)
-    probe : sequence, optional
-        The plain training fits of the pair's point model in each variant (:func:`probe_pair`), when made: not
-        fitted again.
 
     Returns
     -------
@@ -246,7 +234,7 @@ def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[s
             sc = _settled(ctx, rig, ranges, effects, [max(known)])
             if sc is not None:
                 return sc, None
-        return score_with(ctx, *point_pair(ctx, rig, ranges, options, pair, probe)), None
+        return score_with(ctx, *point_pair(ctx, rig, ranges, options, pair)), None
     except FIT_ERRORS as exc:
         return None, f"fit failed: {exc}"
 
@@ -257,61 +245,24 @@ def point_options(options: Mapping[str, dict]) -> dict[str, dict]:
 
 
 def point_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
-               pair: tuple[str, str], probe: Sequence[tuple[tuple[dict, dict], FitResult | None]] = ()
-               ) -> tuple[AugmentedModel, FitResult | None]:
+               pair: tuple[str, str]) -> tuple[AugmentedModel, FitResult | None]:
     """The point model of pair ``(a, b)`` (variants chosen on it), and its plain training fit where known.
 
     A settled effect joins as its path variant: a stick set scored at a noise scale of its own would absorb
     the other effect's misfit at a price no point model pays. An effect's variant (friction's law and
     memory) is chosen on the pair's model: a single fit that had to absorb the partner effect may prefer
-    another law than the pair does. ``probe``: the fits of :func:`probe_pair`, ``((options a, options b),
-    fit)``, not made again.
+    another law than the pair does.
     """
     a, b = pair
     options = point_options(options)
-    opt_a, opt_b = options.get(a, {}), options.get(b, {})
-    fit = next((f for o, f in probe if o == (opt_a, opt_b)), None)
+    fit: FitResult | None = None
+    opt_a = options.get(a, {})
     if a in VARIANTS:
-        opt_a, fit = variant_fit(ctx, rig, a, ranges, after=[make_effect(b, rig, ranges, **opt_b)],
-                                 known=[(o[0], f) for o, f in probe if o[1] == opt_b])
+        opt_a, fit = variant_fit(ctx, rig, a, ranges, after=[make_effect(b, rig, ranges, **options.get(b, {}))])
+    opt_b = options.get(b, {})
     if b in VARIANTS:
-        opt_b, fit = variant_fit(ctx, rig, b, ranges, before=[make_effect(a, rig, ranges, **opt_a)],
-                                 known=[(o[1], f) for o, f in probe if o[0] == opt_a])
+        opt_b, fit = variant_fit(ctx, rig, b, ranges, before=[make_effect(a, rig, ranges, **opt_a)])
     return AugmentedModel(rig, [make_effect(a, rig, ranges, **opt_a), make_effect(b, rig, ranges, **opt_b)]), fit
-
-
-def probe_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
-               pair: tuple[str, str]) -> tuple[list[tuple[tuple[dict, dict], FitResult | None]], float] | None:
-    """The plain training fits of pair ``(a, b)`` in every variant, and the largest log evidence among them.
-
-    For a pair the screen cannot predict (:func:`predicted_pair_evidence`: link compliance is not linear from
-    its nominal values). Without a loading path a pair is scored on its plain training fit in the variant
-    chosen among these (:func:`point_pair`), so the largest evidence here bounds its scored evidence from
-    above: a screen on it drops nothing a fit would have kept. None for a model with a loading path: its
-    state refitted along its own path reaches far beyond any plain fit (on ``oracle_hard/weak_friction``
-    friction + sensor gain 437 nats, to within 3 nats of the verdict; ``studies/pair_screen``), and such a
-    pair is always fitted.
-    """
-    point = point_options(options)
-    variants = [VARIANTS.get(e, [point.get(e, {})]) for e in pair]
-    if AugmentedModel(rig, [make_effect(e, rig, ranges, **point.get(e, {})) for e in pair]).path_dependent:
-        return None
-    out: list[tuple[tuple[dict, dict], FitResult | None]] = []
-    best = -np.inf
-    for oa in variants[0]:
-        for ob in variants[1]:
-            model = AugmentedModel(rig, [make_effect(pair[0], rig, ranges, **oa),
-                                         make_effect(pair[1], rig, ranges, **ob)])
-            if model.path_dependent:
-                return None
-            try:
-                fit: FitResult | None = fit_model(model, ctx.train)
-            except FIT_ERRORS:
-                fit = None
-            out.append(((oa, ob), fit))
-            if fit is not None:
-                best = max(best, log_evidence(fit, ctx.sigma))
-    return out, (best if np.isfinite(best) else float("nan"))
 
 
 #: A pair whose evidence, predicted one Gauss-Newton step from its singles' fits
@@ -367,13 +318,11 @@ def screened_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapp
     """:func:`fit_pair`, unless its predicted evidence is below ``screen``'s floor: ``(score, message, predicted)``.
 
     ``screen``: the singles' fits and the evidence below which a pair is not scored (None: every pair is
-    scored). A pair with a settled lead (``stick_scales``) is always scored. A pair without a prediction
-    (:func:`predicted_pair_evidence`) is fitted plainly in each variant (:func:`probe_pair`, link compliance)
-    and scored unless the best of those fits lies below the floor (it bounds the scored evidence from above),
-    or, with a loading path (friction), always scored: on ``mujoco_b/b1_tendon_friction`` joint friction + link
-    compliance reached 131 nats more than its plain training fit, at measured poses, promised.
-    ``predicted`` is the prediction or the probe's evidence (nan where neither was made); a pair not scored
-    returns ``(None, None, predicted)``.
+    scored). A pair with a settled lead (``stick_scales``) is always scored, and so is a pair without a
+    prediction (:func:`predicted_pair_evidence`: friction along a loading path; on
+    ``mujoco_b/b1_tendon_friction`` joint friction + link compliance reached 131 nats more than even its
+    plain training fit, at measured poses, promised: its state along its own path fits far better).
+    ``predicted`` is nan where no prediction was made; a pair not scored returns ``(None, None, predicted)``.
     """
     predicted = float("nan")
     if screen is None or (stick_scales and any(e in stick_scales for e in pair)):
@@ -385,12 +334,4 @@ def screened_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapp
         predicted = float("nan")
     if predicted < floor:
         return None, None, predicted
-    probe: list = []
-    if not np.isfinite(predicted) and np.isfinite(floor):
-        # no prediction, no loading path: the pair's plain fits in every variant bound its scored evidence
-        made = probe_pair(ctx, rig, ranges, options, pair)
-        if made is not None:
-            probe, predicted = made
-            if predicted < floor:
-                return None, None, predicted
-    return (*fit_pair(ctx, rig, ranges, options, stick_scales, pair, probe), predicted)
+    return (*fit_pair(ctx, rig, ranges, options, stick_scales, pair), predicted)

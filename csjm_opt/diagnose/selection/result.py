@@ -21,9 +21,8 @@
                          improvement_rad, separable, max_correlation, plausible, implausible_params}
                         or {"effect": "none"}
     pairs               [{effects: [a, b], separable, max_correlation, fitted,
-                          (searched pairs:) predicted_log_evidence (the screen's prediction, or for a pair
-                          it cannot predict the best evidence of its plain fits, model_fits.probe_pair; null
-                          where neither is made; a pair far below is not fitted, model_fits.SCREEN_NATS),
+                          (searched pairs:) predicted_log_evidence (the screen's prediction, null where
+                          none is made; a pair predicted far below is not fitted, model_fits.SCREEN_NATS),
                           (fitted pairs:) heldout_rms_rad, fraction_explained, p_value_vs_first,
                           improvement_rad, significant, plausible, implausible_params, bic}]
     steps               the greedy path: [{model, heldout_rms_rad, fraction_explained}]
