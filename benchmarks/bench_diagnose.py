@@ -87,25 +87,38 @@ else:
     rig = co.paper_rig()
     log = simulate_experiment(rig, int(sys.argv[2]), np.random.default_rng(0), effect=effect)
     test = None
+# the work done, counted where it is done on one core: rows through the moment balance (AugmentedModel.evaluate,
+# present in every version timed so far); a forked worker's count stays in the worker
+rows_evaluated = [0]
+from csjm_opt.diagnose.fitting.augmented import AugmentedModel
+_evaluate = AugmentedModel.evaluate
+def _counted(self, R_m, *args, **kwargs):
+    rows_evaluated[0] += len(R_m)
+    return _evaluate(self, R_m, *args, **kwargs)
+AugmentedModel.evaluate = _counted
 t0, c0 = time.perf_counter(), time.process_time()
 d = diagnose(rig, log, test, workers=int(sys.argv[3]) if len(sys.argv) > 3 else None)
 j = d.as_json()   # the JSON keys hold across versions (the objects behind them may not)
-print(json.dumps([time.perf_counter() - t0, time.process_time() - c0, j["selected"], j["secondary"]["effect"]]))
+print(json.dumps([time.perf_counter() - t0, time.process_time() - c0, j["selected"], j["secondary"]["effect"],
+                  rows_evaluated[0]]))
 """
 
 
-def baseline_run(tree: str, effect, cycles: int, workers: int | None = None) -> tuple[float, float, str]:
-    """Wall and CPU seconds of the diagnosis of the checkout ``tree`` on the same log, and its verdict.
+def baseline_run(tree: str, effect, cycles: int, workers: int | None = None) -> tuple[float, float, str, int]:
+    """Wall and CPU seconds of the diagnosis of the checkout ``tree`` on the same log, its verdict, and its work.
 
     ``effect``: the injected effect(s) of a simulated log, or a validation case's files
     (``{"train", "test", "rig"}``); ``workers``: the diagnosis's worker processes (default: the cores).
+    The work is the number of rows taken through the moment balance in this process (all of them with
+    ``workers=1``): a count that the load of a shared machine does not move, where seconds drift by
+    1.3-1.5x between identical runs minutes apart.
     """
     env = {**os.environ, "PYTHONPATH": tree}
     extra = [] if workers is None else [str(workers)]
     out = subprocess.run([sys.executable, "-c", BASELINE, json.dumps(effect), str(cycles), *extra], env=env,
                          capture_output=True, text=True, check=True, cwd=tree)
-    wall, cpu, sel, sec = json.loads(out.stdout.strip().splitlines()[-1])
-    return wall, cpu, f"{sel} + {sec}"
+    wall, cpu, sel, sec, rows = json.loads(out.stdout.strip().splitlines()[-1])
+    return wall, cpu, f"{sel} + {sec}", int(rows)
 
 
 def validation_case(spec: str, args) -> None:
@@ -130,15 +143,17 @@ def validation_case(spec: str, args) -> None:
             runs[f"{tag} 1"].append(baseline_run(tree, files, 0, 1))
             runs[f"{tag} N"].append(baseline_run(tree, files, 0, args.workers))
     med = {k: np.median([r[:2] for r in v], axis=0) for k, v in runs.items() if v}
+    work = {k: int(np.median([r[3] for r in v])) for k, v in runs.items() if v and k.endswith(" 1")}
     n_rows = sum(1 for k in ("train", "test") for _ in open(files[k])) - 2
     print(f"{case} ({n_rows} rows, load average {os.getloadavg()[0]:.1f}): one core {med['new 1'][0]:.1f} s wall / "
-          f"{med['new 1'][1]:.1f} s CPU, on {args.workers or 'all'} cores {med['new N'][0]:.1f} s wall "
-          f"(target < 5 s on 2 cores) -> {runs['new 1'][-1][2]}")
+          f"{med['new 1'][1]:.1f} s CPU ({work['new 1']:,} rows through the balance), on {args.workers or 'all'} "
+          f"cores {med['new N'][0]:.1f} s wall (target < 5 s on 2 cores) -> {runs['new 1'][-1][2]}")
     if "old 1" in med:
         same = {r[2] for r in runs["old 1"] + runs["new 1"] + runs["old N"] + runs["new N"]}
         print(f"  baseline {args.baseline}: one core {med['old 1'][0]:.1f} s wall / {med['old 1'][1]:.1f} s CPU, "
               f"on {args.workers or 'all'} cores {med['old N'][0]:.1f} s wall -> {runs['old 1'][-1][2]}; "
-              f"ratio old / new {med['old 1'][1] / med['new 1'][1]:.2f}x CPU on one core, "
+              f"{work['old 1']:,} rows through the balance; ratio old / new {med['old 1'][1] / med['new 1'][1]:.2f}x "
+              f"CPU on one core ({work['old 1'] / max(work['new 1'], 1):.2f}x rows), "
               f"{med['old N'][0] / med['new N'][0]:.2f}x wall on all cores; verdicts "
               f"{'the same' if len(same) == 1 else 'DIFFER: ' + ', '.join(sorted(same))}")
 
