@@ -68,6 +68,7 @@ def test_parallel_diagnosis_equals_serial(rig, coulomb_log):
     parallel = diagnose(rig, coulomb_log, workers=2, **kw)
     assert parallel.as_json() == serial.as_json()
     assert serial.pair_scores, "no pair was fitted: the test would not exercise the pair pool"
+    assert serial.verdict.selected != "none", "no verdict: the trend probes (on the workers too) did not run"
     for k, sc in serial.pair_scores.items():
         assert parallel.pair_scores[k].fit.rss == sc.fit.rss
         np.testing.assert_array_equal(parallel.pair_scores[k].heldout_zeta_rad, sc.heldout_zeta_rad)
