@@ -14,8 +14,10 @@ runs twice: on one core (``workers=1``, wall = CPU on a quiet box) and on ``--wo
 processes (default: the machine's cores; the CPU time of the workers is not this process's,
 so only wall time is printed there). Baselines measured in the same run: the singles-only
 diagnosis (``secondary=False``) on the same log; with ``--baseline DIR``, the diagnosis of
-another checkout of the package (e.g. the previous release) on the same log, in a subprocess,
-repeats interleaved with this code's (the ratio old / new of medians); and one candidate fitted
+another checkout of the package (e.g. the previous release) on the same log, in a subprocess, on one
+core and on the workers, repeats interleaved with this code's (the ratio old / new of medians). The work
+of each one-core diagnosis is counted too, as the rows taken through the moment balance: a count that a
+shared machine's load does not move (its seconds drift by 1.3-1.5x between identical runs). And one candidate fitted
 the direct way, ``scipy.optimize.least_squares`` on *forward-statics* pose residuals (a full
 equilibrium solve of every row at every evaluation), against the linearised fit the package uses.
 """
@@ -23,6 +25,7 @@ equilibrium solve of every row at every evaluation), against the linearised fit 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import resource
@@ -63,6 +66,23 @@ def timed(fn) -> tuple[object, float, float]:
     t0, c0 = time.perf_counter(), time.process_time()
     out = fn()
     return out, time.perf_counter() - t0, time.process_time() - c0
+
+
+@contextlib.contextmanager
+def counting_rows():
+    """Count the rows taken through the moment balance in this process (as the baseline script does)."""
+    count = [0]
+    evaluate = AugmentedModel.evaluate
+
+    def counted(self, R_m, *args, **kwargs):
+        count[0] += len(R_m)
+        return evaluate(self, R_m, *args, **kwargs)
+
+    AugmentedModel.evaluate = counted
+    try:
+        yield count
+    finally:
+        AugmentedModel.evaluate = evaluate
 
 
 def children_cpu() -> float:
@@ -177,10 +197,11 @@ def main() -> int:
     for case in args.cases:
         effect = case.split("+") if "+" in case else case
         log = simulate_experiment(rig, args.cycles, np.random.default_rng(0), effect=effect)
-        full, par, single, old = [], [], [], []
+        full, par, single, old, old_n = [], [], [], [], []
         for _ in range(args.repeat):
-            d, wall, cpu = timed(lambda log=log: diagnose(rig, log, progress=bar, workers=1))
-            full.append((wall, cpu))
+            with counting_rows() as rows_new:
+                d, wall, cpu = timed(lambda log=log: diagnose(rig, log, progress=bar, workers=1))
+            full.append((wall, cpu, rows_new[0]))
             k0 = children_cpu()
             dp, wall_p, cpu_p = timed(lambda log=log: diagnose(rig, log, progress=bar, workers=args.workers))
             par.append((wall_p, cpu_p + children_cpu() - k0))
@@ -188,21 +209,25 @@ def main() -> int:
                 print(f"  {case}: the diagnosis on workers differs from the serial one", file=sys.stderr)
             _, wall1, cpu1 = timed(lambda log=log: diagnose(rig, log, secondary=False, workers=1))
             single.append((wall1, cpu1))
-            if args.baseline:
-                old.append(baseline_run(args.baseline, effect, args.cycles))
+            if args.baseline:        # on one core (CPU and work, as ``full``) and on the workers (wall, as ``par``)
+                old.append(baseline_run(args.baseline, effect, args.cycles, 1))
+                old_n.append(baseline_run(args.baseline, effect, args.cycles, args.workers))
         j = d.as_json()
-        fw, fc = np.median(full, axis=0)
+        fw, fc, fr = np.median(full, axis=0)
         sw, sc = np.median(single, axis=0)
         pw, pc = np.median(par, axis=0)
-        print(f"{len(log)} rows, injected {case}: singles + pairs on one core {fw:.1f} s wall / {fc:.1f} s CPU, "
+        print(f"{len(log)} rows, injected {case}: singles + pairs on one core {fw:.1f} s wall / {fc:.1f} s CPU "
+              f"({fr:,.0f} rows through the balance), "
               f"on {args.workers or 'all'} cores {pw:.1f} s wall / {pc:.1f} s CPU with the workers' "
               f"(target < 30 s on 2 cores; load average {os.getloadavg()[0]:.1f}); singles only "
               f"{sw:.1f} s wall / {sc:.1f} s CPU -> selected {j['selected']} + {j['secondary']['effect']}, "
               f"gap {1e3 * j['gap']['before_rad']:.2f} -> {1e3 * j['gap']['after_rad']:.2f} mrad")
         if old:
-            ow, oc = np.median([o[:2] for o in old], axis=0)
-            print(f"  baseline {args.baseline}: {ow:.1f} s wall / {oc:.1f} s CPU -> {old[-1][2]}; "
-                  f"ratio old / new {oc / fc:.2f}x CPU on one core, {ow / pw:.2f}x wall on all cores")
+            oc, orows = np.median([o[1] for o in old]), np.median([o[3] for o in old])
+            ow = np.median([o[0] for o in old_n])
+            print(f"  baseline {args.baseline}: one core {oc:.1f} s CPU ({orows:,.0f} rows), on "
+                  f"{args.workers or 'all'} cores {ow:.1f} s wall -> {old[-1][2]}; ratio old / new {oc / fc:.2f}x "
+                  f"CPU on one core ({orows / max(fr, 1):.2f}x rows), {ow / pw:.2f}x wall on all cores")
     if args.no_extras:
         return 0
 
