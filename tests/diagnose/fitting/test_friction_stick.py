@@ -220,3 +220,38 @@ def test_settled_joint_friction_holds_a_testbed_log_of_a_stuck_ball_joint_within
     assert held.max() < 1e-4 * scale
     half = np.linalg.norm(stick_residual(a, B, np.full(3, 0.5 * bound))[0], axis=1)
     assert half.max() > 0.1 * scale
+
+
+def test_stick_residual_is_the_pose_offset_through_the_models_own_tangent():
+    """A pose turned by a known small offset from the true equilibrium reads that offset at zero band.
+
+    The plant's cables are 1.4x stiffer than the rig file's; the model with its stiffness scale at 1.4
+    (and settled friction of zero band) must read the offset itself (to second order), not 1.4 times it
+    as the nominal tangent would.
+    """
+    import dataclasses
+
+    from csjm_opt import so3
+    from csjm_opt.diagnose.data.residuals import compute_residuals
+    from csjm_opt.diagnose.effects import make_effect
+    from csjm_opt.diagnose.fitting.augmented import AugmentedModel
+    from csjm_opt.diagnose.fitting.friction_stick import stick_design
+    from csjm_opt.measurement.instruments import InstrumentNoise
+    from csjm_opt.testbed import make_plant, random_rig, simulate_experiment
+
+    rig, _ = random_rig(np.random.default_rng([1234, 3]))
+    factor = 1.4
+    plant = make_plant(rig, None, 1.0, np.random.default_rng(0))
+    plant = dataclasses.replace(plant, rig=rig.replace(
+        cable_stiffness_N_per_m=factor * np.asarray(rig.cable_stiffness_N_per_m)))
+    log = simulate_experiment(rig, 1, np.random.default_rng(5), effect=plant, noise=InstrumentNoise.none())
+    offset = np.random.default_rng(6).normal(size=(len(log), 3)) * 2e-3
+    log = dataclasses.replace(log, rotvec_rad=so3.log(log.R @ so3.exp(offset)))
+    table = compute_residuals(rig, log)
+    model = AugmentedModel(rig, [make_effect("friction", rig, law="coulomb", memory="settled"),
+                                 make_effect("stiffness_scale", rig)])
+    theta = model.x0()
+    theta[list(model.param_names).index("log_k_scale")] = np.log(factor)
+    a, _, _ = stick_design(model, table, theta)
+    pose = np.einsum("nij,nj->ni", np.linalg.inv(table.whiten), a)
+    assert np.linalg.norm(pose - offset) < 0.01 * np.linalg.norm(offset)
