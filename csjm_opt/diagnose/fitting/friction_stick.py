@@ -53,6 +53,8 @@ import numpy as np
 from numba import njit
 from scipy.optimize import minimize
 
+from .gauss_newton import _safe_inv
+
 #: Iterations of the accelerated projected gradient per row (the fallback of :func:`_project_row`).
 MAX_ITER = 5000
 #: The fallback stops when the squared step (in N^2, relative to the band) falls below this.
@@ -387,7 +389,7 @@ def stick_design(model, table, theta: np.ndarray) -> tuple[np.ndarray, np.ndarra
     """
     _, band, stick = stick_layout(model)
     g, ev = model.evaluate(table.R_meas, table.rows, theta)
-    WGinv = table.whiten @ np.linalg.inv(model.tangent(table.R_meas, table.rows, theta, g, h=1e-6))
+    WGinv = table.whiten @ _safe_inv(model.tangent(table.R_meas, table.rows, theta, g, h=1e-6))
     cols, ties, first = [], [], 0
     for i in stick:
         c, t = model.effects[i].stick_columns(ev)
