@@ -756,4 +756,5 @@ def settled_score(model, train, test, folds, scales: Sequence[float]):
                     evidence_fn=_Evidence(sm))
     floor = float(np.sqrt(equivalent_mse(eq, var, s))) / s    # per unit noise scale, as the other models'
     return CandidateScore(model.name, fit, zeta, cyc, zeta_tr, 0, train.instrument_floor_rad,
-                          float(s ** 2), floor, (), heldout_density=(q, var, s))
+                          float(s ** 2), floor, (), heldout_density=(q, var, s),
+                          heldout_nll=q + 6.0 * np.log(s))

@@ -17,7 +17,7 @@ from ...errors import CsjmError
 from ...model.rig import Rig
 from ..decision_rule import _Context
 from ..effects import make_effect
-from ..selection.scoring import CandidateScore, score
+from ..selection.scoring import CandidateScore, lowest_heldout, score
 from .augmented import N_NUISANCE, AugmentedModel
 from .evidence import log_evidence, predicted_evidence
 from .friction_stick import settled_score
@@ -153,10 +153,11 @@ def _prefer_settled(ctx: _Context, settled: CandidateScore, path: CandidateScore
     A model that closes the held-out gap (its held-out errors at its own floor) beats one that does not
     (selection rule 3): a path model is the more informative where the rig followed it (a slow ramp: it
     predicts a point, the stick condition only a set), and leaves a gap where the rig came to rest by its
-    own dynamics. Between two models that both close or both fail, the lower held-out error wins.
+    own dynamics. Between two models that both close or both fail, the lower held-out log score wins (each
+    at its own noise scale: a stick set's squared errors at a small scale of its own flatter it).
     """
     a, b = ctx.closes(settled), ctx.closes(path)
-    return a and not b if a != b else settled.heldout_mse < path.heldout_mse
+    return a and not b if a != b else lowest_heldout([path, settled]) is settled
 
 
 def score_with(ctx: _Context, model: AugmentedModel, fit: FitResult | None = None) -> CandidateScore:

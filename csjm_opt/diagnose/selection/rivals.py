@@ -66,13 +66,24 @@ from .scoring import CandidateScore, paired_heldout_test
 
 
 class _Cycles:
-    """Per-cycle held-out MSE in the form :func:`~.scoring.paired_heldout_test` reads."""
+    """Per-cycle held-out MSE (and log scores) in the form :func:`~.scoring.paired_heldout_test` reads."""
 
-    def __init__(self, cycle_mse):
+    def __init__(self, cycle_mse, cycle_nll=None, set_valued: bool = False):
         self._mse = dict(enumerate(cycle_mse)) if not isinstance(cycle_mse, Mapping) else dict(cycle_mse)
+        self._nll = None if cycle_nll is None else (
+            dict(enumerate(cycle_nll)) if not isinstance(cycle_nll, Mapping) else dict(cycle_nll))
+        self.set_valued = bool(set_valued)
+
+    @classmethod
+    def of(cls, m: Mapping) -> _Cycles:
+        """From a model entry (``cycle_mse``, optionally ``cycle_nll`` and ``set_valued``)."""
+        return cls(m["cycle_mse"], m.get("cycle_nll"), bool(m.get("set_valued")))
 
     def cycle_mse(self) -> dict:
         return self._mse
+
+    def cycle_nll(self) -> dict | None:
+        return self._nll
 
 
 def _effects(name: str) -> frozenset[str]:
@@ -126,8 +137,8 @@ def unsettled_rivals(models: Mapping[str, Mapping], verdict: str, skip: Collecti
         if eff in skipped:
             continue
         nats = _as_fitted(m) - ev_v
-        p = paired_heldout_test(_Cycles(m["cycle_mse"]), _Cycles(v["cycle_mse"]))   # type: ignore[arg-type]
-        p_better = paired_heldout_test(_Cycles(v["cycle_mse"]), _Cycles(m["cycle_mse"]))  # type: ignore[arg-type]
+        p = paired_heldout_test(_Cycles.of(m), _Cycles.of(v))   # type: ignore[arg-type]
+        p_better = paired_heldout_test(_Cycles.of(v), _Cycles.of(m))  # type: ignore[arg-type]
         tied = p >= HELDOUT_ALPHA                   # the verdict does not beat it on held-out cycles
         if not (m.get("closes_gap") or tied):
             continue
@@ -196,7 +207,7 @@ def inseparable_alternatives(models: Mapping[str, Mapping], selected: str, singl
             continue
         nats = float(m["log_evidence"]) - float(v["log_evidence"])
         excess = float(m.get("chi2", np.nan)) - float(v.get("chi2", np.nan))
-        p = paired_heldout_test(_Cycles(m["cycle_mse"]), _Cycles(v["cycle_mse"]))   # type: ignore[arg-type]
+        p = paired_heldout_test(_Cycles.of(m), _Cycles.of(v))   # type: ignore[arg-type]
         if nats >= -LEAD_NATS:
             route = "evidence"
         elif (single_verdict and not m.get("flexible") and m.get("plausible") and m.get("closes_gap")
@@ -305,7 +316,8 @@ def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mappin
         return None if noise_scale is None or fit is None else log_evidence(fit, float(noise_scale), at_fit=True)
 
     out = {n: {"log_evidence": evidence(sc), "log_evidence_at_fit": at_fit(sc), "cycle_mse": sc.cycle_mse(),
-               "plausible": bool(tests[n].get("plausible")), "closes_gap": bool(tests[n].get("closes_gap")),
+               "cycle_nll": sc.cycle_nll(), "plausible": bool(tests[n].get("plausible")),
+               "closes_gap": bool(tests[n].get("closes_gap")),
                "set_valued": getattr(sc, "heldout_density", None) is not None}
            for n, sc in singles.items()}
     for p in pairs:
@@ -313,7 +325,7 @@ def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mappin
         if p.get("fitted") and key in pair_scores:
             sc = pair_scores[key]
             out["+".join(key)] = {"log_evidence": evidence(sc), "log_evidence_at_fit": at_fit(sc),
-                                  "cycle_mse": sc.cycle_mse(),
+                                  "cycle_mse": sc.cycle_mse(), "cycle_nll": sc.cycle_nll(),
                                   "set_valued": getattr(sc, "heldout_density", None) is not None,
                                   "plausible": bool(p.get("plausible")), "closes_gap": bool(p.get("closes_gap"))}
     return out

@@ -48,6 +48,26 @@ class CandidateScore:
     # row's mean noise variance per axis (rad^2), and s; its squared errors are then -2 s^2 log p less the
     # Gaussian's constant, as a point model's at s (:func:`equivalent_mse`). None: a point model
     heldout_density: tuple[np.ndarray, np.ndarray, float] | None = None
+    # per held-out row its -2 log p (whitened units, less the Gaussian's 3 log 2 pi) at the model's own noise
+    # scale: ``|W zeta|^2 / s^2 + 6 log s`` for a point model (``s^2`` its whitened training residual variance),
+    # ``q + 6 log s`` for a set-valued one (:func:`log_score_test`); None: not computed (a hand-made score)
+    heldout_nll: np.ndarray | None = None
+
+    @property
+    def set_valued(self) -> bool:
+        """Whether the model predicts a set of poses per row (settled friction), scored by a density."""
+        return self.heldout_density is not None
+
+    def cycle_nll(self) -> dict[int, float] | None:
+        """Held-out ``-2 log p`` summed over each cycle (None when not computed)."""
+        if self.heldout_nll is None:
+            return None
+        return {int(c): float(np.sum(self.heldout_nll[self.heldout_cycle == c])) for c in np.unique(self.heldout_cycle)}
+
+    @property
+    def heldout_log_score(self) -> float:
+        """Held-out ``-2 log p`` of all rows at the model's own noise scale (nan when not computed)."""
+        return float("nan") if self.heldout_nll is None else float(np.sum(self.heldout_nll))
 
     def _mse(self, mask: np.ndarray) -> float:
         if self.heldout_density is None:
@@ -211,7 +231,23 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
     ratio2 = float(np.sum(r ** 2) / max(r.size - full.p_eff, 1.0))
     held_table = test if test is not None else train
     return CandidateScore(model.name, full, zeta, cyc, train_zeta, failed, instrument, ratio2,
-                          heldout_floor(held_table, instrument, blocks), tuple(blocks))
+                          heldout_floor(held_table, instrument, blocks), tuple(blocks),
+                          heldout_nll=point_nll(train, train_zeta, full.p_eff, held_table, zeta))
+
+
+def point_nll(train: ResidualTable, train_zeta: np.ndarray, p_eff: float, held: ResidualTable,
+              heldout_zeta: np.ndarray) -> np.ndarray:
+    """A point model's held-out ``-2 log p`` per row at its own noise scale (whitened, less ``3 log 2 pi``).
+
+    The scale is the model's whitened training residual variance ``s^2 = RSS / (3 n - p_eff)``, the
+    rows whitened as a set-valued model's are (the tables' instrument whitening): a model that fits its
+    training rows closely and predicts held-out rows poorly pays for both.
+    """
+    w_tr = np.einsum("nij,nj->ni", train.whiten, train_zeta)
+    s2 = float(np.sum(w_tr ** 2) / max(w_tr.size - p_eff, 1.0))
+    s2 = max(s2, 1e-300)
+    w = np.einsum("nij,nj->ni", held.whiten, heldout_zeta)
+    return np.sum(w ** 2, axis=1) / s2 + 3.0 * np.log(s2)
 
 
 def _fold_fit(model: AugmentedModel, full: FitResult, kept: ResidualTable, keep: np.ndarray) -> np.ndarray:
@@ -255,12 +291,20 @@ def nested_f_test(base: FitResult, cand: FitResult) -> tuple[float, float]:
 def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
     """One-sided p-value that ``b``'s per-cycle held-out MSE is lower than ``a``'s.
 
+    When either model is set-valued (settled friction) and both carry held-out log scores, the test is
+    :func:`log_score_test`: a stick set's errors are a density at its own noise scale, and squared errors
+    at that scale flatter it against a point model when the scale is small.
+
     Paired t-test over cycles of ``log(MSE_a / MSE_b)``: cycles with large loads have large
     errors under both models, and the log ratio keeps them from drowning the rest. Ratios within
     ``TIE_LOG_RATIO`` of 1 are ties (the fits' own precision: a model whose added effect fitted to
     zero predicts the same cycles to round-off), so identical predictions give ``p = 1``, not a
     "significant" improvement of 1e-15 that every cycle shares.
     """
+    if getattr(a, "set_valued", False) or getattr(b, "set_valued", False):
+        la, lb = getattr(a, "cycle_nll", lambda: None)(), getattr(b, "cycle_nll", lambda: None)()
+        if la is not None and lb is not None:
+            return log_score_test(la, lb)
     ma, mb = a.cycle_mse(), b.cycle_mse()
     tiny = 1e-30
     d = np.array([np.log((ma[c] + tiny) / (mb[c] + tiny)) for c in ma])
@@ -268,6 +312,42 @@ def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
     if len(d) < 2 or np.allclose(d, d[0], rtol=0.0, atol=TIE_LOG_RATIO):
         return 0.0 if d.mean() > 0 else 1.0
     return t_greater(d)
+
+
+def log_score_test(nll_a: dict, nll_b: dict) -> float:
+    """One-sided p-value that model ``b`` predicts the held-out cycles better than ``a`` by log score.
+
+    Paired t-test over cycles of ``sum(-2 log p_a) - sum(-2 log p_b)``, each model at its own noise scale
+    (a proper scoring rule: a point model and a stick set are compared as densities). Differences below
+    ``TIE_LOG_RATIO`` per cycle are ties; identical predictions give ``p = 1``.
+
+    Parameters
+    ----------
+    nll_a, nll_b : dict
+        Cycle -> held-out ``-2 log p`` of the cycle's rows (:meth:`CandidateScore.cycle_nll`).
+
+    Returns
+    -------
+    float
+    """
+    d = np.array([nll_a[c] - nll_b[c] for c in nll_a if c in nll_b])
+    d[np.abs(d) < TIE_LOG_RATIO] = 0.0
+    if len(d) < 2 or np.allclose(d, d[0], rtol=0.0, atol=TIE_LOG_RATIO):
+        return 0.0 if len(d) and d.mean() > 0 else 1.0
+    return t_greater(d)
+
+
+def by_heldout(scores) -> list[CandidateScore]:
+    """``scores`` from the lowest held-out error: MSE among point models, log score when one is set-valued."""
+    scores = list(scores)
+    if any(getattr(sc, "set_valued", False) for sc in scores) and all(sc.heldout_nll is not None for sc in scores):
+        return sorted(scores, key=lambda sc: sc.heldout_log_score)
+    return sorted(scores, key=lambda sc: sc.heldout_mse)
+
+
+def lowest_heldout(scores) -> CandidateScore:
+    """The score with the lowest held-out error (:func:`by_heldout`)."""
+    return by_heldout(scores)[0]
 
 
 def improvement_rad(a: CandidateScore, b: CandidateScore) -> float:
