@@ -394,7 +394,7 @@ def _look_alikes(ctx: _Context, verdict: Verdict, singles, tests, detected, pair
                 "closes_gap": bool(tests[n]["closes_gap"]), "separable": sep is None or bool(sep["separable"]),
                 "log_evidence": tests[n]["log_evidence"], "chi2": singles[n].fit.rss / s2,
                 "cycle_mse": singles[n].cycle_mse(), "cycle_nll": singles[n].cycle_nll(),
-                "set_valued": singles[n].set_valued, "flexible": flexible(singles[n], n_cycles)}
+                "set_scale": singles[n].set_scale, "flexible": flexible(singles[n], n_cycles)}
 
     models = {n: entry(n) for n in [selected, *(n for n in detected if n != selected)]}
     return inseparable_alternatives(models, selected, single_verdict=verdict.final is singles[selected])

@@ -68,16 +68,16 @@ from .scoring import CandidateScore, paired_heldout_test
 class _Cycles:
     """Per-cycle held-out MSE (and log scores) in the form :func:`~.scoring.paired_heldout_test` reads."""
 
-    def __init__(self, cycle_mse, cycle_nll=None, set_valued: bool = False):
+    def __init__(self, cycle_mse, cycle_nll=None, set_scale: float | None = None):
         self._mse = dict(enumerate(cycle_mse)) if not isinstance(cycle_mse, Mapping) else dict(cycle_mse)
         self._nll = None if cycle_nll is None else (
             dict(enumerate(cycle_nll)) if not isinstance(cycle_nll, Mapping) else dict(cycle_nll))
-        self.set_valued = bool(set_valued)
+        self.set_scale = set_scale              # a set-valued model's own noise scale (None: a point model)
 
     @classmethod
     def of(cls, m: Mapping) -> _Cycles:
-        """From a model entry (``cycle_mse``, optionally ``cycle_nll`` and ``set_valued``)."""
-        return cls(m["cycle_mse"], m.get("cycle_nll"), bool(m.get("set_valued")))
+        """From a model entry (``cycle_mse``, optionally ``cycle_nll`` and ``set_scale``)."""
+        return cls(m["cycle_mse"], m.get("cycle_nll"), m.get("set_scale"))
 
     def cycle_mse(self) -> dict:
         return self._mse
@@ -318,7 +318,8 @@ def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mappin
     out = {n: {"log_evidence": evidence(sc), "log_evidence_at_fit": at_fit(sc), "cycle_mse": sc.cycle_mse(),
                "cycle_nll": sc.cycle_nll(), "plausible": bool(tests[n].get("plausible")),
                "closes_gap": bool(tests[n].get("closes_gap")),
-               "set_valued": getattr(sc, "heldout_density", None) is not None}
+               "set_valued": getattr(sc, "heldout_density", None) is not None,
+               "set_scale": getattr(sc, "set_scale", None)}
            for n, sc in singles.items()}
     for p in pairs:
         key = tuple(p["effects"])
@@ -327,5 +328,6 @@ def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mappin
             out["+".join(key)] = {"log_evidence": evidence(sc), "log_evidence_at_fit": at_fit(sc),
                                   "cycle_mse": sc.cycle_mse(), "cycle_nll": sc.cycle_nll(),
                                   "set_valued": getattr(sc, "heldout_density", None) is not None,
+                                  "set_scale": getattr(sc, "set_scale", None),
                                   "plausible": bool(p.get("plausible")), "closes_gap": bool(p.get("closes_gap"))}
     return out

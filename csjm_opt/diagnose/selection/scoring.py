@@ -58,6 +58,11 @@ class CandidateScore:
         """Whether the model predicts a set of poses per row (settled friction), scored by a density."""
         return self.heldout_density is not None
 
+    @property
+    def set_scale(self) -> float | None:
+        """A set-valued model's own noise scale (whitened); None for a point model."""
+        return None if self.heldout_density is None else float(self.heldout_density[2])
+
     def cycle_nll(self) -> dict[int, float] | None:
         """Held-out ``-2 log p`` summed over each cycle (None when not computed)."""
         if self.heldout_nll is None:
@@ -291,9 +296,11 @@ def nested_f_test(base: FitResult, cand: FitResult) -> tuple[float, float]:
 def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
     """One-sided p-value that ``b``'s per-cycle held-out MSE is lower than ``a``'s.
 
-    When either model is set-valued (settled friction) and both carry held-out log scores, the test is
+    When the two are not taken at one noise scale (a set-valued model, settled friction, against a point
+    model, or two stick sets at different scales) and both carry held-out log scores, the test is
     :func:`log_score_test`: a stick set's errors are a density at its own noise scale, and squared errors
-    at that scale flatter it against a point model when the scale is small.
+    at that scale flatter it against a point model when the scale is small. Two point models, or two stick
+    sets at one scale, are compared by their squared errors.
 
     Paired t-test over cycles of ``log(MSE_a / MSE_b)``: cycles with large loads have large
     errors under both models, and the log ratio keeps them from drowning the rest. Ratios within
@@ -301,7 +308,7 @@ def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
     zero predicts the same cycles to round-off), so identical predictions give ``p = 1``, not a
     "significant" improvement of 1e-15 that every cycle shares.
     """
-    if getattr(a, "set_valued", False) or getattr(b, "set_valued", False):
+    if _scales_differ(a, b):
         la, lb = getattr(a, "cycle_nll", lambda: None)(), getattr(b, "cycle_nll", lambda: None)()
         if la is not None and lb is not None:
             return log_score_test(la, lb)
@@ -312,6 +319,11 @@ def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
     if len(d) < 2 or np.allclose(d, d[0], rtol=0.0, atol=TIE_LOG_RATIO):
         return 0.0 if d.mean() > 0 else 1.0
     return t_greater(d)
+
+
+def _scales_differ(a, b) -> bool:
+    """Whether ``a`` and ``b`` are not scored at one noise scale (a stick set and a point model, or two sets)."""
+    return getattr(a, "set_scale", None) != getattr(b, "set_scale", None)
 
 
 def log_score_test(nll_a: dict, nll_b: dict) -> float:
@@ -338,9 +350,9 @@ def log_score_test(nll_a: dict, nll_b: dict) -> float:
 
 
 def by_heldout(scores) -> list[CandidateScore]:
-    """``scores`` from the lowest held-out error: MSE among point models, log score when one is set-valued."""
+    """``scores`` from the lowest held-out error: MSE at one noise scale, else log score (as the paired test)."""
     scores = list(scores)
-    if any(getattr(sc, "set_valued", False) for sc in scores) and all(sc.heldout_nll is not None for sc in scores):
+    if len({getattr(sc, "set_scale", None) for sc in scores}) > 1 and all(sc.heldout_nll is not None for sc in scores):
         return sorted(scores, key=lambda sc: sc.heldout_log_score)
     return sorted(scores, key=lambda sc: sc.heldout_mse)
 
