@@ -211,7 +211,8 @@ def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[s
     ``options`` are the singles' variants (kept for an effect without variants in this pair). A pair with the
     lead single settled (the stick condition; ``stick_scales`` holds it) is scored at the noise scale that
     single's held-out rows chose: a set-valued model's held-out error is taken at its noise scale, and the
-    pair is compared with its single at the same one. Any other settled single joins as its path variant.
+    pair is compared with its single at the same one; a partner with a settled variant joins as it. Without
+    a settled lead, a settled single joins as its path variant (:func:`point_pair`).
 
     Parameters
     ----------
@@ -230,8 +231,11 @@ def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[s
         known = [stick_scales[e] for e in (a, b) if stick_scales and e in stick_scales]
         if known:
             # the lead single is settled: the pair is the stick condition with the partner's parameters as point
-            # parameters, at the lead's noise scale
-            effects = [make_effect(e, rig, ranges, **options.get(e, {})) for e in (a, b)]
+            # parameters, at the lead's noise scale. A rig that came to rest by its own dynamics holds every
+            # friction of it in its band at once: a partner with a settled variant (joint friction beside cable
+            # friction) joins as it, never as a loading path inside a stick set (on a log of cable friction
+            # alone, joint friction along its path then bought 15 nats as a second hysteresis)
+            effects = [make_effect(e, rig, ranges, **SETTLED_VARIANTS.get(e, options.get(e, {}))) for e in (a, b)]
             sc = _settled(ctx, rig, ranges, effects, [max(known)])
             if sc is not None:
                 return sc, None
