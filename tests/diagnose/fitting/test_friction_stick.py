@@ -255,3 +255,28 @@ def test_stick_residual_is_the_pose_offset_through_the_models_own_tangent():
     a, _, _ = stick_design(model, table, theta)
     pose = np.einsum("nij,nj->ni", np.linalg.inv(table.whiten), a)
     assert np.linalg.norm(pose - offset) < 0.01 * np.linalg.norm(offset)
+
+
+def test_a_settled_leads_pair_holds_every_friction_of_the_rig_in_its_band(rig, monkeypatch):
+    """A rig that came to rest by its own dynamics holds cable and joint friction in their bands at once.
+
+    With the lead (cable friction) settled, the pair's joint friction is a second stick set, even where the
+    joint friction single came out along its loading path: a path inside a stick set is a second hysteresis.
+    """
+    from csjm_opt.diagnose.fitting import model_fits
+    from csjm_opt.diagnose.fitting.friction_stick import stick_layout
+
+    seen = {}
+
+    def scored(ctx, rig_, ranges, effects, scales=None):
+        seen["effects"], seen["scales"] = list(effects), scales
+        return "scored"
+
+    monkeypatch.setattr(model_fits, "_settled", scored)
+    options = {"friction": model_fits.SETTLED_VARIANTS["friction"], "joint_friction": {"memory": "step"}}
+    got, error = model_fits.fit_pair(None, rig, None, options, {"friction": 0.7}, ("friction", "joint_friction"))
+    assert (got, error) == ("scored", None) and seen["scales"] == [0.7]
+    model = model_fits.AugmentedModel(rig, seen["effects"])
+    _, band, stick = stick_layout(model)
+    assert stick == [0, 1]                                       # both effects are stick sets
+    assert len(band) == sum(e.n_params for e in model.effects)   # every friction parameter is a band
