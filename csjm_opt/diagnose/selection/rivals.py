@@ -86,6 +86,12 @@ class _Cycles:
         return self._nll
 
 
+def _cycle_nll(sc) -> dict | None:
+    """``sc``'s per-cycle held-out log scores, or None where it has none."""
+    f = getattr(sc, "cycle_nll", None)
+    return f() if f is not None else None
+
+
 def _effects(name: str) -> frozenset[str]:
     return frozenset(name.split("+"))
 
@@ -316,7 +322,7 @@ def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mappin
         return None if noise_scale is None or fit is None else log_evidence(fit, float(noise_scale), at_fit=True)
 
     out = {n: {"log_evidence": evidence(sc), "log_evidence_at_fit": at_fit(sc), "cycle_mse": sc.cycle_mse(),
-               "cycle_nll": sc.cycle_nll(), "plausible": bool(tests[n].get("plausible")),
+               "cycle_nll": _cycle_nll(sc), "plausible": bool(tests[n].get("plausible")),
                "closes_gap": bool(tests[n].get("closes_gap")),
                "set_valued": getattr(sc, "heldout_density", None) is not None,
                "set_scale": getattr(sc, "set_scale", None)}
@@ -326,7 +332,7 @@ def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mappin
         if p.get("fitted") and key in pair_scores:
             sc = pair_scores[key]
             out["+".join(key)] = {"log_evidence": evidence(sc), "log_evidence_at_fit": at_fit(sc),
-                                  "cycle_mse": sc.cycle_mse(), "cycle_nll": sc.cycle_nll(),
+                                  "cycle_mse": sc.cycle_mse(), "cycle_nll": _cycle_nll(sc),
                                   "set_valued": getattr(sc, "heldout_density", None) is not None,
                                   "set_scale": getattr(sc, "set_scale", None),
                                   "plausible": bool(p.get("plausible")), "closes_gap": bool(p.get("closes_gap"))}
