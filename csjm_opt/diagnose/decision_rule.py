@@ -11,7 +11,7 @@ import numpy as np
 
 from ..model.rig import Rig
 from .data.localisation import remaining_signature
-from .data.noise import noise_floor, systematic
+from .data.noise import combine_scales, noise_floor, systematic
 from .data.residuals import ResidualTable
 from .fitting.augmented import AugmentedModel
 from .fitting.evidence import log_evidence
@@ -45,21 +45,6 @@ SHORT_LOG_SHARE = 0.5
 LOOK_ALIKE_SHARE = 1.0
 
 
-def combine_scales(s1: float, dof1: float, s2: float, dof2: float) -> float:
-    """Noise level from two estimates: pooled when they agree, else the smaller one.
-
-    Each estimate has relative sd ``sqrt(2/dof)`` in variance; they are pooled when they
-    agree within 2.5 sd, else the smaller is kept (a misfit only inflates an estimate).
-    """
-    if not np.isfinite(s1) or dof1 <= 0:
-        return s2
-    v1, v2 = s1 ** 2, s2 ** 2
-    sd = np.hypot(v1 * np.sqrt(2 / dof1), v2 * np.sqrt(2 / max(dof2, 1)))
-    if abs(v1 - v2) <= 2.5 * sd:
-        return float(np.sqrt((v1 * dof1 + v2 * dof2) / (dof1 + dof2)))
-    return float(min(s1, s2))
-
-
 class _Context:
     """Rows, held-out design and noise estimates shared by every model of one diagnosis."""
 
@@ -79,7 +64,13 @@ class _Context:
         return self._evidence[id(sc)]
 
     def score(self, effects: Sequence) -> CandidateScore:
-        return score(AugmentedModel(self.rig, effects), self.train, self.test, self.folds)
+        return score(AugmentedModel(self.rig, effects), self.train, self.test, self.folds, local=self.local_scale)
+
+    @property
+    def local_scale(self) -> tuple[float, float]:
+        """The within-cycle noise estimate as ``(scale relative to the instrument model, dof)``."""
+        local = self.local / self.instrument if np.isfinite(self.local) and self.instrument > 0 else float("nan")
+        return float(local), float(self.local_dof)
 
     def scale(self, sc: CandidateScore) -> float:
         """Noise scale (relative to the instrument model) with ``sc`` as the model."""

@@ -75,3 +75,18 @@ def noise_floor(table: ResidualTable, zeta: np.ndarray | None = None) -> tuple[f
 def systematic(rms_rad: float, floor_rad: float) -> float:
     """Systematic part of an RMS gap: ``sqrt(max(rms^2 - floor^2, 0))``."""
     return float(np.sqrt(max(rms_rad ** 2 - floor_rad ** 2, 0.0)))
+
+
+def combine_scales(s1: float, dof1: float, s2: float, dof2: float) -> float:
+    """Noise level from two estimates: pooled when they agree, else the smaller one.
+
+    Each estimate has relative sd ``sqrt(2/dof)`` in variance; they are pooled when they
+    agree within 2.5 sd, else the smaller is kept (a misfit only inflates an estimate).
+    """
+    if not np.isfinite(s1) or dof1 <= 0:
+        return s2
+    v1, v2 = s1 ** 2, s2 ** 2
+    sd = np.hypot(v1 * np.sqrt(2 / dof1), v2 * np.sqrt(2 / max(dof2, 1)))
+    if abs(v1 - v2) <= 2.5 * sd:
+        return float(np.sqrt((v1 * dof1 + v2 * dof2) / (dof1 + dof2)))
+    return float(min(s1, s2))

@@ -162,7 +162,7 @@ def _prefer_settled(ctx: _Context, settled: CandidateScore, path: CandidateScore
 
 def score_with(ctx: _Context, model: AugmentedModel, fit: FitResult | None = None) -> CandidateScore:
     """``model`` scored on the diagnosis's rows and folds (``fit``: its plain training fit, if known)."""
-    return score(model, ctx.train, ctx.test, ctx.folds, fit)
+    return score(model, ctx.train, ctx.test, ctx.folds, fit, local=ctx.local_scale)
 
 
 def score_effect(ctx: _Context, effect) -> CandidateScore | None:

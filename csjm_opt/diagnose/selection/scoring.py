@@ -18,6 +18,7 @@ import dataclasses
 import numpy as np
 
 from ...errors import InvalidInput
+from ..data.noise import combine_scales
 from ..data.residuals import ResidualTable, pose_noise_cov, pose_residuals, rms
 from ..data.tails import f_sf, t_greater
 from ..fitting.augmented import AugmentedModel, with_entry
@@ -200,10 +201,12 @@ def fit_on_path(model: AugmentedModel, train: ResidualTable,
 
 
 def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | None,
-          folds: list[np.ndarray] | None, fit: FitResult | None = None) -> CandidateScore:
+          folds: list[np.ndarray] | None, fit: FitResult | None = None,
+          local: tuple[float, float] | None = None) -> CandidateScore:
     """Fit on all training rows; held-out residuals from ``test`` or the folds.
 
     ``fit``: the plain fit of ``model`` on ``train`` (:func:`fit_on_path`), when the caller has it.
+    ``local``: the within-cycle noise estimate ``(scale, dof)`` (:func:`point_nll`).
     """
     full, path = fit_on_path(model, train, fit)
     if path is not train:
@@ -237,19 +240,25 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
     held_table = test if test is not None else train
     return CandidateScore(model.name, full, zeta, cyc, train_zeta, failed, instrument, ratio2,
                           heldout_floor(held_table, instrument, blocks), tuple(blocks),
-                          heldout_nll=point_nll(train, train_zeta, full.p_eff, held_table, zeta))
+                          heldout_nll=point_nll(train, train_zeta, full.p_eff, held_table, zeta, local))
 
 
 def point_nll(train: ResidualTable, train_zeta: np.ndarray, p_eff: float, held: ResidualTable,
-              heldout_zeta: np.ndarray) -> np.ndarray:
-    """A point model's held-out ``-2 log p`` per row at its own noise scale (whitened, less ``3 log 2 pi``).
+              heldout_zeta: np.ndarray, local: tuple[float, float] | None = None) -> np.ndarray:
+    """A point model's held-out ``-2 log p`` per row at its noise scale (whitened, less ``3 log 2 pi``).
 
-    The scale is the model's whitened training residual variance ``s^2 = RSS / (3 n - p_eff)``, the
-    rows whitened as a set-valued model's are (the tables' instrument whitening): a model that fits its
-    training rows closely and predicts held-out rows poorly pays for both.
+    The rows are whitened as a set-valued model's are (the tables' instrument whitening). The scale is
+    the model's whitened training residual variance ``RSS / (3 n - p_eff)``, combined with the within-cycle
+    estimate ``local = (scale, dof)`` where given as the diagnosis combines them
+    (:func:`~csjm_opt.diagnose.data.noise.combine_scales`: pooled when they agree, else the smaller, a
+    misfit only inflating an estimate): a model that misses the log does not buy a wide Gaussian with its
+    own misfit, and one that fits its training rows closely and predicts held-out rows poorly pays for both.
     """
     w_tr = np.einsum("nij,nj->ni", train.whiten, train_zeta)
-    s2 = float(np.sum(w_tr ** 2) / max(w_tr.size - p_eff, 1.0))
+    dof = max(w_tr.size - p_eff, 1.0)
+    s2 = float(np.sum(w_tr ** 2) / dof)
+    if local is not None and np.isfinite(local[0]) and local[0] > 0:
+        s2 = combine_scales(local[0], 3.0 * local[1], float(np.sqrt(s2)), dof) ** 2
     s2 = max(s2, 1e-300)
     w = np.einsum("nij,nj->ni", held.whiten, heldout_zeta)
     return np.sum(w ** 2, axis=1) / s2 + 3.0 * np.log(s2)
