@@ -47,6 +47,22 @@ def test_point_nll_is_the_gaussian_log_density_at_the_fitted_noise_scale():
         assert np.isclose(got[i], expected, rtol=1e-9, atol=1e-9)
 
 
+def test_a_point_models_misfit_does_not_buy_it_a_wide_gaussian():
+    # a within-cycle noise estimate far below the model's training residual variance (a misfit inflates
+    # the latter): the log score is taken at the within-cycle scale
+    rng = np.random.default_rng(6)
+    n = 30
+    train = SimpleNamespace(whiten=np.repeat(np.eye(3)[None] * 1000.0, n, axis=0))
+    zeta_tr = rng.normal(0.0, 3e-3, (n, 3))                     # whitened variance about 9
+    zeta_ho = rng.normal(0.0, 3e-3, (n, 3))
+    got = point_nll(train, zeta_tr, 2.0, train, zeta_ho, local=(1.1, 200.0))
+    w = 1000.0 * zeta_ho
+    expected = np.sum(w ** 2, axis=1) / 1.1 ** 2 + 3.0 * np.log(1.1 ** 2)
+    assert np.allclose(got, expected, rtol=1e-12)
+    # without the estimate, its own variance: a far lower -2 log p for the same residuals
+    assert np.sum(point_nll(train, zeta_tr, 2.0, train, zeta_ho)) < np.sum(got) - 100.0
+
+
 def test_the_log_score_test_is_a_paired_t_test_over_cycles():
     rng = np.random.default_rng(4)
     a = {c: float(v) for c, v in enumerate(rng.normal(40.0, 3.0, 9))}
