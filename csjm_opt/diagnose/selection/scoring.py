@@ -49,9 +49,9 @@ class CandidateScore:
     # row's mean noise variance per axis (rad^2), and s; its squared errors are then -2 s^2 log p less the
     # Gaussian's constant, as a point model's at s (:func:`equivalent_mse`). None: a point model
     heldout_density: tuple[np.ndarray, np.ndarray, float] | None = None
-    # per held-out row its -2 log p (whitened units, less the Gaussian's 3 log 2 pi) at the model's own noise
-    # scale: ``|W zeta|^2 / s^2 + 6 log s`` for a point model (``s^2`` its whitened training residual variance),
-    # ``q + 6 log s`` for a set-valued one (:func:`log_score_test`); None: not computed (a hand-made score)
+    # per held-out row its -2 log p (whitened units, less the Gaussian's 3 log 2 pi) at the model's noise scale:
+    # ``|W zeta|^2 / s^2 + 6 log s`` for a point model (:func:`point_nll`), ``q + 6 log s`` for a set-valued one
+    # at its own s (:func:`log_score_test`); None: not computed (a hand-made score)
     heldout_nll: np.ndarray | None = None
 
     @property
@@ -72,7 +72,7 @@ class CandidateScore:
 
     @property
     def heldout_log_score(self) -> float:
-        """Held-out ``-2 log p`` of all rows at the model's own noise scale (nan when not computed)."""
+        """Held-out ``-2 log p`` of all rows at the model's noise scale (nan when not computed)."""
         return float("nan") if self.heldout_nll is None else float(np.sum(self.heldout_nll))
 
     def _mse(self, mask: np.ndarray) -> float:
@@ -338,7 +338,7 @@ def _scales_differ(a, b) -> bool:
 def log_score_test(nll_a: dict, nll_b: dict) -> float:
     """One-sided p-value that model ``b`` predicts the held-out cycles better than ``a`` by log score.
 
-    Paired t-test over cycles of ``sum(-2 log p_a) - sum(-2 log p_b)``, each model at its own noise scale
+    Paired t-test over cycles of ``sum(-2 log p_a) - sum(-2 log p_b)``, each model at its noise scale
     (a proper scoring rule: a point model and a stick set are compared as densities). Differences below
     ``TIE_LOG_RATIO`` per cycle are ties; identical predictions give ``p = 1``.
 
