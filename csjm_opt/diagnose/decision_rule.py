@@ -74,8 +74,8 @@ class _Context:
 
     def scale(self, sc: CandidateScore) -> float:
         """Noise scale (relative to the instrument model) with ``sc`` as the model."""
-        local = self.local / self.instrument if np.isfinite(self.local) else float("nan")
-        return combine_scales(local, 3 * self.local_dof, float(np.sqrt(sc.noise_ratio2)),
+        local, dof = self.local_scale
+        return combine_scales(local, 3 * dof, float(np.sqrt(sc.noise_ratio2)),
                               3 * len(self.train) - sc.fit.p_eff)
 
     def noise_floor(self, sc: CandidateScore) -> float:

@@ -17,7 +17,7 @@ from ...errors import CsjmError
 from ...model.rig import Rig
 from ..decision_rule import _Context
 from ..effects import make_effect
-from ..selection.scoring import CandidateScore, lowest_heldout, score
+from ..selection.scoring import CandidateScore, heldout_key, score
 from .augmented import N_NUISANCE, AugmentedModel
 from .evidence import log_evidence, predicted_evidence
 from .friction_stick import settled_score
@@ -129,7 +129,7 @@ def path_twin(effect, theta: np.ndarray, rig: Rig) -> tuple:
 
 def settled_scales(ctx: _Context) -> list[float] | None:
     """The noise scales a stick model is scored at (None without a within-cycle noise estimate)."""
-    scale = ctx.local / ctx.instrument if np.isfinite(ctx.local) and ctx.instrument > 0 else float("nan")
+    scale = ctx.local_scale[0]
     if not np.isfinite(scale) or scale <= 0:
         return None
     return [scale * f for f in SETTLED_SCALES]
@@ -157,7 +157,10 @@ def _prefer_settled(ctx: _Context, settled: CandidateScore, path: CandidateScore
     at its own noise scale: a stick set's squared errors at a small scale of its own flatter it).
     """
     a, b = ctx.closes(settled), ctx.closes(path)
-    return a and not b if a != b else lowest_heldout([path, settled]) is settled
+    if a != b:
+        return a and not b
+    key = heldout_key([path, settled])
+    return key(settled) < key(path)
 
 
 def score_with(ctx: _Context, model: AugmentedModel, fit: FitResult | None = None) -> CandidateScore:

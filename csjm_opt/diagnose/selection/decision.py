@@ -66,7 +66,7 @@ from .rivals import (
     scored_models,
     unsettled_rivals,
 )
-from .scoring import CandidateScore, by_heldout, lowest_heldout, paired_heldout_test
+from .scoring import CandidateScore, heldout_key, paired_heldout_test
 from .verdict import Secondary, Verdict
 
 
@@ -162,8 +162,8 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
     gap_sig = ctx.signature(baseline)
     gap_there = bool(gap_sig["significant"]) and systematic(baseline.heldout_rms_rad, floor0) >= IMPROVE_MULT * floor0
     masked = first is None and gap_there and len(singles) > 1     # two effects may hide each other: rule 6
-    name_of = {id(sc): n for n, sc in singles.items()}
-    by_error = [name_of[id(sc)] for sc in by_heldout(singles.values())]
+    key = heldout_key(singles.values())
+    by_error = sorted(singles, key=lambda n: key(singles[n]))
     seeds = ([] if first is None and not masked else
              ([first] if first is not None else []) + [n for n in by_error if n != first])[:PAIR_SEEDS]
     pairs, pair_scores = _pairs(ctx, rig, names, singles, seeds, secondary, ranges, tick, planned_pairs,
@@ -283,10 +283,8 @@ def _first_effect(singles, tests, detected: list[str], n_cycles: int) -> str | N
     plausible = [n for n in detected if tests[n]["plausible"]]
     closers = [n for n in plausible if tests[n]["closes_gap"]]
     if not plausible:
-        if not detected:
-            return None
-        lowest = lowest_heldout(singles[n] for n in detected)
-        return next(n for n in detected if singles[n] is lowest)
+        key = heldout_key(singles[n] for n in detected)
+        return min(detected, key=lambda n: key(singles[n])) if detected else None
     pool = closers or plausible
     return parsimonious({n: singles[n] for n in pool}, {n: tests[n]["log_evidence"] for n in pool}, n_cycles)
 
@@ -609,7 +607,7 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
         set_first = first in stick and first not in (a, b)
         left = flex or set_first
         rivals = [singles[a], singles[b]] + ([singles[first]] if first is not None and not left else [])
-        base = masked_base or lowest_heldout(rivals)
+        base = masked_base or min(rivals, key=heldout_key(rivals))
         t = ctx.compare(base, sc, level, ctx.noise_floor(base))
         ev = ctx.evidence(sc)
         gain = ev - max(ctx.evidence(c) for c in ([masked_base] if masked_base is not None else rivals))

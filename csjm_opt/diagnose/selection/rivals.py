@@ -62,7 +62,7 @@ import numpy as np
 
 from ..decision_rule import EVIDENCE_MIN, HELDOUT_ALPHA, LEAD_NATS
 from ..fitting.evidence import log_evidence
-from .scoring import CandidateScore, paired_heldout_test
+from .scoring import CandidateScore, cycle_nll_of, paired_heldout_test
 
 
 class _Cycles:
@@ -84,12 +84,6 @@ class _Cycles:
 
     def cycle_nll(self) -> dict | None:
         return self._nll
-
-
-def _cycle_nll(sc) -> dict | None:
-    """``sc``'s per-cycle held-out log scores, or None where it has none."""
-    f = getattr(sc, "cycle_nll", None)
-    return f() if f is not None else None
 
 
 def _effects(name: str) -> frozenset[str]:
@@ -322,7 +316,7 @@ def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mappin
         return None if noise_scale is None or fit is None else log_evidence(fit, float(noise_scale), at_fit=True)
 
     out = {n: {"log_evidence": evidence(sc), "log_evidence_at_fit": at_fit(sc), "cycle_mse": sc.cycle_mse(),
-               "cycle_nll": _cycle_nll(sc), "plausible": bool(tests[n].get("plausible")),
+               "cycle_nll": cycle_nll_of(sc), "plausible": bool(tests[n].get("plausible")),
                "closes_gap": bool(tests[n].get("closes_gap")),
                "set_valued": getattr(sc, "heldout_density", None) is not None,
                "set_scale": getattr(sc, "set_scale", None)}
@@ -332,7 +326,7 @@ def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mappin
         if p.get("fitted") and key in pair_scores:
             sc = pair_scores[key]
             out["+".join(key)] = {"log_evidence": evidence(sc), "log_evidence_at_fit": at_fit(sc),
-                                  "cycle_mse": sc.cycle_mse(), "cycle_nll": _cycle_nll(sc),
+                                  "cycle_mse": sc.cycle_mse(), "cycle_nll": cycle_nll_of(sc),
                                   "set_valued": getattr(sc, "heldout_density", None) is not None,
                                   "set_scale": getattr(sc, "set_scale", None),
                                   "plausible": bool(p.get("plausible")), "closes_gap": bool(p.get("closes_gap"))}

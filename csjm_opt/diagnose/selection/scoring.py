@@ -14,6 +14,7 @@ statics of the fitted model on rows the fit did not see.
 from __future__ import annotations
 
 import dataclasses
+from typing import Callable
 
 import numpy as np
 
@@ -318,7 +319,7 @@ def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
     "significant" improvement of 1e-15 that every cycle shares.
     """
     if _scales_differ(a, b):
-        la, lb = getattr(a, "cycle_nll", lambda: None)(), getattr(b, "cycle_nll", lambda: None)()
+        la, lb = cycle_nll_of(a), cycle_nll_of(b)
         if la is not None and lb is not None:
             return log_score_test(la, lb)
     ma, mb = a.cycle_mse(), b.cycle_mse()
@@ -328,6 +329,12 @@ def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
     if len(d) < 2 or np.allclose(d, d[0], rtol=0.0, atol=TIE_LOG_RATIO):
         return 0.0 if d.mean() > 0 else 1.0
     return t_greater(d)
+
+
+def cycle_nll_of(sc) -> dict | None:
+    """``sc``'s per-cycle held-out log scores (:meth:`CandidateScore.cycle_nll`), or None where it has none."""
+    f = getattr(sc, "cycle_nll", None)
+    return f() if f is not None else None
 
 
 def _scales_differ(a, b) -> bool:
@@ -358,17 +365,18 @@ def log_score_test(nll_a: dict, nll_b: dict) -> float:
     return t_greater(d)
 
 
-def by_heldout(scores) -> list[CandidateScore]:
-    """``scores`` from the lowest held-out error: MSE at one noise scale, else log score (as the paired test)."""
+def heldout_key(scores) -> Callable[[CandidateScore], float]:
+    """The held-out error to rank ``scores`` by: MSE at one noise scale, else log score (as the paired test)."""
     scores = list(scores)
     if len({getattr(sc, "set_scale", None) for sc in scores}) > 1 and all(sc.heldout_nll is not None for sc in scores):
-        return sorted(scores, key=lambda sc: sc.heldout_log_score)
-    return sorted(scores, key=lambda sc: sc.heldout_mse)
+        return lambda sc: sc.heldout_log_score
+    return lambda sc: sc.heldout_mse
 
 
-def lowest_heldout(scores) -> CandidateScore:
-    """The score with the lowest held-out error (:func:`by_heldout`)."""
-    return by_heldout(scores)[0]
+def by_heldout(scores) -> list[CandidateScore]:
+    """``scores`` from the lowest held-out error (:func:`heldout_key`)."""
+    scores = list(scores)
+    return sorted(scores, key=heldout_key(scores))
 
 
 def improvement_rad(a: CandidateScore, b: CandidateScore) -> float:
