@@ -28,6 +28,8 @@ def run_one(job: dict) -> dict:
     os.environ["CSJM_WORKERS"] = "1"
     import numpy as np
 
+    from csjm_opt.diagnose.effects import make_effect
+    from csjm_opt.diagnose.fitting.model_fits import _STEPS
     from csjm_opt.diagnose.selection import decision
     from csjm_opt.measurement.logfile import MeasurementLog
     from csjm_opt.model.rig import load_rig
@@ -52,7 +54,8 @@ def run_one(job: dict) -> dict:
     models.update({"+".join(p["effects"]): p.get("log_evidence") for p in off["pairs"] if p.get("fitted")})
     pairs = [{"effects": p["effects"], "predicted": p.get("predicted_log_evidence"),
               "fitted": p.get("log_evidence") if p.get("fitted") else None,
-              "dropped": bool(p.get("fitted")) and frozenset(p["effects"]) not in fitted_on}
+              "dropped": bool(p.get("fitted")) and frozenset(p["effects"]) not in fitted_on,
+              "step": max((make_effect(e, rig).step_from_nominal for e in p["effects"]), key=_STEPS.index)}
              for p in off["pairs"] if "predicted_log_evidence" in p]
     return {"id": job["id"], "best_single": float(np.nanmax(evs)),
             "verdict_evidence": models.get(verdict_model) if verdict_model else None,
@@ -88,6 +91,19 @@ def summarise(records: list[dict], lead_nats: float) -> str:
               f"pairs within {lead_nats:g} nats of the verdict):", "",
               "| fitted minus the verdict | log | pair | fitted minus predicted |", "|---|---|---|---|"]
     lines += [f"| {d:+.1f} | {i} | {p} | {s:+.1f} |" for d, i, p, s in dropped[:8]]
+    # how far a fit reaches beyond its step, as a share of the gap the step left below the screen's anchor (the
+    # verdict's evidence, or the best single's: the anchor in the diagnosis is the lower of them and the first effect)
+    lines += ["", "Fits' reach beyond their steps, as a share of the gap the step left below the anchor (pairs "
+              "predicted more than 60 nats below it; the largest):", "",
+              "| step | pairs | largest share | log | pair |", "|---|---|---|---|---|"]
+    for step in ("tight", "loose"):
+        shares = [((p["fitted"] - p["predicted"]) / gap, r["id"], "+".join(p["effects"]))
+                  for r in records for p in r["pairs"]
+                  if p.get("step") == step and p["fitted"] is not None and p["predicted"] is not None
+                  and (gap := min(r["best_single"], r["verdict_evidence"] or r["best_single"]) - p["predicted"]) > 60]
+        if shares:
+            top = max(shares)
+            lines.append(f"| {step} | {len(shares)} | {top[0]:.0%} | {top[1]} | {top[2]} |")
     on = [r["seconds_on"] for r in records]
     off = [r["seconds_off"] for r in records]
     ratio = statistics.median(o / n for o, n in zip(off, on))

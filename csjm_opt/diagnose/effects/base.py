@@ -44,10 +44,12 @@ class Effect(abc.ABC):
     name: ClassVar[str]
     description: ClassVar[str]
     path_dependent: ClassVar[bool] = False
-    #: Whether a model's evidence may be predicted one Gauss-Newton step from nominal values of this effect
-    #: (the pair screen, :func:`csjm_opt.diagnose.fitting.model_fits.predicted_pair_evidence`): False where the
-    #: effect moves the pose tangent so far that the step misses most of what a fit reaches.
-    linear_from_nominal: ClassVar[bool] = True
+    #: How well a model's evidence is predicted one Gauss-Newton step from nominal values of this effect (the
+    #: pair screen, :func:`csjm_opt.diagnose.fitting.model_fits.predicted_pair_evidence`): ``"tight"``; ``"loose"``
+    #: where a fit reaches well beyond the step (the effect moves the pose tangent, or a loading path's state
+    #: moves with it), and the screen allows a wider margin; ``"none"`` where the step from nominal sees almost
+    #: nothing of what a fit reaches (cable friction's bands), and no prediction is made.
+    step_from_nominal: ClassVar[str] = "tight"
     #: per-rig overrides of the prior ranges (name or fnmatch pattern -> (lo, hi))
     range_overrides: Mapping[str, tuple[float, float]] = {}
     #: the rig's cable count m (per-cable parameters are sized by it)

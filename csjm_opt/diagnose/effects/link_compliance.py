@@ -59,8 +59,8 @@ class LinkCompliance(Effect):
     description = "series compliance C (rad/N m) between cable platform and measured body"
     #: the compliance turns the measured body by C times the whole load, and with it the tangent the residuals
     #: are taken through: from C = 0, a pair's fit reached up to 72 % of the evidence gap the step predicted
-    #: (``studies/pair_screen``), other effects up to 25 %
-    linear_from_nominal = False
+    #: (``studies/pair_screen``), effects with a tight step up to 25 %
+    step_from_nominal = "loose"
 
     @property
     def param_names(self):

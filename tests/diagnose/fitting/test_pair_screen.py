@@ -63,3 +63,35 @@ def test_screened_diagnosis_names_what_the_unscreened_one_names(rig, monkeypatch
         twin = next(q for q in full["pairs"] if set(q["effects"]) == set(p["effects"]))
         assert twin["log_evidence"] < best - decision.LEAD_NATS
     assert (screened["selected"], screened["verdict"]["warnings"]) == (full["selected"], full["verdict"]["warnings"])
+
+
+def test_each_effects_step_from_nominal_is_one_the_screen_reads():
+    from csjm_opt.diagnose.effects import EFFECTS
+    from csjm_opt.diagnose.fitting.model_fits import _STEPS
+
+    steps = {name: cls.step_from_nominal for name, cls in EFFECTS.items()}
+    assert set(steps.values()) <= set(_STEPS)
+    assert steps["friction"] == "none" and steps["link_compliance"] == steps["joint_friction"] == "loose"
+
+
+@pytest.mark.parametrize("injected, seed", [("link_compliance", "sensor_bias"), ("joint_friction", "mass_com")])
+def test_a_loose_step_from_nominal_reaches_most_of_the_fitted_gain(rig, injected, seed):
+    """A loose effect (its tangent or its path moves) from nominal values: the step, against the pair fitted from scratch.
+
+    The screen drops a loose pair only when its step lies ``SCREEN_NATS + LOOSE_SCREEN_NATS`` below the anchor,
+    which is safe while a fit reaches no more than 80 % of the gap beyond its step; here the effect is present
+    and large (the seed alone lies hundreds of nats below), and the step must reach at least 20 % of the
+    fitted gain without overshooting the fit.
+    """
+    log = simulate_experiment(rig, 4, np.random.default_rng(11), effect=injected, severity=3.0, steps=3)
+    t = compute_residuals(rig, log)
+    single = fit_model(AugmentedModel(rig, [make_effect(seed, rig)]), t)
+    model = AugmentedModel(rig, [make_effect(seed, rig), make_effect(injected, rig)])
+    assert make_effect(injected, rig).step_from_nominal == "loose"
+    theta = np.concatenate([single.theta, make_effect(injected, rig).x0()])
+    predicted = predicted_evidence(model, t, theta, 1.0)
+    fitted = log_evidence(fit_model(model, t), 1.0)
+    gain = fitted - log_evidence(single, 1.0)
+    assert gain > 100.0, "the effect adds little on this log: the test checks nothing"
+    assert predicted <= fitted + 3.0
+    assert fitted - predicted <= 0.8 * gain
