@@ -6,7 +6,9 @@ Run: python benchmarks/bench_diagnose.py [--cycles 22] [--repeat 1] [--workers N
 
 ``--validation FOLDER/CASE`` times the standard command's diagnosis of a case of a validation folder
 (``answers.json``: its train and test logs and rig; e.g. ``mujoco_b/b1_tendon_friction``, 132 + 88
-rows), beside the baseline checkout's on the same files when ``--baseline`` is given (verdicts compared).
+rows), beside the baseline checkout's on the same files when ``--baseline`` is given (verdicts compared), and
+the whole standard command ``csjm diagnose TRAIN --rig RIG --test TEST`` in a new process (start, reading the
+logs, diagnosis, report) on ``--workers``: what a lab waits for.
 
 Prints wall and CPU time (the box may be shared: CPU seconds of this process are what
 a 2-core machine of one's own would spend, wall time what it took here). The full diagnosis
@@ -141,6 +143,16 @@ def baseline_run(tree: str, effect, cycles: int, workers: int | None = None) -> 
     return wall, cpu, f"{sel} + {sec}", int(rows)
 
 
+def command_run(tree: str, files: dict, workers: int | None) -> float:
+    """Wall seconds of the whole standard command in the checkout ``tree``: start, reading, diagnosis, report."""
+    env = {**os.environ, "PYTHONPATH": tree}
+    cmd = [sys.executable, "-m", "csjm_opt.cli", "diagnose", files["train"], "--rig", files["rig"], "--test",
+           files["test"], "--no-progress"] + ([] if workers is None else ["--workers", str(workers)])
+    t0 = time.perf_counter()
+    subprocess.run(cmd, env=env, capture_output=True, text=True, check=True, cwd=tree)
+    return time.perf_counter() - t0
+
+
 def validation_case(spec: str, args) -> None:
     """Time the diagnosis of one validation case (both logs, its rig) here and in the baseline checkout.
 
@@ -153,6 +165,7 @@ def validation_case(spec: str, args) -> None:
     files = {k: os.path.join(folder, answers[k]) for k in ("train", "test", "rig")}
     here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     runs: dict[str, list] = {"new 1": [], "new N": [], "old 1": [], "old N": []}
+    commands: dict[str, list] = {"new": [], "old": []}
     for tree in (args.baseline, here):       # warm-up: compiled kernels cached, files read once (not timed)
         if tree is not None:
             baseline_run(tree, files, 0, 1)
@@ -162,12 +175,16 @@ def validation_case(spec: str, args) -> None:
                 continue
             runs[f"{tag} 1"].append(baseline_run(tree, files, 0, 1))
             runs[f"{tag} N"].append(baseline_run(tree, files, 0, args.workers))
+            commands[tag].append(command_run(tree, files, args.workers))
     med = {k: np.median([r[:2] for r in v], axis=0) for k, v in runs.items() if v}
     work = {k: int(np.median([r[3] for r in v])) for k, v in runs.items() if v and k.endswith(" 1")}
     n_rows = sum(1 for k in ("train", "test") for _ in open(files[k])) - 2
     print(f"{case} ({n_rows} rows, load average {os.getloadavg()[0]:.1f}): one core {med['new 1'][0]:.1f} s wall / "
           f"{med['new 1'][1]:.1f} s CPU ({work['new 1']:,} rows through the balance), on {args.workers or 'all'} "
-          f"cores {med['new N'][0]:.1f} s wall (target < 5 s on 2 cores) -> {runs['new 1'][-1][2]}")
+          f"cores {med['new N'][0]:.1f} s wall (target < 5 s on 2 cores) -> {runs['new 1'][-1][2]}; "
+          f"the whole command (start, reading, report) {np.median(commands['new']):.1f} s wall"
+          + (f" against the baseline's {np.median(commands['old']):.1f} s "
+             f"({np.median(commands['old']) / np.median(commands['new']):.2f}x)" if commands["old"] else ""))
     if "old 1" in med:
         same = {r[2] for r in runs["old 1"] + runs["new 1"] + runs["old N"] + runs["new N"]}
         print(f"  baseline {args.baseline}: one core {med['old 1'][0]:.1f} s wall / {med['old 1'][1]:.1f} s CPU, "
