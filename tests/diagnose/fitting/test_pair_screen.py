@@ -76,7 +76,7 @@ def test_each_effects_step_from_nominal_is_one_the_screen_reads():
 
 @pytest.mark.parametrize("injected, seed", [("link_compliance", "sensor_bias"), ("joint_friction", "mass_com")])
 def test_a_loose_step_from_nominal_reaches_most_of_the_fitted_gain(rig, injected, seed):
-    """A loose effect (its tangent or its path moves) from nominal values: the step, against the pair fitted from scratch.
+    """A loose effect (its tangent or its path moves) from nominal: the step, against the pair fitted from scratch.
 
     The screen drops a loose pair only when its step lies ``SCREEN_NATS + LOOSE_SCREEN_NATS`` below the anchor,
     which is safe while a fit reaches no more than 80 % of the gap beyond its step; here the effect is present
