@@ -4,8 +4,7 @@
 :func:`csjm_opt.measurement._fast_csv.scan_rows` and hands every other line
 (one record at a time) to :func:`strict_records`, the row-by-row parser built
 on the ``csv`` module, then resumes the compiled pass after it (unless most
-rows so far needed the strict parser: then it reads the rest); a log under
-:data:`FAST_MIN_BYTES` goes to the strict parser whole. Both accept
+rows so far needed the strict parser: then it reads the rest). Both accept
 exactly the same rows with the same values, so the result, and the first
 error with its line and column, are those of :func:`read_log_strict`, the
 row-by-row reading of the whole text (the reference, and the path used where
@@ -28,6 +27,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from ..errors import DataFileError
+from . import _fast_csv
 from ._log_checks import parse_number
 
 _IDS = ("sample", "cycle")        # the leading integer columns
@@ -197,10 +197,6 @@ def strict_records(data: bytes, pos: int, line: int, n_header: int, source: str 
         yield after[0], last + 1, strict_row(row, n_header, source, last, columns)
 
 
-#: A log shorter than this (bytes, about 6,000 rows of six cables) is read by the strict parser alone: loading the
-#: compiled pass from numba's cache takes 0.3-0.6 s in a new process, the strict parser 2 ms on a 132-row log
-#: (22 kB) and under 0.2 s at this size.
-FAST_MIN_BYTES = 1 << 20
 #: After this many lines for the strict parser, if they are most of the rows so far, it reads the rest.
 _STRICT_RUN = 1000
 
@@ -229,10 +225,6 @@ def read_log_bytes(data: bytes, source: str | None) -> LogRows:
     eol = data.find(b"\n", start)
     pos = len(data) if eol < 0 else eol + 1
     first = data[start:pos]
-    if len(data) - start < FAST_MIN_BYTES:
-        return read_log_strict(data[start:].decode("utf-8"), source)
-    # numba and the compiled pass, loaded only for a long log
-    from . import _fast_csv
     if not _fast_csv.AVAILABLE or b'"' in first:
         return read_log_strict(data[start:].decode("utf-8"), source)
     try:

@@ -17,19 +17,6 @@ from csjm_opt.measurement._log_reader import COLUMNS, read_log_bytes, read_log_s
 from csjm_opt.measurement.logfile import MeasurementLog
 
 pytestmark = pytest.mark.skipif(not _fast_csv.AVAILABLE, reason="no correctly rounded strtod here")
-
-
-@pytest.fixture(autouse=True)
-def _compiled_pass_on_short_logs(monkeypatch):
-    """The logs here are short: the compiled pass reads them too (a short log is otherwise read strictly)."""
-    monkeypatch.setattr(_log_reader, "FAST_MIN_BYTES", 0)
-
-
-def test_a_short_log_is_read_by_the_strict_parser_alone(monkeypatch):
-    text = _log_text(np.random.default_rng(12), n=50, extra=1)
-    monkeypatch.setattr(_log_reader, "FAST_MIN_BYTES", len(text.encode()) + 1)
-    monkeypatch.setattr(_fast_csv, "scan_rows", None)     # would fail if called
-    _same(MeasurementLog.from_text(text, "t.csv"), strict_log(text, "t.csv"))
 HEADER = ",".join(COLUMNS)
 
 
