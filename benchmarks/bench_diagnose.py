@@ -2,13 +2,14 @@
 and ``--suggest 60`` on an ambiguous log (target: under 60 s).
 
 Run: python benchmarks/bench_diagnose.py [--cycles 22] [--repeat 1] [--workers N] [--baseline DIR]
-[--cases coulomb_friction ...] [--validation FOLDER/CASE ...] [--no-progress]
+[--cases coulomb_friction ...] [--validation FOLDER/CASE ...] [--commands FOLDER ...] [--no-progress]
 
 ``--validation FOLDER/CASE`` times the standard command's diagnosis of a case of a validation folder
 (``answers.json``: its train and test logs and rig; e.g. ``mujoco_b/b1_tendon_friction``, 132 + 88
 rows), beside the baseline checkout's on the same files when ``--baseline`` is given (verdicts compared), and
 the whole standard command ``csjm diagnose TRAIN --rig RIG --test TEST`` in a new process (start, reading the
-logs, diagnosis, report) on ``--workers``: what a lab waits for.
+logs, diagnosis, report) on ``--workers``: what a lab waits for. ``--commands FOLDER ...`` times that command
+on every case of validation folders, each case beside the baseline's.
 
 Prints wall and CPU time (the box may be shared: CPU seconds of this process are what
 a 2-core machine of one's own would spend, wall time what it took here). The full diagnosis
@@ -153,6 +154,33 @@ def command_run(tree: str, files: dict, workers: int | None) -> float:
     return time.perf_counter() - t0
 
 
+def command_sweep(folder: str, args) -> None:
+    """The whole standard command on every case of a validation folder, each beside the baseline's (interleaved).
+
+    One run per case and checkout, on ``--workers`` (wall seconds of a new process each): the median over the
+    folder, the median of the per-case ratios, the slowest case, and how many cases finish within 5 s.
+    """
+    folder = os.path.abspath(folder)
+    answers = json.load(open(os.path.join(folder, "answers.json")))
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    new, old = [], []
+    for case, a in tqdm(answers.items(), desc=os.path.basename(folder), disable=args.no_progress, file=sys.stderr,
+                        leave=False):
+        files = {k: os.path.join(folder, a[k]) for k in ("train", "test", "rig")}
+        if args.baseline is not None:
+            old.append(command_run(args.baseline, files, args.workers))
+        new.append((command_run(here, files, args.workers), case))
+    secs = [t for t, _ in new]
+    slow = max(new)
+    line = (f"{os.path.basename(folder)}: the whole command on {args.workers or 'all'} cores, {len(new)} cases: "
+            f"median {np.median(secs):.1f} s, slowest {slow[0]:.1f} s ({slow[1]}), within 5 s "
+            f"{sum(t <= 5.0 for t in secs)}/{len(secs)} (load average {os.getloadavg()[0]:.1f})")
+    if old:
+        line += (f"; baseline {args.baseline}: median {np.median(old):.1f} s, per-case ratio old / new "
+                 f"{np.median([o / t for o, t in zip(old, secs)]):.2f}x (median)")
+    print(line)
+
+
 def validation_case(spec: str, args) -> None:
     """Time the diagnosis of one validation case (both logs, its rig) here and in the baseline checkout.
 
@@ -204,12 +232,16 @@ def main() -> int:
     ap.add_argument("--cases", nargs="*", default=["none", "friction+sensor_bias", "coulomb_friction", "hole_offsets"])
     ap.add_argument("--validation", nargs="+", default=[], metavar="FOLDER/CASE",
                     help="validation cases to time (a folder with answers.json, slash, the case's name)")
+    ap.add_argument("--commands", nargs="+", default=[], metavar="FOLDER",
+                    help="validation folders: the whole standard command on every case, beside the baseline's")
     ap.add_argument("--no-progress", action="store_true")
     ap.add_argument("--no-extras", action="store_true", help="only the diagnosis cases (no --suggest, no direct fit)")
     args = ap.parse_args()
     bar = None if args.no_progress else partial(tqdm, file=sys.stderr, leave=False)
     for spec in args.validation:
         validation_case(spec, args)
+    for folder in args.commands:
+        command_sweep(folder, args)
     rig = co.paper_rig()
     for case in args.cases:
         effect = case.split("+") if "+" in case else case
