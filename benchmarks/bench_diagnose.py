@@ -144,6 +144,15 @@ def baseline_run(tree: str, effect, cycles: int, workers: int | None = None) -> 
     return wall, cpu, f"{sel} + {sec}", int(rows)
 
 
+#: This checkout (the code timed against ``--baseline``).
+HERE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def case_files(folder: str, answer: dict) -> dict[str, str]:
+    """A validation case's files (``answers.json`` entry ``answer`` in ``folder``): train and test logs, rig."""
+    return {k: os.path.join(folder, answer[k]) for k in ("train", "test", "rig")}
+
+
 def command_run(tree: str, files: dict, workers: int | None) -> float:
     """Wall seconds of the whole standard command in the checkout ``tree``: start, reading, diagnosis, report."""
     env = {**os.environ, "PYTHONPATH": tree}
@@ -162,14 +171,13 @@ def command_sweep(folder: str, args) -> None:
     """
     folder = os.path.abspath(folder)
     answers = json.load(open(os.path.join(folder, "answers.json")))
-    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     new, old = [], []
     for case, a in tqdm(answers.items(), desc=os.path.basename(folder), disable=args.no_progress, file=sys.stderr,
                         leave=False):
-        files = {k: os.path.join(folder, a[k]) for k in ("train", "test", "rig")}
+        files = case_files(folder, a)
         if args.baseline is not None:
             old.append(command_run(args.baseline, files, args.workers))
-        new.append((command_run(here, files, args.workers), case))
+        new.append((command_run(HERE, files, args.workers), case))
     secs = [t for t, _ in new]
     slow = max(new)
     line = (f"{os.path.basename(folder)}: the whole command on {args.workers or 'all'} cores, {len(new)} cases: "
@@ -190,15 +198,14 @@ def validation_case(spec: str, args) -> None:
     """
     folder, case = os.path.split(os.path.abspath(spec))
     answers = json.load(open(os.path.join(folder, "answers.json")))[case]
-    files = {k: os.path.join(folder, answers[k]) for k in ("train", "test", "rig")}
-    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    files = case_files(folder, answers)
     runs: dict[str, list] = {"new 1": [], "new N": [], "old 1": [], "old N": []}
     commands: dict[str, list] = {"new": [], "old": []}
-    for tree in (args.baseline, here):       # warm-up: compiled kernels cached, files read once (not timed)
+    for tree in (args.baseline, HERE):       # warm-up: compiled kernels cached, files read once (not timed)
         if tree is not None:
             baseline_run(tree, files, 0, 1)
     for _ in tqdm(range(args.repeat), desc=f"{case}", disable=args.no_progress, file=sys.stderr, leave=False):
-        for tag, tree in (("old", args.baseline), ("new", here)):
+        for tag, tree in (("old", args.baseline), ("new", HERE)):
             if tree is None:
                 continue
             runs[f"{tag} 1"].append(baseline_run(tree, files, 0, 1))

@@ -29,7 +29,7 @@ def run_one(job: dict) -> dict:
     import numpy as np
 
     from csjm_opt.diagnose.effects import make_effect
-    from csjm_opt.diagnose.fitting.model_fits import _STEPS
+    from csjm_opt.diagnose.fitting.model_fits import model_step
     from csjm_opt.diagnose.selection import decision
     from csjm_opt.measurement.logfile import MeasurementLog
     from csjm_opt.model.rig import load_rig
@@ -55,13 +55,18 @@ def run_one(job: dict) -> dict:
     pairs = [{"effects": p["effects"], "predicted": p.get("predicted_log_evidence"),
               "fitted": p.get("log_evidence") if p.get("fitted") else None,
               "dropped": bool(p.get("fitted")) and frozenset(p["effects"]) not in fitted_on,
-              "step": max((make_effect(e, rig).step_from_nominal for e in p["effects"]), key=_STEPS.index)}
+              "step": model_step([make_effect(e, rig) for e in p["effects"]])}
              for p in off["pairs"] if "predicted_log_evidence" in p]
     return {"id": job["id"], "best_single": float(np.nanmax(evs)),
             "verdict_evidence": models.get(verdict_model) if verdict_model else None,
             "on": {k: on["verdict"][k] for k in ("selected", "warnings")} | {"secondary": on["secondary"]["effect"]},
             "off": {k: off["verdict"][k] for k in ("selected", "warnings")} | {"secondary": off["secondary"]["effect"]},
             "seconds_on": t1 - t0, "seconds_off": t2 - t1, "pairs": pairs}
+
+
+def _verdict_evidence(record: dict) -> float:
+    """The verdict's log evidence in a record, the best single's without a named verdict."""
+    return record["best_single"] if record["verdict_evidence"] is None else record["verdict_evidence"]
 
 
 def summarise(records: list[dict], lead_nats: float) -> str:
@@ -81,7 +86,7 @@ def summarise(records: list[dict], lead_nats: float) -> str:
     n_all = sum(len(r["pairs"]) for r in records)
     # a rule reads a pair against the verdict (a rival within EVIDENCE_MIN of it, or above it); without a named
     # verdict, against the best single
-    dropped = [(p["fitted"] - (r["best_single"] if r["verdict_evidence"] is None else r["verdict_evidence"]), r["id"],
+    dropped = [(p["fitted"] - _verdict_evidence(r), r["id"],
                 "+".join(p["effects"]), p["fitted"] - p["predicted"])
                for r in records for p in r["pairs"] if p["dropped"] and p["fitted"] is not None]
     dropped.sort(reverse=True)
@@ -100,7 +105,7 @@ def summarise(records: list[dict], lead_nats: float) -> str:
         shares = [((p["fitted"] - p["predicted"]) / gap, r["id"], "+".join(p["effects"]))
                   for r in records for p in r["pairs"]
                   if p.get("step") == step and p["fitted"] is not None and p["predicted"] is not None
-                  and (gap := min(r["best_single"], r["verdict_evidence"] or r["best_single"]) - p["predicted"]) > 60]
+                  and (gap := min(r["best_single"], _verdict_evidence(r)) - p["predicted"]) > 60]
         if shares:
             top = max(shares)
             lines.append(f"| {step} | {len(shares)} | {top[0]:.0%} | {top[1]} | {top[2]} |")

@@ -289,7 +289,12 @@ SCREEN_NATS = 60.0
 #: anchor; at 80 %, a pair 300 nats below it (60 + 240) would still lie 60 below after its fit.
 LOOSE_SCREEN_NATS = 240.0
 #: :attr:`~csjm_opt.diagnose.effects.base.Effect.step_from_nominal` in order: a model's step is its worst effect's.
-_STEPS = ("tight", "loose", "none")
+STEPS = ("tight", "loose", "none")
+
+
+def model_step(effects: Sequence) -> str:
+    """How well a model of ``effects`` (instances) is predicted from nominal values: its worst effect's step kind."""
+    return max((e.step_from_nominal for e in effects), key=STEPS.index)
 
 
 def predicted_pair_evidence(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
@@ -308,7 +313,7 @@ def predicted_pair_evidence(ctx: _Context, rig: Rig, ranges: Mapping | None, opt
     """
     point = point_options(options)
     effects = [make_effect(e, rig, ranges, **point.get(e, {})) for e in pair]
-    step = max((e.step_from_nominal for e in effects), key=_STEPS.index)
+    step = model_step(effects)
     best = float("nan")
     if step == "none":
         return best, True

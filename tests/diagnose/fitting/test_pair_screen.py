@@ -67,10 +67,10 @@ def test_screened_diagnosis_names_what_the_unscreened_one_names(rig, monkeypatch
 
 def test_each_effects_step_from_nominal_is_one_the_screen_reads():
     from csjm_opt.diagnose.effects import EFFECTS
-    from csjm_opt.diagnose.fitting.model_fits import _STEPS
+    from csjm_opt.diagnose.fitting.model_fits import STEPS
 
     steps = {name: cls.step_from_nominal for name, cls in EFFECTS.items()}
-    assert set(steps.values()) <= set(_STEPS)
+    assert set(steps.values()) <= set(STEPS)
     assert steps["friction"] == "none" and steps["link_compliance"] == steps["joint_friction"] == "loose"
 
 
