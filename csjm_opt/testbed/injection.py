@@ -36,7 +36,7 @@ coordinates within 4 mm (3.3 sd at 1.2), capstan factors within 0.3,
 hardening within 300 /m, compliance entries within 0.05 rad/(N m), a bias
 within 0.5 N m, ``|d(m r)|`` within 0.1 x mass per axis (com z up to
 120 mm), registration within 0.05 rad, a stiffness factor within [0.5, 2], drive
-offsets within 2 mm (3.3 sd at 2), a sensor gain within [0.6, 1.4], a joint
+offsets within 2 mm (3.3 sd at 2), a sensor gain within [0.5, 2], a joint
 friction moment within 0.3 N m.
 A study that wants an effect larger than that against the noise floor lowers
 the noise instead (a better instrument), not the plausibility of the effect.
