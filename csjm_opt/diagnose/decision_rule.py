@@ -58,9 +58,9 @@ class _Context:
         self._evidence: dict[int, float] = {}
 
     def evidence(self, sc: CandidateScore) -> float:
-        """Laplace log evidence of ``sc`` at the diagnosis's noise scale (:mod:`.evidence`)."""
+        """Laplace log evidence of ``sc`` at the diagnosis's noise scale (:mod:`.evidence`), over its variants."""
         if id(sc) not in self._evidence:
-            self._evidence[id(sc)] = log_evidence(sc.fit, self.sigma)
+            self._evidence[id(sc)] = log_evidence(sc.fit, self.sigma) + sc.variant_log_weight
         return self._evidence[id(sc)]
 
     def score(self, effects: Sequence) -> CandidateScore:

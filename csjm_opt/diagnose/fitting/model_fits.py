@@ -9,9 +9,11 @@ would give the same numbers. Each function is one task of :func:`csjm_opt.diagno
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Mapping, Sequence
 
 import numpy as np
+from scipy.special import logsumexp
 
 from ...errors import CsjmError
 from ...model.rig import Rig
@@ -34,14 +36,21 @@ FIT_ERRORS = (np.linalg.LinAlgError, CsjmError, FloatingPointError)
 
 
 def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (),
-                after: Sequence = ()) -> tuple[dict, FitResult | None]:
-    """The variant of ``name`` with the highest evidence on the training rows, and its fit.
+                after: Sequence = ()) -> tuple[dict, FitResult | None, float]:
+    """The variant of ``name`` with the highest evidence on the training rows, its fit, and its log weight.
 
     The noise scale is the best variant's (whitened RMS): the variants then differ by their fit and by
     what their priors say of the fitted parameters (a fit that needs a parameter far outside its range
     pays). ``before`` and ``after`` are the other effects of the model the variant is for (a pair's
     other effect), in the model's order: the variant is a discrete parameter of that model and is
     chosen with them fitted alongside.
+
+    The variant being a parameter, each of the ``K`` equally likely a priori, the model's evidence is the mean of
+    its variants' ``(Z_1 + ... + Z_K) / K``, not the best one's: the log weight
+    ``log((Z_1 + ... + Z_K) / K) - log Z_best`` (between ``-log K`` and 0) is what the evidence of the chosen
+    variant's fit must add (:attr:`~csjm_opt.diagnose.selection.scoring.CandidateScore.variant_log_weight`). Taken at
+    the best one's noise scale. Without it a model with four variants was credited the best of four looks at
+    the data: up to ``log 4`` nats over a model without variants that fits as well.
 
     Parameters
     ----------
@@ -64,7 +73,7 @@ def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (
     """
     options = VARIANTS.get(name, [])
     if len(options) < 2:
-        return (options[0] if options else {}), None
+        return (options[0] if options else {}), None, 0.0
     fits: list[FitResult | None] = []
     for opt in options:
         try:
@@ -74,11 +83,13 @@ def variant_fit(ctx: _Context, rig: Rig, name: str, ranges, before: Sequence = (
             fits.append(None)
     ok = [f for f in fits if f is not None]
     if not ok:
-        return options[0], None
+        return options[0], None, 0.0
     scale = float(np.sqrt(max(min(f.rss for f in ok) / max(ok[0].n_obs, 1), 1e-12)))
-    ev = [-np.inf if f is None else log_evidence(f, scale) for f in fits]
-    best = int(np.nanargmax(np.where(np.isfinite(ev), ev, -np.inf)))
-    return options[best], fits[best]
+    ev = np.array([-np.inf if f is None else log_evidence(f, scale) for f in fits])
+    ev = np.where(np.isfinite(ev), ev, -np.inf)          # a failed fit or a nan evidence: no weight
+    best = int(np.argmax(ev))
+    weight = float(logsumexp(ev - ev[best]) - np.log(len(options))) if np.isfinite(ev[best]) else 0.0
+    return options[best], fits[best], weight
 
 
 #: The variants that need no loading path (:mod:`csjm_opt.diagnose.fitting.friction_stick`): the rest pose is any
@@ -163,9 +174,14 @@ def _prefer_settled(ctx: _Context, settled: CandidateScore, path: CandidateScore
     return key(settled) < key(path)
 
 
-def score_with(ctx: _Context, model: AugmentedModel, fit: FitResult | None = None) -> CandidateScore:
-    """``model`` scored on the diagnosis's rows and folds (``fit``: its plain training fit, if known)."""
-    return score(model, ctx.train, ctx.test, ctx.folds, fit, local=ctx.local_scale)
+def score_with(ctx: _Context, model: AugmentedModel, fit: FitResult | None = None,
+               variant_log_weight: float = 0.0) -> CandidateScore:
+    """``model`` scored on the diagnosis's rows and folds (``fit``: its plain training fit, if known).
+
+    ``variant_log_weight``: what its variants' mixture adds to the evidence (:func:`variant_fit`).
+    """
+    sc = score(model, ctx.train, ctx.test, ctx.folds, fit, local=ctx.local_scale)
+    return dataclasses.replace(sc, variant_log_weight=float(variant_log_weight)) if variant_log_weight else sc
 
 
 def score_effect(ctx: _Context, effect) -> CandidateScore | None:
@@ -195,8 +211,8 @@ def fit_single(ctx: _Context, rig: Rig, ranges: Mapping | None,
     tuple
     """
     try:
-        opt, fit = variant_fit(ctx, rig, name, ranges)
-        sc = score_with(ctx, AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), fit)
+        opt, fit, weight = variant_fit(ctx, rig, name, ranges)
+        sc = score_with(ctx, AugmentedModel(rig, [make_effect(name, rig, ranges, **opt)]), fit, weight)
         if name in SETTLED_VARIANTS:      # the stick condition beside the path: the better held-out score
             settled = _settled(ctx, rig, ranges, [make_effect(name, rig, ranges, **SETTLED_VARIANTS[name])])
             if settled is not None and _prefer_settled(ctx, settled, sc):
@@ -253,8 +269,10 @@ def point_options(options: Mapping[str, dict]) -> dict[str, dict]:
 
 
 def point_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
-               pair: tuple[str, str]) -> tuple[AugmentedModel, FitResult | None]:
-    """The point model of pair ``(a, b)`` (variants chosen on it), and its plain training fit where known.
+               pair: tuple[str, str]) -> tuple[AugmentedModel, FitResult | None, float]:
+    """The point model of pair ``(a, b)`` (variants chosen on it), its plain training fit where known, its log weight.
+
+    The log weight sums each chosen variant's (:func:`variant_fit`).
 
     A settled effect joins as its path variant: a stick set scored at a noise scale of its own would absorb
     the other effect's misfit at a price no point model pays. An effect's variant (friction's law and
@@ -264,13 +282,17 @@ def point_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping
     a, b = pair
     options = point_options(options)
     fit: FitResult | None = None
+    weight = 0.0
     opt_a = options.get(a, {})
     if a in VARIANTS:
-        opt_a, fit = variant_fit(ctx, rig, a, ranges, after=[make_effect(b, rig, ranges, **options.get(b, {}))])
+        opt_a, fit, w = variant_fit(ctx, rig, a, ranges, after=[make_effect(b, rig, ranges, **options.get(b, {}))])
+        weight += w
     opt_b = options.get(b, {})
     if b in VARIANTS:
-        opt_b, fit = variant_fit(ctx, rig, b, ranges, before=[make_effect(a, rig, ranges, **opt_a)])
-    return AugmentedModel(rig, [make_effect(a, rig, ranges, **opt_a), make_effect(b, rig, ranges, **opt_b)]), fit
+        opt_b, fit, w = variant_fit(ctx, rig, b, ranges, before=[make_effect(a, rig, ranges, **opt_a)])
+        weight += w
+    model = AugmentedModel(rig, [make_effect(a, rig, ranges, **opt_a), make_effect(b, rig, ranges, **opt_b)])
+    return model, fit, weight
 
 
 #: A pair whose evidence, predicted one Gauss-Newton step from its singles' fits

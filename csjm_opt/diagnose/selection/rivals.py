@@ -313,7 +313,9 @@ def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mappin
 
     def at_fit(sc) -> float | None:
         fit = getattr(sc, "fit", None)
-        return None if noise_scale is None or fit is None else log_evidence(fit, float(noise_scale), at_fit=True)
+        if noise_scale is None or fit is None:
+            return None
+        return log_evidence(fit, float(noise_scale), at_fit=True) + getattr(sc, "variant_log_weight", 0.0)
 
     out = {n: {"log_evidence": evidence(sc), "log_evidence_at_fit": at_fit(sc), "cycle_mse": sc.cycle_mse(),
                "cycle_nll": cycle_nll_of(sc), "plausible": bool(tests[n].get("plausible")),

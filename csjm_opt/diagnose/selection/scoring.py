@@ -54,6 +54,9 @@ class CandidateScore:
     # ``|W zeta|^2 / s^2 + 6 log s`` for a point model (:func:`point_nll`), ``q + 6 log s`` for a set-valued one
     # at its own s (:func:`log_score_test`); None: not computed (a hand-made score)
     heldout_nll: np.ndarray | None = None
+    # what the mixture over the model's variants adds to its fit's log evidence (nats, <= 0; 0: no variants,
+    # or a model whose variant the evidence did not choose): :func:`..fitting.model_fits.variant_fit`
+    variant_log_weight: float = 0.0
 
     @property
     def set_valued(self) -> bool:

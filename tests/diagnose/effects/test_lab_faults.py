@@ -170,12 +170,36 @@ def test_sensor_gain_variant_chosen_by_the_data(rig):
     per_axis = dataclasses.replace(TestbedPlant.nominal(rig), sensor_gain_A=np.array([0.75, 1.0, 1.25]))
     log = simulate_experiment(rig, 8, rng, per_axis)
     ctx = _Context(rig, compute_residuals(rig, log), None)
-    opt, fit = variant_fit(ctx, rig, "sensor_gain", None)
+    opt, fit, _ = variant_fit(ctx, rig, "sensor_gain", None)
     assert opt == {"axes": "per_axis"}
     np.testing.assert_allclose(np.exp(fit.theta[1:]), [0.75, 1.0, 1.25], atol=0.05)
     common = dataclasses.replace(TestbedPlant.nominal(rig), sensor_gain_A=np.full(3, 0.85))
     log = simulate_experiment(rig, 8, rng, common)
     ctx = _Context(rig, compute_residuals(rig, log), None)
-    opt, fit = variant_fit(ctx, rig, "sensor_gain", None)
+    opt, fit, _ = variant_fit(ctx, rig, "sensor_gain", None)
     assert opt == {"axes": "common"}
     assert abs(np.exp(fit.theta[1]) - 0.85) < 0.03
+
+
+def test_a_models_evidence_is_the_mean_over_its_variants(rig):
+    # the variant is a parameter with K equally likely values: the evidence of the model is the mean of its
+    # variants' evidences, each variant fitted here on its own (not through variant_fit)
+    from scipy.special import logsumexp
+
+    from csjm_opt.diagnose.decision_rule import _Context
+    from csjm_opt.diagnose.fitting.evidence import log_evidence
+    from csjm_opt.diagnose.fitting.model_fits import VARIANTS, variant_fit
+
+    rng = np.random.default_rng(6)
+    log = simulate_experiment(rig, 8, rng, dataclasses.replace(TestbedPlant.nominal(rig),
+                                                               sensor_gain_A=np.full(3, 0.9)))
+    table = compute_residuals(rig, log)
+    ctx = _Context(rig, table, None)
+    fits = [fit_model(AugmentedModel(rig, [make_effect("sensor_gain", rig, **o)]), table)
+            for o in VARIANTS["sensor_gain"]]
+    scale = np.sqrt(min(f.rss for f in fits) / fits[0].n_obs)
+    ev = np.array([log_evidence(f, scale) for f in fits])
+    opt, fit, weight = variant_fit(ctx, rig, "sensor_gain", None)
+    assert -np.log(2) <= weight <= 0.0
+    assert np.isclose(log_evidence(fit, scale) + weight, logsumexp(ev) - np.log(2), atol=1e-6)
+    assert opt == VARIANTS["sensor_gain"][int(np.argmax(ev))]
