@@ -72,7 +72,7 @@ from .plant import DEPRECATED_NAMES, EFFECT_NAMES, OUTSIDE_NAMES, VARIANT_NAMES,
 PLAUSIBLE_SEVERITY = {"hole_offsets": 1.2, "friction": 7.0, "cable_hardening": 15.0, "link_compliance": 8.0,
                       "sensor_bias": 4.0, "mass_com": 2.5, "tracker_registration": 15.0,
                       "stiffness_scale": 15.0, "coulomb_friction": 15.0, "drive_offsets": 2.0,
-                      "sensor_gain": 4.0, "joint_friction": 10.0}
+                      "sensor_gain": 9.0, "joint_friction": 10.0}
 
 
 def _unit(rng: np.random.Generator) -> np.ndarray:
