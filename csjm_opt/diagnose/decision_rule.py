@@ -14,9 +14,9 @@ from .data.localisation import remaining_signature
 from .data.noise import combine_scales, noise_floor, systematic
 from .data.residuals import ResidualTable
 from .fitting.augmented import AugmentedModel
-from .fitting.evidence import log_evidence
 from .selection.scoring import (
     CandidateScore,
+    evidence_of,
     folds_by_cycle,
     improvement_rad,
     nested_f_test,
@@ -60,7 +60,7 @@ class _Context:
     def evidence(self, sc: CandidateScore) -> float:
         """Laplace log evidence of ``sc`` at the diagnosis's noise scale (:mod:`.evidence`), over its variants."""
         if id(sc) not in self._evidence:
-            self._evidence[id(sc)] = log_evidence(sc.fit, self.sigma) + sc.variant_log_weight
+            self._evidence[id(sc)] = evidence_of(sc, self.sigma)
         return self._evidence[id(sc)]
 
     def score(self, effects: Sequence) -> CandidateScore:

@@ -26,9 +26,10 @@ from __future__ import annotations
 import numpy as np
 
 from .base import Effect, one_hot
+from .stiffness_scale import FACTOR_RANGE
 
 #: Plausible gain of the moment reading (true moment -> logged moment): the stiffness factor's range, its look-alike.
-GAIN_RANGE = (0.5, 2.0)
+GAIN_RANGE = FACTOR_RANGE
 AXES = ("common", "per_axis")
 
 

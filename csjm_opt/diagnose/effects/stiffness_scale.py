@@ -12,6 +12,9 @@ import numpy as np
 
 from .base import Effect, one_hot
 
+#: Plausible common stiffness factor (the prior's +-2 sd of its log); also the sensor gain's, its look-alike.
+FACTOR_RANGE = (0.5, 2.0)
+
 
 class StiffnessScale(Effect):
     """Common cable stiffness factor ``s = exp(log_k_scale)``."""
@@ -64,8 +67,8 @@ class StiffnessScale(Effect):
         return np.array([2.0])
 
     def default_ranges(self):
-        """A factor between 0.5 and 2."""
-        return {"log_k_scale": (float(np.log(0.5)), float(np.log(2.0)))}
+        """A factor within :data:`FACTOR_RANGE` (0.5 to 2)."""
+        return {"log_k_scale": tuple(float(np.log(f)) for f in FACTOR_RANGE)}
 
     def adjust_tension(self, ev, stretch_m, T_N, p):
         """Tensions scaled by the common stiffness factor ``s = exp(log_k_scale)``.

@@ -61,8 +61,7 @@ from typing import Collection, Mapping
 import numpy as np
 
 from ..decision_rule import EVIDENCE_MIN, HELDOUT_ALPHA, LEAD_NATS
-from ..fitting.evidence import log_evidence
-from .scoring import CandidateScore, cycle_nll_of, paired_heldout_test
+from .scoring import CandidateScore, cycle_nll_of, evidence_of, paired_heldout_test
 
 
 class _Cycles:
@@ -313,9 +312,7 @@ def scored_models(evidence, singles: Mapping[str, CandidateScore], tests: Mappin
 
     def at_fit(sc) -> float | None:
         fit = getattr(sc, "fit", None)
-        if noise_scale is None or fit is None:
-            return None
-        return log_evidence(fit, float(noise_scale), at_fit=True) + getattr(sc, "variant_log_weight", 0.0)
+        return None if noise_scale is None or fit is None else evidence_of(sc, float(noise_scale), at_fit=True)
 
     out = {n: {"log_evidence": evidence(sc), "log_evidence_at_fit": at_fit(sc), "cycle_mse": sc.cycle_mse(),
                "cycle_nll": cycle_nll_of(sc), "plausible": bool(tests[n].get("plausible")),

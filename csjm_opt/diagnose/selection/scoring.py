@@ -23,6 +23,7 @@ from ..data.noise import combine_scales
 from ..data.residuals import ResidualTable, pose_noise_cov, pose_residuals, rms
 from ..data.tails import f_sf, t_greater
 from ..fitting.augmented import AugmentedModel, with_entry
+from ..fitting.evidence import log_evidence
 from ..fitting.friction_path import on_predicted_path
 from ..fitting.gauss_newton import FitResult, data_jacobian, fit_model, objective
 
@@ -332,6 +333,15 @@ def paired_heldout_test(a: CandidateScore, b: CandidateScore) -> float:
     if len(d) < 2 or np.allclose(d, d[0], rtol=0.0, atol=TIE_LOG_RATIO):
         return 0.0 if d.mean() > 0 else 1.0
     return t_greater(d)
+
+
+def evidence_of(sc, noise_scale: float, at_fit: bool = False) -> float:
+    """Laplace log evidence of score ``sc``'s model at ``noise_scale``: its fit's, plus its variants' log weight.
+
+    :func:`~csjm_opt.diagnose.fitting.evidence.log_evidence` of ``sc.fit`` (``at_fit`` as there) plus
+    ``sc.variant_log_weight`` (:func:`~csjm_opt.diagnose.fitting.model_fits.variant_fit`; 0 where absent).
+    """
+    return log_evidence(sc.fit, float(noise_scale), at_fit=at_fit) + getattr(sc, "variant_log_weight", 0.0)
 
 
 def cycle_nll_of(sc) -> dict | None:
