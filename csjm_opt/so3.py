@@ -17,6 +17,8 @@ import numpy as np
 from .errors import InvalidInput
 
 _SMALL = 1e-6
+_EYE3 = np.eye(3)
+_EYE3.setflags(write=False)
 
 
 def _vectors(w: Any, name: str) -> np.ndarray:
@@ -73,7 +75,11 @@ def hat(w: Any) -> Any:
         return ca.vertcat(ca.horzcat(0, -w[2], w[1]),
                           ca.horzcat(w[2], 0, -w[0]),
                           ca.horzcat(-w[1], w[0], 0))
-    w = _vectors(w, "w")
+    return _hat(_vectors(w, "w"))
+
+
+def _hat(w: np.ndarray) -> np.ndarray:
+    """:func:`hat` of a checked float array (..., 3)."""
     out = np.zeros(w.shape[:-1] + (3, 3))
     out[..., 0, 1], out[..., 0, 2] = -w[..., 2], w[..., 1]
     out[..., 1, 0], out[..., 1, 2] = w[..., 2], -w[..., 0]
@@ -138,11 +144,14 @@ def exp(w: Any) -> Any:
     th2 = np.sum(w * w, axis=-1)
     th = np.sqrt(th2)
     small = th < _SMALL
-    ths = np.where(small, 1.0, th)
-    a = np.where(small, 1 - th2 / 6, np.sin(ths) / ths)
-    b = np.where(small, 0.5 - th2 / 24, (1 - np.cos(ths)) / ths**2)
-    W = hat(w)
-    return np.eye(3) + a[..., None, None] * W + b[..., None, None] * (W @ W)
+    if np.any(small):
+        ths = np.where(small, 1.0, th)
+        a = np.where(small, 1 - th2 / 6, np.sin(ths) / ths)
+        b = np.where(small, 0.5 - th2 / 24, (1 - np.cos(ths)) / ths**2)
+    else:                           # the same numbers without the Taylor branch's arrays
+        a, b = np.sin(th) / th, (1 - np.cos(th)) / th**2
+    W = _hat(w)
+    return _EYE3 + a[..., None, None] * W + b[..., None, None] * (W @ W)
 
 
 def log(R: Any) -> Any:

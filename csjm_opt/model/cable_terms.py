@@ -42,15 +42,17 @@ __all__ = ["CableTerms", "cable_lengths", "geometry", "length_hessians", "point_
            "stiffness", "stiffness_from_rest", "weight_moment"]
 
 
+_NEXT, _LAST = np.array([1, 2, 0]), np.array([2, 0, 1])
+
+
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross product along the last axis, the leading axes broadcast (cheaper than np.cross for small arrays)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-    out[..., 0] = a1 * b2 - a2 * b1
-    out[..., 1] = a2 * b0 - a0 * b2
-    out[..., 2] = a0 * b1 - a1 * b0
-    return out
+    """Cross product along the last axis, the leading axes broadcast (cheaper than np.cross for small arrays).
+
+    Component ``k`` is ``a[k+1] b[k+2] - a[k+2] b[k+1]`` (indices mod 3): the three components in one
+    product of index-rotated copies (``take``: four small copies instead of nine slices).
+    """
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return a.take(_NEXT, -1) * b.take(_LAST, -1) - a.take(_LAST, -1) * b.take(_NEXT, -1)
 
 
 def geometry(R: np.ndarray, A_m: np.ndarray, B_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -406,7 +406,7 @@ class Friction(Effect):
         else:                                        # one row per cycle, sequential prediction
             first = np.isnan(rows.lengths_prev_m)
             _, dl = rows.steps_since_previous
-            dc = np.where(first, 0.0, ev.lengths_m - np.nan_to_num(rows.lengths_prev_m))
+            dc = np.where(first, 0.0, ev.lengths_m - rows.lengths_prev_m)    # (NaN only where discarded)
             step = ramp_input(dc, np.where(first, 0.0, dl), rows.ramp_shape_m, travel, w)
             s = np.where(first, s0, _rows_band(np.ascontiguousarray(rows.state_prev, dtype=np.float64), step, CORNER))
         ev.state_out = s

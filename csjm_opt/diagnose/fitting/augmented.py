@@ -138,6 +138,9 @@ class AugmentedModel:
         self._B = np.asarray(rig.base_holes_B_m, float)
         self._k = np.asarray(rig.cable_stiffness_N_per_m, float)
         self._mr = rig.platform_mass_kg * np.asarray(rig.com_A_m, float)
+        for a in (self._A, self._B, self._k, self._mr):
+            if a.flags.writeable and a.base is None:
+                a.setflags(write=False)   # the model's constants (and cache keys, :func:`_kept`)
         self._g = np.asarray(rig.gravity_B_m_per_s2, float)
         sizes = [len(NUISANCE_NAMES)] + [e.n_params for e in self.effects]
         self._offsets = np.cumsum([0] + sizes)
@@ -159,14 +162,12 @@ class AugmentedModel:
         arrays: bit for bit what a new evaluation gives).
         """
         last = self._geometry
-        if (last is not None and last[0].shape == np.shape(R) and np.shape(A_m) == last[1].shape
-                and np.shape(B_m) == last[2].shape and np.array_equal(last[0], R)
-                and np.array_equal(last[1], A_m) and np.array_equal(last[2], B_m)):
+        if last is not None and _same(last[0], R) and _same(last[1], A_m) and _same(last[2], B_m):
             return last[3], last[4]
         lengths, J = kin.cable_terms(R, A_m, B_m)
         lengths.setflags(write=False)
         J.setflags(write=False)
-        self._geometry = (np.array(R, float), np.array(A_m, float), np.array(B_m, float), lengths, J)
+        self._geometry = (_kept(R), _kept(A_m), _kept(B_m), lengths, J)
         return lengths, J
 
     def weight_moment(self, R: np.ndarray, first_moment_A_kgm: np.ndarray) -> np.ndarray:
@@ -176,12 +177,11 @@ class AugmentedModel:
         to the last ones, value for value.
         """
         last = self._weight
-        if (last is not None and last[0].shape == np.shape(R) and last[1].shape == np.shape(first_moment_A_kgm)
-                and np.array_equal(last[0], R) and np.array_equal(last[1], first_moment_A_kgm)):
+        if last is not None and _same(last[0], R) and _same(last[1], first_moment_A_kgm):
             return last[2]
         tau = kin.weight_moment(R, first_moment_A_kgm, self._g)
         tau.setflags(write=False)
-        self._weight = (np.array(R, float), np.array(first_moment_A_kgm, float), tau)
+        self._weight = (_kept(R), _kept(first_moment_A_kgm), tau)
         return tau
 
     def _identity(self, n: int) -> np.ndarray:
@@ -514,6 +514,18 @@ class AugmentedModel:
             lengths[idx] = ev.lengths_m
             it = max(it, sol.iterations)
         return kin.PoseSolution(R_out, res, it)
+
+
+def _kept(a) -> np.ndarray:
+    """``a`` as a cache key: the array itself when it owns read-only floats (it cannot change), else a copy."""
+    if isinstance(a, np.ndarray) and a.dtype == np.float64 and not a.flags.writeable and a.base is None:
+        return a
+    return np.array(a, float)
+
+
+def _same(key: np.ndarray, a) -> bool:
+    """Whether ``a`` equals the cache key ``key`` value for value (the same object: at once)."""
+    return key is a or (np.shape(a) == key.shape and bool((key == a).all()))
 
 
 def _cable_tangents(ev: Evaluation, lengths: np.ndarray, eta: np.ndarray, d_A: np.ndarray,
