@@ -418,8 +418,12 @@ class Friction(Effect):
         """Stick travel (n, m) of each row and cable, the band size behind it, and the travel before its floor."""
         m = self.n_cables
         band, factor = p[:m], p[m]
-        size = band * np.maximum(T_N, 1e-3) if self.law == "capstan" else band * np.ones_like(T_N)
-        raw = factor * size / ev.cable_stiffness_N_per_m
+        if self.law == "capstan":
+            size = band * np.maximum(T_N, 1e-3)
+            raw = factor * size / ev.cable_stiffness_N_per_m
+        else:                     # the same band on every row
+            size = np.broadcast_to(band, np.shape(T_N))
+            raw = np.broadcast_to(factor * band / ev.cable_stiffness_N_per_m, np.shape(T_N))
         return np.maximum(raw, MIN_TRAVEL_M), size, raw
 
     def tangent_ok(self, rows) -> bool:

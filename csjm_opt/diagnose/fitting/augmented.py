@@ -146,7 +146,7 @@ class AugmentedModel:
         self._offsets = np.cumsum([0] + sizes)
         self._geometry: tuple | None = None     # the last cable terms: (R, A, B, lengths, J)
         self._weight: tuple | None = None       # the last weight moment: (R, first moment, moment)
-        self._eye: np.ndarray | None = None     # identity link rotations (n, 3, 3), read-only
+        self._eye: dict[int, np.ndarray] = {}   # identity link rotations (n, 3, 3) by n, read-only
 
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
@@ -186,9 +186,10 @@ class AugmentedModel:
 
     def _identity(self, n: int) -> np.ndarray:
         """Identity rotations (n, 3, 3), read-only, the same object for the same ``n``."""
-        if self._eye is None or len(self._eye) != n:
-            self._eye = np.broadcast_to(np.eye(3), (n, 3, 3))
-        return self._eye
+        eye = self._eye.get(n)
+        if eye is None:      # a prediction alternates between n rows and a tangent's 3 n
+            eye = self._eye[n] = np.broadcast_to(np.eye(3), (n, 3, 3))
+        return eye
 
     @property
     def name(self) -> str:

@@ -23,6 +23,7 @@ import dataclasses
 
 import numpy as np
 
+from ...model.kinematics import PoseSolution
 from ..data.residuals import ResidualTable
 from .augmented import AugmentedModel, Rows, cable_steps, log_steps, with_entry
 from .friction_ramp import predict_ramp
@@ -52,6 +53,17 @@ def on_predicted_path(model: AugmentedModel, table: ResidualTable, theta: np.nda
     if not model.path_dependent:
         return table
     sol, shape = predict_ramp(model, with_entry(model, table.rows, table.R_meas, theta), theta, table.R_meas)
+    return along(model, table, theta, sol, shape)
+
+
+def along(model: AugmentedModel, table: ResidualTable, theta: np.ndarray, sol: PoseSolution,
+          shape: np.ndarray) -> ResidualTable:
+    """``table`` on the path of a prediction ``(sol, shape)`` of its rows (:func:`on_predicted_path`'s second half).
+
+    ``(sol, shape)`` is :func:`~csjm_opt.diagnose.fitting.friction_ramp.predict_ramp` of the table's rows with
+    their entries (:func:`~csjm_opt.diagnose.fitting.augmented.with_entry`) at ``theta``, made by the caller
+    (e.g. beside another log's, :func:`~csjm_opt.diagnose.fitting.friction_ramp.predict_ramps`).
+    """
     ok = np.all(np.isfinite(sol.R.reshape(len(table), -1)), axis=1) & sol.converged(1e-6)
     R = np.where(ok[:, None, None], sol.R, table.R_meas)
     # the cables' own lengths: at the cable platform's pose and the model's hole geometry (a link's twist,

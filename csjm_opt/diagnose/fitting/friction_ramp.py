@@ -23,11 +23,15 @@ while they are refitted (:func:`csjm_opt.diagnose.fitting.friction_path.on_predi
 from __future__ import annotations
 
 import dataclasses
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
 from ... import so3
 from ...model import kinematics as kin
+
+if TYPE_CHECKING:      # (augmented imports the effects, which import ramp_steps from here)
+    from .augmented import Rows
 
 #: Evenly spaced inputs along each ramp between two rows (resolves one reversal of a cable's motion).
 RAMP_SUBSTEPS = 8
@@ -132,6 +136,68 @@ def predict_ramp(model, rows, theta: np.ndarray, R_init: np.ndarray, substeps: i
     shape = ramp_shape_of(path)
     shape[~ok | no_ramp | ~np.isfinite(shape).all(axis=(1, 2))] = 0.0
     return kin.PoseSolution(R_out, res, it), shape
+
+
+def predict_ramps(model, parts: Sequence[tuple[Rows, np.ndarray]],
+                  theta: np.ndarray) -> list[tuple[kin.PoseSolution, np.ndarray]]:
+    """:func:`predict_ramp` of several logs' rows ``(rows, R_init)`` at the same parameters, in one pass.
+
+    The cycles of every part are stepped side by side: a cycle's ramps depend on its own rows and entry only,
+    and each row's equilibria are solved row by row (:func:`csjm_opt.model.kinematics.solve_poses`), so each
+    part gets the numbers it gets alone (the solutions' ``iterations`` is the pass's largest) for one pass's
+    overhead: the steps of a prediction are many small batches, and their cost hardly grows with the rows.
+
+    Parameters
+    ----------
+    model : AugmentedModel
+        A path-dependent model.
+    parts : sequence of (Rows, numpy.ndarray)
+        Each log's rows in time order (with their entry states, :func:`csjm_opt.diagnose.fitting.augmented.
+        with_entry`) and poses near their equilibria.
+    theta : numpy.ndarray
+        The model's parameters.
+
+    Returns
+    -------
+    list of (PoseSolution, numpy.ndarray)
+        Per part, as :func:`predict_ramp` returns.
+    """
+    if len(parts) == 1:
+        return [predict_ramp(model, parts[0][0], theta, parts[0][1])]
+    sizes = np.cumsum([0] + [len(r) for r, _ in parts])
+    sol, shape = predict_ramp(model, _side_by_side([r for r, _ in parts]), theta,
+                              np.concatenate([np.asarray(R, float) for _, R in parts]))
+    return [(kin.PoseSolution(sol.R[a:b], sol.residual_Nm[a:b], sol.iterations), shape[a:b])
+            for a, b in zip(sizes[:-1], sizes[1:])]
+
+
+def _side_by_side(parts: Sequence[Rows]) -> Rows:
+    """The rows of ``parts`` as one log of distinct cycles, with what :func:`predict_ramp` reads of them.
+
+    Inputs, cycles (renumbered after each other), measured steps and entries (NaN where a part has none: a
+    row without history, as :func:`predict_ramp` treats a missing entry); the rest is set along the ramps.
+    """
+    from .augmented import Rows
+
+    cycles, start = [], 0
+    for r in parts:
+        first = np.r_[True, r.cycle[1:] != r.cycle[:-1]]
+        cycles.append(start + np.cumsum(first) - 1)
+        start = int(cycles[-1][-1]) + 1 if len(r) else start
+
+    def joined(name: str, tail: tuple[int, ...]) -> np.ndarray | None:
+        got = [getattr(r, name) for r in parts]
+        if all(g is None for g in got):
+            return None
+        return np.concatenate([np.full((len(r),) + tail, np.nan) if g is None else np.asarray(g, float)
+                               for r, g in zip(parts, got)])
+
+    m = np.shape(parts[0].rest_lengths_m)[1]
+    return Rows(np.concatenate([r.rest_lengths_m for r in parts]), np.concatenate([r.tau_meas_A_Nm for r in parts]),
+                np.concatenate(cycles), np.concatenate([r.cable_steps_m for r in parts]),
+                entry_state=joined("entry_state", (m,)), entry_lengths_m=joined("entry_lengths_m", (m,)),
+                entry_rest_m=joined("entry_rest_m", (m,)), entry_tau_A_Nm=joined("entry_tau_A_Nm", (3,)),
+                entry_R=joined("entry_R", (3, 3)))
 
 
 def ramp_shape_of(path_m: np.ndarray) -> np.ndarray:

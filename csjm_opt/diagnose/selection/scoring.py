@@ -24,7 +24,8 @@ from ..data.residuals import ResidualTable, pose_noise_cov, pose_residuals, rms
 from ..data.tails import f_sf, t_greater
 from ..fitting.augmented import AugmentedModel, with_entry
 from ..fitting.evidence import log_evidence
-from ..fitting.friction_path import on_predicted_path
+from ..fitting.friction_path import along, on_predicted_path
+from ..fitting.friction_ramp import predict_ramps
 from ..fitting.gauss_newton import FitResult, data_jacobian, fit_model, objective
 
 #: Held-out MSE ratios within this of 1 (as a log) are ties: below the precision of the fits.
@@ -214,10 +215,19 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
     ``local``: the within-cycle noise estimate ``(scale, dof)`` (:func:`point_nll`).
     """
     full, path = fit_on_path(model, train, fit)
+    train_rows = None
     if path is not train:
         train = path
-        test = None if test is None else on_predicted_path(model, test, full.theta)
-    sol = model.predict_poses(with_entry(model, train.rows, train.R_meas, full.theta), full.theta, train.R_meas)
+        train_rows = with_entry(model, train.rows, train.R_meas, full.theta)
+    if train_rows is not None and test is not None:
+        # the held-out log's path and the training rows' prediction at once (the same numbers as one by one)
+        (ho_path, ho_shape), (sol, _) = predict_ramps(
+            model, [(with_entry(model, test.rows, test.R_meas, full.theta), test.R_meas), (train_rows, train.R_meas)],
+            full.theta)
+        test = along(model, test, full.theta, ho_path, ho_shape)
+    else:
+        sol = model.predict_poses(with_entry(model, train.rows, train.R_meas, full.theta) if train_rows is None
+                                  else train_rows, full.theta, train.R_meas)
     train_zeta = pose_residuals(sol.R, train.R_meas)
     failed = int(np.sum(~sol.converged(1e-6)))
     blocks: list[tuple[np.ndarray, np.ndarray]] = []
