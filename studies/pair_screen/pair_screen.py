@@ -29,7 +29,7 @@ def run_one(job: dict) -> dict:
     import numpy as np
 
     from csjm_opt.diagnose.effects import make_effect
-    from csjm_opt.diagnose.fitting.model_fits import model_step
+    from csjm_opt.diagnose.fitting.model_fits import pair_step
     from csjm_opt.diagnose.selection import decision
     from csjm_opt.measurement.logfile import MeasurementLog
     from csjm_opt.model.rig import load_rig
@@ -55,7 +55,7 @@ def run_one(job: dict) -> dict:
     pairs = [{"effects": p["effects"], "predicted": p.get("predicted_log_evidence"),
               "fitted": p.get("log_evidence") if p.get("fitted") else None,
               "dropped": bool(p.get("fitted")) and frozenset(p["effects"]) not in fitted_on,
-              "step": model_step([make_effect(e, rig) for e in p["effects"]])}
+              "step": pair_step([make_effect(e, rig) for e in p["effects"]])}
              for p in off["pairs"] if "predicted_log_evidence" in p]
     return {"id": job["id"], "best_single": float(np.nanmax(evs)),
             "verdict_evidence": models.get(verdict_model) if verdict_model else None,
@@ -72,6 +72,8 @@ def _verdict_evidence(record: dict) -> float:
 def summarise(records: list[dict], lead_nats: float) -> str:
     """Markdown: whether the screened diagnosis says what the unscreened one says, and how far below the dropped lie."""
     import statistics
+
+    import numpy as np
 
     same = [r for r in records if r["on"] == r["off"]]
     lines = [f"**{len(same)}/{len(records)} logs: the screened diagnosis gives the same verdict, second effect and "
@@ -101,7 +103,7 @@ def summarise(records: list[dict], lead_nats: float) -> str:
     lines += ["", "Fits' reach beyond their steps, as a share of the gap the step left below the anchor (pairs "
               "predicted more than 60 nats below it; the largest):", "",
               "| step | pairs | largest share | log | pair |", "|---|---|---|---|---|"]
-    for step in ("tight", "loose"):
+    for step in ("tight", "loose", "own_fit"):
         shares = [((p["fitted"] - p["predicted"]) / gap, r["id"], "+".join(p["effects"]))
                   for r in records for p in r["pairs"]
                   if p.get("step") == step and p["fitted"] is not None and p["predicted"] is not None
@@ -109,6 +111,16 @@ def summarise(records: list[dict], lead_nats: float) -> str:
         if shares:
             top = max(shares)
             lines.append(f"| {step} | {len(shares)} | {top[0]:.0%} | {top[1]} | {top[2]} |")
+    # an own-fit step (cable friction's pairs, from the friction single's fit) is screened by a margin in nats: how far
+    # a fit reached beyond its step, over every such pair with a prediction
+    reach = sorted(((p["fitted"] - p["predicted"], r["id"], "+".join(p["effects"]))
+                    for r in records for p in r["pairs"]
+                    if p.get("step") == "own_fit" and p["fitted"] is not None and p["predicted"] is not None
+                    and np.isfinite(p["predicted"])), reverse=True)
+    if reach:
+        lines += ["", f"Own-fit steps (cable friction's pairs, {len(reach)} with a prediction): the fit's reach beyond "
+                  "the step in nats, the largest:", "", "| fitted minus predicted | log | pair |", "|---|---|---|"]
+        lines += [f"| {d:+.1f} | {i} | {p} |" for d, i, p in reach[:6]]
     on = [r["seconds_on"] for r in records]
     off = [r["seconds_off"] for r in records]
     ratio = statistics.median(o / n for o, n in zip(off, on))

@@ -196,8 +196,11 @@ def score_effect(ctx: _Context, effect) -> CandidateScore | None:
 
 
 def fit_single(ctx: _Context, rig: Rig, ranges: Mapping | None,
-               name: str) -> tuple[dict, CandidateScore | None, str | None]:
-    """One candidate: ``(variant options, score, None)``, or ``({}, None, message)`` when its fit fails.
+               name: str) -> tuple[dict, CandidateScore | None, str | None, tuple[dict, FitResult] | None]:
+    """One candidate: ``(variant options, score, None, path)``, or ``({}, None, message, None)`` when its fit fails.
+
+    ``path``: where the settled variant (a stick set) is preferred, the loading-path variant it was preferred
+    over, ``(options, fit)`` (what a pair's point model starts from: the pair screen predicts from it), else None.
 
     Parameters
     ----------
@@ -216,10 +219,10 @@ def fit_single(ctx: _Context, rig: Rig, ranges: Mapping | None,
         if name in SETTLED_VARIANTS:      # the stick condition beside the path: the better held-out score
             settled = _settled(ctx, rig, ranges, [make_effect(name, rig, ranges, **SETTLED_VARIANTS[name])])
             if settled is not None and _prefer_settled(ctx, settled, sc):
-                return SETTLED_VARIANTS[name], settled, None
-        return opt, sc, None
+                return SETTLED_VARIANTS[name], settled, None, (opt, sc.fit)
+        return opt, sc, None, None
     except FIT_ERRORS as exc:
-        return {}, None, f"fit failed: {exc}"
+        return {}, None, f"fit failed: {exc}", None
 
 
 def fit_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
@@ -310,6 +313,14 @@ SCREEN_NATS = 60.0
 #: (``studies/pair_screen``) a loose pair's fit reached at most 72 % of the gap between the step and the screen's
 #: anchor; at 80 %, a pair 300 nats below it (60 + 240) would still lie 60 below after its fit.
 LOOSE_SCREEN_NATS = 240.0
+#: An own-fit prediction (:func:`pair_step`: a cable-friction pair, from the friction single's fit with the partner
+#: stepped from nominal) screens its pair only this many nats below :data:`SCREEN_NATS`'s floor as well: the pair's
+#: fit chooses its friction law and path afresh. On ``mujoco_b/b1_mass_com`` (friction a stick set, predicted from
+#: its loading-path variant) fits reached up to 242 nats beyond the step; the pairs this drops lie thousands of nats
+#: below the verdict (friction with a stiffness, compliance, guide or gain effect on a log of neither).
+OWN_FIT_SCREEN_NATS = 600.0
+#: The screen's extra margin below its floor by :func:`pair_step` kind.
+STEP_MARGIN_NATS = {"tight": 0.0, "loose": LOOSE_SCREEN_NATS, "own_fit": OWN_FIT_SCREEN_NATS}
 #: :attr:`~csjm_opt.diagnose.effects.base.Effect.step_from_nominal` in order: a model's step is its worst effect's.
 STEPS = ("tight", "loose", "none")
 
@@ -319,28 +330,47 @@ def model_step(effects: Sequence) -> str:
     return max((e.step_from_nominal for e in effects), key=STEPS.index)
 
 
+def pair_step(effects: Sequence) -> str:
+    """How a pair of ``effects`` (instances) is predicted by :func:`predicted_pair_evidence`.
+
+    ``"tight"`` or ``"loose"`` (:func:`model_step`) from either single's fit; ``"own_fit"`` where one effect's
+    step from nominal sees almost nothing (cable friction, ``step_from_nominal = "none"``): only from that
+    effect's own fit, on the path its fit followed, the partner stepped from nominal (screened with
+    :data:`OWN_FIT_SCREEN_NATS`); ``"none"`` (no prediction) where both are such effects.
+    """
+    kinds = [e.step_from_nominal for e in effects]
+    if "none" not in kinds:
+        return model_step(effects)
+    return "none" if all(k == "none" for k in kinds) else "own_fit"
+
+
 def predicted_pair_evidence(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
-                            fits: Mapping[str, FitResult], pair: tuple[str, str]) -> tuple[float, bool]:
-    """The pair's log evidence predicted from each single's fit, the larger (nan: none), and whether it is loose.
+                            fits: Mapping[str, FitResult], pair: tuple[str, str]) -> tuple[float, str]:
+    """The pair's log evidence predicted from each single's fit, the larger (nan: none), and its :func:`pair_step`.
 
     From the fit of one effect of the pair, the other at its nominal value, the pair model is linearised
     and its evidence taken (:func:`.evidence.predicted_evidence`, a score test): where a second effect
     would explain part of what the first leaves, the step finds it; where two effects hide each other
     (neither single detected), the step from either finds the pair's joint direction. No prediction from a
-    settled single (a stick model's fit is not a point of the pair's path model), and none with an effect
-    whose step from nominal sees almost nothing (cable friction); *loose* where an effect's fit reaches
-    well beyond its step (link compliance, joint friction: :attr:`~csjm_opt.diagnose.effects.base.Effect.
-    step_from_nominal`). Each effect keeps its single's variant (the pair's fit chooses afresh: the margin
-    covers the difference).
+    settled single (a stick model's fit is not a point of the pair's path model). An effect whose step from
+    nominal sees almost nothing (cable friction: from zero forces a pair's fit reached 2.3 times the gap the
+    step left) is predicted only from its own fit, on the path that fit followed (``FitResult.rows``: where its
+    state was scored), the partner stepped from nominal (:func:`pair_step`, ``"own_fit"``). *Loose* where an
+    effect's fit reaches well beyond its step (link compliance, joint friction: :attr:`~csjm_opt.diagnose.
+    effects.base.Effect.step_from_nominal`) and for an own-fit prediction. Each effect keeps its single's
+    variant (the pair's fit chooses afresh: the margin covers the difference).
     """
     point = point_options(options)
     effects = [make_effect(e, rig, ranges, **point.get(e, {})) for e in pair]
-    step = model_step(effects)
+    step = pair_step(effects)
     best = float("nan")
     if step == "none":
-        return best, True
+        return best, step
     model = AugmentedModel(rig, effects)
     for i, name in enumerate(pair):
+        own = step == "own_fit"
+        if own and effects[i].step_from_nominal != "none":
+            continue                  # from the partner's fit, friction's bands at zero: the step sees nothing
         fit = fits.get(name)
         if fit is None or fit.evidence_fn is not None or is_settled(name, options.get(name, {})):
             continue
@@ -349,35 +379,38 @@ def predicted_pair_evidence(ctx: _Context, rig: Rig, ranges: Mapping | None, opt
             continue
         parts[i] = fit.theta[N_NUISANCE:]
         theta = np.concatenate([fit.theta[:N_NUISANCE], *parts])
+        table = dataclasses.replace(ctx.train, rows=fit.rows) if own and fit.rows is not None else ctx.train
         try:
-            ev = predicted_evidence(model, ctx.train, theta, ctx.sigma)
+            ev = predicted_evidence(model, table, theta, ctx.sigma)
         except FIT_ERRORS:
             continue
         if np.isfinite(ev):
             best = ev if not np.isfinite(best) else max(best, ev)
-    return best, step == "loose"
+    return best, step
 
 
 def screened_pair(ctx: _Context, rig: Rig, ranges: Mapping | None, options: Mapping[str, dict],
-                  stick_scales: Mapping[str, float] | None, screen: tuple[Mapping[str, FitResult], float] | None,
+                  stick_scales: Mapping[str, float] | None,
+                  screen: tuple[Mapping[str, FitResult], float, Mapping[str, dict]] | None,
                   pair: tuple[str, str]) -> tuple[CandidateScore | None, str | None, float]:
     """:func:`fit_pair`, unless its predicted evidence is below ``screen``'s floor: ``(score, message, predicted)``.
 
-    ``screen``: the singles' fits and the evidence below which a pair is not scored (None: every pair is
-    scored). A pair with a settled lead (``stick_scales``) is always scored, and so is a pair without a
-    prediction (:func:`predicted_pair_evidence`: cable friction); a loose prediction must lie
-    :data:`LOOSE_SCREEN_NATS` further below the floor. ``predicted`` is nan where no prediction was made; a pair
-    not scored returns ``(None, None, predicted)``.
+    ``screen``: the singles' point fits, the evidence below which a pair is not scored, and the fits' variant
+    options (a settled single's: its loading-path variant's, :func:`fit_single`) (None: every pair is scored). A
+    pair with a settled lead (``stick_scales``) is always scored, and so is a pair without a prediction
+    (:func:`predicted_pair_evidence`); a loose or own-fit prediction must lie :data:`STEP_MARGIN_NATS` further
+    below the floor. ``predicted`` is nan where no prediction was made; a pair not scored returns
+    ``(None, None, predicted)``.
     """
     predicted = float("nan")
     if screen is None or (stick_scales and any(e in stick_scales for e in pair)):
         return (*fit_pair(ctx, rig, ranges, options, stick_scales, pair), predicted)
-    fits, floor = screen
-    loose = True
+    fits, floor, fit_options = screen
+    step = "none"
     try:
-        predicted, loose = predicted_pair_evidence(ctx, rig, ranges, options, fits, pair)
+        predicted, step = predicted_pair_evidence(ctx, rig, ranges, fit_options, fits, pair)
     except FIT_ERRORS:
         predicted = float("nan")
-    if predicted < floor - (LOOSE_SCREEN_NATS if loose else 0.0):
+    if predicted < floor - STEP_MARGIN_NATS.get(step, np.inf):     # (nan: never below)
         return None, None, predicted
     return (*fit_pair(ctx, rig, ranges, options, stick_scales, pair), predicted)

@@ -46,6 +46,7 @@ from ..effects.base import PLAUSIBLE_Z
 from ..effects.cable_creep import CableCreep
 from ..effects.drum_slip import DrumSlip
 from ..fitting.augmented import N_NUISANCE
+from ..fitting.gauss_newton import FitResult
 from ..fitting.model_fits import (  # noqa: F401 (VARIANTS re-exported)
     FIT_ERRORS,
     SCREEN_NATS,
@@ -153,7 +154,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
     tick = bar.update if bar else (lambda n=1: None)
     baseline = ctx.score([])
     tick(1)
-    singles, failed, options = _fit_singles(ctx, rig, names, ranges, workers, tick)
+    singles, failed, options, point_fits = _fit_singles(ctx, rig, names, ranges, workers, tick)
     floor0 = _noise_floor(ctx, baseline, singles)
     tests = _test_singles(ctx, baseline, singles, floor0)
     n_cycles = len(np.unique(ctx.held.cycle))
@@ -167,7 +168,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
     seeds = ([] if first is None and not masked else
              ([first] if first is not None else []) + [n for n in by_error if n != first])[:PAIR_SEEDS]
     pairs, pair_scores = _pairs(ctx, rig, names, singles, seeds, secondary, ranges, tick, planned_pairs,
-                                baseline if masked else None, first, options, workers, n_cycles)
+                                baseline if masked else None, first, options, workers, n_cycles, point_fits)
     if bar:
         bar.close()
     verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_there, n_cycles)
@@ -189,18 +190,25 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
     return d
 
 
-def _fit_singles(ctx: _Context, rig: Rig, names, ranges, workers: int, tick) -> tuple[dict, dict, dict]:
-    """Every single candidate fitted and scored: ``(scores, failures, variant options)`` by name."""
+def _fit_singles(ctx: _Context, rig: Rig, names, ranges, workers: int,
+                 tick) -> tuple[dict, dict, dict, dict[str, tuple[dict, FitResult]]]:
+    """Every single candidate fitted and scored: ``(scores, failures, variant options, point fits)`` by name.
+
+    The point fits ``(options, fit)`` are the scores' own, and a settled single's loading-path variant's (what
+    the pair screen predicts from, :func:`~csjm_opt.diagnose.fitting.model_fits.screened_pair`).
+    """
     singles: dict[str, CandidateScore] = {}
     failed: dict[str, str] = {}
     options: dict[str, dict] = {}
+    point: dict[str, tuple[dict, FitResult]] = {}
     done = map_ordered(fit_single, (ctx, rig, ranges), names, workers, tick, fit_cost)
-    for name, (opt, sc, error) in zip(names, done):
+    for name, (opt, sc, error, path) in zip(names, done):
         if sc is None:                                          # reported, not fatal
             failed[name] = str(error)
         else:
             options[name], singles[name] = opt, sc
-    return singles, failed, options
+            point[name] = (opt, sc.fit) if path is None else path
+    return singles, failed, options, point
 
 
 def _noise_floor(ctx: _Context, baseline: CandidateScore, singles: Mapping[str, CandidateScore]) -> float:
@@ -553,8 +561,12 @@ def _trend_probe_warning(ctx: _Context, rig: Rig, verdict: Verdict, baseline: Ca
 
 def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, tick, planned: int,
            masked_base: CandidateScore | None, first: str | None, options: dict,
-           workers: int = 1, n_cycles: int | None = None) -> tuple[list, dict]:
+           workers: int = 1, n_cycles: int | None = None,
+           point_fits: dict[str, tuple[dict, FitResult]] | None = None) -> tuple[list, dict]:
     """Every pair's separability; each seed + each other effect fitted and tested (rule 3 / rule 6).
+
+    ``point_fits``: each single's point fit and its options (:func:`_fit_singles`; default: the scores' own
+    fits), what the pair screen predicts from.
 
     A pair is tested against the best of its two singles and the first effect (``masked_base``,
     the null model, when no single was detected), at ``ALPHA`` over the number of pairs fitted
@@ -586,7 +598,9 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
     if singles:
         anchors = [max(ctx.evidence(sc) for sc in singles.values())]
         anchors += [ctx.evidence(sc) for sc in (lead, masked_base) if sc is not None]
-        screen = ({n: sc.fit for n, sc in singles.items()}, min(anchors) - SCREEN_NATS)
+        point = point_fits if point_fits is not None else {n: (options.get(n, {}), sc.fit) for n, sc in singles.items()}
+        screen = ({n: f for n, (_, f) in point.items()}, min(anchors) - SCREEN_NATS,
+                  {n: o for n, (o, _) in point.items()})
     done = map_ordered(screened_pair, (ctx, rig, ranges, options, stick, screen), todo, workers, tick, fit_cost)
     for (a, b), (sc, error, predicted) in zip(todo, done):
         entry = next(p for p in pairs if set(p["effects"]) == {a, b})
