@@ -85,3 +85,11 @@ def test_batched_shapes_and_angle_between():
     d = so3.angle_between(Rs[:-1], Rs[1:])
     expected = [np.arccos(np.clip((np.trace(a.T @ b) - 1) / 2, -1, 1)) for a, b in zip(Rs[:-1], Rs[1:])]
     assert np.allclose(d, expected, atol=1e-7)
+
+
+def test_exp_with_and_without_small_angles_in_the_batch_agree_row_by_row():
+    """A batch with a zero angle takes the Taylor branch: every other row is what it is in a batch without one."""
+    w = np.random.default_rng(3).normal(size=(5, 3)) * 0.3
+    mixed = so3.exp(np.r_[w, np.zeros((1, 3))])
+    np.testing.assert_array_equal(mixed[:5], so3.exp(w))
+    np.testing.assert_array_equal(mixed[5], np.eye(3))

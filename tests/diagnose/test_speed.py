@@ -184,3 +184,35 @@ def test_remembered_slide_direction_equals_a_fresh_one(rig, coulomb_log):
     np.testing.assert_array_equal(g2, fresh.balance(table.R_meas, table.rows, theta + np.r_[0.0, 0.01]))
     np.testing.assert_array_equal(g1, fresh.balance(table.R_meas, table.rows, theta))
     assert "_last" not in pickle.loads(pickle.dumps(model.effects[0])).__dict__
+
+
+def test_remembered_geometry_does_not_follow_a_changed_pose_array(rig, coulomb_log):
+    """The last poses are a cache key: the caller's array changed in place afterwards is a new pose, not a hit."""
+    table = compute_residuals(rig, coulomb_log)
+    model = AugmentedModel(rig, [make_effect("mass_com", rig)])
+    theta = model.x0()
+    R = table.R_meas.copy()
+    model.balance(R, table.rows, theta)
+    R[:] = np.swapaxes(R, 1, 2)                              # another pose in the same array
+    fresh = AugmentedModel(rig, [make_effect("mass_com", rig)])
+    np.testing.assert_array_equal(model.balance(R, table.rows, theta), fresh.balance(R, table.rows, theta))
+
+
+def test_two_logs_predicted_side_by_side_equal_each_alone(rig, coulomb_log):
+    """predict_ramps steps the cycles of several logs at once: each log's poses and ramps are its own, bit for bit."""
+    from csjm_opt.diagnose.fitting.augmented import with_entry
+    from csjm_opt.diagnose.fitting.friction_ramp import predict_ramp, predict_ramps
+
+    table = compute_residuals(rig, coulomb_log)
+    other = compute_residuals(rig, simulate_experiment(rig, 3, np.random.default_rng(6), effect="coulomb_friction",
+                                                       severity=4.0, noise=InstrumentNoise.paper(), steps=4))
+    model = AugmentedModel(rig, [make_effect("friction", rig, None, law="coulomb", memory="carried")])
+    theta = fit_model(model, table).theta
+    parts = [(with_entry(model, t.rows, t.R_meas, theta), t.R_meas) for t in (table, other)]
+    together = predict_ramps(model, parts, theta)
+    for (rows, R), (sol, shape) in zip(parts, together):
+        alone, alone_shape = predict_ramp(model, rows, theta, R)
+        assert np.any(alone_shape != 0.0), "no ramp was predicted: the test checks nothing"
+        np.testing.assert_array_equal(sol.R, alone.R)
+        np.testing.assert_array_equal(sol.residual_Nm, alone.residual_Nm)
+        np.testing.assert_array_equal(shape, alone_shape)

@@ -135,3 +135,11 @@ def test_nearly_orthogonal_rotation_is_accepted_like_the_validator(rig):
     from csjm_opt._validate import as_rotation
     R_fixed = as_rotation(R_noisy)
     assert _rel(K, co.Model(rig).casadi("stiffness", R_fixed, np.full(6, 50.0))[0]) < REL
+
+
+@pytest.mark.parametrize("a_shape, b_shape", [((6, 3), (4, 6, 3)), ((3,), (5, 3)), ((2, 1, 3), (1, 4, 3))])
+def test_the_references_cross_product_is_numpys(a_shape, b_shape):
+    """The reference's cross product (index-rotated copies) against numpy's, broadcast over the leading axes."""
+    rng = np.random.default_rng(4)
+    a, b = rng.normal(size=a_shape), rng.normal(size=b_shape)
+    np.testing.assert_allclose(reference._cross(a, b), np.cross(a, b), rtol=0, atol=1e-15)

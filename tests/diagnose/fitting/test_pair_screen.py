@@ -95,3 +95,33 @@ def test_a_loose_step_from_nominal_reaches_most_of_the_fitted_gain(rig, injected
     assert gain > 100.0, "the effect adds little on this log: the test checks nothing"
     assert predicted <= fitted + 3.0
     assert fitted - predicted <= 0.8 * gain
+
+
+def test_a_friction_pair_is_predicted_from_the_friction_fit_and_screened_only_far_below(rig, monkeypatch):
+    """Cable friction's pairs: predicted from the friction single's own fit (the partner stepped from nominal).
+
+    On a log of a first moment error, friction with a stiffness scale or a guide radius explains nothing the log
+    shows; the screened diagnosis drops such pairs and names what the diagnosis fitting every pair names, and each
+    dropped pair lies far below the best single there.
+    """
+    from csjm_opt.diagnose.fitting import model_fits
+    from csjm_opt.diagnose.fitting.model_fits import pair_step
+
+    assert pair_step([make_effect("friction", rig), make_effect("mass_com", rig)]) == "own_fit"
+    assert pair_step([make_effect("friction", rig), make_effect("link_compliance", rig)]) == "own_fit"
+    assert pair_step([make_effect("mass_com", rig), make_effect("link_compliance", rig)]) == "loose"
+    few = ["friction", "mass_com", "stiffness_scale", "guide_radius"]
+    log = simulate_experiment(rig, 4, np.random.default_rng(12), effect="mass_com", severity=3.0, steps=3)
+    screened = diagnose(rig, log, effects=few, workers=1).as_json()
+    monkeypatch.setattr(decision, "SCREEN_NATS", float("inf"))
+    full = diagnose(rig, log, effects=few, workers=1).as_json()
+    dropped = [p for p in screened["pairs"] if "friction" in p["effects"] and not p["fitted"]
+               and np.isfinite(p.get("predicted_log_evidence", np.nan))]
+    assert dropped, "the screen dropped no friction pair on this log: the test checks nothing"
+    best = max(c["log_evidence"] for c in full["candidates"])
+    for p in dropped:
+        twin = next(q for q in full["pairs"] if set(q["effects"]) == set(p["effects"]))
+        assert twin["log_evidence"] < best - decision.LEAD_NATS
+        # the margin covers the fit's reach beyond its step
+        assert twin["log_evidence"] <= p["predicted_log_evidence"] + model_fits.OWN_FIT_SCREEN_NATS
+    assert (screened["selected"], screened["verdict"]["warnings"]) == (full["selected"], full["verdict"]["warnings"])
