@@ -100,9 +100,9 @@ def test_a_loose_step_from_nominal_reaches_most_of_the_fitted_gain(rig, injected
 def test_a_friction_pair_is_predicted_from_the_friction_fit_and_screened_only_far_below(rig, monkeypatch):
     """Cable friction's pairs: predicted from the friction single's own fit (the partner stepped from nominal).
 
-    On a log of a first moment error, friction with a stiffness scale or a guide radius explains nothing the log
-    shows; the screened diagnosis drops such pairs and names what the diagnosis fitting every pair names, and each
-    dropped pair lies far below the best single there.
+    On a log of hole offsets, friction with a stiffness scale or a sensor gain explains nothing the log shows; the
+    screened diagnosis drops such pairs and names what the diagnosis fitting every pair names, and each dropped
+    pair lies far below the best single there.
     """
     from csjm_opt.diagnose.fitting import model_fits
     from csjm_opt.diagnose.fitting.model_fits import pair_step
@@ -110,8 +110,8 @@ def test_a_friction_pair_is_predicted_from_the_friction_fit_and_screened_only_fa
     assert pair_step([make_effect("friction", rig), make_effect("mass_com", rig)]) == "own_fit"
     assert pair_step([make_effect("friction", rig), make_effect("link_compliance", rig)]) == "own_fit"
     assert pair_step([make_effect("mass_com", rig), make_effect("link_compliance", rig)]) == "loose"
-    few = ["friction", "mass_com", "stiffness_scale", "guide_radius"]
-    log = simulate_experiment(rig, 4, np.random.default_rng(12), effect="mass_com", severity=3.0, steps=3)
+    few = ["friction", "hole_offsets", "stiffness_scale", "sensor_gain"]
+    log = simulate_experiment(rig, 4, np.random.default_rng(12), effect="hole_offsets", severity=3.0, steps=3)
     screened = diagnose(rig, log, effects=few, workers=1).as_json()
     monkeypatch.setattr(decision, "SCREEN_NATS", float("inf"))
     full = diagnose(rig, log, effects=few, workers=1).as_json()
