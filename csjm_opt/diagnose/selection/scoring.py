@@ -215,19 +215,15 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
     ``local``: the within-cycle noise estimate ``(scale, dof)`` (:func:`point_nll`).
     """
     full, path = fit_on_path(model, train, fit)
-    train_rows = None
-    if path is not train:
-        train = path
-        train_rows = with_entry(model, train.rows, train.R_meas, full.theta)
-    if train_rows is not None and test is not None:
-        # the held-out log's path and the training rows' prediction at once (the same numbers as one by one)
-        (ho_path, ho_shape), (sol, _) = predict_ramps(
-            model, [(with_entry(model, test.rows, test.R_meas, full.theta), test.R_meas), (train_rows, train.R_meas)],
-            full.theta)
-        test = along(model, test, full.theta, ho_path, ho_shape)
+    on_path, train = path is not train, path
+    train_rows = with_entry(model, train.rows, train.R_meas, full.theta)
+    if on_path and test is not None:
+        # the held-out log's path and the training rows' prediction in one pass (the same numbers as one by one)
+        held = with_entry(model, test.rows, test.R_meas, full.theta)
+        (ho, ho_shape), (sol, _) = predict_ramps(model, [(held, test.R_meas), (train_rows, train.R_meas)], full.theta)
+        test = along(model, test, full.theta, ho, ho_shape)
     else:
-        sol = model.predict_poses(with_entry(model, train.rows, train.R_meas, full.theta) if train_rows is None
-                                  else train_rows, full.theta, train.R_meas)
+        sol = model.predict_poses(train_rows, full.theta, train.R_meas)
     train_zeta = pose_residuals(sol.R, train.R_meas)
     failed = int(np.sum(~sol.converged(1e-6)))
     blocks: list[tuple[np.ndarray, np.ndarray]] = []
