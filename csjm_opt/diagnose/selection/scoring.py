@@ -219,8 +219,9 @@ def score(model: AugmentedModel, train: ResidualTable, test: ResidualTable | Non
     train_rows = with_entry(model, train.rows, train.R_meas, full.theta)
     if on_path and test is not None:
         # the held-out log's path and the training rows' prediction in one pass (the same numbers as one by one)
-        held = with_entry(model, test.rows, test.R_meas, full.theta)
-        (ho, ho_shape), (sol, _) = predict_ramps(model, [(held, test.R_meas), (train_rows, train.R_meas)], full.theta)
+        test_rows = with_entry(model, test.rows, test.R_meas, full.theta)
+        (ho, ho_shape), (sol, _) = predict_ramps(model, [(test_rows, test.R_meas), (train_rows, train.R_meas)],
+                                                 full.theta)
         test = along(model, test, full.theta, ho, ho_shape)
     else:
         sol = model.predict_poses(train_rows, full.theta, train.R_meas)
