@@ -162,8 +162,6 @@ def predict_ramps(model, parts: Sequence[tuple[Rows, np.ndarray]],
     list of (PoseSolution, numpy.ndarray)
         Per part, as :func:`predict_ramp` returns.
     """
-    if len(parts) == 1:
-        return [predict_ramp(model, parts[0][0], theta, parts[0][1])]
     sizes = np.cumsum([0] + [len(r) for r, _ in parts])
     sol, shape = predict_ramp(model, _side_by_side([r for r, _ in parts]), theta,
                               np.concatenate([np.asarray(R, float) for _, R in parts]))

@@ -168,7 +168,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
     seeds = ([] if first is None and not masked else
              ([first] if first is not None else []) + [n for n in by_error if n != first])[:PAIR_SEEDS]
     pairs, pair_scores = _pairs(ctx, rig, names, singles, seeds, secondary, ranges, tick, planned_pairs,
-                                baseline if masked else None, first, options, workers, n_cycles, point_fits)
+                                baseline if masked else None, first, options, point_fits, workers, n_cycles)
     if bar:
         bar.close()
     verdict = _verdict(ctx, baseline, singles, tests, first, pairs, pair_scores, gap_there, n_cycles)
@@ -561,12 +561,12 @@ def _trend_probe_warning(ctx: _Context, rig: Rig, verdict: Verdict, baseline: Ca
 
 def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, tick, planned: int,
            masked_base: CandidateScore | None, first: str | None, options: dict,
-           workers: int = 1, n_cycles: int | None = None,
-           point_fits: dict[str, tuple[dict, FitResult]] | None = None) -> tuple[list, dict]:
+           point_fits: dict[str, tuple[dict, FitResult]], workers: int = 1,
+           n_cycles: int | None = None) -> tuple[list, dict]:
     """Every pair's separability; each seed + each other effect fitted and tested (rule 3 / rule 6).
 
-    ``point_fits``: each single's point fit and its options (:func:`_fit_singles`; default: the scores' own
-    fits), what the pair screen predicts from.
+    ``point_fits``: each single's point fit and its options (:func:`_fit_singles`), what the pair screen predicts
+    from.
 
     A pair is tested against the best of its two singles and the first effect (``masked_base``,
     the null model, when no single was detected), at ``ALPHA`` over the number of pairs fitted
@@ -598,9 +598,8 @@ def _pairs(ctx: _Context, rig: Rig, names, singles, seeds, secondary, ranges, ti
     if singles:
         anchors = [max(ctx.evidence(sc) for sc in singles.values())]
         anchors += [ctx.evidence(sc) for sc in (lead, masked_base) if sc is not None]
-        point = point_fits if point_fits is not None else {n: (options.get(n, {}), sc.fit) for n, sc in singles.items()}
-        screen = ({n: f for n, (_, f) in point.items()}, min(anchors) - SCREEN_NATS,
-                  {n: o for n, (o, _) in point.items()})
+        screen = ({n: f for n, (_, f) in point_fits.items()}, min(anchors) - SCREEN_NATS,
+                  {n: o for n, (o, _) in point_fits.items()})
     done = map_ordered(screened_pair, (ctx, rig, ranges, options, stick, screen), todo, workers, tick, fit_cost)
     for (a, b), (sc, error, predicted) in zip(todo, done):
         entry = next(p for p in pairs if set(p["effects"]) == {a, b})
