@@ -56,6 +56,9 @@ class FitResult:
     # a model whose likelihood is not a sum of squares (settled friction, :mod:`.friction_stick`): its own
     # Laplace log evidence at a noise scale, used by :func:`csjm_opt.diagnose.evidence.log_evidence`
     evidence_fn: Callable[[float], float] | None = None
+    # the fit's own cost function, whitened data residuals (3 n,) at parameters theta (SI): what the evidence
+    # checks a linearised step against (:func:`csjm_opt.diagnose.fitting.evidence.log_evidence`)
+    residuals: Callable[[np.ndarray], np.ndarray] | None = None
 
     def refit_rows(self, keep: np.ndarray) -> np.ndarray:
         """Parameters fitted to rows ``keep`` only: one Gauss-Newton step from this fit.
@@ -247,7 +250,24 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     cov = cov_x * np.outer(scales, scales)
     theta = x * scales
     zeta = linearised(theta)[0]
-    return FitResult(model, theta, cov, rss, N, p_eff, rank, cond, zeta, Jfull, res(x), free, table.rows)
+    return FitResult(model, theta, cov, rss, N, p_eff, rank, cond, zeta, Jfull, res(x), free, table.rows,
+                     residuals=WhitenedResiduals(model, table))
+
+
+class WhitenedResiduals:
+    """``theta -> W zeta_lin(theta)`` flattened (3 n,): :func:`fit_model`'s data residuals, picklable.
+
+    A fit carries it so that its evidence can check what a linearised step from the fit promises against
+    the model itself (the Gauss-Newton Jacobian leaves out how a model changes its own tangent).
+    """
+
+    def __init__(self, model: AugmentedModel, table: ResidualTable):
+        self.model, self.table = model, table
+
+    def __call__(self, theta: np.ndarray) -> np.ndarray:
+        """The whitened linearised pose residuals (3 n,) at ``theta`` (SI units, nuisance first)."""
+        zeta = _linearised(self.model, self.table, np.asarray(theta, float))[0]
+        return np.einsum("nij,nj->ni", self.table.whiten, zeta).ravel()
 
 
 def linearisation(model: AugmentedModel, table: ResidualTable, theta: np.ndarray) -> FitResult:
