@@ -223,10 +223,25 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     lb, ub = model.lower_bounds / scales, model.upper_bounds / scales
     starts = model.starts() if theta0 is None else [np.asarray(theta0)]
     sol = None
+    def solve(x0: np.ndarray):
+        return least_squares(res, x0, jac=jac, bounds=(lb, ub), method="trf",
+                             x_scale=1.0, xtol=1e-10, ftol=FTOL, gtol=1e-10, max_nfev=200)
+
     for start in starts:     # best of the starts (more than one only where an effect asks for it)
         x0 = np.clip(start / scales, lb, ub)
-        trial = least_squares(res, x0, jac=jac, bounds=(lb, ub), method="trf",
-                              x_scale=1.0, xtol=1e-10, ftol=FTOL, gtol=1e-10, max_nfev=200)
+        trial = solve(x0)
+        if _stuck(trial, x0, lb, ub):
+            # a start on a bound (a friction band, a compliance's diagonal at 0) whose gradient points out of it
+            # cuts the first step to the start's 1e-10 offset from the bound: the step gains nothing, FTOL ends the
+            # fit where it began, and the other parameters never move (joint friction + cable hardening stayed
+            # at the nominal model, its misfit above the null model's). Once more from one scale inside the bound
+            low, high = x0 <= lb, x0 >= ub
+            inside = x0.copy()
+            inside[low] = np.minimum(lb[low] + 1.0, 0.5 * (lb[low] + ub[low]))
+            inside[high] = np.maximum(ub[high] - 1.0, 0.5 * (lb[high] + ub[high]))
+            again = solve(inside)
+            if again.cost < trial.cost:
+                trial = again
         if sol is None or trial.cost < sol.cost:
             sol = trial
     assert sol is not None
@@ -252,6 +267,26 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     zeta = linearised(theta)[0]
     return FitResult(model, theta, cov, rss, N, p_eff, rank, cond, zeta, Jfull, res(x), free, table.rows,
                      residuals=WhitenedResiduals(model, table))
+
+
+#: A fit that did not leave its start although its free parameters promise this much (nats at unit noise) is stuck.
+STUCK_NATS = 0.5
+
+
+def _stuck(sol, x0: np.ndarray, lb: np.ndarray, ub: np.ndarray) -> bool:
+    """Whether ``least_squares`` ended where it began, at a start on a bound, with a gain left on the table.
+
+    The gain is what the Gauss-Newton step of the parameters off their bounds promises,
+    ``g_f^T (J_f^T J_f)^+ g_f / 2`` (half the whitened cost: nats at unit noise).
+    """
+    on_bound = (x0 <= lb) | (x0 >= ub)
+    if not on_bound.any() or np.max(np.abs(sol.x - x0)) > 1e-6:
+        return False
+    free = (sol.x > lb + 1e-6) & (sol.x < ub - 1e-6)
+    if not free.any():
+        return False
+    J, g = sol.jac[:, free], sol.grad[free]
+    return bool(0.5 * g @ np.linalg.lstsq(J.T @ J, g, rcond=None)[0] > STUCK_NATS)
 
 
 class WhitenedResiduals:

@@ -114,7 +114,7 @@ def test_a_friction_pair_is_predicted_from_the_friction_fit_and_screened_only_fa
     assert pair_step([make_effect("friction", rig), make_effect("link_compliance", rig)]) == "own_fit"
     assert pair_step([make_effect("mass_com", rig), make_effect("link_compliance", rig)]) == "loose"
     few = ["friction", "hole_offsets", "stiffness_scale", "sensor_gain"]
-    log = simulate_experiment(rig, 4, np.random.default_rng(12), effect="hole_offsets", severity=3.0, steps=3)
+    log = simulate_experiment(rig, 8, np.random.default_rng(12), effect="hole_offsets", severity=3.0, steps=3)
     screened = diagnose(rig, log, effects=few, workers=1).as_json()
     monkeypatch.setattr(decision, "SCREEN_NATS", float("inf"))
     full = diagnose(rig, log, effects=few, workers=1).as_json()
