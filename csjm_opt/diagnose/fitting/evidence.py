@@ -173,9 +173,11 @@ def log_evidence(fit: FitResult, noise_scale: float, at_fit: bool = False, trust
         r_step = fit.residuals(x_step * scales)
         centres = [(float(r0 @ r0 / s2 + np.sum(((x0 - m) / sd) ** 2)), x0),
                    (float(r_step @ r_step / s2 + np.sum(((x_step - m) / sd) ** 2)), x_step)]
-        q, xc = min((c for c in centres if np.isfinite(c[0])), key=lambda c: c[0])
-        if q > quad:
-            quad, x = q, xc
+        finite = [c for c in centres if np.isfinite(c[0])]
+        if finite:                                  # (a fit without a finite cost keeps the step's value)
+            q, xc = min(finite, key=lambda c: c[0])
+            if q > quad:
+                quad, x = q, xc
     M = np.eye(len(x)) + (sd[:, None] * (J.T @ J) * sd[None, :]) / s2
     sign, logdet = np.linalg.slogdet(M)
     # half-normal priors: the Gaussian evidence times 2 P(allowed side) under the posterior marginals
