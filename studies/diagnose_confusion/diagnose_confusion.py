@@ -469,7 +469,7 @@ def main(argv: list[str] | None = None) -> int:
     out.with_suffix(".md").write_text(text)
     for p in plants:
         figure([r for r in records if r.get("plant", "quasistatic") == p],
-               out.with_suffix(".png") if p == "quasistatic" else Path(f"{out}_{p}.png"))
+               out.with_suffix(".png") if p == "quasistatic" or out.name.endswith(f"_{p}") else Path(f"{out}_{p}.png"))
     print(text)
     return 0
 
