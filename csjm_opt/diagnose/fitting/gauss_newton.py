@@ -222,11 +222,12 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
 
     lb, ub = model.lower_bounds / scales, model.upper_bounds / scales
     starts = model.starts() if theta0 is None else [np.asarray(theta0)]
-    sol = None
+
     def solve(x0: np.ndarray):
         return least_squares(res, x0, jac=jac, bounds=(lb, ub), method="trf",
                              x_scale=1.0, xtol=1e-10, ftol=FTOL, gtol=1e-10, max_nfev=200)
 
+    sol = None
     for start in starts:     # best of the starts (more than one only where an effect asks for it)
         x0 = np.clip(start / scales, lb, ub)
         trial = solve(x0)

@@ -359,8 +359,8 @@ def predicted_pair_evidence(ctx: _Context, rig: Rig, ranges: Mapping | None, opt
     step left) is predicted only from its own fit, on the path that fit followed (``FitResult.rows``: where its
     state was scored), the partner stepped from nominal (:func:`pair_step`, ``"own_fit"``). *Loose* where an
     effect's fit reaches well beyond its step (link compliance, joint friction: :attr:`~csjm_opt.diagnose.
-    effects.base.Effect.step_from_nominal`) and for an own-fit prediction. Each effect keeps its single's
-    variant (the pair's fit chooses afresh: the margin covers the difference).
+    effects.base.Effect.step_from_nominal`); each kind has its margin (:data:`STEP_MARGIN_NATS`). Each effect
+    keeps its single's variant (the pair's fit chooses afresh: the margin covers the difference).
     """
     point = point_options(options)
     effects = [make_effect(e, rig, ranges, **point.get(e, {})) for e in pair]
@@ -369,8 +369,8 @@ def predicted_pair_evidence(ctx: _Context, rig: Rig, ranges: Mapping | None, opt
     if step == "none":
         return best, step
     model = AugmentedModel(rig, effects)
+    own = step == "own_fit"
     for i, name in enumerate(pair):
-        own = step == "own_fit"
         if own and effects[i].step_from_nominal != "none":
             continue                  # from the partner's fit, friction's bands at zero: the step sees nothing
         fit = fits.get(name)
