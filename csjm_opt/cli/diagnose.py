@@ -157,6 +157,13 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {result['verdict']['reason']}")
         for w in result["verdict"]["warnings"]:
             print(f"  warning: {w}")
+        left = result["left_out_rows"]
+        if left:
+            where = ", ".join(f"{r['log']} sample {r['sample']}" for r in left[:5]) + ("; ..." if len(left) > 5 else "")
+            worst = max(r["pose_noise_rad"] / r["median_pose_noise_rad"] for r in left)
+            print(f"  note: {len(left)} row(s) left out ({where}): the rig file's model is nearly singular at their "
+                  f"measured poses (pose noise up to {worst:.0f}x the log's median: a cable slack in the model where "
+                  "the rig held it)")
         print(f"gap: {1e3 * g['before_rad']:.3f} -> {1e3 * g['after_rad']:.3f} mrad held-out RMS; noise floor "
               f"{1e3 * result['noise_floor_rad']:.3f} mrad; systematic part explained {g['fraction_explained']:.0%}")
         for c in result["candidates"]:

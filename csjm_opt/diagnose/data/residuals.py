@@ -63,8 +63,7 @@ class ResidualTable:
     @property
     def instrument_floor_rad(self) -> float:
         """RMS pose residual the instrument noise alone would give: ``sqrt(mean tr Cov_zeta)``."""
-        L = np.linalg.inv(self.whiten)
-        return float(np.sqrt(np.mean(np.sum(L ** 2, axis=(1, 2)))))
+        return float(np.sqrt(np.mean(row_pose_noise_rad(self) ** 2)))
 
     @property
     def tilt_rad(self) -> np.ndarray:
@@ -132,6 +131,37 @@ def branches(cycle: np.ndarray, tau_meas: np.ndarray) -> np.ndarray:
         out[idx[1:peak + 1]] = 1
         out[idx[peak + 1:]] = -1
     return out
+
+
+#: A row whose pose noise under the instrument model exceeds this multiple of its log's median is ill-conditioned
+#: (:func:`ill_conditioned_rows`). Over the 94 logs of the validation folders the largest ratio was 14 (one row of
+#: ``oracle_hard/combo_holes_mass``, two of its cables slack in the rig file's model at the measured pose), the next
+#: 3.1 (a soft rig's lightest loads carry 2-3 times the noise of its heaviest); a suggested row that pulled a link
+#: compliance's cable slack in the model: 100.
+ILL_ROW_FACTOR = 10.0
+#: Ill-conditioned rows are left out only while they are at most this share of the log (more: the log is not
+#: this rig's, or the rig file is far off, and :func:`csjm_opt.diagnose.data.extra.check_rows_belong` speaks).
+ILL_ROW_SHARE = 0.1
+
+
+def row_pose_noise_rad(table: ResidualTable) -> np.ndarray:
+    """Each row's pose noise under the instrument model, ``sqrt(tr Cov_zeta_i)`` (rad, (n,))."""
+    return np.sqrt(np.sum(np.linalg.inv(table.whiten) ** 2, axis=(1, 2)))
+
+
+def ill_conditioned_rows(table: ResidualTable) -> np.ndarray:
+    """Rows (indices) where the rig file's model is nearly singular at the measured pose.
+
+    The instrument noise reaches the pose through the nominal tangent ``G^-1``; where a cable of the model is slack
+    at the measured pose (the rig held it taut: the model is off there) the joint is nearly free in the model, and
+    the row's predicted pose noise and its residual grow by orders of magnitude. Such a row carries almost no
+    weight in the fits (whitened), but it swamps every summary in rad: on a log of 168 rows one such row (100
+    times the median) raised the instrument floor from 3.8 to 30 mrad and hid a link compliance at 3x the floor.
+    Rows whose noise exceeds ``ILL_ROW_FACTOR`` times the log's median, while at most ``ILL_ROW_SHARE`` of the log.
+    """
+    sd = row_pose_noise_rad(table)
+    bad = sd > ILL_ROW_FACTOR * np.median(sd)
+    return np.flatnonzero(bad) if bad.mean() <= ILL_ROW_SHARE else np.zeros(0, int)
 
 
 def compute_residuals(rig: Rig, log: MeasurementLog, noise: InstrumentNoise | None = None) -> ResidualTable:

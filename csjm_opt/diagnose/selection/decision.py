@@ -24,7 +24,7 @@ from ...model.rig import Rig
 from ..data.extra import append_log
 from ..data.localisation import localise
 from ..data.noise import systematic
-from ..data.residuals import compute_residuals
+from ..data.residuals import ResidualTable, compute_residuals, ill_conditioned_rows, row_pose_noise_rad
 from ..data.tails import chi2_sf, norm_sf
 from ..data.trend import time_trend
 from ..decision_rule import (  # noqa: F401 (ALPHA and the thresholds are re-exported)
@@ -147,8 +147,9 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
     names = list(EFFECTS) if effects is None else list(effects)
     for n in names:
         make_effect(n, rig)                        # unknown names fail here, before any fitting
-    ctx = _Context(rig, compute_residuals(rig, log, noise),
-                   compute_residuals(rig, test, noise) if test is not None else None)
+    (train, test_table), left_out = zip(*[_well_conditioned(rig, one, noise, what)
+                                          for what, one in (("log", log), ("test log", test))])
+    ctx = _Context(rig, train, test_table)
     planned_pairs = _n_pair_fits(min(PAIR_SEEDS, len(names)), len(names)) if secondary else 0
     bar = progress(total=1 + len(names) + planned_pairs, desc="diagnose: fitting models") if progress else None
     tick = bar.update if bar else (lambda n=1: None)
@@ -183,11 +184,31 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
                   localisation=localise(ctx.held, ctx.held.zeta_rad, verdict.final.heldout_zeta_rad,
                                         ctx.scale(verdict.final) * ctx.instrument),
                   remaining=remaining, failed=failed, pairs=pairs, steps=_steps(baseline, singles, verdict, first),
-                  gap_signature=gap_sig, rule=_rule(len(singles)), pair_scores=pair_scores)
+                  gap_signature=gap_sig, rule=_rule(len(singles)), pair_scores=pair_scores,
+                  left_out_rows=[r for rows in left_out for r in rows])
     for s in d.steps:
         sc = verdict.final if "+" in s["model"] else singles.get(s["model"], baseline)
         s["fraction_explained"] = d.fraction(sc)
     return d
+
+
+def _well_conditioned(rig: Rig, log: MeasurementLog | None, noise, what: str) -> tuple[ResidualTable | None, list]:
+    """``log``'s residual table without its ill-conditioned rows, and those rows (one dict each).
+
+    Rows where the rig file's model is nearly singular at the measured pose
+    (:func:`~csjm_opt.diagnose.data.residuals.ill_conditioned_rows`) are left out of the diagnosis: the table is
+    made again from the other rows (the friction path runs through the rows kept).
+    """
+    if log is None:
+        return None, []
+    table = compute_residuals(rig, log, noise)
+    bad = ill_conditioned_rows(table)
+    if not bad.size:
+        return table, []
+    sd = row_pose_noise_rad(table)
+    rows = [{"log": what, "sample": int(log.sample[i]), "cycle": int(log.cycle[i]), "pose_noise_rad": float(sd[i]),
+             "median_pose_noise_rad": float(np.median(sd))} for i in bad]
+    return compute_residuals(rig, log.subset(np.setdiff1d(np.arange(len(log)), bad)), noise), rows
 
 
 def _fit_singles(ctx: _Context, rig: Rig, names, ranges, workers: int,

@@ -54,7 +54,10 @@
     remaining_signature residual-structure test on the final model's held-out residuals
     gap_signature       the same test on nominal_refit's (is there a gap at all?)
     localisation        where the residual lies (by axis, tilt, azimuth, load, branch; hysteresis)
-    rows, heldout       row counts; "test file" or "grouped K-fold by cycle"
+    rows, heldout       row counts (rows diagnosed); "test file" or "grouped K-fold by cycle"
+    left_out_rows       [{log, sample, cycle, pose_noise_rad, median_pose_noise_rad}]: rows left out because
+                        the rig file's model is nearly singular at their measured pose (a cable slack in the
+                        model; pose noise above data.residuals.ILL_ROW_FACTOR times the log's median)
 """
 
 from __future__ import annotations
@@ -90,6 +93,8 @@ class Diagnosis:
     gap_signature: dict = dataclasses.field(default_factory=dict)
     rule: dict = dataclasses.field(default_factory=dict)
     pair_scores: dict = dataclasses.field(default_factory=dict)   # (a, b) -> CandidateScore of fitted pairs
+    #: rows left out where the rig file's model is nearly singular at the measured pose (decision._well_conditioned)
+    left_out_rows: list = dataclasses.field(default_factory=list)
 
     @property
     def selected(self) -> str:
@@ -211,6 +216,7 @@ class Diagnosis:
             "gap_signature": self.gap_signature,
             "localisation": self.localisation,
             "rows": {"train": len(self.train), "test": 0 if self.test is None else len(self.test)},
+            "left_out_rows": self.left_out_rows,
         }
 
 
