@@ -140,3 +140,38 @@ def test_suggested_rows_show_the_effect_not_only_the_lookalike_difference(rig):
                              noise=InstrumentNoise.none(), after=log)
     floor = compute_residuals(rig, log, noise).instrument_floor_rad
     assert compute_residuals(rig, rows, noise).rms_rad > floor
+
+
+def test_a_cycle_a_hypothesis_puts_slack_in_the_rig_files_model_is_not_suggested(rig):
+    """A cycle where one hypothesis predicts a pose at which a cable of the rig file's model is slack is not used.
+
+    The candidate cycles' own poses are the nominal ones (every cable taut, ``candidate_cycles``); a hypothesis
+    that turns a cycle's poses about {A}'s z axis until some cable is shorter than its rest length (checked from
+    the cable lengths here, so the case is what it says) makes that cycle unusable. When no cycle is usable,
+    all are.
+    """
+    from csjm_opt import so3
+    from csjm_opt.diagnose.suggest.experiment import _usable
+
+    holes = np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m)
+    cands = candidate_cycles(rig, default_dead_weights(rig), np.random.default_rng(2), n=2)
+    R = np.concatenate([c["R"] for c in cands])
+    rest = np.concatenate([np.repeat(c["rest_lengths_m"][None], len(c["loads"]), 0) for c in cands])
+    bounds = np.cumsum([0] + [len(c["loads"]) for c in cands])
+
+    def slackened(cycles):
+        """``R`` with the rows of ``cycles`` turned by the smallest angle that leaves a cable slack in each."""
+        out = R.copy()
+        for j in cycles:
+            rows = slice(bounds[j], bounds[j + 1])
+            for angle in np.linspace(0.01, 1.0, 100):
+                out[rows] = so3.exp([0.0, 0.0, angle]) @ R[rows]
+                if np.any(kin.cable_terms(out[rows], *holes)[0] < rest[rows]):
+                    break
+            assert np.any(kin.cable_terms(out[rows], *holes)[0] < rest[rows])
+        return out
+
+    assert np.all(kin.cable_terms(R, *holes)[0] > rest)
+    assert list(_usable(rig, cands, [R], bounds)) == [True, True]
+    assert list(_usable(rig, cands, [R, slackened([1])], bounds)) == [True, False]
+    assert list(_usable(rig, cands, [slackened([0, 1])], bounds)) == [True, True]
