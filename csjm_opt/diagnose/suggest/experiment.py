@@ -277,8 +277,8 @@ def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[De
         return out
 
     # hypotheses no feasible experiment of this size can tell apart are equivalent here: not a target
-    spread = np.where(usable, np.sum([terms[(b, a)][2] for a, b in pairs], axis=0), -np.inf)
-    reachable = separation(list(np.argsort(-spread)[:max(1, max_rows // max(min(sizes), 1))]))
+    spread = np.sum([terms[(b, a)][2] for a, b in pairs], axis=0)
+    reachable = separation([i for i in np.argsort(-spread) if usable[i]][:max(1, max_rows // max(min(sizes), 1))])
     target = np.sqrt(reachable) >= EQUIVALENT_SD
     if not target.any():
         target[:] = True
