@@ -248,7 +248,7 @@ def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[De
             bar.update(1)
     sizes = [len(c["loads"]) for c in cands]
     bounds = np.cumsum([0] + sizes)
-    usable = _usable(rig, cands, preds, bounds)
+    usable = _usable(rig, rows.rest_lengths_m, preds, bounds)
     names = [n for n, _ in hyps]
     pairs = list(itertools.combinations(range(len(hyps)), 2))
     # per candidate cycle and direction (truth b, refit a): J^T J, J^T delta, delta^T delta (whitened)
@@ -314,25 +314,21 @@ def suggest_experiment(rig: Rig, d: Diagnosis, max_rows: int, loads: Sequence[De
                       before, [f"{names[a]} vs {names[b]}" for k, (a, b) in enumerate(pairs) if not target[k]])
 
 
-def _usable(rig: Rig, cands: list[dict], preds: list[np.ndarray], bounds: np.ndarray) -> np.ndarray:
+def _usable(rig: Rig, rest_lengths_m: np.ndarray, preds: list[np.ndarray], bounds: np.ndarray) -> np.ndarray:
     """Candidate cycles (bool, one each) whose rows keep every cable of the rig file's model taut where predicted.
 
-    Every hypothesis's predicted pose of every row counts; all cycles are usable when none is.
+    Every hypothesis's predicted pose of every row counts (a cable is taut where it is longer than its rest length,
+    ``rest_lengths_m`` of the candidate rows, cycles from ``bounds``); all cycles are usable when none is.
 
     At a pose where a cable of the rig file's model is slack (a hypothesis such as a link compliance moves the
     measured body away from the cable platform's pose), the model is nearly singular and the diagnosis leaves the
     row out or is swamped by it (``data.residuals.ill_conditioned_rows``: a suggested row with two such cables had
     100 times the log's pose noise).
     """
-    l = np.concatenate([np.repeat(c["rest_lengths_m"][None], len(c["loads"]), 0) for c in cands])
-    k = np.asarray(rig.cable_stiffness_N_per_m)
     holes = np.asarray(rig.platform_holes_A_m), np.asarray(rig.base_holes_B_m)
-    taut = np.ones(len(l), bool)
-    for R in preds:
-        lengths, _ = kin.cable_terms(R, *holes)
-        taut &= np.all(k * (lengths - l) > 0.0, axis=1)
+    taut = np.all([np.all(kin.cable_terms(R, *holes)[0] > rest_lengths_m, axis=1) for R in preds], axis=0)
     ok = np.logical_and.reduceat(taut, bounds[:-1])
-    return ok if ok.any() else np.ones(len(cands), bool)
+    return ok if ok.any() else np.ones(len(ok), bool)
 
 
 def _separation_on_log(d: Diagnosis, hyps, var: float) -> dict:

@@ -172,6 +172,6 @@ def test_a_cycle_a_hypothesis_puts_slack_in_the_rig_files_model_is_not_suggested
         return out
 
     assert np.all(kin.cable_terms(R, *holes)[0] > rest)
-    assert list(_usable(rig, cands, [R], bounds)) == [True, True]
-    assert list(_usable(rig, cands, [R, slackened([1])], bounds)) == [True, False]
-    assert list(_usable(rig, cands, [slackened([0, 1])], bounds)) == [True, True]
+    assert list(_usable(rig, rest, [R], bounds)) == [True, True]
+    assert list(_usable(rig, rest, [R, slackened([1])], bounds)) == [True, False]
+    assert list(_usable(rig, rest, [slackened([0, 1])], bounds)) == [True, True]
