@@ -157,13 +157,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {result['verdict']['reason']}")
         for w in result["verdict"]["warnings"]:
             print(f"  warning: {w}")
-        left = result["left_out_rows"]
-        if left:
-            where = ", ".join(f"{r['log']} sample {r['sample']}" for r in left[:5]) + ("; ..." if len(left) > 5 else "")
-            worst = max(r["pose_noise_rad"] / r["median_pose_noise_rad"] for r in left)
-            print(f"  note: {len(left)} row(s) left out ({where}): the rig file's model is nearly singular at their "
-                  f"measured poses (pose noise up to {worst:.0f}x the log's median: a cable slack in the model where "
-                  "the rig held it)")
+        for note in left_out_notes(result["left_out_rows"]):
+            print(f"  note: {note}")
         print(f"gap: {1e3 * g['before_rad']:.3f} -> {1e3 * g['after_rad']:.3f} mrad held-out RMS; noise floor "
               f"{1e3 * result['noise_floor_rad']:.3f} mrad; systematic part explained {g['fraction_explained']:.0%}")
         for c in result["candidates"]:
@@ -204,3 +199,21 @@ def _priors(items: list[str]) -> dict[str, tuple[float, float]]:
             raise UsageError(f"--prior {item!r}: expected NAME=LO:HI with LO < HI (numbers)", "--prior")
         out[name] = bounds
     return out
+
+
+def left_out_notes(left: list[dict]) -> list[str]:
+    """One console note per reason rows were left out of the diagnosis (``left_out_rows`` of the JSON)."""
+    notes = []
+    for reason, why in (("gross_residual", "no model comes near them and they stand apart from their cycle "
+                                           "(outlier ratio up to {worst:.1f}: a tracker glitch or a force spike?)"),
+                        ("ill_conditioned", "the rig file's model is nearly singular at their measured poses (pose "
+                                            "noise up to {worst:.0f}x the log's median: a cable slack in the model "
+                                            "where the rig held it)")):
+        rows = [r for r in left if r.get("reason", "ill_conditioned") == reason]
+        if not rows:
+            continue
+        worst = max(r["outlier_ratio"] if reason == "gross_residual" else
+                    r["pose_noise_rad"] / r["median_pose_noise_rad"] for r in rows)
+        where = ", ".join(f"{r['log']} sample {r['sample']}" for r in rows[:5]) + ("; ..." if len(rows) > 5 else "")
+        notes.append(f"{len(rows)} row(s) left out ({where}): " + why.format(worst=worst))
+    return notes

@@ -213,6 +213,7 @@ def _run_one(job: dict) -> dict:
             "true_plausible": all(c.get("plausible", False) for c in j["candidates"] if c["effect"] in truth(job)),
             "remaining_p": j["remaining_signature"]["p_value"], "gap_signature_p": j["gap_signature"]["p_value"],
             "detected": [c["effect"] for c in j["candidates"] if c.get("significant")],
+            "left_out_rows": [[r["log"], r["sample"], r["reason"]] for r in j["left_out_rows"]],
             "models": model_summary(j, d),
             "seconds_diagnose": time.perf_counter() - t1, "seconds": time.perf_counter() - t0}
 

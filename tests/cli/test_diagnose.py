@@ -146,3 +146,20 @@ def test_workers_below_one_is_refused_in_one_line(logs, tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "workers" in err
     assert not (tmp_path / "x.json").exists()
+
+
+def test_a_row_left_out_is_named_on_the_console_and_in_the_json(tmp_path, rig, capsys):
+    """A force spike in one row: the console says which row was left out and why, the JSON lists it."""
+    from csjm_opt.measurement.logfile import MeasurementLog
+
+    log = simulate_experiment(rig, 6, np.random.default_rng(41), effect="sensor_bias", severity=3.0)
+    tau = np.array(log.tau_ext_A_Nm, float)
+    tau[10, 1] -= 0.6
+    path = MeasurementLog.from_arrays(log.cycle, log.rest_lengths_m, tau, log.R, sample=log.sample).to_csv(
+        tmp_path / "spike.csv")
+    out = tmp_path / "out.json"
+    assert main(["diagnose", str(path), "--effects", "sensor_bias", "mass_com", "--json", str(out),
+                 "--no-progress"]) == 0
+    left = json.loads(out.read_text())["left_out_rows"]
+    assert [(r["log"], r["sample"], r["reason"]) for r in left] == [("log", int(log.sample[10]), "gross_residual")]
+    assert f"note: 1 row(s) left out (log sample {int(log.sample[10])}): no model comes near" in capsys.readouterr().out

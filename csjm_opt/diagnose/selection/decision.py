@@ -24,7 +24,13 @@ from ...model.rig import Rig
 from ..data.extra import append_log
 from ..data.localisation import localise
 from ..data.noise import systematic
-from ..data.residuals import ResidualTable, compute_residuals, ill_conditioned_rows, row_pose_noise_rad
+from ..data.residuals import (
+    ResidualTable,
+    compute_residuals,
+    gross_rows,
+    ill_conditioned_rows,
+    row_pose_noise_rad,
+)
 from ..data.tails import chi2_sf, norm_sf
 from ..data.trend import time_trend
 from ..decision_rule import (  # noqa: F401 (ALPHA and the thresholds are re-exported)
@@ -143,19 +149,29 @@ def diagnose(rig: Rig, log: MeasurementLog, test: MeasurementLog | None = None,
                               "belongs to this rig (cables taut at the measured poses)", "numpy") from exc
 
 
-def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, workers) -> Diagnosis:
+def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, workers,
+              gross: Mapping[str, list[dict]] | None = None) -> Diagnosis:
+    """One diagnosis; again without the gross outliers (:func:`_gross_rows`) when the first pass finds some."""
     names = list(EFFECTS) if effects is None else list(effects)
     for n in names:
         make_effect(n, rig)                        # unknown names fail here, before any fitting
-    (train, test_table), left_out = zip(*[_well_conditioned(rig, one, noise, what)
-                                          for what, one in (("log", log), ("test log", test))])
+    logs = {"log": log, "test log": test}
+    (train, test_table), left_out, kept = zip(*[_well_conditioned(rig, one, noise, what, (gross or {}).get(what, []))
+                                                for what, one in logs.items()])
     ctx = _Context(rig, train, test_table)
     planned_pairs = _n_pair_fits(min(PAIR_SEEDS, len(names)), len(names)) if secondary else 0
-    bar = progress(total=1 + len(names) + planned_pairs, desc="diagnose: fitting models") if progress else None
+    desc = "diagnose: fitting models" + (" again without the gross outliers" if gross else "")
+    bar = progress(total=1 + len(names) + planned_pairs, desc=desc) if progress else None
     tick = bar.update if bar else (lambda n=1: None)
     baseline = ctx.score([])
     tick(1)
     singles, failed, options, point_fits = _fit_singles(ctx, rig, names, ranges, workers, tick)
+    if gross is None:
+        found = _gross_rows(ctx, baseline, singles, dict(zip(logs, kept)), logs)
+        if any(found.values()):
+            if bar:
+                bar.close()
+            return _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, workers, found)
     floor0 = _noise_floor(ctx, baseline, singles)
     tests = _test_singles(ctx, baseline, singles, floor0)
     n_cycles = len(np.unique(ctx.held.cycle))
@@ -192,23 +208,50 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
     return d
 
 
-def _well_conditioned(rig: Rig, log: MeasurementLog | None, noise, what: str) -> tuple[ResidualTable | None, list]:
-    """``log``'s residual table without its ill-conditioned rows, and those rows (one dict each).
+def _well_conditioned(rig: Rig, log: MeasurementLog | None, noise, what: str,
+                      gross: Sequence[dict] = ()) -> tuple[ResidualTable | None, list, np.ndarray | None]:
+    """``(table, rows left out, log index of each table row)``: ``log`` without ``gross`` and its ill-conditioned rows.
 
-    Rows where the rig file's model is nearly singular at the measured pose
+    ``gross`` are the rows :func:`_gross_rows` found (listed first among the rows left out, one dict each). Rows
+    where the rig file's model is nearly singular at the measured pose
     (:func:`~csjm_opt.diagnose.data.residuals.ill_conditioned_rows`) are left out of the diagnosis: the table is
     made again from the other rows (the friction path runs through the rows kept).
     """
     if log is None:
-        return None, []
-    table = compute_residuals(rig, log, noise)
+        return None, [], None
+    kept = np.setdiff1d(np.arange(len(log)), [r["row"] for r in gross])
+    part = log.subset(kept) if len(kept) < len(log) else log
+    table = compute_residuals(rig, part, noise)
     bad = ill_conditioned_rows(table)
+    rows = [{k: v for k, v in r.items() if k != "row"} for r in gross]
     if not bad.size:
-        return table, []
+        return table, rows, kept
     sd = row_pose_noise_rad(table)
-    rows = [{"log": what, "sample": int(log.sample[i]), "cycle": int(log.cycle[i]), "pose_noise_rad": float(sd[i]),
-             "median_pose_noise_rad": float(np.median(sd))} for i in bad]
-    return compute_residuals(rig, log.subset(np.setdiff1d(np.arange(len(log)), bad)), noise), rows
+    rows += [{"log": what, "sample": int(part.sample[i]), "cycle": int(part.cycle[i]), "reason": "ill_conditioned",
+              "pose_noise_rad": float(sd[i]), "median_pose_noise_rad": float(np.median(sd))} for i in bad]
+    kept = np.delete(kept, bad)
+    return compute_residuals(rig, log.subset(kept), noise), rows, kept
+
+
+def _gross_rows(ctx: _Context, baseline: CandidateScore, singles: Mapping[str, CandidateScore],
+                kept: Mapping[str, np.ndarray | None], logs: Mapping[str, MeasurementLog | None]) -> dict[str, list]:
+    """Rows of each log (``"log"``, ``"test log"``) that are gross outliers, one dict each (``row``: the log's index).
+
+    A tracker glitch or a force spike in one row is explained by no model and inflates the noise floor every test is
+    measured against (:func:`~csjm_opt.diagnose.data.residuals.gross_rows`: judged on the training rows' fitted
+    residuals and the test rows' predicted ones, of the nominal model and every point single). Such rows are left out
+    and the diagnosis made again, and listed (``left_out_rows``).
+    """
+    points = [baseline, *(sc for sc in singles.values() if not sc.set_valued)]
+    found: dict[str, list] = {}
+    for what, table, attr in (("log", ctx.train, "train_zeta_rad"), ("test log", ctx.test, "heldout_zeta_rad")):
+        log, idx = logs[what], kept[what]
+        if table is None or log is None or idx is None:
+            continue
+        bad, ratio = gross_rows(table, [getattr(sc, attr) for sc in points], getattr(baseline, attr))
+        found[what] = [{"log": what, "sample": int(log.sample[idx[i]]), "cycle": int(log.cycle[idx[i]]),
+                        "reason": "gross_residual", "outlier_ratio": float(ratio[i]), "row": int(idx[i])} for i in bad]
+    return found
 
 
 def _fit_singles(ctx: _Context, rig: Rig, names, ranges, workers: int,

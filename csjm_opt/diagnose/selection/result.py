@@ -55,9 +55,11 @@
     gap_signature       the same test on nominal_refit's (is there a gap at all?)
     localisation        where the residual lies (by axis, tilt, azimuth, load, branch; hysteresis)
     rows, heldout       row counts (rows diagnosed); "test file" or "grouped K-fold by cycle"
-    left_out_rows       [{log, sample, cycle, pose_noise_rad, median_pose_noise_rad}]: rows left out because
-                        the rig file's model is nearly singular at their measured pose (a cable slack in the
-                        model; pose noise above data.residuals.ILL_ROW_FACTOR times the log's median)
+    left_out_rows       [{log, sample, cycle, reason, ...}]: rows left out of the diagnosis. reason
+                        "gross_residual" (with outlier_ratio): no model comes near the row and it stands apart
+                        from its cycle (data.residuals.gross_rows); "ill_conditioned" (with pose_noise_rad,
+                        median_pose_noise_rad): the rig file's model is nearly singular at the measured pose (a
+                        cable slack in the model; pose noise above data.residuals.ILL_ROW_FACTOR times the median)
 """
 
 from __future__ import annotations
@@ -93,7 +95,7 @@ class Diagnosis:
     gap_signature: dict = dataclasses.field(default_factory=dict)
     rule: dict = dataclasses.field(default_factory=dict)
     pair_scores: dict = dataclasses.field(default_factory=dict)   # (a, b) -> CandidateScore of fitted pairs
-    #: rows left out where the rig file's model is nearly singular at the measured pose (decision._well_conditioned)
+    #: rows left out: gross outliers and rows where the rig file's model is nearly singular (decision._well_conditioned)
     left_out_rows: list = dataclasses.field(default_factory=list)
 
     @property
