@@ -1,6 +1,6 @@
 """Every validation log checked against its own rig and against every other rig.
 
-Usage: python -m studies.log_rig_check.log_rig_check VALIDATION_DIR [-o OUT.md]
+Usage: python -m studies.log_rig_check.log_rig_check studies/validation_shared/logs [-o OUT.md]
 
 Runs :func:`csjm_opt.measurement.rig_fit.log_rig_fit` on each log of the validation set made
 outside the project (three folders, 94 logs) with each of the six rig files and the

@@ -7,10 +7,10 @@ it (every pair fitted, every prediction still made), and records both verdicts w
 per pair the prediction and the fitted evidence: the screen must change nothing a lab reads, and a pair it
 drops must lie far below anything a rule reads.
 
-Usage (from the repository root; VALIDATION_DIR holds the folders with ``answers.json``)::
+Usage (from the repository root; the folders with ``answers.json`` are in ``studies/validation_shared/logs``)::
 
-    python -m studies.pair_screen.pair_screen VALIDATION_DIR/mujoco_a VALIDATION_DIR/mujoco_b \
-        VALIDATION_DIR/oracle_hard [--workers 2] [--out studies/pair_screen/pair_screen]
+    python -m studies.pair_screen.pair_screen studies/validation_shared/logs/mujoco_a \
+        studies/validation_shared/logs/mujoco_b studies/validation_shared/logs/oracle_hard [--workers 2]
 """
 
 from __future__ import annotations
