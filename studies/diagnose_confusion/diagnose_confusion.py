@@ -214,6 +214,7 @@ def _run_one(job: dict) -> dict:
             "remaining_p": j["remaining_signature"]["p_value"], "gap_signature_p": j["gap_signature"]["p_value"],
             "detected": [c["effect"] for c in j["candidates"] if c.get("significant")],
             "left_out_rows": [[r["log"], r["sample"], r["reason"]] for r in j["left_out_rows"]],
+            "outlier_ratio_max": j["outlier_ratio_max"],
             "models": model_summary(j, d),
             "seconds_diagnose": time.perf_counter() - t1, "seconds": time.perf_counter() - t0}
 

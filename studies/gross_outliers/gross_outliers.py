@@ -63,7 +63,8 @@ def run_one(job: dict) -> dict:
     return {**job, "spoiled_sample": sample, "selected": j["selected"], "secondary": j["secondary"]["effect"],
             "warnings": j["verdict"]["warnings"], "right": accepted(job["accept"], job["effects"], j),
             "noise_floor_rad": j["noise_floor_rad"],
-            "left_out": [[r["log"], r["sample"], r.get("reason", "ill_conditioned")] for r in j["left_out_rows"]]}
+            "left_out": [[r["log"], r["sample"], r.get("reason", "ill_conditioned")] for r in j["left_out_rows"]],
+            "outlier_ratio_max": j.get("outlier_ratio_max", {})}
 
 
 def summarise(records: list[dict]) -> str:

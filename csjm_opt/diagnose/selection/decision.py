@@ -166,12 +166,11 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
     baseline = ctx.score([])
     tick(1)
     singles, failed, options, point_fits = _fit_singles(ctx, rig, names, ranges, workers, tick)
-    if gross is None:
-        found = _gross_rows(ctx, baseline, singles, dict(zip(logs, kept)), logs)
-        if any(found.values()):
-            if bar:
-                bar.close()
-            return _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, workers, found)
+    found, ratio_max = _gross_rows(ctx, baseline, singles, dict(zip(logs, kept)), logs)
+    if gross is None and any(found.values()):
+        if bar:
+            bar.close()
+        return _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, workers, found)
     floor0 = _noise_floor(ctx, baseline, singles)
     tests = _test_singles(ctx, baseline, singles, floor0)
     n_cycles = len(np.unique(ctx.held.cycle))
@@ -201,7 +200,7 @@ def _diagnose(rig, log, test, effects, noise, progress, secondary, ranges, worke
                                         ctx.scale(verdict.final) * ctx.instrument),
                   remaining=remaining, failed=failed, pairs=pairs, steps=_steps(baseline, singles, verdict, first),
                   gap_signature=gap_sig, rule=_rule(len(singles)), pair_scores=pair_scores,
-                  left_out_rows=[r for rows in left_out for r in rows])
+                  left_out_rows=[r for rows in left_out for r in rows], outlier_ratio_max=ratio_max)
     for s in d.steps:
         sc = verdict.final if "+" in s["model"] else singles.get(s["model"], baseline)
         s["fraction_explained"] = d.fraction(sc)
@@ -234,18 +233,21 @@ def _well_conditioned(rig: Rig, log: MeasurementLog | None, noise, what: str,
 
 
 def _gross_rows(ctx: _Context, baseline: CandidateScore, singles: Mapping[str, CandidateScore],
-                kept: Mapping[str, np.ndarray | None], logs: Mapping[str, MeasurementLog | None]) -> dict[str, list]:
-    """Rows of each log (``"log"``, ``"test log"``) that are gross outliers, one dict each (``row``: the log's index).
+                kept: Mapping[str, np.ndarray | None],
+                logs: Mapping[str, MeasurementLog | None]) -> tuple[dict[str, list], dict[str, float]]:
+    """``(gross outliers of each log, each log's largest outlier ratio)``, by ``"log"`` and ``"test log"``.
 
-    A tracker glitch or a force spike in one row is explained by no model and inflates the noise floor every test is
-    measured against (:func:`~csjm_opt.diagnose.data.residuals.gross_rows`: judged on the training rows' fitted
-    residuals and the test rows' predicted ones, of the nominal model and every point single that cannot follow one
-    row: a flexible one (:func:`flexible`, 36 hole offsets) bends toward a spike in its training rows and would hide
-    it). Such rows are left out and the diagnosis made again, and listed (``left_out_rows``).
+    Each gross row is a dict (``row``: its index in the log). A tracker glitch or a force spike in one row is
+    explained by no model and inflates the noise floor every test is measured against
+    (:func:`~csjm_opt.diagnose.data.residuals.gross_rows`: judged on the training rows' fitted residuals and the test
+    rows' predicted ones, of the nominal model and every point single that cannot follow one row: a flexible one
+    (:func:`flexible`, 36 hole offsets) bends toward a spike in its training rows and would hide it). Such rows are
+    left out and the diagnosis made again, and listed (``left_out_rows``).
     """
     n_cycles = len(np.unique(ctx.held.cycle))
     points = [baseline, *(sc for sc in singles.values() if not sc.set_valued and not flexible(sc, n_cycles))]
     found: dict[str, list] = {}
+    ratio_max: dict[str, float] = {}
     for what, table, attr in (("log", ctx.train, "train_zeta_rad"), ("test log", ctx.test, "heldout_zeta_rad")):
         log, idx = logs[what], kept[what]
         if table is None or log is None or idx is None:
@@ -253,7 +255,8 @@ def _gross_rows(ctx: _Context, baseline: CandidateScore, singles: Mapping[str, C
         bad, ratio = gross_rows(table, [getattr(sc, attr) for sc in points], getattr(baseline, attr))
         found[what] = [{"log": what, "sample": int(log.sample[idx[i]]), "cycle": int(log.cycle[idx[i]]),
                         "reason": "gross_residual", "outlier_ratio": float(ratio[i]), "row": int(idx[i])} for i in bad]
-    return found
+        ratio_max[what] = float(np.max(ratio)) if ratio.size else 0.0
+    return found, ratio_max
 
 
 def _fit_singles(ctx: _Context, rig: Rig, names, ranges, workers: int,

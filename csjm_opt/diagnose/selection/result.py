@@ -60,6 +60,8 @@
                         from its cycle (data.residuals.gross_rows); "ill_conditioned" (with pose_noise_rad,
                         median_pose_noise_rad): the rig file's model is nearly singular at the measured pose (a
                         cable slack in the model; pose noise above data.residuals.ILL_ROW_FACTOR times the median)
+    outlier_ratio_max   {log, test log}: each log's largest row outlier ratio (data.residuals.gross_rows; rows
+                        above data.residuals.GROSS_ROW_FACTOR are gross), on the rows the diagnosis kept
 """
 
 from __future__ import annotations
@@ -97,6 +99,8 @@ class Diagnosis:
     pair_scores: dict = dataclasses.field(default_factory=dict)   # (a, b) -> CandidateScore of fitted pairs
     #: rows left out: gross outliers and rows where the rig file's model is nearly singular (decision._well_conditioned)
     left_out_rows: list = dataclasses.field(default_factory=list)
+    #: each log's largest row outlier ratio on the rows kept ("log", "test log"; decision._gross_rows)
+    outlier_ratio_max: dict = dataclasses.field(default_factory=dict)
 
     @property
     def selected(self) -> str:
@@ -219,6 +223,7 @@ class Diagnosis:
             "localisation": self.localisation,
             "rows": {"train": len(self.train), "test": 0 if self.test is None else len(self.test)},
             "left_out_rows": self.left_out_rows,
+            "outlier_ratio_max": self.outlier_ratio_max,
         }
 
 
