@@ -365,6 +365,12 @@ def summarise(records: list[dict]) -> str:
         lines += ["", f"{len(lowered)} logs reached their multiple with the instrument noise lowered (the effect "
                       f"capped at its plausible size): median noise factor {np.median(lowered):.2f}, "
                       f"smallest {min(lowered):.2f}."]
+    ratios = [(max(r["outlier_ratio_max"].values()), r["id"]) for r in records if r.get("outlier_ratio_max")]
+    if ratios:
+        left = [r["id"] for r in records if any(x[2] == "gross_residual" for x in r.get("left_out_rows", []))]
+        lines += ["", f"Rows left out as gross outliers: {len(left)} of {len(ratios)} logs"
+                      + (f" ({', '.join(left[:5])})" if left else "")
+                      + f"; the largest row outlier ratio of a log: {max(ratios)[0]:.2f} ({max(ratios)[1]})."]
     secs = [r["seconds_diagnose"] for r in records]
     lines += ["", f"Median diagnosis time per log (all singles and pairs): {np.median(secs):.1f} s."]
     return "\n".join(lines) + "\n"
