@@ -204,7 +204,7 @@ def _priors(items: list[str]) -> dict[str, tuple[float, float]]:
 def left_out_notes(left: list[dict]) -> list[str]:
     """One console note per reason rows were left out of the diagnosis (``left_out_rows`` of the JSON)."""
     notes = []
-    for reason, why in (("gross_residual", "no model comes near them and they stand apart from their cycle "
+    for reason, why in (("gross_residual", "the model that fits the log does not come near them and they stand apart "
                                            "(outlier ratio up to {worst:.1f}: a tracker glitch or a force spike?)"),
                         ("ill_conditioned", "the rig file's model is nearly singular at their measured poses (pose "
                                             "noise up to {worst:.0f}x the log's median: a cable slack in the model "

@@ -200,15 +200,36 @@ def cycle_deviation(zeta: np.ndarray, cycle: np.ndarray) -> np.ndarray:
     return out
 
 
+def left_out_residuals(table: ResidualTable, zeta: np.ndarray, jac: np.ndarray | None, free: np.ndarray | None,
+                       n_obs: int) -> np.ndarray:
+    """Training residuals ``zeta`` (rad, (n, 3)) as if each row had been left out of the fit that made them.
+
+    A fit bends toward each of its rows by the row's leverage ``H_ii = J_i (J^T J)^-1 J_i^T`` (3 x 3, ``J`` the fit's
+    whitened Jacobian ``jac`` over its ``free`` parameters, data rows first, ``n_obs = 3 n`` of them, then its
+    priors); the left-out residual is ``(I - H_ii)^-1`` times the row's whitened residual (exact for a linear least
+    squares fit), taken back to rad through ``table``'s whitening. A model with many parameters (36 hole offsets)
+    hides a spike in its training rows that its left-out residual shows. Returned unchanged without a Jacobian.
+    """
+    if jac is None or free is None or n_obs != 3 * len(table):
+        return zeta
+    J = jac[:, free]
+    A = np.linalg.pinv(J.T @ J)
+    Jd = J[:n_obs].reshape(len(table), 3, -1)
+    H = Jd @ A @ Jd.transpose(0, 2, 1)
+    w = (table.whiten @ np.asarray(zeta)[..., None])[..., 0]
+    w_out = np.linalg.solve(np.eye(3) - H + 1e-12 * np.eye(3), w[..., None])[..., 0]
+    return np.linalg.solve(table.whiten, w_out[..., None])[..., 0]
+
+
 def gross_rows(table: ResidualTable, model_zetas, nominal_zeta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rows (indices) that are gross outliers, and every row's outlier ratio.
 
-    A row's ratio is the smaller of two whitened norms, each over its median across the log: its residual under the
-    point model that comes nearest to it (``model_zetas``: every point model's residuals, (n, 3) each), and its
+    A row's ratio is the smaller of two whitened norms, each over its median across the log: its residual under a
+    model that fits the log (``model_zetas``, (n, 3) each; with several, the nearest of them row by row), and its
     nominal residual's departure from its cycle neighbours (:func:`cycle_deviation` of ``nominal_zeta``). An
-    effect, however large, is either followed by one of the models or smooth within a cycle; a tracker glitch or a
-    force spike in one row is neither. Rows above ``GROSS_ROW_FACTOR`` are gross while at most ``GROSS_ROW_SHARE``
-    of the log.
+    effect, however large, is either followed by the model or smooth within a cycle; a tracker glitch or a force
+    spike in one row is neither. Rows above ``GROSS_ROW_FACTOR`` are gross while at most ``GROSS_ROW_SHARE`` of the
+    log.
     """
     q_model = np.min([whitened_norm2(table, z) for z in model_zetas], axis=0)
     q_local = whitened_norm2(table, cycle_deviation(nominal_zeta, table.cycle))

@@ -29,7 +29,9 @@ from ..data.residuals import (
     compute_residuals,
     gross_rows,
     ill_conditioned_rows,
+    left_out_residuals,
     row_pose_noise_rad,
+    whitened_norm2,
 )
 from ..data.tails import chi2_sf, norm_sf
 from ..data.trend import time_trend
@@ -240,19 +242,24 @@ def _gross_rows(ctx: _Context, baseline: CandidateScore, singles: Mapping[str, C
     Each gross row is a dict (``row``: its index in the log). A tracker glitch or a force spike in one row is
     explained by no model and inflates the noise floor every test is measured against
     (:func:`~csjm_opt.diagnose.data.residuals.gross_rows`: judged on the training rows' fitted residuals and the test
-    rows' predicted ones, of the nominal model and every point single that cannot follow one row: a flexible one
-    (:func:`flexible`, 36 hole offsets) bends toward a spike in its training rows and would hide it). Such rows are
-    left out and the diagnosis made again, and listed (``left_out_rows``).
+    rows' predicted ones, of the point model that fits the training rows best; a training row's residual as if it
+    had been left out of the fit, :func:`~csjm_opt.diagnose.data.residuals.left_out_residuals`: 36 hole offsets bend
+    toward a spike in their training rows). Such rows are left out and the diagnosis made again, and listed
+    (``left_out_rows``).
     """
-    n_cycles = len(np.unique(ctx.held.cycle))
-    points = [baseline, *(sc for sc in singles.values() if not sc.set_valued and not flexible(sc, n_cycles))]
+    points = [baseline, *(sc for sc in singles.values() if not sc.set_valued)]
+    # the point model that fits the training rows best (smallest median whitened residual) judges every row: the
+    # nearest model row by row would let a model that fits the log badly vouch for a spike by chance
+    best = min(points, key=lambda sc: float(np.median(whitened_norm2(ctx.train, sc.train_zeta_rad))))
     found: dict[str, list] = {}
     ratio_max: dict[str, float] = {}
     for what, table, attr in (("log", ctx.train, "train_zeta_rad"), ("test log", ctx.test, "heldout_zeta_rad")):
         log, idx = logs[what], kept[what]
         if table is None or log is None or idx is None:
             continue
-        bad, ratio = gross_rows(table, [getattr(sc, attr) for sc in points], getattr(baseline, attr))
+        zeta = (left_out_residuals(table, best.train_zeta_rad, best.fit.jac_x, best.fit.free, best.fit.n_obs)
+                if what == "log" else best.heldout_zeta_rad)
+        bad, ratio = gross_rows(table, [zeta], getattr(baseline, attr))
         found[what] = [{"log": what, "sample": int(log.sample[idx[i]]), "cycle": int(log.cycle[idx[i]]),
                         "reason": "gross_residual", "outlier_ratio": float(ratio[i]), "row": int(idx[i])} for i in bad]
         ratio_max[what] = float(np.max(ratio)) if ratio.size else 0.0
