@@ -164,11 +164,11 @@ def ill_conditioned_rows(table: ResidualTable) -> np.ndarray:
     return np.flatnonzero(bad) if bad.mean() <= ILL_ROW_SHARE else np.zeros(0, int)
 
 
-#: A row no point model comes near and that stands apart from its cycle neighbours, each by more than this multiple
-#: of the log's median (whitened norms), is a gross outlier (:func:`gross_rows`): a tracker glitch or a force spike.
-#: Over the 94 logs of the validation folders the largest such ratio (the smaller of the two) is 3.5 (a Coulomb
-#: friction log's first row); a moment spike of 0.5 N m (25 times the sensor noise) in one row of 132 gives 12 and
-#: raised that log's noise floor from 3.5 to 5.6 mrad.
+#: A row the model that fits the log does not come near and that stands apart from its cycle neighbours, each by more
+#: than this multiple of the log's median (whitened norms), is a gross outlier (:func:`gross_rows`): a tracker glitch
+#: or a force spike. Over the 94 logs of the validation folders the largest such ratio (the smaller of the two) is 3.5
+#: (a Coulomb friction log's first row), over the 242 step-study logs 3.7; a moment spike of 0.5 N m (25 times the
+#: sensor noise) kept in one row of 132 raised that log's noise floor from 3.5 to 5.6 mrad.
 GROSS_ROW_FACTOR = 6.0
 #: Gross outliers are left out only while they are at most this share of the log (more: heavy-tailed noise or an
 #: effect the models miss, which the diagnosis reports rather than drops).
