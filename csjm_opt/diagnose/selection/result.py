@@ -58,8 +58,9 @@
     left_out_rows       [{log, sample, cycle, reason, ...}]: rows left out of the diagnosis. reason
                         "gross_residual" (with outlier_ratio): the model that fits the log does not come near
                         the row and it stands apart from its cycle (data.residuals.gross_rows);
-                        "ill_conditioned" (with pose_noise_rad, median_pose_noise_rad): the rig file's model is nearly singular at the measured pose (a
-                        cable slack in the model; pose noise above data.residuals.ILL_ROW_FACTOR times the median)
+                        "ill_conditioned" (with pose_noise_rad, median_pose_noise_rad): the rig file's model is
+                        nearly singular at the measured pose (a cable slack in the model; pose noise above
+                        data.residuals.ILL_ROW_FACTOR times the median)
     outlier_ratio_max   {log, test log}: each log's largest row outlier ratio (data.residuals.gross_rows; rows
                         above data.residuals.GROSS_ROW_FACTOR are gross), on the rows the diagnosis kept
 """
