@@ -35,14 +35,24 @@ def test_settled_coulomb_friction_is_named_on_a_mujoco_log():
     assert j["left_out_rows"] == []
 
 
+FOUR = ["stiffness_scale", "sensor_gain", "link_compliance", "mass_com"]
+
+
+@pytest.fixture(scope="module")
+def stiffness_case():
+    """``mujoco_b/b1_stiffness_scale`` and its clean diagnosis over four look-alike effects (made once)."""
+    answer, rig, train, test = _case("mujoco_b", "b1_stiffness_scale")
+    return answer, rig, train, test, diagnose(rig, train, test, effects=FOUR, workers=1)
+
+
 @pytest.mark.parametrize("kind", ["moment", "pose"])
-def test_a_spoiled_row_of_a_mujoco_log_is_left_out_and_the_verdict_holds(kind):
+def test_a_spoiled_row_of_a_mujoco_log_is_left_out_and_the_verdict_holds(kind, stiffness_case):
     """One training row spoiled as labs see it (a 0.5 N m force spike, a 30 mrad tracker glitch): that row is left
     out, and the verdict and noise floor are the clean log's (the spike kept raised the floor from 3.5 to 5.6 mrad
     and named ``sensor_gain``)."""
     from csjm_opt import so3
 
-    answer, rig, train, test = _case("mujoco_b", "b1_stiffness_scale")
+    answer, rig, train, test, clean = stiffness_case
     i = 40
     tau, R = np.array(train.tau_ext_A_Nm, float), np.array(train.R, float)
     if kind == "moment":
@@ -50,10 +60,7 @@ def test_a_spoiled_row_of_a_mujoco_log_is_left_out_and_the_verdict_holds(kind):
     else:
         R[i] = R[i] @ so3.exp(np.array([0.0, 0.03, 0.0]))
     spoiled = MeasurementLog.from_arrays(train.cycle, train.rest_lengths_m, tau, R, sample=train.sample)
-    clean = diagnose(rig, train, test, effects=["stiffness_scale", "sensor_gain", "link_compliance", "mass_com"],
-                     workers=1)
-    d = diagnose(rig, spoiled, test, effects=["stiffness_scale", "sensor_gain", "link_compliance", "mass_com"],
-                 workers=1)
+    d = diagnose(rig, spoiled, test, effects=FOUR, workers=1)
     assert [(r["sample"], r["reason"]) for r in d.left_out_rows] == [(int(train.sample[i]), "gross_residual")]
     assert d.selected == clean.selected == answer["effects"][0]
     assert d.noise_floor_rad == pytest.approx(clean.noise_floor_rad, rel=0.05)
