@@ -67,3 +67,18 @@ def finished(done: dict[str, dict], path: Path, what: str = "cases") -> list[dic
         print(f"{len(failed)} {what} failed (recorded in {path}): " + "; ".join(r["error"] for r in failed[:3]),
               file=sys.stderr)
     return [r for r in done.values() if "error" not in r]
+
+
+def run_and_summarise(run_one: Callable[[dict], dict], jobs: list[dict], out: str, desc: str, workers: int,
+                      no_progress: bool, summarise: Callable[[list[dict]], str]) -> None:
+    """Run the ``jobs`` ``OUT.jsonl`` does not hold yet (``out`` without its suffix), then write ``OUT.md``
+    (atomically) from the records of ``jobs``, in their order, and print it."""
+    path = Path(out + ".jsonl")
+    done = read_records(path)
+    todo = [j for j in jobs if j["id"] not in done]
+    run_and_append(pool_stream(run_one, todo, workers), len(todo), path, done, desc, no_progress)
+    md = Path(out + ".md")
+    tmp = md.with_suffix(".md.tmp")
+    tmp.write_text(summarise([done[j["id"]] for j in jobs if j["id"] in done]))
+    tmp.replace(md)
+    print(md.read_text())

@@ -19,9 +19,8 @@ from __future__ import annotations
 import argparse
 import os
 import zlib
-from pathlib import Path
 
-from studies._runner import pool_stream, read_records, run_and_append
+from studies._runner import run_and_summarise
 
 SPOILS = ("clean", "moment", "pose")
 
@@ -114,16 +113,7 @@ def main(argv: list[str] | None = None) -> None:
              "test": str(c.test), "accept": c.accept, "effects": list(c.effects), "spike_Nm": args.spike_Nm,
              "glitch_rad": args.glitch_rad}
             for f in args.folders for c in load_cases(f, tuple(EFFECTS)) for k in SPOILS]
-    out = Path(args.out + ".jsonl")
-    done = read_records(out)
-    todo = [j for j in jobs if j["id"] not in done]
-    run_and_append(pool_stream(run_one, todo, args.workers), len(todo), out, done, "gross outliers",
-                   args.no_progress)
-    md = Path(args.out + ".md")
-    tmp = md.with_suffix(".md.tmp")
-    tmp.write_text(summarise([done[j["id"]] for j in jobs if j["id"] in done]))
-    tmp.replace(md)
-    print(md.read_text())
+    run_and_summarise(run_one, jobs, args.out, "gross outliers", args.workers, args.no_progress, summarise)
 
 
 if __name__ == "__main__":

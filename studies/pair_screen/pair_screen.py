@@ -18,9 +18,8 @@ from __future__ import annotations
 import argparse
 import os
 import time
-from pathlib import Path
 
-from studies._runner import pool_stream, read_records, run_and_append
+from studies._runner import run_and_summarise
 
 
 def run_one(job: dict) -> dict:
@@ -146,16 +145,8 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     jobs = [{"id": c.label, "rig": str(c.rig), "train": str(c.train), "test": str(c.test)}
             for f in args.folders for c in load_cases(f, tuple(EFFECTS))]
-    out = Path(args.out + ".jsonl")
-    done = read_records(out)
-    todo = [j for j in jobs if j["id"] not in done]
-    run_and_append(pool_stream(run_one, todo, args.workers), len(todo), out, done, "pair screen",
-                   args.no_progress)
-    md = Path(args.out + ".md")
-    tmp = md.with_suffix(".md.tmp")
-    tmp.write_text(summarise([done[j["id"]] for j in jobs if j["id"] in done], LEAD_NATS))
-    tmp.replace(md)
-    print(md.read_text())
+    run_and_summarise(run_one, jobs, args.out, "pair screen", args.workers, args.no_progress,
+                      lambda rs: summarise(rs, LEAD_NATS))
 
 
 if __name__ == "__main__":
