@@ -9,6 +9,7 @@ from csjm_opt.diagnose.fitting.friction_stick import (
     ZonotopeMeasures,
     expected_sq_distance,
     log_normaliser,
+    log_normaliser_gradient,
     stick_residual,
 )
 
@@ -179,6 +180,27 @@ def test_gradient_with_tied_bands_and_point_parameters_matches_finite_difference
         e[j] = 1e-6
         num[j] = (StickFit(a, D, B, tie).neg_log_lik(x + e)[0] - StickFit(a, D, B, tie).neg_log_lik(x - e)[0]) / 2e-6
     np.testing.assert_allclose(g, num, rtol=2e-4, atol=2e-4)
+
+
+@pytest.mark.parametrize("m", [2, 3, 6])
+def test_band_price_gradient_is_the_finite_difference_of_the_price(m):
+    # the closed form against central differences of log(Z/Z0) itself; a band at 0 against a forward one
+    rng = np.random.default_rng(m)
+    B = rng.normal(size=(12, 3, m)) * 0.6
+    meas = ZonotopeMeasures(B)
+    F = rng.uniform(0.1, 1.5, size=m)
+    F[0] = 0.0
+    s, h = 0.37, 1e-6
+    value, d_F, d_log_s = log_normaliser_gradient(meas, F, s)
+    np.testing.assert_array_equal(value, log_normaliser(meas, F, s))
+    for j in range(m):
+        up, down = F.copy(), F.copy()
+        up[j] += h
+        down[j] = max(F[j] - h, 0.0)
+        num = (log_normaliser(meas, up, s) - log_normaliser(meas, down, s)) / (up[j] - down[j])
+        np.testing.assert_allclose(d_F[:, j], num, rtol=1e-5, atol=1e-8)
+    num = (log_normaliser(meas, F, s * np.exp(h)) - log_normaliser(meas, F, s * np.exp(-h))) / (2 * h)
+    np.testing.assert_allclose(d_log_s, num, rtol=1e-6, atol=1e-9)
 
 
 def test_point_parameters_recovered_beside_the_bands():
