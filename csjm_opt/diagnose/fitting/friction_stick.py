@@ -332,6 +332,11 @@ class ZonotopeMeasures:
                     if len(self.triples) else np.zeros((len(B), 0)))
         self.cross = np.linalg.norm(np.cross(cols[:, self.pairs[:, 0]], cols[:, self.pairs[:, 1]]), axis=-1)
         self.norm = np.linalg.norm(cols, axis=-1)                              # (n, m)
+        # where each band's derivative of a triple's (a pair's) product lands, and the bands that multiply it
+        self._slot3 = (np.arange(len(self.triples))[:, None] * m + self.triples).ravel()
+        self._rest3 = self.triples[:, [[1, 2], [0, 2], [0, 1]]].reshape(-1, 2)
+        self._slot2 = (np.arange(len(self.pairs))[:, None] * m + self.pairs).ravel()
+        self._rest2 = self.pairs[:, ::-1].ravel()
 
     def parts(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(V, A, M)`` per row for bands ``F``."""
@@ -349,17 +354,11 @@ class ZonotopeMeasures:
         """
         F = np.asarray(F, float)
         m = len(F)
-        dV = np.zeros_like(self.norm)
-        if len(self.triples):
-            others = np.zeros((len(self.triples), m))        # the product of a triple's other two bands
-            for a, (b, c) in ((0, (1, 2)), (1, (0, 2)), (2, (0, 1))):
-                others[np.arange(len(self.triples)), self.triples[:, a]] = (F[self.triples[:, b]]
-                                                                            * F[self.triples[:, c]])
-            dV = 8.0 * (self.det @ others)
+        others = np.zeros((len(self.triples), m))             # the product of a triple's other two bands
+        others.flat[self._slot3] = F[self._rest3[:, 0]] * F[self._rest3[:, 1]]
         other = np.zeros((len(self.pairs), m))                # a pair's other band
-        other[np.arange(len(self.pairs)), self.pairs[:, 0]] = F[self.pairs[:, 1]]
-        other[np.arange(len(self.pairs)), self.pairs[:, 1]] = F[self.pairs[:, 0]]
-        return dV, 8.0 * (self.cross @ other), 2.0 * np.pi * self.norm
+        other.flat[self._slot2] = F[self._rest2]
+        return 8.0 * (self.det @ others), 8.0 * (self.cross @ other), 2.0 * np.pi * self.norm
 
 
 def log_normaliser(meas: ZonotopeMeasures, F: np.ndarray, s: float) -> np.ndarray:
@@ -593,11 +592,10 @@ class SettledModel:
     def _nll(self, idx: np.ndarray, x: np.ndarray, s: float) -> tuple[float, np.ndarray]:
         d = self.design
         key = np.asarray(idx).tobytes()
-        known: dict[bytes, ZonotopeMeasures] = self.__dict__.setdefault("_meas", {})
-        meas = known.get(key)
-        if meas is None:          # the stick sets' measures depend on the rows alone: once per row set
-            meas = known[key] = ZonotopeMeasures(d.B[idx])
-        sf = StickFit(d.a0[idx], d.D[idx], d.B[idx], d.tie, meas)
+        known: dict[bytes, StickFit] = self.__dict__.setdefault("_fits", {})
+        sf = known.get(key)
+        if sf is None:          # the rows' problem and their stick sets' measures: once per row set
+            sf = known[key] = StickFit(d.a0[idx], d.D[idx], d.B[idx], d.tie)
         sf.f = self._f[idx]
         val, grad = sf.neg_log_lik(np.r_[x, np.log(s)])
         self._f[idx] = sf.f
