@@ -275,7 +275,7 @@ def main() -> int:
         print(f"{len(log)} rows, injected {case}: singles + pairs on one core {fw:.1f} s wall / {fc:.1f} s CPU "
               f"({fr:,.0f} rows through the balance), "
               f"on {args.workers or 'all'} cores {pw:.1f} s wall / {pc:.1f} s CPU with the workers' "
-              f"(target < 30 s on 2 cores; load average {os.getloadavg()[0]:.1f}); singles only "
+              f"(target < 5 s on 2 cores; load average {os.getloadavg()[0]:.1f}); singles only "
               f"{sw:.1f} s wall / {sc:.1f} s CPU -> selected {j['selected']} + {j['secondary']['effect']}, "
               f"gap {1e3 * j['gap']['before_rad']:.2f} -> {1e3 * j['gap']['after_rad']:.2f} mrad")
         if old:

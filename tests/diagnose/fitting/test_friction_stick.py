@@ -302,3 +302,32 @@ def test_a_settled_leads_pair_holds_every_friction_of_the_rig_in_its_band(rig, m
     _, band, stick = stick_layout(model)
     assert stick == [0, 1]                                       # both effects are stick sets
     assert len(band) == sum(e.n_params for e in model.effects)   # every friction parameter is a band
+
+
+@pytest.mark.parametrize("partner", ["hole_offsets", "sensor_bias"])
+def test_a_settled_pair_fit_ends_at_its_optimum(rig, partner):
+    """Settled friction beside a partner's point parameters: the fit ends where a long second solver gains nothing.
+
+    The reference continues from the fit with L-BFGS-B in the parameters' own units, many times longer (another
+    path to the same optimum). Unpreconditioned and at 150 iterations, the centre fit of a pair with 36 hole offsets
+    stopped hundreds of nats short; a sensor bias (units a thousand times a hole offset's) tens.
+    """
+    from scipy.optimize import minimize
+
+    from csjm_opt.diagnose.data.residuals import compute_residuals
+    from csjm_opt.diagnose.effects import make_effect
+    from csjm_opt.diagnose.fitting.augmented import AugmentedModel
+    from csjm_opt.diagnose.fitting.friction_stick import SettledModel, StickDesign
+    from csjm_opt.testbed import simulate_experiment
+
+    log = simulate_experiment(rig, 8, np.random.default_rng(5), effect=["coulomb_friction", partner])
+    table = compute_residuals(rig, log)
+    model = AugmentedModel(rig, [make_effect("friction", rig, law="coulomb", memory="settled"),
+                                 make_effect(partner, rig)])
+    design = StickDesign(model, table, model.x0())
+    sm = SettledModel(model, design, 0.8)
+    rows = np.arange(len(table))
+    best = sm._nll(rows, sm.x, sm.s)[0]
+    ref = minimize(lambda x: sm._nll(rows, x, sm.s), sm.x, jac=True, method="L-BFGS-B", bounds=sm.bounds,
+                   options={"maxiter": 20000, "ftol": 1e-15, "gtol": 1e-10})
+    assert ref.fun > best - 0.05, (best, ref.fun)
