@@ -320,7 +320,7 @@ def test_a_settled_pair_fit_ends_at_its_optimum(rig, partner):
     from csjm_opt.diagnose.fitting.friction_stick import SettledModel, StickDesign
     from csjm_opt.testbed import simulate_experiment
 
-    log = simulate_experiment(rig, 8, np.random.default_rng(5), effect=["coulomb_friction", partner])
+    log = simulate_experiment(rig, 6, np.random.default_rng(5), effect=["coulomb_friction", partner])
     table = compute_residuals(rig, log)
     model = AugmentedModel(rig, [make_effect("friction", rig, law="coulomb", memory="settled"),
                                  make_effect(partner, rig)])
@@ -329,5 +329,5 @@ def test_a_settled_pair_fit_ends_at_its_optimum(rig, partner):
     rows = np.arange(len(table))
     best = sm._nll(rows, sm.x, sm.s)[0]
     ref = minimize(lambda x: sm._nll(rows, x, sm.s), sm.x, jac=True, method="L-BFGS-B", bounds=sm.bounds,
-                   options={"maxiter": 20000, "ftol": 1e-15, "gtol": 1e-10})
+                   options={"maxiter": 4000, "ftol": 1e-13, "gtol": 1e-9})
     assert ref.fun > best - 0.05, (best, ref.fun)
