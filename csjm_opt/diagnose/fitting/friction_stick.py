@@ -582,7 +582,7 @@ class SettledModel:
         self.ridge = np.where(np.isfinite(prior), prior, np.inf)       # a partner's proper prior (hole offsets)
         # the optimiser's unit of each parameter (its typical magnitude, as the point fits'): a hole offset moves
         # the residual a million times more per unit than a band does, and L-BFGS-B in raw units crawled (a
-        # pair's centre fit stopped at its iteration limit up to 1,000 nats short of its optimum)
+        # pair's centre fit stopped at its iteration limit up to 740 nats short of its optimum)
         self.unit = np.asarray(model.scales, float)[np.r_[design.lin, design.band]]
         self._f = np.zeros((len(design.a0), design.B.shape[2]))
         self.x = np.r_[np.zeros(self.k), np.full(self.nb, 0.0)]
