@@ -229,14 +229,16 @@ def fit_model(model: AugmentedModel, table: ResidualTable, theta0: np.ndarray | 
     lb, ub = model.lower_bounds / scales, model.upper_bounds / scales
     starts = model.starts() if theta0 is None else [np.asarray(theta0)]
 
+    def run(x0: np.ndarray):
+        return least_squares(res, x0, jac=jac, bounds=(lb, ub), method="trf",
+                             x_scale=1.0, xtol=1e-10, ftol=FTOL, gtol=1e-10, max_nfev=MAX_NFEV)
+
     def solve(x0: np.ndarray):
-        sol = least_squares(res, x0, jac=jac, bounds=(lb, ub), method="trf",
-                            x_scale=1.0, xtol=1e-10, ftol=FTOL, gtol=1e-10, max_nfev=MAX_NFEV)
+        sol = run(x0)
         for _ in range(RESTARTS):       # out of evaluations: again from its end, with a fresh trust region
             if sol.status != 0:
                 break
-            again = least_squares(res, sol.x, jac=jac, bounds=(lb, ub), method="trf",
-                                  x_scale=1.0, xtol=1e-10, ftol=FTOL, gtol=1e-10, max_nfev=MAX_NFEV)
+            again = run(sol.x)
             if not again.cost < sol.cost:
                 break
             sol = again
