@@ -15,6 +15,8 @@ import sys
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
+from csjm_opt._fileio import atomic_write_text
+
 
 def read_records(path: Path) -> dict[str, dict]:
     """Records already in ``path`` (a JSON line each), by ``id``; empty when there is no file."""
@@ -77,8 +79,6 @@ def run_and_summarise(run_one: Callable[[dict], dict], jobs: list[dict], out: st
     done = read_records(path)
     todo = [j for j in jobs if j["id"] not in done]
     run_and_append(pool_stream(run_one, todo, workers), len(todo), path, done, desc, no_progress)
-    md = Path(out + ".md")
-    tmp = md.with_suffix(".md.tmp")
-    tmp.write_text(summarise([done[j["id"]] for j in jobs if j["id"] in done]))
-    tmp.replace(md)
-    print(md.read_text())
+    text = summarise([done[j["id"]] for j in jobs if j["id"] in done])
+    atomic_write_text(out + ".md", text)
+    print(text)

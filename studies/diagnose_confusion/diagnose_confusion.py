@@ -42,6 +42,7 @@ from typing import Callable, Iterator
 
 import numpy as np
 
+from csjm_opt._fileio import atomic_write_text  # noqa: E402
 from studies._runner import finished, pool_stream, read_records, run_and_append  # noqa: E402
 
 MULTIPLES = (1.5, 3.0, 6.0, 10.0)
@@ -474,7 +475,7 @@ def main(argv: list[str] | None = None) -> int:
     plants = sorted({r.get("plant", "quasistatic") for r in records})
     text = "".join(f"## Plant: {p}\n\n" + summarise([r for r in records if r.get("plant", "quasistatic") == p]) + "\n"
                    for p in plants)
-    out.with_suffix(".md").write_text(text)
+    atomic_write_text(out.with_suffix(".md"), text)
     for p in plants:
         figure([r for r in records if r.get("plant", "quasistatic") == p],
                out.with_suffix(".png") if p == "quasistatic" or out.name.endswith(f"_{p}") else Path(f"{out}_{p}.png"))

@@ -221,17 +221,18 @@ def left_out_residuals(table: ResidualTable, zeta: np.ndarray, jac: np.ndarray |
     return np.linalg.solve(table.whiten, w_out[..., None])[..., 0]
 
 
-def gross_rows(table: ResidualTable, model_zetas, nominal_zeta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def gross_rows(table: ResidualTable, model_zeta: np.ndarray,
+               nominal_zeta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rows (indices) that are gross outliers, and every row's outlier ratio.
 
-    A row's ratio is the smaller of two whitened norms, each over its median across the log: its residual under a
-    model that fits the log (``model_zetas``, (n, 3) each; with several, the nearest of them row by row), and its
-    nominal residual's departure from its cycle neighbours (:func:`cycle_deviation` of ``nominal_zeta``). An
+    A row's ratio is the smaller of two whitened norms, each over its median across the log: its residual under the
+    model that fits the log (``model_zeta``, (n, 3)), and its nominal residual's departure from its cycle
+    neighbours (:func:`cycle_deviation` of ``nominal_zeta``). An
     effect, however large, is either followed by the model or smooth within a cycle; a tracker glitch or a force
     spike in one row is neither. Rows above ``GROSS_ROW_FACTOR`` are gross while at most ``GROSS_ROW_SHARE`` of the
     log.
     """
-    q_model = np.min([whitened_norm2(table, z) for z in model_zetas], axis=0)
+    q_model = whitened_norm2(table, model_zeta)
     q_local = whitened_norm2(table, cycle_deviation(nominal_zeta, table.cycle))
     ratio = np.sqrt(np.minimum(q_model / max(float(np.median(q_model)), 1e-300),
                                q_local / max(float(np.median(q_local)), 1e-300)))

@@ -681,8 +681,8 @@ class SettledModel:
         finite = [a is not None or b is not None for a, b in self.bounds[:self.k]]
         if any(finite):
             return self._diagonal
-        known: dict[tuple, np.ndarray] = self.__dict__.setdefault("_transforms", {})
-        key = (np.asarray(idx).tobytes(), self.s)
+        known: dict[bytes, np.ndarray] = self.__dict__.setdefault("_transforms", {})
+        key = np.asarray(idx).tobytes()             # the noise scale is the model's own
         if key not in known:
             u = self.unit[:self.k]
             D = self.design.D[idx] * u                                # per unit scale of each point parameter

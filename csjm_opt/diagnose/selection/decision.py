@@ -259,7 +259,7 @@ def _gross_rows(ctx: _Context, baseline: CandidateScore, singles: Mapping[str, C
             continue
         zeta = (left_out_residuals(table, best.train_zeta_rad, best.fit.jac_x, best.fit.free, best.fit.n_obs)
                 if what == "log" else best.heldout_zeta_rad)
-        bad, ratio = gross_rows(table, [zeta], getattr(baseline, attr))
+        bad, ratio = gross_rows(table, zeta, getattr(baseline, attr))
         found[what] = [{"log": what, "sample": int(log.sample[idx[i]]), "cycle": int(log.cycle[idx[i]]),
                         "reason": "gross_residual", "outlier_ratio": float(ratio[i]), "row": int(idx[i])} for i in bad]
         ratio_max[what] = float(np.max(ratio)) if ratio.size else 0.0
